@@ -1,0 +1,59 @@
+// The component model in process: every component derives from Component;
+// a plugin registers its classes through one exported function.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "yarf/properties.h"
+
+namespace yarf {
+
+// Answer to Describe (proto ComponentInfo).
+struct ComponentInfo {
+  std::string class_name;
+  std::string version;
+  std::vector<std::string> interfaces;
+  std::string summary;
+  std::string origin;
+};
+
+class Component {
+ public:
+  virtual ~Component() = default;
+  // Which class this is and the interfaces it serves (QueryInterface).
+  const ComponentInfo& Describe() const { return info_; }
+  void SetInfo(ComponentInfo info) { info_ = std::move(info); }
+
+ private:
+  ComponentInfo info_;
+};
+
+using ComponentFactory = std::function<std::unique_ptr<Component>(const Properties&)>;
+
+// What a plugin's registration function receives.
+class Registrar {
+ public:
+  virtual ~Registrar() = default;
+  virtual void Add(ComponentInfo info, ComponentFactory factory) = 0;
+};
+
+// The interfaces (proto service names) a C++ class implements, found from
+// its bases: each interface class names its service in kInterface.
+template <typename T, typename... Interfaces>
+std::vector<std::string> InterfacesOf() {
+  std::vector<std::string> names;
+  ((std::is_base_of_v<Interfaces, T> ? names.push_back(Interfaces::kInterface) : void()), ...);
+  return names;
+}
+
+}  // namespace yarf
+
+// Name of the one function a plugin exports.
+#define YARF_REGISTER_SYMBOL "yarf_register_components"
+// Defines it: YARF_PLUGIN(registrar) { yarf::Register<Lambertian>(registrar, ...); }
+#define YARF_PLUGIN(registrar) \
+  extern "C" __attribute__((visibility("default"))) void yarf_register_components(yarf::Registrar& registrar)

@@ -1,0 +1,56 @@
+// Ray queries, mirroring the Intersect service of geometry.proto. In
+// process a batch is an array of Ray records; on the wire the same fields
+// travel as the dense arrays of RayBatch.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <span>
+
+#include "yarf/vecmath.h"
+
+namespace yarf {
+
+inline constexpr uint32_t kNoShape = 0xFFFFFFFFu;
+inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+struct Ray {
+  Vec3 origin;
+  float tnear = 0;
+  Vec3 direction;
+  float tfar = kInfinity;
+};
+
+struct Hit {
+  float t = kInfinity;
+  // Index of the shape placement hit (kNoShape for a miss) and its primitive.
+  uint32_t shape = kNoShape;
+  uint32_t primitive = 0;
+  // Surface parameters (barycentrics for triangles).
+  float u = 0, v = 0;
+  // Unit geometric normal, world space, on the shape's outward side.
+  Vec3 normal;
+
+  bool Found() const { return shape != kNoShape; }
+};
+
+class Intersector {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.Intersect";
+  static constexpr const char* kMethods[] = {"Intersect", "Occluded", "CrossSection"};
+
+  virtual ~Intersector() = default;
+  // Closest hit of each ray.
+  virtual void Intersect(std::span<const Ray> rays, std::span<Hit> hits) const = 0;
+  // occluded[i] = 1 when something lies on ray i within its interval.
+  virtual void Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const = 0;
+};
+
+// An offset origin for a ray leaving a surface at p with geometric normal n
+// toward direction d, so that it does not hit the surface it leaves.
+inline Vec3 OffsetRayOrigin(Vec3 p, Vec3 n, Vec3 d) {
+  const float scale = 1e-4f * std::max(1.0f, std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
+  return p + n * (Dot(n, d) > 0 ? scale : -scale);
+}
+
+}  // namespace yarf

@@ -1,0 +1,110 @@
+// Numerical interfaces, mirroring proto/yarf/v1/math.proto method for
+// method. Batches are row-major float arrays, as on the wire.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "yarf/component.h"
+
+namespace yarf {
+
+// f: R^d -> R^k on batches.
+class Function : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.Function";
+  static constexpr const char* kMethods[] = {"Signature", "Evaluate", "EvaluateStream"};
+
+  virtual uint32_t InputDimensions() const = 0;
+  virtual uint32_t OutputDimensions() const = 0;
+  // points: [N, d]; values: [N, k].
+  virtual void Evaluate(std::span<const float> points, std::span<float> values) = 0;
+};
+
+struct IntegrationResult {
+  std::vector<double> estimate;
+  std::vector<double> standard_error;
+  uint64_t evaluations = 0;
+};
+
+class Sampler;
+class Transport;
+class SceneView;
+class RenderTarget;
+
+class Integrator : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.Integrator";
+  static constexpr const char* kMethods[] = {"Integrate"};
+
+  // ∫ f over the box [lower, upper] with about `evaluations` points.
+  virtual IntegrationResult Integrate(Function& f, std::span<const double> lower,
+                                      std::span<const double> upper, uint64_t evaluations,
+                                      uint64_t seed, const Sampler& sampler) = 0;
+  // The image mode: integrates a transport algorithm's Function over each
+  // pixel's footprint, feeding the target's film pass after pass.
+  virtual void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
+                      RenderTarget& target) = 0;
+};
+
+// Point sets in [0,1)^d, addressed statelessly so that any coordinate of
+// any point can be produced lazily (a path that ends early costs nothing)
+// and reproducibly whatever thread asks.
+class Sampler : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.Sampler";
+  static constexpr const char* kMethods[] = {"Generate"};
+
+  // Coordinate `dimension` of point `index` of the sequence for `seed`.
+  virtual float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const = 0;
+  // Points first .. first+count-1 as [count, dimensions].
+  virtual void Generate(uint64_t first, uint32_t count, uint32_t dimensions, uint64_t seed,
+                        std::span<float> out) const {
+    for (uint32_t i = 0; i < count; ++i)
+      for (uint32_t d = 0; d < dimensions; ++d)
+        out[size_t(i) * dimensions + d] = Sample(first + i, d, seed);
+  }
+};
+
+class Generator : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.Generator";
+  static constexpr const char* kMethods[] = {"Next"};
+
+  // out.size() uniform numbers of stream `stream` after skipping `offset`.
+  virtual void Next(uint64_t seed, uint64_t stream, uint64_t offset, std::span<float> out) = 0;
+};
+
+struct RootResult {
+  double root = 0;
+  uint32_t iterations = 0;
+};
+
+class RootFinder : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.RootFinder";
+  static constexpr const char* kMethods[] = {"FindRoot"};
+
+  // Throws Error when [lower, upper] brackets no root or it does not converge.
+  virtual RootResult FindRoot(Function& f, double lower, double upper, double tolerance,
+                              uint32_t max_iterations) = 0;
+};
+
+class Warp : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.Warp";
+  static constexpr const char* kMethods[] = {"Signature", "Forward", "Inverse", "Pdf"};
+
+  virtual uint32_t DomainDimensions() const = 0;
+  virtual uint32_t ImageDimensions() const = 0;
+  // uniform [N, m] -> points [N, n], pdf [N].
+  virtual void Forward(std::span<const float> uniform, std::span<float> points,
+                       std::span<float> pdf) const = 0;
+  // points [N, n] -> uniform [N, m], pdf [N]. Throws Error when not invertible.
+  virtual void Inverse(std::span<const float> points, std::span<float> uniform,
+                       std::span<float> pdf) const = 0;
+  virtual void Pdf(std::span<const float> points, std::span<float> pdf) const = 0;
+};
+
+}  // namespace yarf

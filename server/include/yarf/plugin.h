@@ -1,0 +1,26 @@
+// What a plugin source file includes to register its classes.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "yarf/component.h"
+#include "yarf/math.h"
+#include "yarf/surface.h"
+#include "yarf/transport.h"
+
+namespace yarf {
+
+// Registers class T, constructible from Properties, under `name`.
+template <typename T>
+void Register(Registrar& registrar, std::string name, std::string version, std::string summary) {
+  ComponentInfo info{std::move(name), std::move(version),
+                     InterfacesOf<T, Function, Integrator, Sampler, Generator, RootFinder, Warp,
+                                  SurfaceModel, Emitter, Transport>(),
+                     std::move(summary), ""};
+  registrar.Add(std::move(info), [](const Properties& p) -> std::unique_ptr<Component> {
+    return std::make_unique<T>(p);
+  });
+}
+
+}  // namespace yarf

@@ -1,0 +1,89 @@
+// Properties: the typed map that configures a component (proto Properties).
+// It remembers which keys were read so that a key no class understood is
+// reported instead of ignored.
+#pragma once
+
+#include <map>
+#include <set>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "yarf/error.h"
+#include "yarf/vecmath.h"
+
+namespace yarf {
+
+struct Rgb {
+  Vec3 value;
+};
+struct Reference {
+  std::string name;
+};
+
+class Properties {
+ public:
+  using Value = std::variant<double, int64_t, bool, std::string, Vec3, Rgb, Transform, Reference>;
+
+  void Set(const std::string& key, Value value) { values_[key] = std::move(value); }
+  bool Has(const std::string& key) const { return values_.count(key) != 0; }
+
+  double Float(const std::string& key, double fallback) const {
+    return Has(key) ? Float(key) : fallback;
+  }
+  double Float(const std::string& key) const {
+    const Value& v = Find(key);
+    if (auto* i = std::get_if<int64_t>(&v)) return double(*i);
+    return Get<double>(key, v, "float");
+  }
+  int64_t Int(const std::string& key, int64_t fallback) const {
+    return Has(key) ? Get<int64_t>(key, Find(key), "int") : fallback;
+  }
+  bool Bool(const std::string& key, bool fallback) const {
+    return Has(key) ? Get<bool>(key, Find(key), "bool") : fallback;
+  }
+  std::string String(const std::string& key, const std::string& fallback) const {
+    return Has(key) ? Get<std::string>(key, Find(key), "string") : fallback;
+  }
+  Vec3 Vector(const std::string& key, Vec3 fallback) const {
+    return Has(key) ? Get<Vec3>(key, Find(key), "vec3") : fallback;
+  }
+  // An RGB value; a plain float f is accepted as (f, f, f).
+  Vec3 Color(const std::string& key, Vec3 fallback) const {
+    if (!Has(key)) return fallback;
+    const Value& v = Find(key);
+    if (auto* f = std::get_if<double>(&v)) return Vec3(float(*f), float(*f), float(*f));
+    return Get<Rgb>(key, v, "rgb").value;
+  }
+  Transform Matrix(const std::string& key, const Transform& fallback) const {
+    return Has(key) ? Get<Transform>(key, Find(key), "transform") : fallback;
+  }
+
+  // Keys set but never read: a misspelt or unsupported parameter.
+  std::vector<std::string> Unread() const {
+    std::vector<std::string> out;
+    for (const auto& [key, value] : values_)
+      if (!read_.count(key)) out.push_back(key);
+    return out;
+  }
+  const std::map<std::string, Value>& values() const { return values_; }
+
+ private:
+  const Value& Find(const std::string& key) const {
+    auto it = values_.find(key);
+    if (it == values_.end()) throw Error("missing property '" + key + "'");
+    read_.insert(key);
+    return it->second;
+  }
+  template <typename T>
+  static const T& Get(const std::string& key, const Value& v, const char* type) {
+    if (auto* p = std::get_if<T>(&v)) return *p;
+    throw Error("property '" + key + "' must be of type " + type);
+  }
+
+  std::map<std::string, Value> values_;
+  mutable std::set<std::string> read_;
+};
+
+}  // namespace yarf

@@ -1,0 +1,51 @@
+// Surface scattering and emission, mirroring proto/yarf/v1/surface.proto.
+// Directions are in the local shading frame (+z = normal); wi points
+// toward the camera side, wo toward where light comes from.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "yarf/component.h"
+
+namespace yarf {
+
+enum ScatterFlags : uint32_t {
+  kScatterNone = 0,
+  kScatterReflect = 1,
+  kScatterRefract = 2,
+  kScatterDelta = 4,
+};
+
+class SurfaceModel : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.SurfaceModel";
+  static constexpr const char* kMethods[] = {"Evaluate", "Sample", "Pdf", "Lobes"};
+
+  // wi, wo: [N,3]; uv: [N,2]; value: [N,3] = f(wi, wo) in 1/sr, no cosine.
+  virtual void Evaluate(std::span<const float> wi, std::span<const float> wo,
+                        std::span<const float> uv, std::span<float> value) const = 0;
+  // wi: [N,3]; uv: [N,2]; uniform: [N,3] -> wo [N,3], weight [N,3]
+  // (f·|cos θo|/pdf), pdf [N], flags [N] (the lobe sampled).
+  virtual void Sample(std::span<const float> wi, std::span<const float> uv,
+                      std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
+                      std::span<float> weight, std::span<float> pdf,
+                      std::span<uint32_t> flags) const = 0;
+  // pdf: [N], solid angle; 0 for delta lobes.
+  virtual void Pdf(std::span<const float> wi, std::span<const float> wo,
+                   std::span<const float> uv, std::span<float> pdf) const = 0;
+  virtual uint32_t Lobes() const = 0;
+};
+
+class Emitter : public virtual Component {
+ public:
+  static constexpr const char* kInterface = "yarf.v1.Emitter";
+  static constexpr const char* kMethods[] = {"Radiance"};
+
+  // w: [N,3] local direction of travel away from the surface; uv: [N,2];
+  // radiance: [N,3] in W·m⁻²·sr⁻¹.
+  virtual void Radiance(std::span<const float> w, std::span<const float> uv,
+                        std::span<float> radiance) const = 0;
+};
+
+}  // namespace yarf
