@@ -26,6 +26,8 @@ class CollectingRegistrar final : public Registrar {
 }  // namespace
 
 Registry::~Registry() {
+  // The factories' code lives in the libraries: drop them first.
+  classes_.clear();
   for (void* lib : libraries_) dlclose(lib);
 }
 

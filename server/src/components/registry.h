@@ -19,6 +19,8 @@ struct PluginFailure {
   std::string message;
 };
 
+// Instances it made must be destroyed before it: their code lives in the
+// plugins it unloads.
 class Registry final {
  public:
   Registry() = default;

@@ -1,0 +1,72 @@
+# yarf: every entry point. Each target installs what is missing on a
+# fresh Debian 12 (apt packages, a Python venv in .venv), then builds.
+#   make render   build, start a local server, render the Cornell box
+#   make test     build and run every test (C++ through ctest, then pytest)
+#   make bench    the benchmarks
+
+SHELL := /bin/bash
+BUILD := build
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMPS := .stamps
+SPP ?= 256
+
+APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
+  libembree-dev libtbb-dev libopenimageio-dev openimageio-tools \
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc \
+  libgtest-dev libtinyobjloader-dev
+# Mitsuba's LLVM variant, for the benchmark only.
+BENCH_APT_PACKAGES := libllvm19
+
+.PHONY: all deps venv build stubs render test bench clean
+
+all: build
+
+# Installs only the packages that are missing; quick when all are there.
+define apt_install
+	@missing=$$(for p in $(1); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:" $$missing; \
+	  SUDO=$$( [ $$(id -u) -eq 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends \
+	    -o DPkg::Lock::Timeout=600 $$missing; \
+	fi
+endef
+
+deps:
+	$(call apt_install,$(APT_PACKAGES))
+
+$(STAMPS)/venv: requirements-dev.txt clients/python/pyproject.toml | deps
+	@mkdir -p $(STAMPS)
+	test -x $(PY) || python3 -m venv $(VENV)
+	$(PY) -m pip install -q --disable-pip-version-check -r requirements-dev.txt
+	$(PY) -m pip install -q --disable-pip-version-check -e clients/python
+	@touch $@
+
+venv: $(STAMPS)/venv
+
+# Python stubs from the IDL, generated at build time, never committed.
+stubs: venv
+	$(PY) -m grpc_tools.protoc -I proto --python_out=clients/python \
+	  --grpc_python_out=clients/python --pyi_out=clients/python proto/yarf/v1/*.proto
+
+build: deps stubs
+	@test -f $(BUILD)/build.ninja || cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BUILD) -j2
+
+render: build
+	@mkdir -p out
+	$(VENV)/bin/yarf render scenes/cornell-box/scene.json -o out/cornell-box.exr --spp $(SPP)
+	$(VENV)/bin/yarf render scenes/cornell-box/scene.json -o out/cornell-box.png --spp $(SPP)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j2
+	$(PY) -m pytest -q
+
+bench: build
+	$(call apt_install,$(BENCH_APT_PACKAGES))
+	$(PY) bench/cornell_box.py
+
+clean:
+	rm -rf $(BUILD) $(STAMPS) out

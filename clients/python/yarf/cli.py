@@ -1,0 +1,196 @@
+"""The ``yarf`` command: render a scene file on a yarfd, list its classes and jobs.
+
+Without ``--server`` the command uses a yarfd on 127.0.0.1:50051 when one
+answers there, and otherwise starts one on this machine for the command's
+duration (the embedded default).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+import grpc
+from tqdm import tqdm
+
+from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, Client
+from yarf.scene import SceneError, load_scene
+from yarf.server import LocalServer, ServerError
+from yarf.v1 import render_pb2
+
+OUTPUT_FORMATS = {
+    ".exr": render_pb2.GetResultRequest.EXR,
+    ".png": render_pb2.GetResultRequest.PNG,
+}
+CONNECT_TIMEOUT = 5.0
+
+
+class CommandError(Exception):
+    """A failure the command reports in one line, with an exit code."""
+
+    def __init__(self, message: str, exit_code: int = 1) -> None:
+        super().__init__(message)
+        self.exit_code = exit_code
+
+
+def _say(message: str) -> None:
+    print(f"yarf: {message}", file=sys.stderr)
+
+
+@contextmanager
+def connect(address: str | None, *, say: Callable[[str], None] = _say) -> Iterator[Client]:
+    """A client of ``address``; without one, of 127.0.0.1:50051 or a local yarfd."""
+    if address:
+        with Client(address) as client:
+            try:
+                grpc.channel_ready_future(client.channel).result(timeout=CONNECT_TIMEOUT)
+            except grpc.FutureTimeoutError:
+                raise CommandError(f"no yarfd answers at {address}") from None
+            yield client
+        return
+    with Client(DEFAULT_ADDRESS) as client:
+        if client.is_serving(timeout=0.5):
+            say(f"using the yarfd at {DEFAULT_ADDRESS}")
+            yield client
+            return
+    say("no yarfd at 127.0.0.1:50051: starting one for this command")
+    with LocalServer() as server, server.client() as client:
+        yield client
+
+
+def _follow(client: Client, job_id: str, *, total: int | None, quiet: bool) -> render_pb2.JobStatus:
+    """Shows the job's progress until it ends; returns its final status."""
+    last: render_pb2.JobStatus | None = None
+    with tqdm(total=total, unit="spp", disable=quiet, dynamic_ncols=True, leave=True) as bar:
+        for status in client.watch(job_id):
+            last = status
+            if status.samples_total and bar.total != status.samples_total:
+                bar.total = status.samples_total
+                bar.refresh()
+            if status.samples_done > bar.n:
+                bar.update(status.samples_done - bar.n)
+            bar.set_postfix_str(render_pb2.JobState.Name(status.state).lower(), refresh=True)
+    if last is None or last.state not in FINAL_STATES:
+        last = client.status(job_id)
+    return last
+
+
+def render_command(args: argparse.Namespace) -> int:
+    output = Path(args.output)
+    output_format = OUTPUT_FORMATS.get(output.suffix.lower())
+    if output_format is None:
+        raise CommandError(
+            f"cannot write {output}: the output's extension must be one of "
+            f"{', '.join(OUTPUT_FORMATS)}",
+            exit_code=2,
+        )
+    scene_path = Path(args.scene)
+    scene = load_scene(scene_path)
+    with connect(args.server) as client:
+        job_id = client.submit(scene, args.spp, args.seed, name=scene_path.name)
+        try:
+            status = _follow(client, job_id, total=args.spp or None, quiet=args.quiet)
+        except KeyboardInterrupt:
+            client.cancel(job_id)
+            raise
+        if status.state != render_pb2.SUCCEEDED:
+            state = render_pb2.JobState.Name(status.state)
+            raise CommandError(f"job {job_id} {state}: {status.error or 'no message'}")
+        image = client.encoded(job_id, output_format)
+    if not image:
+        raise CommandError(f"the server sent an empty {output.suffix} image for job {job_id}")
+    output.parent.mkdir(parents=True, exist_ok=True)
+    output.write_bytes(image)
+    print(
+        f"wrote {output.resolve()} ({status.samples_done} spp, "
+        f"{status.elapsed_seconds:.2f} s, job {job_id})"
+    )
+    return 0
+
+
+def classes_command(args: argparse.Namespace) -> int:
+    with connect(args.server) as client:
+        reply = client.list_classes()
+    for info in sorted(reply.classes, key=lambda info: info.class_name):
+        interfaces = ", ".join(info.interfaces)
+        print(f"{info.class_name:<22} {info.version:<9} {interfaces}  [{info.origin}]")
+    if reply.plugin_errors:
+        print("plugins that failed to load:")
+        for error in reply.plugin_errors:
+            print(f"  {error.path}: {error.message}")
+    return 0
+
+
+def jobs_command(args: argparse.Namespace) -> int:
+    with connect(args.server) as client:
+        jobs = client.list()
+    for job in jobs:
+        state = render_pb2.JobState.Name(job.state).lower()
+        line = f"{job.job_id}  {state:<9} {job.samples_done:>7}/{job.samples_total:<7} {job.name}"
+        print(line + (f"  ({job.error})" if job.error else ""))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="yarf", description="Render scene files on a yarf render server (yarfd)."
+    )
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    def add_server_option(command: argparse.ArgumentParser) -> None:
+        command.add_argument(
+            "--server",
+            metavar="ADDR",
+            help="yarfd address host:port (default: 127.0.0.1:50051 if it answers, "
+            "else a yarfd started for this command)",
+        )
+
+    render = commands.add_parser("render", help="render a scene file into an EXR or PNG image")
+    render.add_argument("scene", help="scene file: protobuf JSON (.json) or text (.textproto)")
+    render.add_argument("-o", "--output", required=True, help="image to write (.exr or .png)")
+    render.add_argument(
+        "--spp", type=int, default=0, help="samples per pixel (default: the server's, 16)"
+    )
+    render.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    render.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_server_option(render)
+    render.set_defaults(handler=render_command)
+
+    classes = commands.add_parser("classes", help="list the server's classes and plugin errors")
+    add_server_option(classes)
+    classes.set_defaults(handler=classes_command)
+
+    jobs = commands.add_parser("jobs", help="list the server's jobs, newest first")
+    add_server_option(jobs)
+    jobs.set_defaults(handler=jobs_command)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args))
+    except CommandError as error:
+        _say(f"error: {error}")
+        return error.exit_code
+    except SceneError as error:
+        _say(f"error: {error}")
+        return 2
+    except ServerError as error:
+        _say(f"error: {error}")
+        return 1
+    except grpc.RpcError as error:
+        code = error.code().name if isinstance(error, grpc.Call) else "RPC"
+        details = error.details() if isinstance(error, grpc.Call) else str(error)
+        _say(f"error: {code}: {details}")
+        return 1
+    except KeyboardInterrupt:
+        _say("interrupted")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,333 @@
+"""A typed client of yarfd's services over one gRPC channel."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Any, Self
+
+import grpc
+import numpy as np
+from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+from yarf.v1 import (
+    component_pb2,
+    component_pb2_grpc,
+    render_pb2,
+    render_pb2_grpc,
+    scene_pb2,
+)
+
+# Scenes with inline meshes and float images of large films are big messages.
+MAX_MESSAGE_BYTES = 256 * 1024 * 1024
+DEFAULT_ADDRESS = "127.0.0.1:50051"
+# Deadline of unary calls, seconds.
+DEFAULT_TIMEOUT = 60.0
+
+JobState = render_pb2.JobState
+JobStatus = render_pb2.JobStatus
+ResultFormat = render_pb2.GetResultRequest.Format
+FINAL_STATES = frozenset({render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CANCELLED})
+
+_NUMPY_DTYPES: dict[int, np.dtype[Any]] = {
+    component_pb2.Array.FLOAT32: np.dtype("<f4"),
+    component_pb2.Array.INT32: np.dtype("<i4"),
+    component_pb2.Array.UINT32: np.dtype("<u4"),
+}
+
+
+class RenderError(RuntimeError):
+    """A job that ended FAILED or CANCELLED; ``status`` holds its last JobStatus."""
+
+    def __init__(self, status: render_pb2.JobStatus) -> None:
+        state = render_pb2.JobState.Name(status.state)
+        message = f"job {status.job_id} {state}"
+        if status.error:
+            message += f": {status.error}"
+        super().__init__(message)
+        self.status = status
+
+
+@dataclass(frozen=True)
+class RenderResult:
+    """A job's image: ``pixels`` and ``variance`` are float32 arrays [H, W, 3]."""
+
+    status: render_pb2.JobStatus
+    pixels: np.ndarray
+    variance: np.ndarray
+
+
+def array_to_numpy(array: component_pb2.Array) -> np.ndarray:
+    """Copies a yarf.v1.Array into a numpy array of its dtype and shape."""
+    dtype = _NUMPY_DTYPES.get(array.dtype)
+    if dtype is None:
+        raise ValueError(f"Array has no dtype ({array.dtype})")
+    shape = tuple(array.shape)
+    values = np.frombuffer(array.data, dtype=dtype)
+    if values.size != int(np.prod(shape, dtype=np.int64)):
+        raise ValueError(f"Array of shape {shape} carries {values.size} elements")
+    return values.reshape(shape).astype(dtype.newbyteorder("="), copy=True)
+
+
+def numpy_to_array(values: np.ndarray) -> component_pb2.Array:
+    """A yarf.v1.Array of a float32, int32 or uint32 numpy array."""
+    for code, dtype in _NUMPY_DTYPES.items():
+        if values.dtype.kind == dtype.kind and values.dtype.itemsize == dtype.itemsize:
+            return component_pb2.Array(
+                dtype=code,  # type: ignore[arg-type]
+                shape=list(values.shape),
+                data=np.ascontiguousarray(values, dtype=dtype).tobytes(),
+            )
+    raise TypeError(f"no yarf.v1.Array dtype for {values.dtype}")
+
+
+def _health_messages() -> tuple[type[Any], type[Any]]:
+    """grpc.health.v1 request and response classes, in a private descriptor pool."""
+    file = descriptor_pb2.FileDescriptorProto(
+        name="grpc/health/v1/health.proto", package="grpc.health.v1", syntax="proto3"
+    )
+    request = file.message_type.add(name="HealthCheckRequest")
+    request.field.add(name="service", number=1, type=9, label=1)  # string
+    response = file.message_type.add(name="HealthCheckResponse")
+    status = response.enum_type.add(name="ServingStatus")
+    for number, name in enumerate(("UNKNOWN", "SERVING", "NOT_SERVING", "SERVICE_UNKNOWN")):
+        status.value.add(name=name, number=number)
+    response.field.add(
+        name="status",
+        number=1,
+        type=14,  # enum
+        label=1,
+        type_name=".grpc.health.v1.HealthCheckResponse.ServingStatus",
+    )
+    pool = descriptor_pool.DescriptorPool()
+    pool.Add(file)
+    return tuple(  # type: ignore[return-value]
+        message_factory.GetMessageClass(pool.FindMessageTypeByName(f"grpc.health.v1.{name}"))
+        for name in ("HealthCheckRequest", "HealthCheckResponse")
+    )
+
+
+_HealthCheckRequest, _HealthCheckResponse = _health_messages()
+
+
+class Client:
+    """yarfd's RenderService, Registry, Component, Factory and health on one channel.
+
+    Unary calls carry a deadline of ``timeout`` seconds; rpc failures raise
+    ``grpc.RpcError`` (its ``code()`` and ``details()`` say why).
+    """
+
+    def __init__(self, address: str = DEFAULT_ADDRESS, *, timeout: float = DEFAULT_TIMEOUT) -> None:
+        self.address = address
+        self.timeout = timeout
+        self._channel = grpc.insecure_channel(
+            address,
+            options=[
+                ("grpc.max_send_message_length", MAX_MESSAGE_BYTES),
+                ("grpc.max_receive_message_length", MAX_MESSAGE_BYTES),
+            ],
+        )
+        self.render_service = render_pb2_grpc.RenderServiceStub(self._channel)
+        self.registry = component_pb2_grpc.RegistryStub(self._channel)
+        self.component = component_pb2_grpc.ComponentStub(self._channel)
+        self.factory = component_pb2_grpc.FactoryStub(self._channel)
+        self._health_check = self._channel.unary_unary(
+            "/grpc.health.v1.Health/Check",
+            request_serializer=_HealthCheckRequest.SerializeToString,
+            response_deserializer=_HealthCheckResponse.FromString,
+        )
+
+    @property
+    def channel(self) -> grpc.Channel:
+        return self._channel
+
+    def close(self) -> None:
+        self._channel.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    # Health.
+
+    def health(self, service: str = "", *, timeout: float | None = None) -> str:
+        """The serving status name ("SERVING", "NOT_SERVING"...) of the server or a service."""
+        reply = self._health_check(
+            _HealthCheckRequest(service=service), timeout=timeout or self.timeout
+        )
+        return _HealthCheckResponse.ServingStatus.Name(reply.status)
+
+    def is_serving(self, *, timeout: float = 1.0) -> bool:
+        """Whether the server answers the health check with SERVING within ``timeout``."""
+        try:
+            return self.health(timeout=timeout) == "SERVING"
+        except grpc.RpcError:
+            return False
+
+    # Jobs.
+
+    def submit(
+        self,
+        scene: scene_pb2.Scene,
+        spp: int = 16,
+        seed: int = 0,
+        *,
+        name: str = "",
+        transport: scene_pb2.ComponentSpec | None = None,
+        integrator: scene_pb2.ComponentSpec | None = None,
+        sampler: scene_pb2.ComponentSpec | None = None,
+    ) -> str:
+        """Queues a render of ``scene``; returns the job id."""
+        options = render_pb2.RenderOptions(spp=spp, seed=seed)
+        if transport is not None:
+            options.transport.CopyFrom(transport)
+        if integrator is not None:
+            options.integrator.CopyFrom(integrator)
+        if sampler is not None:
+            options.sampler.CopyFrom(sampler)
+        request = render_pb2.SubmitRequest(scene=scene, options=options, name=name)
+        return str(self.render_service.Submit(request, timeout=self.timeout).job_id)
+
+    def watch(self, job_id: str, *, timeout: float | None = None) -> Iterator[render_pb2.JobStatus]:
+        """The job's status now, then after every sample pass, until the job ends."""
+        stream = self.render_service.Watch(render_pb2.WatchRequest(job_id=job_id), timeout=timeout)
+        try:
+            yield from stream
+        finally:
+            stream.cancel()
+
+    def status(self, job_id: str) -> render_pb2.JobStatus:
+        """The job's current status."""
+        for status in self.watch(job_id, timeout=self.timeout):
+            return status
+        raise RuntimeError(f"Watch of job {job_id} ended without a status")
+
+    def wait(self, job_id: str, *, timeout: float | None = None) -> render_pb2.JobStatus:
+        """Blocks until the job ends; returns its final status."""
+        last: render_pb2.JobStatus | None = None
+        for status in self.watch(job_id, timeout=timeout):
+            last = status
+        if last is None or last.state not in FINAL_STATES:
+            # The stream ended early (e.g. the server went away): ask once more.
+            last = self.status(job_id)
+        return last
+
+    def result(
+        self, job_id: str, format: int = render_pb2.GetResultRequest.RAW
+    ) -> render_pb2.GetResultReply:
+        """GetResult: RAW float arrays, or the EXR / PNG file bytes in ``image``."""
+        request = render_pb2.GetResultRequest(job_id=job_id, format=format)  # type: ignore[arg-type]
+        return self.render_service.GetResult(request, timeout=self.timeout)
+
+    def raw(self, job_id: str) -> RenderResult:
+        """The job's pixels and per-pixel variance (finished or progressive so far)."""
+        reply = self.result(job_id, render_pb2.GetResultRequest.RAW)
+        return RenderResult(
+            status=reply.status,
+            pixels=array_to_numpy(reply.pixels),
+            variance=array_to_numpy(reply.variance),
+        )
+
+    def image(self, job_id: str) -> np.ndarray:
+        """The job's pixel estimates, float32 [H, W, 3]."""
+        return array_to_numpy(self.result(job_id).pixels)
+
+    def variance(self, job_id: str) -> np.ndarray:
+        """The variance of each pixel's estimate, float32 [H, W, 3]."""
+        return array_to_numpy(self.result(job_id).variance)
+
+    def encoded(self, job_id: str, format: int) -> bytes:
+        """The job's image as an EXR or PNG file."""
+        return bytes(self.result(job_id, format).image)
+
+    def render(
+        self,
+        scene: scene_pb2.Scene,
+        spp: int = 16,
+        seed: int = 0,
+        *,
+        name: str = "",
+        transport: scene_pb2.ComponentSpec | None = None,
+        integrator: scene_pb2.ComponentSpec | None = None,
+        sampler: scene_pb2.ComponentSpec | None = None,
+        timeout: float | None = None,
+    ) -> RenderResult:
+        """Submits, waits (at most ``timeout`` s) and fetches the image.
+
+        Raises RenderError unless the job SUCCEEDED.
+        """
+        job_id = self.submit(
+            scene,
+            spp,
+            seed,
+            name=name,
+            transport=transport,
+            integrator=integrator,
+            sampler=sampler,
+        )
+        status = self.wait(job_id, timeout=timeout)
+        if status.state != render_pb2.SUCCEEDED:
+            raise RenderError(status)
+        return self.raw(job_id)
+
+    def cancel(self, job_id: str) -> render_pb2.JobStatus:
+        """Asks the job to stop; it ends CANCELLED within a second."""
+        reply = self.render_service.Cancel(
+            render_pb2.CancelRequest(job_id=job_id), timeout=self.timeout
+        )
+        return reply.status
+
+    def list(self) -> list[render_pb2.JobStatus]:
+        """Every job the server knows, newest first."""
+        reply = self.render_service.List(render_pb2.ListJobsRequest(), timeout=self.timeout)
+        return list(reply.jobs)
+
+    # Components.
+
+    def list_classes(self) -> component_pb2.ListClassesReply:
+        """Classes the server can make, and the plugins that failed to load."""
+        return self.registry.ListClasses(component_pb2.ListClassesRequest(), timeout=self.timeout)
+
+    def load_plugin(self, path: str) -> list[component_pb2.ComponentInfo]:
+        """Loads a plugin (a path on the server's machine); returns its classes."""
+        reply = self.registry.LoadPlugin(
+            component_pb2.LoadPluginRequest(path=path), timeout=self.timeout
+        )
+        return list(reply.classes)
+
+    def describe(self, class_name: str = "", *, handle: int = 0) -> component_pb2.ComponentInfo:
+        """Class name, version and interfaces of a class or instance."""
+        request = component_pb2.DescribeRequest(class_name=class_name, handle=handle)
+        return self.component.Describe(request, timeout=self.timeout)
+
+    def create(
+        self, class_name: str, properties: component_pb2.Properties | None = None
+    ) -> component_pb2.CreateReply:
+        """Makes an instance; the reply holds its handle."""
+        request = component_pb2.CreateRequest(class_name=class_name, properties=properties)
+        return self.factory.Create(request, timeout=self.timeout)
+
+    def release(self, handle: int) -> None:
+        """Ends an instance made by ``create``."""
+        self.factory.Release(component_pb2.ReleaseRequest(handle=handle), timeout=self.timeout)
+
+
+def wait_until_serving(client: Client, timeout: float) -> bool:
+    """Polls the health check until SERVING or ``timeout`` seconds pass."""
+    deadline = time.monotonic() + timeout
+    while True:
+        remaining = deadline - time.monotonic()
+        if client.is_serving(timeout=max(0.1, min(1.0, remaining))):
+            return True
+        if remaining <= 0:
+            return False
+        time.sleep(0.05)

@@ -1,0 +1,101 @@
+// lambertian — ideal diffuse reflector
+//
+// Scatters incident light equally in all directions of the side it
+// arrives on: f(wi, wo) = reflectance / π when wi and wo lie on the same
+// side of the surface, 0 otherwise. Both sides reflect alike (a two-sided
+// material, as pbrt's DiffuseBxDF); there is no transmission.
+//
+// Parameters
+//   reflectance   rgb (or float)   default 0.5
+//       Fraction of the incident light reflected, per channel in [0, 1].
+//
+// Lobes: reflection. Sample draws wo from the cosine-weighted hemisphere
+// on wi's side, so its weight is the reflectance itself.
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "yarf/plugin.h"
+#include "yarf/warps.h"
+
+namespace {
+
+using yarf::Vec3;
+
+// `allowed` of Sample: 0 accepts every lobe; otherwise a lobe is accepted
+// when all of its flags are among the allowed ones.
+bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
+  return allowed == 0 || (lobe & ~allowed) == 0;
+}
+
+Vec3 RequireUnitInterval(Vec3 rgb, const std::string& property) {
+  for (int c = 0; c < 3; ++c)
+    if (!(rgb[c] >= 0.0f && rgb[c] <= 1.0f))
+      throw yarf::Error("property '" + property + "' must lie in [0, 1] in every channel");
+  return rgb;
+}
+
+class Lambertian final : public yarf::SurfaceModel {
+ public:
+  explicit Lambertian(const yarf::Properties& props)
+      : reflectance_(RequireUnitInterval(props.Color("reflectance", Vec3(0.5f, 0.5f, 0.5f)),
+                                         "reflectance")) {}
+
+  void Evaluate(std::span<const float> wi, std::span<const float> wo,
+                std::span<const float> uv, std::span<float> value) const override {
+    const size_t count = wi.size() / 3;
+    for (size_t k = 0; k < count; ++k) {
+      const bool same_side = wi[3 * k + 2] * wo[3 * k + 2] > 0;
+      (same_side ? reflectance_ * yarf::kInvPi : Vec3()).Store(&value[3 * k]);
+    }
+  }
+
+  void Sample(std::span<const float> wi, std::span<const float> uv,
+              std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
+              std::span<float> weight, std::span<float> pdf,
+              std::span<uint32_t> flags) const override {
+    const size_t count = wi.size() / 3;
+    const bool can_reflect = LobeAllowed(yarf::kScatterReflect, allowed);
+    for (size_t k = 0; k < count; ++k) {
+      const float wi_z = wi[3 * k + 2];
+      Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);
+      // Mirror onto wi's side: the back face reflects like the front.
+      if (wi_z < 0) out.z = -out.z;
+      const float density = yarf::CosineHemispherePdf(std::abs(out.z));
+      if (!can_reflect || wi_z == 0 || density <= 0) {
+        Vec3().Store(&wo[3 * k]);
+        Vec3().Store(&weight[3 * k]);
+        pdf[k] = 0;
+        flags[k] = yarf::kScatterNone;
+        continue;
+      }
+      out.Store(&wo[3 * k]);
+      // f·|cos θo| / pdf = (ρ/π)·cos θo / (cos θo/π).
+      reflectance_.Store(&weight[3 * k]);
+      pdf[k] = density;
+      flags[k] = yarf::kScatterReflect;
+    }
+  }
+
+  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+           std::span<float> pdf) const override {
+    const size_t count = wi.size() / 3;
+    for (size_t k = 0; k < count; ++k) {
+      const float wo_z = wo[3 * k + 2];
+      pdf[k] = wi[3 * k + 2] * wo_z > 0 ? yarf::CosineHemispherePdf(std::abs(wo_z)) : 0.0f;
+    }
+  }
+
+  uint32_t Lobes() const override { return yarf::kScatterReflect; }
+
+ private:
+  Vec3 reflectance_;
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<Lambertian>(registrar, "lambertian", "1.0.0",
+                             "Ideal diffuse (Lambertian) reflection, two-sided");
+}

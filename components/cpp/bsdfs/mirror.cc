@@ -1,0 +1,89 @@
+// mirror — perfect specular reflector
+//
+// Reflects all light into the mirror direction of wi about the normal,
+// scaled by the reflectance: a Dirac delta lobe, so Evaluate and Pdf
+// return 0 and only Sample finds it. Both sides reflect alike.
+//
+// Parameters
+//   reflectance   rgb (or float)   default 1
+//       Fraction of the incident light reflected, per channel in [0, 1].
+//
+// Lobes: delta reflection. Sample returns wo = (-wi.x, -wi.y, wi.z),
+// weight = reflectance, pdf = 1 (the probability of the only lobe).
+#include <algorithm>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "yarf/plugin.h"
+#include "yarf/warps.h"
+
+namespace {
+
+using yarf::Vec3;
+
+constexpr uint32_t kMirrorLobe = yarf::kScatterReflect | yarf::kScatterDelta;
+
+// `allowed` of Sample: 0 accepts every lobe; otherwise a lobe is accepted
+// when all of its flags are among the allowed ones.
+bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
+  return allowed == 0 || (lobe & ~allowed) == 0;
+}
+
+Vec3 RequireUnitInterval(Vec3 rgb, const std::string& property) {
+  for (int c = 0; c < 3; ++c)
+    if (!(rgb[c] >= 0.0f && rgb[c] <= 1.0f))
+      throw yarf::Error("property '" + property + "' must lie in [0, 1] in every channel");
+  return rgb;
+}
+
+class Mirror final : public yarf::SurfaceModel {
+ public:
+  explicit Mirror(const yarf::Properties& props)
+      : reflectance_(RequireUnitInterval(props.Color("reflectance", Vec3(1.0f, 1.0f, 1.0f)),
+                                         "reflectance")) {}
+
+  // A delta lobe has no finite value or density.
+  void Evaluate(std::span<const float> wi, std::span<const float> wo,
+                std::span<const float> uv, std::span<float> value) const override {
+    std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
+  }
+
+  void Sample(std::span<const float> wi, std::span<const float> uv,
+              std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
+              std::span<float> weight, std::span<float> pdf,
+              std::span<uint32_t> flags) const override {
+    const size_t count = wi.size() / 3;
+    const bool can_reflect = LobeAllowed(kMirrorLobe, allowed);
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 in = Vec3::Load(&wi[3 * k]);
+      if (!can_reflect || in.z == 0) {
+        Vec3().Store(&wo[3 * k]);
+        Vec3().Store(&weight[3 * k]);
+        pdf[k] = 0;
+        flags[k] = yarf::kScatterNone;
+        continue;
+      }
+      yarf::Reflect(in).Store(&wo[3 * k]);
+      reflectance_.Store(&weight[3 * k]);
+      pdf[k] = 1.0f;
+      flags[k] = kMirrorLobe;
+    }
+  }
+
+  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+           std::span<float> pdf) const override {
+    std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
+  }
+
+  uint32_t Lobes() const override { return kMirrorLobe; }
+
+ private:
+  Vec3 reflectance_;
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<Mirror>(registrar, "mirror", "1.0.0", "Perfect specular reflection");
+}

@@ -1,0 +1,159 @@
+// phong — the modified Phong reflection model
+//
+// The energy-conserving, reciprocal Phong model of Lafortune & Willems
+// (1994), a diffuse term plus a glossy lobe around the mirror direction:
+//
+//   f(wi, wo) = kd / π + ks · (n + 2) / (2π) · cos^n α
+//
+// where α is the angle between wo and the mirror direction of wi (the
+// lobe is 0 beyond α = 90°). The (n + 2)/(2π) factor makes the glossy
+// lobe reflect at most ks (exactly ks at normal incidence). Both sides
+// reflect alike (two-sided); wi and wo on opposite sides give 0.
+//
+// Parameters
+//   diffuse_reflectance    rgb (or float)   default 0.5    kd, per channel ≥ 0
+//   specular_reflectance   rgb (or float)   default 0.2    ks, per channel ≥ 0
+//   exponent               float            default 30     n ≥ 0; larger is shinier
+// kd + ks must not exceed 1 in any channel (energy conservation).
+//
+// Lobes: reflection. Sample picks the diffuse or the glossy lobe with
+// probability proportional to the luminance of kd and ks, draws wo from
+// the cosine-weighted hemisphere or the cos^n lobe around the mirror
+// direction, and returns the density of the whole mixture.
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "yarf/plugin.h"
+#include "yarf/warps.h"
+
+namespace {
+
+using yarf::Vec3;
+
+// `allowed` of Sample: 0 accepts every lobe; otherwise a lobe is accepted
+// when all of its flags are among the allowed ones.
+bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
+  return allowed == 0 || (lobe & ~allowed) == 0;
+}
+
+Vec3 RequireNonNegative(Vec3 rgb, const std::string& property) {
+  for (int c = 0; c < 3; ++c)
+    if (!(rgb[c] >= 0.0f))
+      throw yarf::Error("property '" + property + "' must be non-negative in every channel");
+  return rgb;
+}
+
+float RequireExponent(double exponent) {
+  if (!(exponent >= 0.0 && std::isfinite(exponent)))
+    throw yarf::Error("property 'exponent' must be a finite number ≥ 0");
+  return float(exponent);
+}
+
+class Phong final : public yarf::SurfaceModel {
+ public:
+  explicit Phong(const yarf::Properties& props)
+      : diffuse_(RequireNonNegative(props.Color("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f)),
+                                    "diffuse_reflectance")),
+        specular_(RequireNonNegative(
+            props.Color("specular_reflectance", Vec3(0.2f, 0.2f, 0.2f)), "specular_reflectance")),
+        exponent_(RequireExponent(props.Float("exponent", 30.0))) {
+    static constexpr const char* kChannel[] = {"red", "green", "blue"};
+    for (int c = 0; c < 3; ++c)
+      if (diffuse_[c] + specular_[c] > 1.0f)
+        throw yarf::Error(std::string("properties 'diffuse_reflectance' + 'specular_reflectance' "
+                                      "exceed 1 in the ") +
+                          kChannel[c] + " channel: the material would create energy");
+    const float diffuse_weight = yarf::Luminance(diffuse_);
+    const float specular_weight = yarf::Luminance(specular_);
+    const float total = diffuse_weight + specular_weight;
+    specular_probability_ = total > 0 ? specular_weight / total : 0.0f;
+  }
+
+  void Evaluate(std::span<const float> wi, std::span<const float> wo,
+                std::span<const float> uv, std::span<float> value) const override {
+    const size_t count = wi.size() / 3;
+    for (size_t k = 0; k < count; ++k)
+      Value(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k])).Store(&value[3 * k]);
+  }
+
+  void Sample(std::span<const float> wi, std::span<const float> uv,
+              std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
+              std::span<float> weight, std::span<float> pdf,
+              std::span<uint32_t> flags) const override {
+    const size_t count = wi.size() / 3;
+    const bool can_reflect = LobeAllowed(yarf::kScatterReflect, allowed);
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 in = Vec3::Load(&wi[3 * k]);
+      const float* u = &uniform[3 * k];
+      Vec3 out;
+      if (u[0] < specular_probability_) {
+        // The lobe is symmetric about the mirror direction: sample it in
+        // a frame whose z axis is that direction.
+        const yarf::Frame mirror(yarf::Reflect(in));
+        out = mirror.ToWorld(yarf::SamplePhongLobe(u[1], u[2], exponent_));
+      } else {
+        out = yarf::SampleCosineHemisphere(u[1], u[2]);
+        if (in.z < 0) out.z = -out.z;
+      }
+      // Zero when the glossy lobe dipped below the surface.
+      const float density = can_reflect ? Density(in, out) : 0.0f;
+      if (!(density > 0)) {
+        Vec3().Store(&wo[3 * k]);
+        Vec3().Store(&weight[3 * k]);
+        pdf[k] = 0;
+        flags[k] = yarf::kScatterNone;
+        continue;
+      }
+      out.Store(&wo[3 * k]);
+      (Value(in, out) * (std::abs(out.z) / density)).Store(&weight[3 * k]);
+      pdf[k] = density;
+      flags[k] = yarf::kScatterReflect;
+    }
+  }
+
+  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+           std::span<float> pdf) const override {
+    const size_t count = wi.size() / 3;
+    for (size_t k = 0; k < count; ++k)
+      pdf[k] = Density(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]));
+  }
+
+  uint32_t Lobes() const override { return yarf::kScatterReflect; }
+
+ private:
+  // cos α between wo and the mirror direction of wi. Symmetric in wi and
+  // wo, which makes the model reciprocal, and unchanged by mirroring both
+  // to the other side, which makes it two-sided.
+  static float CosToMirror(Vec3 wi, Vec3 wo) { return yarf::Dot(wo, yarf::Reflect(wi)); }
+
+  Vec3 Value(Vec3 wi, Vec3 wo) const {
+    if (!(wi.z * wo.z > 0)) return Vec3();
+    const float cos_alpha = CosToMirror(wi, wo);
+    const float glossy =
+        cos_alpha > 0 ? (exponent_ + 2.0f) / (2.0f * yarf::kPi) * std::pow(cos_alpha, exponent_)
+                      : 0.0f;
+    return diffuse_ * yarf::kInvPi + specular_ * glossy;
+  }
+
+  // Density of the lobe mixture Sample draws from; the part of the glossy
+  // lobe below the surface is lost (Sample returns no sample there).
+  float Density(Vec3 wi, Vec3 wo) const {
+    if (!(wi.z * wo.z > 0)) return 0.0f;
+    return (1.0f - specular_probability_) * yarf::CosineHemispherePdf(std::abs(wo.z)) +
+           specular_probability_ * yarf::PhongLobePdf(CosToMirror(wi, wo), exponent_);
+  }
+
+  Vec3 diffuse_;
+  Vec3 specular_;
+  float exponent_;
+  float specular_probability_ = 0;
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<Phong>(registrar, "phong", "1.0.0",
+                        "Modified Phong (Lafortune & Willems 1994): diffuse plus a glossy lobe");
+}

@@ -1,0 +1,146 @@
+// mean_sample — the mean-sample Monte Carlo integrator.
+//
+// Integrate: ∫ f over a box ≈ volume · (1/N) Σ f(x_i), with the points x_i
+// drawn from the job's sampler (so with a low-discrepancy sampler this is
+// quasi-Monte Carlo); the standard error is volume · s / √N.
+//
+// Render: for each pixel and each sample index s < spp, the sampler's
+// point number s (seeded per pixel) places the sample inside the pixel
+// (coordinates 0, 1) and drives the transport (the rest). Pixels go in
+// 32×32 tiles, one sample pass over all tiles at a time, tiles in
+// parallel; progress is reported and cancellation checked per tile.
+//
+// Properties: int "tile_size" (default 32).
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <vector>
+
+#include "yarf/hash.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+// The points of one tile's pixels for one sample index, produced lazily.
+class TilePoints final : public PrimarySamples {
+ public:
+  TilePoints(const Sampler& sampler, uint64_t sample_index, uint32_t width, uint32_t height)
+      : sampler_(sampler), index_(sample_index), inv_width_(1.0f / width), inv_height_(1.0f / height) {}
+
+  void Reset(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, uint32_t width, uint64_t seed) {
+    pixels_.clear();
+    seeds_.clear();
+    for (uint32_t y = y0; y < y1; ++y)
+      for (uint32_t x = x0; x < x1; ++x) {
+        pixels_.push_back({x, y});
+        seeds_.push_back(Hash(seed, uint64_t(y) * width + x));
+      }
+  }
+
+  size_t Count() const override { return pixels_.size(); }
+  float Get(size_t i, uint32_t dimension) const override {
+    const float u = sampler_.Sample(index_, dimension, seeds_[i]);
+    if (dimension == 0) return (pixels_[i].x + u) * inv_width_;
+    if (dimension == 1) return (pixels_[i].y + u) * inv_height_;
+    return u;
+  }
+
+ private:
+  struct Pixel {
+    uint32_t x, y;
+  };
+  const Sampler& sampler_;
+  uint64_t index_;
+  float inv_width_, inv_height_;
+  std::vector<Pixel> pixels_;
+  std::vector<uint64_t> seeds_;
+};
+
+class MeanSampleIntegrator final : public Integrator {
+ public:
+  explicit MeanSampleIntegrator(const Properties& props)
+      : tile_size_(uint32_t(props.Int("tile_size", 32))) {
+    if (tile_size_ < 1 || tile_size_ > 1024) throw Error("property 'tile_size' must be in [1, 1024]");
+  }
+
+  IntegrationResult Integrate(Function& f, std::span<const double> lower,
+                              std::span<const double> upper, uint64_t evaluations, uint64_t seed,
+                              const Sampler& sampler) override {
+    const uint32_t d = f.InputDimensions(), k = f.OutputDimensions();
+    if (lower.size() != d || upper.size() != d)
+      throw Error("integration box has " + std::to_string(lower.size()) + " dimensions, the function " +
+                  std::to_string(d));
+    if (evaluations < 2) throw Error("need at least 2 evaluations");
+    double volume = 1;
+    for (uint32_t j = 0; j < d; ++j) volume *= upper[j] - lower[j];
+    std::vector<double> sum(k, 0.0), sum_sq(k, 0.0);
+    constexpr uint64_t kBatch = 4096;
+    std::vector<float> points, values;
+    for (uint64_t first = 0; first < evaluations; first += kBatch) {
+      const uint32_t n = uint32_t(std::min(kBatch, evaluations - first));
+      points.resize(size_t(n) * d);
+      values.resize(size_t(n) * k);
+      sampler.Generate(first, n, d, seed, points);
+      for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t j = 0; j < d; ++j) {
+          float& x = points[size_t(i) * d + j];
+          x = float(lower[j] + (upper[j] - lower[j]) * x);
+        }
+      f.Evaluate(points, values);
+      for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t c = 0; c < k; ++c) {
+          const double v = values[size_t(i) * k + c];
+          sum[c] += v;
+          sum_sq[c] += v * v;
+        }
+    }
+    IntegrationResult result;
+    result.evaluations = evaluations;
+    const double n = double(evaluations);
+    for (uint32_t c = 0; c < k; ++c) {
+      const double mean = sum[c] / n;
+      const double var = std::max(0.0, (sum_sq[c] / n - mean * mean) * n / (n - 1));
+      result.estimate.push_back(volume * mean);
+      result.standard_error.push_back(volume * std::sqrt(var / n));
+    }
+    return result;
+  }
+
+  void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
+              RenderTarget& target) override {
+    const uint32_t width = scene.FilmWidth(), height = scene.FilmHeight();
+    const uint32_t tiles_x = (width + tile_size_ - 1) / tile_size_;
+    const uint32_t tiles_y = (height + tile_size_ - 1) / tile_size_;
+    tbb::enumerable_thread_specific<FilmSamples> outputs;
+    for (uint32_t pass = 0; pass < target.SamplesPerPixel(); ++pass) {
+      if (target.Cancelled()) return;
+      tbb::parallel_for(uint32_t(0), tiles_x * tiles_y, [&](uint32_t tile) {
+        if (target.Cancelled()) return;
+        const uint32_t x0 = (tile % tiles_x) * tile_size_, y0 = (tile / tiles_x) * tile_size_;
+        TilePoints points(sampler, pass, width, height);
+        points.Reset(x0, y0, std::min(width, x0 + tile_size_), std::min(height, y0 + tile_size_), width,
+                     target.Seed());
+        FilmSamples& out = outputs.local();
+        out.Clear();
+        transport.Evaluate(scene, points, out);
+        target.Accumulate(out);
+      });
+      if (target.Cancelled()) return;
+      target.PassDone(pass + 1);
+    }
+  }
+
+ private:
+  uint32_t tile_size_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::MeanSampleIntegrator>(registrar, "mean_sample", "1.0.0",
+                                             "mean-sample Monte Carlo integration");
+}

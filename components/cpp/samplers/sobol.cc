@@ -1,0 +1,97 @@
+// sobol — padded, scrambled Sobol points
+//
+// Low-discrepancy points built from 2-D blocks: coordinates (2k, 2k+1)
+// are the first two dimensions of the Sobol sequence, which together form
+// a (0, 2)-sequence in base 2: every 2^m consecutive points from an index
+// that is a multiple of 2^m put exactly one point in each elementary
+// interval of area 2^-m. Blocks are decorrelated from each other by
+// shuffling the point order per block and scrambling every coordinate
+// (the "padded" construction of pbrt-v4, with Burley's 2020 hash-based
+// Owen scrambling). Use sample counts that are powers of two.
+//
+// Deterministic and stateless: the same (index, dimension, seed) always
+// gives the same number in [0, 1).
+//
+// Parameters: none.
+#include <array>
+#include <cstdint>
+
+#include "yarf/hash.h"
+#include "yarf/plugin.h"
+
+namespace {
+
+// Distinct salts so that the index shuffle and the value scramble of the
+// same block never share a seed.
+constexpr uint64_t kShuffleSalt = 0x5348554646ull;   // "SHUFF"
+constexpr uint64_t kScrambleSalt = 0x534352414dull;  // "SCRAM"
+
+constexpr uint32_t ReverseBits(uint32_t v) {
+  v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
+  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+  v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
+  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
+  return (v >> 16) | (v << 16);
+}
+
+// Direction numbers of Sobol's second dimension: column i of its
+// generator matrix, the binary Pascal triangle read from the top bit.
+constexpr std::array<uint32_t, 32> kSecondDimension = [] {
+  std::array<uint32_t, 32> v{};
+  v[0] = 1u << 31;
+  for (int i = 1; i < 32; ++i) v[i] = v[i - 1] ^ (v[i - 1] >> 1);
+  return v;
+}();
+
+// Sobol's first dimension: the van der Corput sequence, the radical
+// inverse of the index in base 2.
+constexpr uint32_t SobolFirst(uint32_t index) { return ReverseBits(index); }
+
+constexpr uint32_t SobolSecond(uint32_t index) {
+  uint32_t bits = 0;
+  for (int i = 0; index != 0; ++i, index >>= 1)
+    if (index & 1) bits ^= kSecondDimension[i];
+  return bits;
+}
+
+// Burley's nested uniform scramble (2020, after Laine & Karras 2011): in
+// bit-reversed order, each step (add, multiply by an odd constant, xor
+// with a multiple by an even constant) changes a bit only as a function
+// of itself and less significant bits. Read back in normal order, every
+// digit is flipped as a function of the digits above it: an Owen
+// scramble, which maps each elementary interval onto one of the same
+// shape and so keeps (0, m, 2)-nets nets.
+constexpr uint32_t NestedUniformScramble(uint32_t v, uint32_t seed) {
+  v = ReverseBits(v);
+  v ^= v * 0x3d20adeau;
+  v += seed;
+  v *= (seed >> 16) | 1u;
+  v ^= v * 0x05526c56u;
+  v ^= v * 0x53a22864u;
+  return ReverseBits(v);
+}
+
+class Sobol final : public yarf::Sampler {
+ public:
+  explicit Sobol(const yarf::Properties&) {}
+
+  float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {
+    const uint32_t block = dimension / 2;
+    // Owen-scrambling the index permutes it within every aligned run of
+    // 2^m indices, and an aligned run of Sobol points is a (0, m, 2)-net,
+    // so any power-of-two prefix stays stratified. Indices past 2^32 pick
+    // another shuffle rather than wrapping onto the same points.
+    const uint32_t shuffle_seed = uint32_t(yarf::Hash(seed, block, index >> 32, kShuffleSalt));
+    const uint32_t shuffled = NestedUniformScramble(uint32_t(index), shuffle_seed);
+    const uint32_t bits = dimension % 2 == 0 ? SobolFirst(shuffled) : SobolSecond(shuffled);
+    const uint32_t scramble_seed = uint32_t(yarf::Hash(seed, dimension, kScrambleSalt));
+    return yarf::ToUnitFloat(NestedUniformScramble(bits, scramble_seed));
+  }
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<Sobol>(registrar, "sobol", "1.0.0",
+                        "Padded 2-D Sobol points with hash-based Owen scrambling");
+}

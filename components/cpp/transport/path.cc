@@ -1,0 +1,283 @@
+// path — the eye path tracer, as a batch Function over primary sample space.
+//
+// Unidirectional path tracing with next-event estimation (one light sample
+// per vertex, chosen uniformly by emitting area), multiple importance
+// sampling of light and BSDF samples with the power heuristic, and Russian
+// roulette. Paths advance together, one bounce at a time (a wavefront):
+// each bounce intersects all live rays as one batch and calls each
+// SurfaceModel and Emitter once per batch, never per sample, so a
+// component in another process costs one call per bounce.
+//
+// Primary sample space: coordinates 0–1 film, 2–3 lens, then 7 per bounce
+// (3 light sample, 3 BSDF sample, 1 Russian roulette).
+//
+// Properties:
+//   int max_depth  longest path in segments, Mitsuba's convention: 1 shows
+//                  emitters only, 2 direct light; -1 (default) unbounded.
+//   int rr_depth   depth from which Russian roulette may end paths (5).
+
+#include <algorithm>
+#include <numeric>
+#include <vector>
+
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr uint32_t kFirstBounceDimension = 4;
+constexpr uint32_t kDimensionsPerBounce = 7;
+
+float PowerHeuristic(float a, float b) {
+  a *= a;
+  b *= b;
+  return a + b > 0 ? a / (a + b) : 0;
+}
+
+// Indices 0..keys.size()-1 grouped by key, one contiguous run per key.
+template <typename Key>
+std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key>& keys) {
+  std::vector<uint32_t> order(keys.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return keys[a] < keys[b]; });
+  std::vector<std::pair<Key, std::vector<uint32_t>>> groups;
+  for (uint32_t i : order) {
+    if (groups.empty() || groups.back().first != keys[i]) groups.push_back({keys[i], {}});
+    groups.back().second.push_back(i);
+  }
+  return groups;
+}
+
+struct Path {
+  float film_x = 0, film_y = 0;
+  Ray ray;
+  Vec3 throughput{1, 1, 1};
+  Vec3 radiance{0, 0, 0};
+  // Solid-angle pdf of the last BSDF sample, and whether an emitter hit
+  // next takes full weight (camera ray, delta lobe, or no light sample).
+  float bsdf_pdf = 0;
+  bool full_weight = true;
+};
+
+// A surface hit that scatters further.
+struct Vertex {
+  uint32_t path;
+  Vec3 position, normal, wi;
+  float u, v;
+};
+
+class PathTracer final : public Transport {
+ public:
+  explicit PathTracer(const Properties& props)
+      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))) {
+    if (max_depth_ < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
+    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
+  }
+
+  uint32_t Dimensions() const override {
+    return kFirstBounceDimension + kDimensionsPerBounce * uint32_t(max_depth_ < 0 ? 64 : max_depth_);
+  }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    const size_t n = points.Count();
+    std::vector<Path> paths(n);
+    std::vector<uint32_t> active;
+    active.reserve(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      Path& p = paths[i];
+      p.film_x = points.Get(i, 0);
+      p.film_y = points.Get(i, 1);
+      p.ray = scene.CameraRay(p.film_x, p.film_y, points.Get(i, 2), points.Get(i, 3));
+      active.push_back(i);
+    }
+    for (int depth = 1; !active.empty() && max_depth_ != 0; ++depth)
+      active = Bounce(scene, points, paths, active, depth);
+    const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
+    for (const Path& p : paths) out.Add(p.film_x * w, p.film_y * h, p.radiance);
+  }
+
+ private:
+  // Advances the paths in `active` by one bounce; returns those that go on.
+  std::vector<uint32_t> Bounce(const SceneView& scene, const PrimarySamples& points,
+                               std::vector<Path>& paths, const std::vector<uint32_t>& active,
+                               int depth) const {
+    std::vector<Ray> rays(active.size());
+    std::vector<Hit> hits(active.size());
+    for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
+    scene.Intersect(rays, hits);
+
+    const bool may_scatter = max_depth_ < 0 || depth < max_depth_;
+    std::vector<Vertex> vertices;
+    std::vector<uint32_t> vertex_material;
+    std::vector<uint32_t> emitted;  // indices into active/hits
+    for (size_t k = 0; k < active.size(); ++k) {
+      const Hit& hit = hits[k];
+      if (!hit.Found()) continue;
+      if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
+      if (!may_scatter) continue;
+      const Ray& ray = rays[k];
+      Vertex v{active[k], ray.origin + ray.direction * hit.t, hit.normal,
+               Frame(hit.normal).ToLocal(-ray.direction), hit.u, hit.v};
+      vertices.push_back(v);
+      vertex_material.push_back(scene.MaterialOf(hit.shape));
+    }
+    AddEmission(scene, paths, active, rays, hits, emitted);
+
+    const uint32_t base = kFirstBounceDimension + kDimensionsPerBounce * uint32_t(depth - 1);
+    std::vector<uint32_t> next;
+    for (const auto& [material, members] : GroupBy(vertex_material)) {
+      const SurfaceModel& model = scene.Material(material);
+      const bool sample_lights = scene.HasEmitters() && !(model.Lobes() & kScatterDelta);
+      if (sample_lights) SampleLights(scene, points, model, paths, vertices, members, base);
+      ScatterBsdf(points, model, paths, vertices, members, base + 3, depth, sample_lights, next);
+    }
+    return next;
+  }
+
+  // Emitters hit by the rays of this bounce, weighted against light sampling.
+  void AddEmission(const SceneView& scene, std::vector<Path>& paths, const std::vector<uint32_t>& active,
+                   const std::vector<Ray>& rays, const std::vector<Hit>& hits,
+                   const std::vector<uint32_t>& emitted) const {
+    std::vector<const Emitter*> keys;
+    for (uint32_t k : emitted) keys.push_back(scene.EmitterOf(hits[k].shape));
+    for (const auto& [emitter, members] : GroupBy(keys)) {
+      const size_t m = members.size();
+      std::vector<float> w(3 * m), uv(2 * m), le(3 * m);
+      for (size_t j = 0; j < m; ++j) {
+        const uint32_t k = emitted[members[j]];
+        Frame(hits[k].normal).ToLocal(-rays[k].direction).Store(&w[3 * j]);
+        uv[2 * j] = hits[k].u;
+        uv[2 * j + 1] = hits[k].v;
+      }
+      emitter->Radiance(w, uv, le);
+      for (size_t j = 0; j < m; ++j) {
+        const uint32_t k = emitted[members[j]];
+        Path& p = paths[active[k]];
+        float weight = 1;
+        if (!p.full_weight) {
+          const float cos_light = std::abs(w[3 * j + 2]);
+          const float light_pdf =
+              cos_light > 0 ? scene.EmitterPdfArea(hits[k].shape) * hits[k].t * hits[k].t / cos_light : 0;
+          weight = PowerHeuristic(p.bsdf_pdf, light_pdf);
+        }
+        p.radiance += p.throughput * Vec3::Load(&le[3 * j]) * weight;
+      }
+    }
+  }
+
+  // Next-event estimation: one emitter sample per vertex, MIS-weighted.
+  void SampleLights(const SceneView& scene, const PrimarySamples& points, const SurfaceModel& model,
+                    std::vector<Path>& paths, const std::vector<Vertex>& vertices,
+                    const std::vector<uint32_t>& members, uint32_t dim) const {
+    const size_t m = members.size();
+    std::vector<float> wi(3 * m), wo(3 * m), uv(2 * m), f(3 * m), pdf(m);
+    std::vector<float> light_w(3 * m), light_uv(2 * m), le(3 * m), light_pdf(m);
+    std::vector<Ray> shadow(m);
+    std::vector<const Emitter*> emitters(m);
+    for (size_t j = 0; j < m; ++j) {
+      const Vertex& v = vertices[members[j]];
+      const uint32_t path = v.path;
+      const EmitterSample s =
+          scene.SampleEmitter(points.Get(path, dim), points.Get(path, dim + 1), points.Get(path, dim + 2));
+      Vec3 to_light = s.position - v.position;
+      const float dist = Length(to_light);
+      to_light = dist > 0 ? to_light / dist : Vec3(0, 0, 1);
+      const float cos_light = std::abs(Dot(s.normal, to_light));
+      light_pdf[j] = cos_light > 0 && dist > 0 ? s.pdf_area * dist * dist / cos_light : 0;
+      emitters[j] = s.shape == kNoShape ? nullptr : scene.EmitterOf(s.shape);
+      v.wi.Store(&wi[3 * j]);
+      Frame(v.normal).ToLocal(to_light).Store(&wo[3 * j]);
+      uv[2 * j] = v.u;
+      uv[2 * j + 1] = v.v;
+      Frame(s.normal).ToLocal(-to_light).Store(&light_w[3 * j]);
+      light_uv[2 * j] = s.u;
+      light_uv[2 * j + 1] = s.v;
+      Ray& r = shadow[j];
+      r.origin = OffsetRayOrigin(v.position, v.normal, to_light);
+      r.direction = to_light;
+      r.tnear = 0;
+      r.tfar = dist * (1 - 1e-4f);
+    }
+    model.Evaluate(wi, wo, uv, f);
+    model.Pdf(wi, wo, uv, pdf);
+    std::vector<const Emitter*> keys = emitters;
+    for (const auto& [emitter, group] : GroupBy(keys)) {
+      if (!emitter) continue;
+      const size_t g = group.size();
+      std::vector<float> w(3 * g), guv(2 * g), radiance(3 * g);
+      for (size_t q = 0; q < g; ++q) {
+        std::copy_n(&light_w[3 * group[q]], 3, &w[3 * q]);
+        std::copy_n(&light_uv[2 * group[q]], 2, &guv[2 * q]);
+      }
+      emitter->Radiance(w, guv, radiance);
+      for (size_t q = 0; q < g; ++q) std::copy_n(&radiance[3 * q], 3, &le[3 * group[q]]);
+    }
+    // Trace shadow rays only for samples that would contribute.
+    std::vector<Ray> rays;
+    std::vector<uint32_t> owners;
+    std::vector<Vec3> contributions;
+    for (size_t j = 0; j < m; ++j) {
+      if (!emitters[j] || light_pdf[j] <= 0) continue;
+      const Path& p = paths[vertices[members[j]].path];
+      const float cos_surface = std::abs(wo[3 * j + 2]);
+      const Vec3 c = p.throughput * Vec3::Load(&f[3 * j]) * Vec3::Load(&le[3 * j]) *
+                     (cos_surface * PowerHeuristic(light_pdf[j], pdf[j]) / light_pdf[j]);
+      if (MaxComponent(c) <= 0) continue;
+      rays.push_back(shadow[j]);
+      owners.push_back(vertices[members[j]].path);
+      contributions.push_back(c);
+    }
+    std::vector<uint8_t> occluded(rays.size());
+    scene.Occluded(rays, occluded);
+    for (size_t q = 0; q < rays.size(); ++q)
+      if (!occluded[q]) paths[owners[q]].radiance += contributions[q];
+  }
+
+  // Samples the BSDF for each vertex, extends the path, applies roulette.
+  void ScatterBsdf(const PrimarySamples& points, const SurfaceModel& model, std::vector<Path>& paths,
+                   const std::vector<Vertex>& vertices, const std::vector<uint32_t>& members,
+                   uint32_t dim, int depth, bool sampled_lights, std::vector<uint32_t>& next) const {
+    const size_t m = members.size();
+    std::vector<float> wi(3 * m), uv(2 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m);
+    std::vector<uint32_t> flags(m);
+    for (size_t j = 0; j < m; ++j) {
+      const Vertex& v = vertices[members[j]];
+      v.wi.Store(&wi[3 * j]);
+      uv[2 * j] = v.u;
+      uv[2 * j + 1] = v.v;
+      for (uint32_t c = 0; c < 3; ++c) u[3 * j + c] = points.Get(v.path, dim + c);
+    }
+    model.Sample(wi, uv, u, 0, wo, weight, pdf, flags);
+    for (size_t j = 0; j < m; ++j) {
+      const Vertex& v = vertices[members[j]];
+      Path& p = paths[v.path];
+      const Vec3 w = Vec3::Load(&weight[3 * j]);
+      if (!(pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
+      p.throughput *= w;
+      p.bsdf_pdf = pdf[j];
+      p.full_weight = !sampled_lights || (flags[j] & kScatterDelta);
+      const Vec3 dir = Normalize(Frame(v.normal).ToWorld(Vec3::Load(&wo[3 * j])));
+      p.ray.origin = OffsetRayOrigin(v.position, v.normal, dir);
+      p.ray.direction = dir;
+      p.ray.tnear = 0;
+      p.ray.tfar = kInfinity;
+      if (depth >= rr_depth_) {
+        const float q = std::min(MaxComponent(p.throughput), 0.95f);
+        if (points.Get(v.path, dim + 3) >= q) continue;
+        p.throughput *= 1.0f / q;
+      }
+      next.push_back(v.path);
+    }
+  }
+
+  int max_depth_;
+  int rr_depth_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::PathTracer>(registrar, "path", "1.0.0",
+                                   "eye path tracer with next-event estimation and MIS");
+}

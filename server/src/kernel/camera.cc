@@ -1,0 +1,66 @@
+#include "kernel/camera.h"
+
+#include <cmath>
+
+#include "yarf/error.h"
+#include "yarf/warps.h"
+
+namespace yarf {
+namespace {
+Vec3 ToVec3(const v1::Vec3& v) { return {float(v.x()), float(v.y()), float(v.z())}; }
+}  // namespace
+
+Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
+  origin_ = ToVec3(camera.origin());
+  const Vec3 to_target = ToVec3(camera.target()) - origin_;
+  if (Length(to_target) <= 0) throw Error("camera: target equals origin");
+  forward_ = Normalize(to_target);
+  const Vec3 right = Cross(forward_, ToVec3(camera.up()));
+  if (Length(right) <= 1e-6f) throw Error("camera: up is parallel to the view direction");
+  right_ = Normalize(right);
+  up_ = Cross(right_, forward_);
+
+  if (!(camera.fov() > 0 && camera.fov() < 180))
+    throw Error("camera: fov must lie in (0, 180) degrees, got " + std::to_string(camera.fov()));
+  const float tan_half = std::tan(float(camera.fov()) * kPi / 360.0f);
+  const float aspect = float(width) / float(height);
+  bool along_x = camera.fov_axis() == v1::Camera::X;
+  if (camera.fov_axis() == v1::Camera::SMALLER) along_x = width <= height;
+  if (camera.fov_axis() == v1::Camera::LARGER) along_x = width > height;
+  tan_half_x_ = along_x ? tan_half : tan_half * aspect;
+  tan_half_y_ = along_x ? tan_half / aspect : tan_half;
+
+  if (camera.model() == v1::Camera::THIN_LENS) {
+    if (camera.lens_radius() < 0 || camera.focus_distance() <= 0)
+      throw Error("camera: thin lens needs lens_radius >= 0 and focus_distance > 0");
+    lens_radius_ = float(camera.lens_radius());
+    focus_distance_ = float(camera.focus_distance());
+  }
+  if (camera.near_clip() < 0 || camera.far_clip() < 0 ||
+      (camera.far_clip() > 0 && camera.far_clip() <= camera.near_clip()))
+    throw Error("camera: need 0 <= near_clip < far_clip (far_clip 0 = unbounded)");
+  near_clip_ = float(camera.near_clip());
+  far_clip_ = float(camera.far_clip());
+}
+
+Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v) const {
+  // Direction in camera space (x right, y up, z forward) through the image
+  // plane at z = 1.
+  Vec3 dir{(2 * film_x - 1) * tan_half_x_, (1 - 2 * film_y) * tan_half_y_, 1};
+  Vec3 lens{0, 0, 0};
+  if (lens_radius_ > 0) {
+    const auto disk = SampleConcentricDisk(lens_u, lens_v);
+    lens = Vec3(disk[0] * lens_radius_, disk[1] * lens_radius_, 0);
+    dir = dir * focus_distance_ - lens;
+  }
+  const float inv_len = 1.0f / Length(dir);
+  const Vec3 d = dir * inv_len;  // d.z is the cosine to the view axis
+  Ray ray;
+  ray.origin = origin_ + right_ * lens.x + up_ * lens.y;
+  ray.direction = right_ * d.x + up_ * d.y + forward_ * d.z;
+  ray.tnear = near_clip_ / d.z;
+  ray.tfar = far_clip_ > 0 ? far_clip_ / d.z : kInfinity;
+  return ray;
+}
+
+}  // namespace yarf

@@ -1,0 +1,81 @@
+#include "kernel/film.h"
+
+#include <cmath>
+
+namespace yarf {
+
+ReconstructionFilter::ReconstructionFilter(const v1::ReconstructionFilter& filter)
+    : kind_(filter.kind()) {
+  const double defaults[] = {0.5, 1.0, 2.0};
+  radius_ = float(filter.radius() > 0 ? filter.radius() : defaults[kind_]);
+  if (kind_ == v1::ReconstructionFilter::GAUSSIAN)
+    gaussian_offset_ = std::exp(-radius_ * radius_ / (2 * 0.25f));
+}
+
+float ReconstructionFilter::Weight1(float d) const {
+  d = std::abs(d);
+  if (d >= radius_) return 0;
+  switch (kind_) {
+    case v1::ReconstructionFilter::TENT:
+      return 1 - d / radius_;
+    case v1::ReconstructionFilter::GAUSSIAN:  // standard deviation 0.5 pixel
+      return std::exp(-d * d / (2 * 0.25f)) - gaussian_offset_;
+    default:
+      return 1;
+  }
+}
+
+Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
+    : width_(width), height_(height), filter_(filter), pixels_(size_t(width) * height) {}
+
+void Film::Add(float x, float y, Vec3 value) {
+  if (!(std::isfinite(value.x) && std::isfinite(value.y) && std::isfinite(value.z))) return;
+  const float r = filter_.radius();
+  // Pixel (i, j) has its centre at (i + 0.5, j + 0.5).
+  const int x0 = std::max(0, int(std::ceil(x - r - 0.5f)));
+  const int x1 = std::min(int(width_) - 1, int(std::floor(x + r - 0.5f)));
+  const int y0 = std::max(0, int(std::ceil(y - r - 0.5f)));
+  const int y1 = std::min(int(height_) - 1, int(std::floor(y + r - 0.5f)));
+  for (int j = y0; j <= y1; ++j)
+    for (int i = x0; i <= x1; ++i) {
+      const double w = filter_.Weight(i + 0.5f - x, j + 0.5f - y);
+      if (w <= 0) continue;
+      Pixel& p = pixels_[size_t(j) * width_ + i];
+      p.weight += w;
+      p.weight_sq += w * w;
+      for (int c = 0; c < 3; ++c) {
+        const double l = value[c];
+        p.sum[c] += w * l;
+        p.sum_wsq[c] += w * w * l;
+        p.sum_sq[c] += w * w * l * l;
+      }
+    }
+}
+
+std::vector<float> Film::Pixels() const {
+  std::vector<float> out(pixels_.size() * 3, 0.0f);
+  for (size_t k = 0; k < pixels_.size(); ++k)
+    if (pixels_[k].weight > 0)
+      for (int c = 0; c < 3; ++c) out[k * 3 + c] = float(pixels_[k].sum[c] / pixels_[k].weight);
+  return out;
+}
+
+std::vector<float> Film::Variances() const {
+  // Var of Σ w L / Σ w with L's variance estimated from the samples:
+  // Σ w² (L − m)² / (Σ w)², scaled by n/(n−1) (effective n).
+  std::vector<float> out(pixels_.size() * 3, 0.0f);
+  for (size_t k = 0; k < pixels_.size(); ++k) {
+    const Pixel& p = pixels_[k];
+    if (p.weight <= 0 || p.weight_sq <= 0) continue;
+    const double n_eff = p.weight * p.weight / p.weight_sq;
+    if (n_eff <= 1) continue;
+    for (int c = 0; c < 3; ++c) {
+      const double m = p.sum[c] / p.weight;
+      const double ss = p.sum_sq[c] - 2 * m * p.sum_wsq[c] + m * m * p.weight_sq;
+      out[k * 3 + c] = float(std::max(0.0, ss) / (p.weight * p.weight) * n_eff / (n_eff - 1));
+    }
+  }
+  return out;
+}
+
+}  // namespace yarf

@@ -1,0 +1,50 @@
+// The RGB film: a weighted-average estimate per pixel under a
+// reconstruction filter, with the variance of each estimate.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "yarf/vecmath.h"
+#include "yarf/v1/scene.pb.h"
+
+namespace yarf {
+
+class ReconstructionFilter {
+ public:
+  explicit ReconstructionFilter(const v1::ReconstructionFilter& filter);
+  float radius() const { return radius_; }
+  float Weight(float dx, float dy) const { return Weight1(dx) * Weight1(dy); }
+
+ private:
+  float Weight1(float d) const;
+  v1::ReconstructionFilter::Kind kind_;
+  float radius_;
+  float gaussian_offset_ = 0;
+};
+
+class Film {
+ public:
+  Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter);
+
+  uint32_t width() const { return width_; }
+  uint32_t height() const { return height_; }
+  // A camera sample of radiance `value` at raster position (x, y) in pixels.
+  void Add(float x, float y, Vec3 value);
+  // Pixel estimates and their variances, row-major [height, width, 3].
+  std::vector<float> Pixels() const;
+  std::vector<float> Variances() const;
+
+ private:
+  struct Pixel {
+    double weight = 0, weight_sq = 0;
+    double sum[3] = {0, 0, 0};      // Σ w L
+    double sum_wsq[3] = {0, 0, 0};  // Σ w² L
+    double sum_sq[3] = {0, 0, 0};   // Σ w² L²
+  };
+  uint32_t width_, height_;
+  ReconstructionFilter filter_;
+  std::vector<Pixel> pixels_;
+};
+
+}  // namespace yarf

@@ -1,0 +1,259 @@
+#include "kernel/scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "yarf/error.h"
+#include "yarf/warps.h"
+
+namespace yarf {
+namespace {
+
+RTCRayHit ToEmbree(const Ray& ray) {
+  RTCRayHit rh;
+  rh.ray.org_x = ray.origin.x;
+  rh.ray.org_y = ray.origin.y;
+  rh.ray.org_z = ray.origin.z;
+  rh.ray.dir_x = ray.direction.x;
+  rh.ray.dir_y = ray.direction.y;
+  rh.ray.dir_z = ray.direction.z;
+  rh.ray.tnear = ray.tnear;
+  rh.ray.tfar = ray.tfar;
+  rh.ray.time = 0;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
+}  // namespace
+
+KernelScene::KernelScene(const EmbreeDevice& device, const Camera& camera, uint32_t width,
+                         uint32_t height)
+    : device_(device), camera_(camera), width_(width), height_(height) {
+  groups_.push_back({rtcNewScene(device.get()), {}});  // kWorld
+}
+
+KernelScene::~KernelScene() {
+  for (Group& g : groups_) rtcReleaseScene(g.scene);
+}
+
+uint32_t KernelScene::AddMaterial(std::unique_ptr<SurfaceModel> material) {
+  materials_.push_back(std::move(material));
+  return uint32_t(materials_.size() - 1);
+}
+
+const Emitter* KernelScene::AddEmitter(std::unique_ptr<Emitter> emitter) {
+  emitters_.push_back(std::move(emitter));
+  return emitters_.back().get();
+}
+
+uint32_t KernelScene::NewGroup() {
+  groups_.push_back({rtcNewScene(device_.get()), {}});
+  return uint32_t(groups_.size() - 1);
+}
+
+void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look) {
+  RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+  auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.TriangleCount()));
+  if (!vertices || !indices) {
+    rtcReleaseGeometry(geom);
+    device_.Check("mesh '" + look.name + "'");
+    throw Error("mesh '" + look.name + "': Embree could not allocate its buffers");
+  }
+  for (size_t i = 0; i < mesh.positions.size(); ++i) mesh.positions[i].Store(vertices + 3 * i);
+  std::copy(mesh.indices.begin(), mesh.indices.end(), indices);
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(groups_[group].scene, geom);
+  rtcReleaseGeometry(geom);
+
+  ShapeRecord record;
+  record.kind = Kind::kTriangles;
+  record.mesh = uint32_t(meshes_.size());
+  record.look = look;
+  meshes_.push_back(std::move(mesh));
+  groups_[group].shapes.push_back(record);
+}
+
+void KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look) {
+  RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_SPHERE_POINT);
+  auto* point = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+  point[0] = center.x;
+  point[1] = center.y;
+  point[2] = center.z;
+  point[3] = radius;
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(groups_[group].scene, geom);
+  rtcReleaseGeometry(geom);
+
+  ShapeRecord record;
+  record.kind = Kind::kSphere;
+  record.center = center;
+  record.radius = radius;
+  record.look = look;
+  groups_[group].shapes.push_back(record);
+}
+
+void KernelScene::AddPlacement(uint32_t group, const Transform& to_world) {
+  placements_.emplace_back(group, to_world);
+}
+
+void KernelScene::Commit() {
+  // World geometries come first, one shape each; then each placement adds
+  // an instance whose geometries are the shapes of its group.
+  for (const ShapeRecord& s : groups_[kWorld].shapes) {
+    geometry_base_.push_back(uint32_t(shapes_.size()));
+    shapes_.push_back(s);
+  }
+  for (size_t g = 1; g < groups_.size(); ++g) {
+    rtcSetSceneBuildQuality(groups_[g].scene, RTC_BUILD_QUALITY_HIGH);
+    rtcCommitScene(groups_[g].scene);
+  }
+  for (const auto& [group, to_world] : placements_) {
+    RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(geom, groups_[group].scene);
+    float m[12];
+    for (int i = 0; i < 12; ++i) m[i] = float(to_world.m[i]);
+    rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(groups_[kWorld].scene, geom);
+    rtcReleaseGeometry(geom);
+    geometry_base_.push_back(uint32_t(shapes_.size()));
+    for (ShapeRecord s : groups_[group].shapes) {
+      s.placed = true;
+      s.to_world = to_world;
+      shapes_.push_back(s);
+    }
+  }
+  rtcSetSceneBuildQuality(groups_[kWorld].scene, RTC_BUILD_QUALITY_HIGH);
+  rtcCommitScene(groups_[kWorld].scene);
+  device_.Check("scene build");
+
+  for (uint32_t id = 0; id < shapes_.size(); ++id) {
+    const ShapeRecord& s = shapes_[id];
+    if (!s.look.emitter) continue;
+    const uint32_t count = s.kind == Kind::kSphere ? 1 : uint32_t(meshes_[s.mesh].TriangleCount());
+    for (uint32_t p = 0; p < count; ++p) {
+      emitter_area_ += PrimitiveArea(s, p);
+      emitting_.emplace_back(id, p);
+      emitting_cdf_.push_back(emitter_area_);
+    }
+  }
+}
+
+void KernelScene::Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const {
+  const TriangleMesh& mesh = meshes_[shape.mesh];
+  for (int k = 0; k < 3; ++k) {
+    v[k] = mesh.positions[mesh.indices[3 * primitive + k]];
+    if (shape.placed) v[k] = shape.to_world.Point(v[k]);
+  }
+}
+
+float KernelScene::PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const {
+  if (shape.kind == Kind::kSphere) {
+    // Spheres are placed by similarity transforms: scale by the cube root
+    // of the determinant.
+    const float scale = shape.placed ? float(std::cbrt(std::abs(shape.to_world.Determinant3()))) : 1;
+    const float r = shape.radius * scale;
+    return 4 * kPi * r * r;
+  }
+  Vec3 v[3];
+  Triangle(shape, primitive, v);
+  return 0.5f * Length(Cross(v[1] - v[0], v[2] - v[0]));
+}
+
+Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position) const {
+  Vec3 n;
+  if (shape.kind == Kind::kSphere) {
+    const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
+    n = position - center;
+  } else {
+    const TriangleMesh& mesh = meshes_[shape.mesh];
+    const Vec3 p0 = mesh.positions[mesh.indices[3 * primitive]];
+    const Vec3 p1 = mesh.positions[mesh.indices[3 * primitive + 1]];
+    const Vec3 p2 = mesh.positions[mesh.indices[3 * primitive + 2]];
+    n = Cross(p1 - p0, p2 - p0);
+    if (shape.placed) n = shape.to_world.Normal(n);
+  }
+  n = Normalize(n);
+  return shape.look.flip_normals ? -n : n;
+}
+
+void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  const RTCScene world = groups_[kWorld].scene;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    RTCRayHit rh = ToEmbree(rays[i]);
+    rtcIntersect1(world, &context, &rh);
+    Hit& hit = hits[i];
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+      hit = Hit{};
+      continue;
+    }
+    const uint32_t top = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
+    const uint32_t local = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.geomID : 0;
+    hit.shape = geometry_base_[top] + local;
+    hit.primitive = rh.hit.primID;
+    hit.t = rh.ray.tfar;
+    hit.u = rh.hit.u;
+    hit.v = rh.hit.v;
+    hit.normal = Normal(shapes_[hit.shape], hit.primitive, rays[i].origin + rays[i].direction * hit.t);
+  }
+  closest_hit_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
+}
+
+void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  const RTCScene world = groups_[kWorld].scene;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    RTCRay ray = ToEmbree(rays[i]).ray;
+    rtcOccluded1(world, &context, &ray);
+    occluded[i] = ray.tfar < 0 ? 1 : 0;
+  }
+  shadow_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
+}
+
+EmitterSample KernelScene::SampleEmitter(float u0, float u1, float u2) const {
+  EmitterSample s;
+  if (emitting_.empty()) return s;
+  const float target = u0 * emitter_area_;
+  const size_t k = std::min(size_t(std::upper_bound(emitting_cdf_.begin(), emitting_cdf_.end(), target) -
+                                   emitting_cdf_.begin()),
+                            emitting_.size() - 1);
+  const auto [shape_id, primitive] = emitting_[k];
+  const ShapeRecord& shape = shapes_[shape_id];
+  s.shape = shape_id;
+  s.pdf_area = 1.0f / emitter_area_;
+  if (shape.kind == Kind::kSphere) {
+    const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
+    const float scale = shape.placed ? float(std::cbrt(std::abs(shape.to_world.Determinant3()))) : 1;
+    const Vec3 d = SampleUniformSphere(u1, u2);
+    s.position = center + d * (shape.radius * scale);
+    s.normal = shape.look.flip_normals ? -d : d;
+    return s;
+  }
+  Vec3 v[3];
+  Triangle(shape, primitive, v);
+  const auto b = SampleUniformTriangle(u1, u2);
+  s.position = v[0] * b[0] + v[1] * b[1] + v[2] * (1 - b[0] - b[1]);
+  s.u = b[1];
+  s.v = 1 - b[0] - b[1];
+  s.normal = Normal(shape, primitive, s.position);
+  return s;
+}
+
+float KernelScene::EmitterPdfArea(uint32_t shape) const {
+  return shapes_[shape].look.emitter && emitter_area_ > 0 ? 1.0f / emitter_area_ : 0.0f;
+}
+
+}  // namespace yarf

@@ -1,0 +1,110 @@
+// The kernel's scene: Embree geometry, materials, emitters and the camera
+// of one job, seen by transport algorithms through SceneView.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "kernel/camera.h"
+#include "kernel/embree_device.h"
+#include "kernel/mesh_io.h"
+#include "yarf/transport.h"
+
+namespace yarf {
+
+// What a shape is made of, besides its geometry.
+struct ShapeLook {
+  std::string name;
+  uint32_t material = 0;
+  const Emitter* emitter = nullptr;
+  bool flip_normals = false;
+};
+
+class KernelScene final : public SceneView {
+ public:
+  static constexpr uint32_t kWorld = 0;
+
+  KernelScene(const EmbreeDevice& device, const Camera& camera, uint32_t width, uint32_t height);
+  ~KernelScene() override;
+  KernelScene(const KernelScene&) = delete;
+  KernelScene& operator=(const KernelScene&) = delete;
+
+  // Building: materials and emitters first, then shapes in groups (group
+  // kWorld is the world itself), then placements of groups, then Commit.
+  uint32_t AddMaterial(std::unique_ptr<SurfaceModel> material);
+  const Emitter* AddEmitter(std::unique_ptr<Emitter> emitter);
+  uint32_t NewGroup();
+  // Geometry in the group's own space.
+  void AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look);
+  void AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look);
+  // Places a group (not kWorld) in the world; nested placements arrive
+  // here already flattened, with composed transforms.
+  void AddPlacement(uint32_t group, const Transform& to_world);
+  void Commit();
+
+  // SceneView
+  void Intersect(std::span<const Ray> rays, std::span<Hit> hits) const override;
+  void Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
+  uint32_t MaterialCount() const override { return uint32_t(materials_.size()); }
+  const SurfaceModel& Material(uint32_t material) const override { return *materials_[material]; }
+  uint32_t MaterialOf(uint32_t shape) const override { return shapes_[shape].look.material; }
+  const Emitter* EmitterOf(uint32_t shape) const override { return shapes_[shape].look.emitter; }
+  bool HasEmitters() const override { return emitter_area_ > 0; }
+  EmitterSample SampleEmitter(float u0, float u1, float u2) const override;
+  float EmitterPdfArea(uint32_t shape) const override;
+  Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v) const override {
+    return camera_.Generate(film_x, film_y, lens_u, lens_v);
+  }
+  uint32_t FilmWidth() const override { return width_; }
+  uint32_t FilmHeight() const override { return height_; }
+
+  uint32_t ShapeCount() const { return uint32_t(shapes_.size()); }
+  // The committed Embree scene (for measuring Embree itself).
+  RTCScene embree_scene() const { return groups_[kWorld].scene; }
+  uint64_t ClosestHitRays() const { return closest_hit_rays_.load(std::memory_order_relaxed); }
+  uint64_t ShadowRays() const { return shadow_rays_.load(std::memory_order_relaxed); }
+
+ private:
+  enum class Kind { kTriangles, kSphere };
+  struct ShapeRecord {
+    Kind kind = Kind::kTriangles;
+    uint32_t mesh = 0;  // into meshes_
+    Vec3 center;
+    float radius = 0;
+    bool placed = false;  // false: world geometry, already in world space
+    Transform to_world;
+    ShapeLook look;
+  };
+  struct Group {
+    RTCScene scene = nullptr;
+    std::vector<ShapeRecord> shapes;
+  };
+
+  Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position) const;
+  void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
+  float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
+
+  const EmbreeDevice& device_;
+  Camera camera_;
+  uint32_t width_, height_;
+  std::vector<std::unique_ptr<SurfaceModel>> materials_;
+  std::vector<std::unique_ptr<Emitter>> emitters_;
+  std::vector<TriangleMesh> meshes_;
+  std::vector<Group> groups_;
+  std::vector<std::pair<uint32_t, Transform>> placements_;
+  // Every shape placement; Hit::shape indexes it.
+  std::vector<ShapeRecord> shapes_;
+  // First shape id of each world-level Embree geometry (by geomID).
+  std::vector<uint32_t> geometry_base_;
+  // Emitting primitives and the running sum of their areas.
+  std::vector<std::pair<uint32_t, uint32_t>> emitting_;
+  std::vector<float> emitting_cdf_;
+  float emitter_area_ = 0;
+  mutable std::atomic<uint64_t> closest_hit_rays_{0}, shadow_rays_{0};
+};
+
+}  // namespace yarf

@@ -1,0 +1,236 @@
+#include "kernel/scene_builder.h"
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "components/properties_proto.h"
+#include "yarf/error.h"
+
+namespace yarf {
+namespace {
+
+std::string ShapeName(const v1::SceneShape& shape, size_t index) {
+  return "shape " + std::to_string(index) + (shape.name().empty() ? "" : " ('" + shape.name() + "')");
+}
+
+Transform ShapeTransform(const v1::SceneShape& shape, const std::string& what) {
+  return shape.has_to_world() ? FromProto(shape.to_world(), what + " to_world") : Transform{};
+}
+
+void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
+                    const std::set<std::string>& materials, const std::string& where) {
+  for (int i = 0; i < shapes.size(); ++i) {
+    const v1::SceneShape& s = shapes[i];
+    const std::string what = where + ShapeName(s, i);
+    if (s.geometry_case() == v1::SceneShape::GEOMETRY_NOT_SET) throw Error(what + " has no geometry");
+    if (s.material().empty()) throw Error(what + " has no material");
+    if (!materials.count(s.material()))
+      throw Error(what + " uses unknown material '" + s.material() + "'");
+    if (s.has_emitter() && s.emitter().class_name().empty())
+      throw Error(what + " has an emitter without a class");
+    if (s.has_sphere() && !(s.sphere().radius() > 0 && std::isfinite(s.sphere().radius())))
+      throw Error(what + ": sphere radius must be positive");
+    if (s.has_to_world()) {
+      const Transform t = FromProto(s.to_world(), what + " to_world");
+      if (std::abs(t.Determinant3()) < 1e-30) throw Error(what + ": degenerate to_world");
+    }
+    if (s.has_mesh() && s.mesh().source_case() == v1::Mesh::SOURCE_NOT_SET) {
+      if (s.mesh().positions_size() % 3 != 0 || s.mesh().indices_size() % 3 != 0 ||
+          s.mesh().indices_size() == 0)
+        throw Error(what + ": inline mesh needs xyz positions and index triples");
+      for (uint32_t index : s.mesh().indices())
+        if (index >= uint32_t(s.mesh().positions_size() / 3))
+          throw Error(what + ": mesh index " + std::to_string(index) + " out of range");
+    }
+  }
+}
+
+std::string ReadAsset(const std::filesystem::path& root, const std::string& file,
+                      const std::string& what) {
+  namespace fs = std::filesystem;
+  if (root.empty())
+    throw Error(what + ": mesh file '" + file +
+                "' cannot be read: this server has no asset root; send the file's bytes in `data`");
+  const fs::path base = fs::weakly_canonical(root);
+  const fs::path path = fs::weakly_canonical(base / file);
+  const auto [end, _] = std::mismatch(base.begin(), base.end(), path.begin(), path.end());
+  if (end != base.end()) throw Error(what + ": mesh file '" + file + "' lies outside the scene folder");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(what + ": mesh file '" + file + "' not found");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+class Builder {
+ public:
+  Builder(const v1::Scene& scene, const SceneSources& sources) : scene_(scene), sources_(sources) {}
+
+  std::unique_ptr<KernelScene> Build() {
+    const uint32_t w = scene_.film().width(), h = scene_.film().height();
+    kernel_ = std::make_unique<KernelScene>(sources_.device, Camera(scene_.camera(), w, h), w, h);
+    for (const v1::Material& m : scene_.materials()) {
+      const std::string what = "material '" + m.name() + "' (" + m.class_name() + ")";
+      materials_[m.name()] = kernel_->AddMaterial(
+          Create<SurfaceModel>(m.class_name(), m.properties(), what));
+    }
+    AddShapes(KernelScene::kWorld, scene_.shapes(), "");
+    for (const v1::Group& g : scene_.groups()) {
+      groups_[g.name()] = {&g, kernel_->NewGroup()};
+      AddShapes(groups_[g.name()].second, g.shapes(), "group '" + g.name() + "' ");
+    }
+    for (const v1::Instance& instance : scene_.instances()) Place(instance, Transform{}, 1);
+    kernel_->Commit();
+    return std::move(kernel_);
+  }
+
+ private:
+  template <typename I>
+  std::unique_ptr<I> Create(const std::string& class_name, const v1::Properties& props,
+                            const std::string& what) {
+    try {
+      return sources_.registry.CreateAs<I>(class_name, FromProto(props));
+    } catch (const Error& e) {
+      throw Error(what + ": " + e.what());
+    }
+  }
+
+  void AddShapes(uint32_t group, const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
+                 const std::string& where) {
+    for (int i = 0; i < shapes.size(); ++i) {
+      const v1::SceneShape& s = shapes[i];
+      const std::string what = where + ShapeName(s, i);
+      ShapeLook look;
+      look.name = s.name().empty() ? what : s.name();
+      look.material = materials_.at(s.material());
+      look.flip_normals = s.flip_normals();
+      if (s.has_emitter())
+        look.emitter = kernel_->AddEmitter(
+            Create<Emitter>(s.emitter().class_name(), s.emitter().properties(), what + " emitter"));
+      const Transform to_world = ShapeTransform(s, what);
+      if (s.has_sphere()) {
+        const auto& c = s.sphere().center();
+        const float scale = float(std::cbrt(std::abs(to_world.Determinant3())));
+        kernel_->AddSphere(group, to_world.Point(Vec3(float(c.x()), float(c.y()), float(c.z()))),
+                           float(s.sphere().radius()) * scale, look);
+        continue;
+      }
+      TriangleMesh mesh = s.has_mesh() ? LoadMesh(s.mesh(), what) : Rectangle();
+      for (Vec3& p : mesh.positions) p = to_world.Point(p);
+      kernel_->AddMesh(group, std::move(mesh), look);
+    }
+  }
+
+  TriangleMesh LoadMesh(const v1::Mesh& mesh, const std::string& what) {
+    switch (mesh.source_case()) {
+      case v1::Mesh::kFile: {
+        std::string format = mesh.format();
+        if (format.empty()) {
+          const std::string ext = std::filesystem::path(mesh.file()).extension().string();
+          format = ext.empty() ? ext : ext.substr(1);
+        }
+        return ParseMesh(ReadAsset(sources_.asset_root, mesh.file(), what), format, mesh.file());
+      }
+      case v1::Mesh::kData:
+        return ParseMesh(mesh.data(), mesh.format(), what);
+      default: {
+        TriangleMesh out;
+        for (int i = 0; i + 2 < mesh.positions_size(); i += 3)
+          out.positions.emplace_back(mesh.positions(i), mesh.positions(i + 1), mesh.positions(i + 2));
+        out.indices.assign(mesh.indices().begin(), mesh.indices().end());
+        ValidateMesh(out, what);
+        return out;
+      }
+    }
+  }
+
+  static TriangleMesh Rectangle() {
+    TriangleMesh m;
+    m.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+    m.indices = {0, 1, 2, 0, 2, 3};
+    return m;
+  }
+
+  // Embree here instances one level deep: nested placements are flattened
+  // into world placements with composed transforms.
+  void Place(const v1::Instance& instance, const Transform& parent, int depth) {
+    const auto& [group, index] = groups_.at(instance.group());
+    const Transform to_world =
+        parent * (instance.has_to_world()
+                      ? FromProto(instance.to_world(), "instance of '" + instance.group() + "'")
+                      : Transform{});
+    if (group->shapes_size() > 0) kernel_->AddPlacement(index, to_world);
+    for (const v1::Instance& child : group->instances()) Place(child, to_world, depth + 1);
+  }
+
+  const v1::Scene& scene_;
+  const SceneSources& sources_;
+  std::unique_ptr<KernelScene> kernel_;
+  std::map<std::string, uint32_t> materials_;
+  std::map<std::string, std::pair<const v1::Group*, uint32_t>> groups_;
+};
+
+// Counts the world placements nested instancing expands to, rejecting
+// cycles, missing groups and explosive nesting before anything is built.
+uint64_t CountPlacements(const v1::Scene& scene) {
+  std::map<std::string, const v1::Group*> groups;
+  for (const v1::Group& g : scene.groups()) {
+    if (g.name().empty()) throw Error("a group has no name");
+    if (!groups.emplace(g.name(), &g).second) throw Error("group '" + g.name() + "' defined twice");
+  }
+  std::map<std::string, uint64_t> memo;
+  std::set<std::string> visiting;
+  std::function<uint64_t(const std::string&, int)> count = [&](const std::string& name, int depth) -> uint64_t {
+    auto it = groups.find(name);
+    if (it == groups.end()) throw Error("instance of unknown group '" + name + "'");
+    if (depth > SceneLimits::kMaxInstanceDepth)
+      throw Error("instancing nested deeper than " + std::to_string(SceneLimits::kMaxInstanceDepth) + " levels");
+    if (visiting.count(name)) throw Error("group '" + name + "' instances itself");
+    if (memo.count(name)) return memo[name];
+    visiting.insert(name);
+    uint64_t n = 1;
+    for (const v1::Instance& child : it->second->instances())
+      n = std::min<uint64_t>(n + count(child.group(), depth + 1), SceneLimits::kMaxPlacements + 1);
+    visiting.erase(name);
+    return memo[name] = n;
+  };
+  uint64_t total = 0;
+  for (const v1::Instance& instance : scene.instances())
+    total = std::min<uint64_t>(total + count(instance.group(), 1), SceneLimits::kMaxPlacements + 1);
+  return total;
+}
+
+}  // namespace
+
+void ValidateScene(const v1::Scene& scene) {
+  const v1::Film& film = scene.film();
+  if (film.width() == 0 || film.height() == 0 || film.width() > SceneLimits::kMaxFilmSide ||
+      film.height() > SceneLimits::kMaxFilmSide ||
+      uint64_t(film.width()) * film.height() > SceneLimits::kMaxPixels)
+    throw Error("film resolution " + std::to_string(film.width()) + "x" + std::to_string(film.height()) +
+                " is out of range (1 to " + std::to_string(SceneLimits::kMaxFilmSide) +
+                " per side, at most " + std::to_string(SceneLimits::kMaxPixels) + " pixels)");
+  if (!scene.has_camera()) throw Error("scene has no camera");
+  Camera(scene.camera(), film.width(), film.height());
+  std::set<std::string> materials;
+  for (const v1::Material& m : scene.materials()) {
+    if (m.name().empty()) throw Error("a material has no name");
+    if (m.class_name().empty()) throw Error("material '" + m.name() + "' has no class");
+    if (!materials.insert(m.name()).second) throw Error("material '" + m.name() + "' defined twice");
+  }
+  ValidateShapes(scene.shapes(), materials, "");
+  for (const v1::Group& g : scene.groups()) ValidateShapes(g.shapes(), materials, "group '" + g.name() + "' ");
+  if (CountPlacements(scene) > SceneLimits::kMaxPlacements)
+    throw Error("instancing expands to more than " + std::to_string(SceneLimits::kMaxPlacements) + " placements");
+}
+
+std::unique_ptr<KernelScene> BuildScene(const v1::Scene& scene, const SceneSources& sources) {
+  ValidateScene(scene);
+  return Builder(scene, sources).Build();
+}
+
+}  // namespace yarf

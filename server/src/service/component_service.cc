@@ -1,0 +1,83 @@
+#include "service/component_service.h"
+
+#include "components/properties_proto.h"
+
+namespace yarf {
+
+uint64_t InstanceTable::Add(std::unique_ptr<Component> instance) {
+  std::lock_guard lock(mutex_);
+  const uint64_t handle = next_++;
+  instances_[handle] = std::move(instance);
+  return handle;
+}
+
+bool InstanceTable::Release(uint64_t handle) {
+  std::lock_guard lock(mutex_);
+  return instances_.erase(handle) != 0;
+}
+
+std::shared_ptr<Component> InstanceTable::Find(uint64_t handle) const {
+  std::lock_guard lock(mutex_);
+  auto it = instances_.find(handle);
+  return it == instances_.end() ? nullptr : it->second;
+}
+
+grpc::Status RegistryServiceImpl::ListClasses(grpc::ServerContext*, const v1::ListClassesRequest*,
+                                              v1::ListClassesReply* reply) {
+  for (const ComponentInfo& info : registry_.Classes()) *reply->add_classes() = ToProto(info);
+  for (const PluginFailure& failure : registry_.Failures()) {
+    v1::PluginError* e = reply->add_plugin_errors();
+    e->set_path(failure.path);
+    e->set_message(failure.message);
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status RegistryServiceImpl::LoadPlugin(grpc::ServerContext*, const v1::LoadPluginRequest* request,
+                                             v1::LoadPluginReply* reply) {
+  try {
+    for (const ComponentInfo& info : registry_.LoadPlugin(request->path()))
+      *reply->add_classes() = ToProto(info);
+    return grpc::Status::OK;
+  } catch (const Error& e) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
+  }
+}
+
+grpc::Status ComponentServiceImpl::Describe(grpc::ServerContext*, const v1::DescribeRequest* request,
+                                            v1::ComponentInfo* reply) {
+  if (request->handle() != 0) {
+    auto instance = instances_.Find(request->handle());
+    if (!instance) return {grpc::StatusCode::NOT_FOUND, "no instance " + std::to_string(request->handle())};
+    *reply = ToProto(instance->Describe());
+    return grpc::Status::OK;
+  }
+  for (const ComponentInfo& info : registry_.Classes())
+    if (info.class_name == request->class_name()) {
+      *reply = ToProto(info);
+      return grpc::Status::OK;
+    }
+  return {grpc::StatusCode::NOT_FOUND, "unknown component class '" + request->class_name() + "'"};
+}
+
+grpc::Status FactoryServiceImpl::Create(grpc::ServerContext*, const v1::CreateRequest* request,
+                                        v1::CreateReply* reply) {
+  try {
+    auto instance = registry_.Create(request->class_name(), FromProto(request->properties()));
+    *reply->mutable_info() = ToProto(instance->Describe());
+    reply->set_handle(instances_.Add(std::move(instance)));
+    return grpc::Status::OK;
+  } catch (const Error& e) {
+    const bool unknown = !registry_.Has(request->class_name());
+    return {unknown ? grpc::StatusCode::NOT_FOUND : grpc::StatusCode::INVALID_ARGUMENT, e.what()};
+  }
+}
+
+grpc::Status FactoryServiceImpl::Release(grpc::ServerContext*, const v1::ReleaseRequest* request,
+                                         v1::ReleaseReply*) {
+  if (!instances_.Release(request->handle()))
+    return {grpc::StatusCode::NOT_FOUND, "no instance " + std::to_string(request->handle())};
+  return grpc::Status::OK;
+}
+
+}  // namespace yarf

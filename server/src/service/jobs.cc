@@ -1,0 +1,185 @@
+#include "service/jobs.h"
+
+#include <cstdio>
+
+#include "kernel/film_target.h"
+#include "kernel/scene_builder.h"
+#include "components/properties_proto.h"
+#include "yarf/error.h"
+#include "yarf/math.h"
+
+namespace yarf {
+namespace {
+
+constexpr uint32_t kDefaultSpp = 16;
+constexpr uint32_t kMaxSpp = 1u << 20;
+
+bool Terminal(v1::JobState state) {
+  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+}
+
+// The job's choice, else the scene's, else the default class.
+v1::ComponentSpec Choose(const v1::ComponentSpec& job, const v1::ComponentSpec& scene,
+                         const char* fallback) {
+  if (!job.class_name().empty()) return job;
+  if (!scene.class_name().empty()) return scene;
+  v1::ComponentSpec spec;
+  spec.set_class_name(fallback);
+  return spec;
+}
+
+template <typename I>
+std::unique_ptr<I> Make(const Registry& registry, const v1::ComponentSpec& spec, const char* role) {
+  try {
+    return registry.CreateAs<I>(spec.class_name(), FromProto(spec.properties()));
+  } catch (const Error& e) {
+    throw Error(std::string(role) + " '" + spec.class_name() + "': " + e.what());
+  }
+}
+
+}  // namespace
+
+Job::Job(std::string id, v1::SubmitRequest request) : id_(std::move(id)), request_(std::move(request)) {
+  status_.set_job_id(id_);
+  status_.set_name(request_.name());
+  status_.set_state(v1::QUEUED);
+  status_.set_samples_total(request_.options().spp());
+}
+
+v1::JobStatus Job::Status() const {
+  std::lock_guard lock(mutex_);
+  return status_;
+}
+
+uint64_t Job::Version() const {
+  std::lock_guard lock(mutex_);
+  return version_;
+}
+
+bool Job::Finished() const {
+  std::lock_guard lock(mutex_);
+  return Terminal(status_.state());
+}
+
+void Job::WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(mutex_);
+  changed_.wait_for(lock, timeout, [&] { return version_ != seen; });
+}
+
+void Job::Update(const std::function<void(v1::JobStatus&)>& change) {
+  {
+    std::lock_guard lock(mutex_);
+    change(status_);
+    if (status_.state() == v1::RUNNING || Terminal(status_.state())) {
+      const double elapsed =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+      status_.set_elapsed_seconds(elapsed);
+      const double fraction = status_.samples_total() ? double(status_.samples_done()) / status_.samples_total() : 0;
+      status_.set_percent(100 * fraction);
+      status_.set_eta_seconds(fraction > 0 && !Terminal(status_.state()) ? elapsed * (1 - fraction) / fraction : 0);
+    }
+    ++version_;
+  }
+  changed_.notify_all();
+}
+
+void Job::RequestCancel() {
+  cancel_ = true;
+  Update([](v1::JobStatus& s) {
+    if (s.state() == v1::QUEUED) s.set_state(v1::CANCELLED);
+  });
+}
+
+bool Job::Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
+                   uint32_t& height) const {
+  std::lock_guard lock(film_mutex_);
+  if (!film_) return false;
+  pixels = film_->Pixels();
+  variances = film_->Variances();
+  width = film_->width();
+  height = film_->height();
+  return true;
+}
+
+void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::filesystem::path& asset_root) {
+  {
+    std::lock_guard lock(mutex_);
+    if (status_.state() != v1::QUEUED) return;  // cancelled while queued
+    started_ = std::chrono::steady_clock::now();
+  }
+  Update([](v1::JobStatus& s) { s.set_state(v1::RUNNING); });
+  try {
+    const v1::Scene& scene = request_.scene();
+    const v1::RenderOptions& options = request_.options();
+    std::unique_ptr<KernelScene> kernel = BuildScene(scene, SceneSources{registry, device, asset_root});
+    auto transport = Make<Transport>(registry, Choose(options.transport(), scene.transport(), "path"), "transport");
+    auto integrator =
+        Make<Integrator>(registry, Choose(options.integrator(), scene.integrator(), "mean_sample"), "integrator");
+    auto sampler = Make<Sampler>(registry, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
+    {
+      std::lock_guard lock(film_mutex_);
+      film_ = std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
+    }
+    const KernelScene* counters = kernel.get();
+    FilmTarget target(*film_, film_mutex_, options.spp(), options.seed(), cancel_, [&](uint32_t done) {
+      Update([&](v1::JobStatus& s) {
+        s.set_samples_done(done);
+        s.set_closest_hit_rays(counters->ClosestHitRays());
+        s.set_shadow_rays(counters->ShadowRays());
+      });
+    });
+    transport->Prepare(*kernel);
+    integrator->Render(*transport, *kernel, *sampler, target);
+    Update([&](v1::JobStatus& s) {
+      s.set_state(cancel_ ? v1::CANCELLED : v1::SUCCEEDED);
+      s.set_closest_hit_rays(counters->ClosestHitRays());
+      s.set_shadow_rays(counters->ShadowRays());
+    });
+  } catch (const std::exception& e) {
+    Update([&](v1::JobStatus& s) {
+      s.set_state(v1::FAILED);
+      s.set_error(e.what());
+    });
+  }
+}
+
+JobManager::JobManager(const Registry& registry, const EmbreeDevice& device, std::filesystem::path asset_root)
+    : registry_(registry), device_(device), asset_root_(std::move(asset_root)) {}
+
+JobManager::~JobManager() {
+  for (const auto& job : List()) job->RequestCancel();
+  threads_.clear();  // joins
+}
+
+std::string JobManager::Submit(const v1::SubmitRequest& request) {
+  v1::SubmitRequest accepted = request;
+  uint32_t spp = request.options().spp();
+  if (spp == 0) spp = kDefaultSpp;
+  if (spp > kMaxSpp)
+    throw Error("spp " + std::to_string(spp) + " is out of range (1 to " + std::to_string(kMaxSpp) + ")");
+  accepted.mutable_options()->set_spp(spp);
+  ValidateScene(accepted.scene());
+
+  std::lock_guard lock(mutex_);
+  char id[32];
+  std::snprintf(id, sizeof id, "job-%06llu", static_cast<unsigned long long>(next_id_++));
+  auto job = std::make_shared<Job>(id, std::move(accepted));
+  jobs_[id] = job;
+  threads_.emplace_back([this, job] { job->Run(registry_, device_, asset_root_); });
+  return id;
+}
+
+std::shared_ptr<Job> JobManager::Find(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  auto it = jobs_.find(id);
+  return it == jobs_.end() ? nullptr : it->second;
+}
+
+std::vector<std::shared_ptr<Job>> JobManager::List() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::shared_ptr<Job>> out;
+  for (auto it = jobs_.rbegin(); it != jobs_.rend(); ++it) out.push_back(it->second);
+  return out;
+}
+
+}  // namespace yarf

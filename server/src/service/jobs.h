@@ -1,0 +1,80 @@
+// The job table: accepted render jobs, each rendering on its own thread
+// while the server stays responsive.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "components/registry.h"
+#include "kernel/embree_device.h"
+#include "kernel/film.h"
+#include "yarf/v1/render.pb.h"
+
+namespace yarf {
+
+class Job {
+ public:
+  Job(std::string id, v1::SubmitRequest request);
+
+  const std::string& id() const { return id_; }
+  const v1::SubmitRequest& request() const { return request_; }
+  v1::JobStatus Status() const;
+  // Bumped on every change, for watchers.
+  uint64_t Version() const;
+  // Waits until the version differs from `seen` or `timeout` passes.
+  void WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const;
+  void RequestCancel();
+  bool Finished() const;
+  // Pixels and variances of the film so far (empty before the film exists).
+  bool Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
+                uint32_t& height) const;
+
+  // Runs the job to its end (called on the job's own thread).
+  void Run(const Registry& registry, const EmbreeDevice& device, const std::filesystem::path& asset_root);
+
+ private:
+  void Update(const std::function<void(v1::JobStatus&)>& change);
+
+  const std::string id_;
+  const v1::SubmitRequest request_;
+  std::atomic<bool> cancel_{false};
+  mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
+  v1::JobStatus status_;
+  uint64_t version_ = 0;
+  std::chrono::steady_clock::time_point started_;
+  std::unique_ptr<Film> film_;
+  mutable std::mutex film_mutex_;
+};
+
+class JobManager {
+ public:
+  JobManager(const Registry& registry, const EmbreeDevice& device, std::filesystem::path asset_root);
+  // Cancels running jobs and waits for their threads.
+  ~JobManager();
+
+  // Validates and starts a job; throws Error for a scene or options it refuses.
+  std::string Submit(const v1::SubmitRequest& request);
+  std::shared_ptr<Job> Find(const std::string& id) const;
+  std::vector<std::shared_ptr<Job>> List() const;
+
+ private:
+  const Registry& registry_;
+  const EmbreeDevice& device_;
+  const std::filesystem::path asset_root_;
+  mutable std::mutex mutex_;
+  uint64_t next_id_ = 1;
+  std::map<std::string, std::shared_ptr<Job>> jobs_;
+  std::vector<std::jthread> threads_;
+};
+
+}  // namespace yarf

@@ -1,0 +1,24 @@
+// yarf.v1.RenderService over the job table.
+#pragma once
+
+#include "service/jobs.h"
+#include "yarf/v1/render.grpc.pb.h"
+
+namespace yarf {
+
+class RenderServiceImpl final : public v1::RenderService::Service {
+ public:
+  explicit RenderServiceImpl(JobManager& jobs) : jobs_(jobs) {}
+
+  grpc::Status Submit(grpc::ServerContext*, const v1::SubmitRequest*, v1::SubmitReply*) override;
+  grpc::Status Watch(grpc::ServerContext*, const v1::WatchRequest*,
+                     grpc::ServerWriter<v1::JobStatus>*) override;
+  grpc::Status GetResult(grpc::ServerContext*, const v1::GetResultRequest*, v1::GetResultReply*) override;
+  grpc::Status Cancel(grpc::ServerContext*, const v1::CancelRequest*, v1::CancelReply*) override;
+  grpc::Status List(grpc::ServerContext*, const v1::ListJobsRequest*, v1::ListJobsReply*) override;
+
+ private:
+  JobManager& jobs_;
+};
+
+}  // namespace yarf

@@ -1,0 +1,81 @@
+// yarfd: the render server. Loads the plugins, then serves rendering, the
+// component registry, health and reflection until SIGINT or SIGTERM.
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <tbb/global_control.h>
+
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <optional>
+
+#include "service/component_service.h"
+#include "service/render_service.h"
+#include "service/server_options.h"
+
+namespace {
+
+int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
+  std::optional<tbb::global_control> threads;
+  if (options.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, options.threads);
+
+  yarf::EmbreeDevice device;
+  yarf::Registry registry;
+  for (const auto& dir : options.plugin_paths) registry.LoadDirectory(dir);
+  for (const auto& failure : registry.Failures())
+    std::cerr << "yarfd: plugin " << failure.path << ": " << failure.message << "\n";
+
+  yarf::JobManager jobs(registry, device, options.asset_root);
+  yarf::InstanceTable instances;
+  yarf::RenderServiceImpl render(jobs);
+  yarf::RegistryServiceImpl registry_service(registry);
+  yarf::ComponentServiceImpl component(registry, instances);
+  yarf::FactoryServiceImpl factory(registry, instances);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &port);
+  // Batches and images are large.
+  builder.SetMaxReceiveMessageSize(256 << 20);
+  builder.SetMaxSendMessageSize(256 << 20);
+  builder.RegisterService(&render);
+  builder.RegisterService(&registry_service);
+  builder.RegisterService(&component);
+  builder.RegisterService(&factory);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (!server) {
+    std::cerr << "yarfd: cannot listen on " << options.listen << "\n";
+    return 1;
+  }
+  std::cout << "yarfd listening on " << options.listen << " (port " << port << ")" << std::endl;
+  if (!options.port_file.empty()) {
+    const auto tmp = options.port_file.string() + ".tmp";
+    std::ofstream(tmp) << port << "\n";
+    std::filesystem::rename(tmp, options.port_file);
+  }
+  int signal = 0;
+  sigwait(&signals, &signal);
+  std::cout << "yarfd: shutting down" << std::endl;
+  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Block the stop signals in every thread; the main thread waits for them.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  try {
+    return Serve(yarf::ParseServerOptions(argc, argv), signals);
+  } catch (const std::exception& e) {
+    std::cerr << "yarfd: " << e.what() << "\n";
+    return 2;
+  }
+}

@@ -1,0 +1,93 @@
+"""The component model and job bookkeeping seen from a client."""
+
+from __future__ import annotations
+
+import re
+
+import grpc
+import pytest
+from conftest import ASSET_MESH, small_scene
+
+from yarf import Client, properties, rgb
+from yarf.v1 import render_pb2
+
+SEMANTIC_VERSION = re.compile(r"^\d+\.\d+\.\d+")
+
+
+def test_health_check_reports_serving(client: Client) -> None:
+    assert client.health() == "SERVING"
+
+
+def test_lambertian_describes_itself_as_a_surface_model(client: Client) -> None:
+    info = client.describe("lambertian")
+    assert info.class_name == "lambertian"
+    assert "yarf.v1.SurfaceModel" in info.interfaces
+    assert SEMANTIC_VERSION.match(info.version), info.version
+
+
+def test_every_listed_class_has_a_version_and_an_interface(client: Client) -> None:
+    classes = client.list_classes().classes
+    names = {info.class_name for info in classes}
+    for expected in ("lambertian", "phong", "mirror", "dielectric", "diffuse_area", "path"):
+        assert expected in names, f"{expected} is not among the classes: {sorted(names)}"
+    for info in classes:
+        assert SEMANTIC_VERSION.match(info.version), f"{info.class_name}: version {info.version!r}"
+        assert info.interfaces, f"{info.class_name} lists no interface"
+        assert all(name.startswith("yarf.v1.") for name in info.interfaces), info
+
+
+def test_describe_of_an_unknown_class_is_not_found(client: Client) -> None:
+    with pytest.raises(grpc.RpcError) as caught:
+        client.describe("no_such_class")
+    assert caught.value.code() == grpc.StatusCode.NOT_FOUND, caught.value
+
+
+def test_factory_creates_and_releases_an_instance(client: Client) -> None:
+    reply = client.create("lambertian", properties(reflectance=rgb(0.5)))
+    assert reply.handle != 0
+    assert reply.info.class_name == "lambertian"
+    assert client.describe(handle=reply.handle).class_name == "lambertian"
+    client.release(reply.handle)
+    with pytest.raises(grpc.RpcError) as caught:
+        client.release(reply.handle)
+    assert caught.value.code() == grpc.StatusCode.NOT_FOUND, caught.value
+
+
+def test_factory_rejects_an_unknown_property_naming_it(client: Client) -> None:
+    with pytest.raises(grpc.RpcError) as caught:
+        client.create("lambertian", properties(reflectance=rgb(0.5), shininess_typo=2.0))
+    assert caught.value.code() == grpc.StatusCode.INVALID_ARGUMENT, caught.value
+    assert "shininess_typo" in str(caught.value.details())
+
+
+def test_list_shows_submitted_jobs_newest_first(client: Client) -> None:
+    first = client.submit(small_scene(), spp=1, seed=1, name="listed job one")
+    second = client.submit(small_scene(), spp=1, seed=2, name="listed job two")
+    for job_id in (first, second):
+        assert client.wait(job_id, timeout=30).state == render_pb2.SUCCEEDED
+    jobs = client.list()
+    ids = [job.job_id for job in jobs]
+    assert first in ids and second in ids
+    assert ids.index(second) < ids.index(first)
+    names = {job.job_id: job.name for job in jobs}
+    assert names[first] == "listed job one" and names[second] == "listed job two"
+
+
+def test_watch_streams_growing_progress_until_the_job_ends(client: Client) -> None:
+    job_id = client.submit(small_scene(), spp=8, seed=1, name="watched")
+    statuses = list(client.watch(job_id, timeout=30))
+    assert statuses, "Watch sent nothing"
+    assert statuses[-1].state == render_pb2.SUCCEEDED
+    assert statuses[-1].samples_done == statuses[-1].samples_total == 8
+    assert statuses[-1].percent == pytest.approx(100.0)
+    done = [status.samples_done for status in statuses]
+    assert done == sorted(done), done
+
+
+def test_mesh_file_inside_the_asset_root_renders(client: Client) -> None:
+    scene = small_scene()
+    shape = scene.shapes.add(name="asset_triangle", material="grey")
+    shape.mesh.file = ASSET_MESH
+    job_id = client.submit(scene, spp=2, seed=1)
+    status = client.wait(job_id, timeout=30)
+    assert status.state == render_pb2.SUCCEEDED, status.error
