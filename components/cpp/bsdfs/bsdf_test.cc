@@ -279,7 +279,8 @@ class SurfaceModelTest : public testing::Test {
 TEST_F(SurfaceModelTest, RegistersEveryModelWithItsInterface) {
   for (const char* name : {"lambertian", "phong", "mirror", "dielectric"}) {
     ASSERT_TRUE(registry_.Has(name)) << name;
-    const ComponentInfo& info = Make(name)->Describe();
+    const auto model = Make(name);
+    const ComponentInfo& info = model->Describe();
     EXPECT_EQ(info.class_name, name);
     EXPECT_EQ(info.interfaces, std::vector<std::string>{SurfaceModel::kInterface}) << name;
     EXPECT_FALSE(info.summary.empty()) << name;

@@ -47,20 +47,22 @@ constexpr std::array<uint32_t, 32> kSecondDimension = [] {
 // inverse of the index in base 2.
 constexpr uint32_t SobolFirst(uint32_t index) { return ReverseBits(index); }
 
+// The second dimension's generator matrix applied a byte at a time: entry
+// [k][b] is the XOR of the direction numbers of the set bits of byte k.
+constexpr std::array<std::array<uint32_t, 256>, 4> kSecondDimensionBytes = [] {
+  std::array<std::array<uint32_t, 256>, 4> table{};
+  for (int k = 0; k < 4; ++k)
+    for (int b = 0; b < 256; ++b)
+      for (int bit = 0; bit < 8; ++bit)
+        if (b & (1 << bit)) table[k][b] ^= kSecondDimension[8 * k + bit];
+  return table;
+}();
+
 constexpr uint32_t SobolSecond(uint32_t index) {
-  uint32_t bits = 0;
-  for (int i = 0; index != 0; ++i, index >>= 1)
-    if (index & 1) bits ^= kSecondDimension[i];
-  return bits;
+  return kSecondDimensionBytes[0][index & 0xff] ^ kSecondDimensionBytes[1][(index >> 8) & 0xff] ^
+         kSecondDimensionBytes[2][(index >> 16) & 0xff] ^ kSecondDimensionBytes[3][index >> 24];
 }
 
-// Burley's nested uniform scramble (2020, after Laine & Karras 2011): in
-// bit-reversed order, each step (add, multiply by an odd constant, xor
-// with a multiple by an even constant) changes a bit only as a function
-// of itself and less significant bits. Read back in normal order, every
-// digit is flipped as a function of the digits above it: an Owen
-// scramble, which maps each elementary interval onto one of the same
-// shape and so keeps (0, m, 2)-nets nets.
 constexpr uint32_t NestedUniformScramble(uint32_t v, uint32_t seed) {
   v = ReverseBits(v);
   v ^= v * 0x3d20adeau;
@@ -70,6 +72,18 @@ constexpr uint32_t NestedUniformScramble(uint32_t v, uint32_t seed) {
   v ^= v * 0x53a22864u;
   return ReverseBits(v);
 }
+
+// Per-dimension and per-pair salts, computed at compile time so that a
+// coordinate costs one mixing round per seed.
+constexpr uint32_t kCachedSeeds = 256;
+constexpr uint64_t kGolden = 0x9e3779b97f4a7c15ull;
+constexpr std::array<uint64_t, kCachedSeeds> Salts(uint64_t salt) {
+  std::array<uint64_t, kCachedSeeds> salts{};
+  for (uint32_t d = 0; d < kCachedSeeds; ++d) salts[d] = yarf::MixBits(salt + d * kGolden);
+  return salts;
+}
+constexpr std::array<uint64_t, kCachedSeeds> kScrambleSeeds = Salts(kScrambleSalt);
+constexpr std::array<uint64_t, kCachedSeeds> kShuffleSeeds = Salts(kShuffleSalt);
 
 class Sobol final : public yarf::Sampler {
  public:
@@ -81,10 +95,13 @@ class Sobol final : public yarf::Sampler {
     // 2^m indices, and an aligned run of Sobol points is a (0, m, 2)-net,
     // so any power-of-two prefix stays stratified. Indices past 2^32 pick
     // another shuffle rather than wrapping onto the same points.
-    const uint32_t shuffle_seed = uint32_t(yarf::Hash(seed, block, index >> 32, kShuffleSalt));
+    const uint32_t shuffle_seed =
+        uint32_t(yarf::MixBits(seed ^ kShuffleSeeds[block % kCachedSeeds] ^ ((index >> 32) * kGolden))) +
+        block / kCachedSeeds;
     const uint32_t shuffled = NestedUniformScramble(uint32_t(index), shuffle_seed);
     const uint32_t bits = dimension % 2 == 0 ? SobolFirst(shuffled) : SobolSecond(shuffled);
-    const uint32_t scramble_seed = uint32_t(yarf::Hash(seed, dimension, kScrambleSalt));
+    const uint32_t scramble_seed = uint32_t(yarf::MixBits(seed ^ kScrambleSeeds[dimension % kCachedSeeds]) +
+                                            (dimension / kCachedSeeds));
     return yarf::ToUnitFloat(NestedUniformScramble(bits, scramble_seed));
   }
 };

@@ -76,6 +76,16 @@ void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& lo
   record.kind = Kind::kTriangles;
   record.mesh = uint32_t(meshes_.size());
   record.look = look;
+  std::vector<Vec3> normals(mesh.TriangleCount());
+  for (size_t t = 0; t < normals.size(); ++t) {
+    const Vec3 p0 = mesh.positions[mesh.indices[3 * t]], p1 = mesh.positions[mesh.indices[3 * t + 1]],
+               p2 = mesh.positions[mesh.indices[3 * t + 2]];
+    const Vec3 n = Cross(p1 - p0, p2 - p0);
+    const float length = Length(n);
+    normals[t] = length > 0 ? n / length : Vec3(0, 0, 1);
+    if (look.flip_normals) normals[t] = -normals[t];
+  }
+  face_normals_.push_back(std::move(normals));
   meshes_.push_back(std::move(mesh));
   groups_[group].shapes.push_back(record);
 }
@@ -169,19 +179,12 @@ float KernelScene::PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) c
 }
 
 Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position) const {
-  Vec3 n;
-  if (shape.kind == Kind::kSphere) {
-    const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
-    n = position - center;
-  } else {
-    const TriangleMesh& mesh = meshes_[shape.mesh];
-    const Vec3 p0 = mesh.positions[mesh.indices[3 * primitive]];
-    const Vec3 p1 = mesh.positions[mesh.indices[3 * primitive + 1]];
-    const Vec3 p2 = mesh.positions[mesh.indices[3 * primitive + 2]];
-    n = Cross(p1 - p0, p2 - p0);
-    if (shape.placed) n = shape.to_world.Normal(n);
+  if (shape.kind == Kind::kTriangles) {
+    const Vec3 n = face_normals_[shape.mesh][primitive];  // flipped already
+    return shape.placed ? Normalize(shape.to_world.Normal(n)) : n;
   }
-  n = Normalize(n);
+  const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
+  const Vec3 n = Normalize(position - center);
   return shape.look.flip_normals ? -n : n;
 }
 

@@ -96,6 +96,8 @@ class KernelScene final : public SceneView {
   std::vector<TriangleMesh> meshes_;
   std::vector<Group> groups_;
   std::vector<std::pair<uint32_t, Transform>> placements_;
+  // Unit normals of each mesh's triangles in the mesh's own space.
+  std::vector<std::vector<Vec3>> face_normals_;
   // Every shape placement; Hit::shape indexes it.
   std::vector<ShapeRecord> shapes_;
   // First shape id of each world-level Embree geometry (by geomID).
