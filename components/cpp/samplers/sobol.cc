@@ -63,6 +63,13 @@ constexpr uint32_t SobolSecond(uint32_t index) {
          kSecondDimensionBytes[2][(index >> 16) & 0xff] ^ kSecondDimensionBytes[3][index >> 24];
 }
 
+// Burley's nested uniform scramble (2020, after Laine & Karras 2011): in
+// bit-reversed order, each step (add, multiply by an odd constant, xor
+// with a multiple by an even constant) changes a bit only as a function
+// of itself and less significant bits. Read back in normal order, every
+// digit is flipped as a function of the digits above it: an Owen
+// scramble, which maps each elementary interval onto one of the same
+// shape and so keeps (0, m, 2)-nets nets.
 constexpr uint32_t NestedUniformScramble(uint32_t v, uint32_t seed) {
   v = ReverseBits(v);
   v ^= v * 0x3d20adeau;
