@@ -56,12 +56,8 @@ RaySets MakeRays(const KernelScene& scene, size_t count) {
     const Vec3 d = frame.ToWorld(SampleCosineHemisphere(Uniform(i, 2), Uniform(i, 3)));
     if (sets.closest.size() < count) sets.closest.push_back({OffsetRayOrigin(p, hits[k].normal, d), 0, d, kInfinity});
     const EmitterSample s = scene.SampleEmitter(Uniform(i, 4), Uniform(i, 5), Uniform(i, 6));
-    Vec3 to = s.position - p;
-    const float dist = Length(to);
-    if (sets.shadow.size() < count && dist > 0) {
-      to = to / dist;
-      sets.shadow.push_back({OffsetRayOrigin(p, hits[k].normal, to), 0, to, dist * (1 - 1e-4f)});
-    }
+    if (sets.shadow.size() < count && Length(s.position - p) > 0)
+      sets.shadow.push_back(ShadowRay(p, hits[k].normal, s.position));
   }
   return sets;
 }

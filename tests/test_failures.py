@@ -238,15 +238,16 @@ def test_cancelled_job_ends_within_a_second_and_other_jobs_go_on(
 
     cancelled_at = time.monotonic()
     client.cancel(long_job)
-    state = client.status(long_job).state
-    while state != render_pb2.CANCELLED and time.monotonic() - cancelled_at < 1.0:
-        time.sleep(0.02)
+    while True:
+        asked_at = time.monotonic()
         state = client.status(long_job).state
-    took = time.monotonic() - cancelled_at
-    assert state == render_pb2.CANCELLED, (
+        if state == render_pb2.CANCELLED or asked_at - cancelled_at > 1.0:
+            break
+        time.sleep(0.02)
+    took = asked_at - cancelled_at
+    assert state == render_pb2.CANCELLED and took <= 1.0, (
         f"{took:.2f} s after Cancel the job is {render_pb2.JobState.Name(state)}"
     )
-    assert took <= 1.0
 
     watcher.join(timeout=2.0)
     assert not watcher.is_alive(), "Watch of the cancelled job did not end"

@@ -23,9 +23,9 @@ from yarf.v1 import scene_pb2
 MITSUBA_SCENE = SHARED / "scenes" / "mitsuba-cbox" / "cbox-rgb.xml"
 SIZE = 256
 MAX_DEPTH = 6
-MITSUBA_SPP = 64
+MITSUBA_SPP = 32
 MITSUBA_SEEDS = (1, 2)
-YARF_SPP = 128
+YARF_SPP = 64
 BLOCK = 16
 # Family-wise rate of false alarms over all blocks and channels.
 FAMILY_ALPHA = 1e-3

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from types import TracebackType
@@ -26,9 +25,6 @@ DEFAULT_ADDRESS = "127.0.0.1:50051"
 # Deadline of unary calls, seconds.
 DEFAULT_TIMEOUT = 60.0
 
-JobState = render_pb2.JobState
-JobStatus = render_pb2.JobStatus
-ResultFormat = render_pb2.GetResultRequest.Format
 FINAL_STATES = frozenset({render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CANCELLED})
 
 _NUMPY_DTYPES: dict[int, np.dtype[Any]] = {
@@ -84,12 +80,17 @@ def numpy_to_array(values: np.ndarray) -> component_pb2.Array:
 
 
 def _health_messages() -> tuple[type[Any], type[Any]]:
-    """grpc.health.v1 request and response classes, in a private descriptor pool."""
+    """grpc.health.v1 request and response classes, in a private descriptor pool.
+
+    The two messages of the standard health protocol are declared here so
+    that the client needs no grpcio-health-checking package.
+    """
+    field = descriptor_pb2.FieldDescriptorProto
     file = descriptor_pb2.FileDescriptorProto(
         name="grpc/health/v1/health.proto", package="grpc.health.v1", syntax="proto3"
     )
     request = file.message_type.add(name="HealthCheckRequest")
-    request.field.add(name="service", number=1, type=9, label=1)  # string
+    request.field.add(name="service", number=1, type=field.TYPE_STRING, label=field.LABEL_OPTIONAL)
     response = file.message_type.add(name="HealthCheckResponse")
     status = response.enum_type.add(name="ServingStatus")
     for number, name in enumerate(("UNKNOWN", "SERVING", "NOT_SERVING", "SERVICE_UNKNOWN")):
@@ -97,8 +98,8 @@ def _health_messages() -> tuple[type[Any], type[Any]]:
     response.field.add(
         name="status",
         number=1,
-        type=14,  # enum
-        label=1,
+        type=field.TYPE_ENUM,
+        label=field.LABEL_OPTIONAL,
         type_name=".grpc.health.v1.HealthCheckResponse.ServingStatus",
     )
     pool = descriptor_pool.DescriptorPool()
@@ -206,9 +207,14 @@ class Client:
             stream.cancel()
 
     def status(self, job_id: str) -> render_pb2.JobStatus:
-        """The job's current status."""
-        for status in self.watch(job_id, timeout=self.timeout):
-            return status
+        """The job's current status (the first message of Watch)."""
+        request = render_pb2.WatchRequest(job_id=job_id)
+        stream = self.render_service.Watch(request, timeout=self.timeout)
+        try:
+            for status in stream:
+                return status
+        finally:
+            stream.cancel()
         raise RuntimeError(f"Watch of job {job_id} ended without a status")
 
     def wait(self, job_id: str, *, timeout: float | None = None) -> render_pb2.JobStatus:
@@ -319,15 +325,3 @@ class Client:
     def release(self, handle: int) -> None:
         """Ends an instance made by ``create``."""
         self.factory.Release(component_pb2.ReleaseRequest(handle=handle), timeout=self.timeout)
-
-
-def wait_until_serving(client: Client, timeout: float) -> bool:
-    """Polls the health check until SERVING or ``timeout`` seconds pass."""
-    deadline = time.monotonic() + timeout
-    while True:
-        remaining = deadline - time.monotonic()
-        if client.is_serving(timeout=max(0.1, min(1.0, remaining))):
-            return True
-        if remaining <= 0:
-            return False
-        time.sleep(0.05)

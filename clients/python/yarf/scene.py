@@ -8,6 +8,7 @@ references are resolved relative to the scene file's folder and inlined as
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePath
@@ -98,7 +99,7 @@ def inline_mesh_files(scene: scene_pb2.Scene, base_dir: str | Path) -> int:
     return inlined
 
 
-def iter_shapes(scene: scene_pb2.Scene) -> Iterator[tuple[str, scene_pb2.Shape]]:
+def iter_shapes(scene: scene_pb2.Scene) -> Iterator[tuple[str, scene_pb2.SceneShape]]:
     """Every shape of the scene (world and groups) with a label for messages."""
     for index, shape in enumerate(scene.shapes):
         yield _label(f"shapes[{index}]", shape.name), shape
@@ -157,17 +158,17 @@ def transform(matrix: Sequence[float] | Sequence[Sequence[float]]) -> component_
 
 
 def _as_row(row: float | Sequence[float]) -> Sequence[float]:
-    return [row] if isinstance(row, int | float) else row
+    return [row] if isinstance(row, numbers.Real) else row
 
 
 def property_value(value: PropertyValue) -> component_pb2.Property:
     """Wraps a Python value in the Property variant of its type."""
     if isinstance(value, bool):
         return component_pb2.Property(bool_value=value)
-    if isinstance(value, int):
-        return component_pb2.Property(int_value=value)
-    if isinstance(value, float):
-        return component_pb2.Property(float_value=value)
+    if isinstance(value, numbers.Integral):
+        return component_pb2.Property(int_value=int(value))
+    if isinstance(value, numbers.Real):
+        return component_pb2.Property(float_value=float(value))
     if isinstance(value, str):
         return component_pb2.Property(string_value=value)
     if isinstance(value, Reference):

@@ -26,12 +26,12 @@ namespace {
 constexpr uint64_t kShuffleSalt = 0x5348554646ull;   // "SHUFF"
 constexpr uint64_t kScrambleSalt = 0x534352414dull;  // "SCRAM"
 
+// Byte swap (one instruction), then the bits within each byte.
 constexpr uint32_t ReverseBits(uint32_t v) {
-  v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+  v = __builtin_bswap32(v);
   v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-  return (v >> 16) | (v << 16);
+  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+  return ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
 }
 
 // Direction numbers of Sobol's second dimension: column i of its
@@ -43,9 +43,6 @@ constexpr std::array<uint32_t, 32> kSecondDimension = [] {
   return v;
 }();
 
-// Sobol's first dimension: the van der Corput sequence, the radical
-// inverse of the index in base 2.
-constexpr uint32_t SobolFirst(uint32_t index) { return ReverseBits(index); }
 
 // The second dimension's generator matrix applied a byte at a time: entry
 // [k][b] is the XOR of the direction numbers of the set bits of byte k.
@@ -70,14 +67,18 @@ constexpr uint32_t SobolSecond(uint32_t index) {
 // digit is flipped as a function of the digits above it: an Owen
 // scramble, which maps each elementary interval onto one of the same
 // shape and so keeps (0, m, 2)-nets nets.
-constexpr uint32_t NestedUniformScramble(uint32_t v, uint32_t seed) {
-  v = ReverseBits(v);
+// The scramble on bit-reversed values: each bit depends on the lower ones.
+constexpr uint32_t LaineKarrasPermutation(uint32_t v, uint32_t seed) {
   v ^= v * 0x3d20adeau;
   v += seed;
   v *= (seed >> 16) | 1u;
   v ^= v * 0x05526c56u;
   v ^= v * 0x53a22864u;
-  return ReverseBits(v);
+  return v;
+}
+
+constexpr uint32_t NestedUniformScramble(uint32_t v, uint32_t seed) {
+  return ReverseBits(LaineKarrasPermutation(ReverseBits(v), seed));
 }
 
 // Per-dimension and per-pair salts, computed at compile time so that a
@@ -105,8 +106,11 @@ class Sobol final : public yarf::Sampler {
     const uint32_t shuffle_seed =
         uint32_t(yarf::MixBits(seed ^ kShuffleSeeds[block % kCachedSeeds] ^ ((index >> 32) * kGolden))) +
         block / kCachedSeeds;
-    const uint32_t shuffled = NestedUniformScramble(uint32_t(index), shuffle_seed);
-    const uint32_t bits = dimension % 2 == 0 ? SobolFirst(shuffled) : SobolSecond(shuffled);
+    // Sobol's first dimension is the van der Corput sequence, the bit
+    // reversal of the index, so the reversals around the scrambles cancel.
+    const uint32_t reversed_shuffled = LaineKarrasPermutation(ReverseBits(uint32_t(index)), shuffle_seed);
+    const uint32_t bits =
+        dimension % 2 == 0 ? reversed_shuffled : SobolSecond(ReverseBits(reversed_shuffled));
     const uint32_t scramble_seed = uint32_t(yarf::MixBits(seed ^ kScrambleSeeds[dimension % kCachedSeeds]) +
                                             (dimension / kCachedSeeds));
     return yarf::ToUnitFloat(NestedUniformScramble(bits, scramble_seed));

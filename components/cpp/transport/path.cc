@@ -192,11 +192,7 @@ class PathTracer final : public Transport {
       Frame(s.normal).ToLocal(-to_light).Store(&light_w[3 * j]);
       light_uv[2 * j] = s.u;
       light_uv[2 * j + 1] = s.v;
-      Ray& r = shadow[j];
-      r.origin = OffsetRayOrigin(v.position, v.normal, to_light);
-      r.direction = to_light;
-      r.tnear = 0;
-      r.tfar = dist * (1 - 1e-4f);
+      shadow[j] = ShadowRay(v.position, v.normal, s.position);
     }
     model.Evaluate(wi, wo, uv, f);
     model.Pdf(wi, wo, uv, pdf);

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <span>
 
@@ -46,11 +48,30 @@ class Intersector {
   virtual void Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const = 0;
 };
 
-// An offset origin for a ray leaving a surface at p with geometric normal n
-// toward direction d, so that it does not hit the surface it leaves.
+// How far a ray starts or stops short of a surface point so that float
+// rounding does not make it hit that surface: relative to the coordinates.
+inline float SurfaceOffset(Vec3 p) {
+  return 1e-4f * std::max(1.0f, std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
+}
+
+// The origin of a ray leaving a surface at p with geometric normal n
+// toward direction d, moved off the surface to the side d goes to.
 inline Vec3 OffsetRayOrigin(Vec3 p, Vec3 n, Vec3 d) {
-  const float scale = 1e-4f * std::max(1.0f, std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
-  return p + n * (Dot(n, d) > 0 ? scale : -scale);
+  const float offset = SurfaceOffset(p);
+  return p + n * (Dot(n, d) > 0 ? offset : -offset);
+}
+
+// The shadow ray from surface point p (normal n) to the point `to`: it
+// leaves p's surface and stops short of `to`'s, whatever the offsets do to
+// its length.
+inline Ray ShadowRay(Vec3 p, Vec3 n, Vec3 to) {
+  Ray ray;
+  ray.origin = OffsetRayOrigin(p, n, to - p);
+  const Vec3 d = to - ray.origin;
+  const float length = Length(d);
+  ray.direction = length > 0 ? d / length : n;
+  ray.tfar = std::max(0.0f, length - SurfaceOffset(to));
+  return ray;
 }
 
 }  // namespace yarf
