@@ -58,7 +58,6 @@ build: deps stubs
 render: build
 	@mkdir -p out
 	$(VENV)/bin/yarf render scenes/cornell-box/scene.json -o out/cornell-box.exr --spp $(SPP)
-	$(VENV)/bin/yarf render scenes/cornell-box/scene.json -o out/cornell-box.png --spp $(SPP)
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j2

@@ -10,12 +10,12 @@
 #include <cmath>
 #include <functional>
 #include <memory>
-#include <numeric>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "components/registry.h"
+#include "testing/chi_square.h"
 #include "yarf/hash.h"
 #include "yarf/surface.h"
 #include "yarf/warps.h"
@@ -156,15 +156,6 @@ MeanWithError AlbedoBySampling(const SurfaceModel& model, Vec3 wi, int count, ui
 
 // --- Pearson's χ² test of sampled directions ---------------------------
 
-// P(X ≥ statistic) for X ~ χ²(dof), by Wilson & Hilferty's cube-root
-// normal approximation, accurate to ~1e-3 in p for hundreds of degrees of
-// freedom.
-double ChiSquareSurvival(double statistic, double dof) {
-  const double variance = 2.0 / (9.0 * dof);
-  const double z = (std::cbrt(statistic / dof) - (1.0 - variance)) / std::sqrt(variance);
-  return 0.5 * std::erfc(z / std::sqrt(2.0));
-}
-
 // Directions binned in (cos θ, φ) cells, which have equal solid angle
 // (dω = d cos θ dφ); the expected count of a cell is N ∫ pdf over it by
 // 5-point Gauss–Legendre quadrature per coordinate (its nodes lie inside
@@ -175,7 +166,7 @@ testing::AssertionResult DirectionsFollowPdf(const std::vector<Vec3>& directions
                                              int sample_count,
                                              const std::function<double(Vec3)>& pdf) {
   constexpr int kRows = 50, kCols = 100;
-  constexpr double kSignificance = 0.01, kMinExpected = 5;
+  constexpr double kSignificance = 0.01;
   static constexpr double kNodes[] = {-0.9061798459386640, -0.5384693101056831, 0.0,
                                       0.5384693101056831, 0.9061798459386640};
   static constexpr double kWeights[] = {0.2369268850561891, 0.4786286704993665,
@@ -201,37 +192,7 @@ testing::AssertionResult DirectionsFollowPdf(const std::vector<Vec3>& directions
       expected[row * kCols + col] = sample_count * sum * (0.5 * dz) * (0.5 * dphi);
     }
 
-  std::vector<int> order(observed.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return expected[a] < expected[b]; });
-  double statistic = 0, pooled_observed = 0, pooled_expected = 0;
-  int dof = -1;  // the counts' total is fixed
-  for (int cell : order) {
-    if (expected[cell] <= 0) {
-      if (observed[cell] > 0)
-        return testing::AssertionFailure()
-               << observed[cell] << " samples in cell " << cell << " where the pdf is 0";
-      continue;
-    }
-    if (expected[cell] < kMinExpected || (pooled_expected > 0 && pooled_expected < kMinExpected)) {
-      pooled_observed += observed[cell];
-      pooled_expected += expected[cell];
-      continue;
-    }
-    const double diff = observed[cell] - expected[cell];
-    statistic += diff * diff / expected[cell];
-    ++dof;
-  }
-  if (pooled_expected > 0) {
-    const double diff = pooled_observed - pooled_expected;
-    statistic += diff * diff / pooled_expected;
-    ++dof;
-  }
-  const double p = ChiSquareSurvival(statistic, dof);
-  std::ostringstream summary;
-  summary << "χ² = " << statistic << ", dof = " << dof << ", p = " << p;
-  if (dof < 1 || p < kSignificance) return testing::AssertionFailure() << summary.str();
-  return testing::AssertionSuccess() << summary.str();
+  return testing_support::PearsonChiSquareTest(observed, expected, kSignificance);
 }
 
 // --- Fixture: the plugins, loaded as yarfd loads them ----------------------

@@ -34,12 +34,6 @@ using yarf::Vec3;
 constexpr uint32_t kReflectLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 constexpr uint32_t kRefractLobe = yarf::kScatterRefract | yarf::kScatterDelta;
 
-// `allowed` of Sample: 0 accepts every lobe; otherwise a lobe is accepted
-// when all of its flags are among the allowed ones.
-bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
-  return allowed == 0 || (lobe & ~allowed) == 0;
-}
-
 float RequireIndex(double ior, const std::string& property) {
   if (!(ior > 0.0 && std::isfinite(ior)))
     throw yarf::Error("property '" + property + "' must be a finite number > 0");
@@ -63,8 +57,8 @@ class Dielectric final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool can_reflect = LobeAllowed(kReflectLobe, allowed);
-    const bool can_refract = LobeAllowed(kRefractLobe, allowed);
+    const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
+    const bool can_refract = yarf::LobeAllowed(kRefractLobe, allowed);
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float fresnel = yarf::FresnelDielectric(in.z, eta_);

@@ -23,24 +23,10 @@ namespace {
 
 using yarf::Vec3;
 
-// `allowed` of Sample: 0 accepts every lobe; otherwise a lobe is accepted
-// when all of its flags are among the allowed ones.
-bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
-  return allowed == 0 || (lobe & ~allowed) == 0;
-}
-
-Vec3 RequireUnitInterval(Vec3 rgb, const std::string& property) {
-  for (int c = 0; c < 3; ++c)
-    if (!(rgb[c] >= 0.0f && rgb[c] <= 1.0f))
-      throw yarf::Error("property '" + property + "' must lie in [0, 1] in every channel");
-  return rgb;
-}
-
 class Lambertian final : public yarf::SurfaceModel {
  public:
   explicit Lambertian(const yarf::Properties& props)
-      : reflectance_(RequireUnitInterval(props.Color("reflectance", Vec3(0.5f, 0.5f, 0.5f)),
-                                         "reflectance")) {}
+      : reflectance_(props.Reflectance("reflectance", Vec3(0.5f, 0.5f, 0.5f))) {}
 
   void Evaluate(std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
@@ -56,7 +42,7 @@ class Lambertian final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool can_reflect = LobeAllowed(yarf::kScatterReflect, allowed);
+    const bool can_reflect = yarf::LobeAllowed(yarf::kScatterReflect, allowed);
     for (size_t k = 0; k < count; ++k) {
       const float wi_z = wi[3 * k + 2];
       Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);

@@ -24,24 +24,10 @@ using yarf::Vec3;
 
 constexpr uint32_t kMirrorLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 
-// `allowed` of Sample: 0 accepts every lobe; otherwise a lobe is accepted
-// when all of its flags are among the allowed ones.
-bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
-  return allowed == 0 || (lobe & ~allowed) == 0;
-}
-
-Vec3 RequireUnitInterval(Vec3 rgb, const std::string& property) {
-  for (int c = 0; c < 3; ++c)
-    if (!(rgb[c] >= 0.0f && rgb[c] <= 1.0f))
-      throw yarf::Error("property '" + property + "' must lie in [0, 1] in every channel");
-  return rgb;
-}
-
 class Mirror final : public yarf::SurfaceModel {
  public:
   explicit Mirror(const yarf::Properties& props)
-      : reflectance_(RequireUnitInterval(props.Color("reflectance", Vec3(1.0f, 1.0f, 1.0f)),
-                                         "reflectance")) {}
+      : reflectance_(props.Reflectance("reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
 
   // A delta lobe has no finite value or density.
   void Evaluate(std::span<const float> wi, std::span<const float> wo,
@@ -54,7 +40,7 @@ class Mirror final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool can_reflect = LobeAllowed(kMirrorLobe, allowed);
+    const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       if (!can_reflect || in.z == 0) {

@@ -32,19 +32,6 @@ namespace {
 
 using yarf::Vec3;
 
-// `allowed` of Sample: 0 accepts every lobe; otherwise a lobe is accepted
-// when all of its flags are among the allowed ones.
-bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
-  return allowed == 0 || (lobe & ~allowed) == 0;
-}
-
-Vec3 RequireNonNegative(Vec3 rgb, const std::string& property) {
-  for (int c = 0; c < 3; ++c)
-    if (!(rgb[c] >= 0.0f))
-      throw yarf::Error("property '" + property + "' must be non-negative in every channel");
-  return rgb;
-}
-
 float RequireExponent(double exponent) {
   if (!(exponent >= 0.0 && std::isfinite(exponent)))
     throw yarf::Error("property 'exponent' must be a finite number ≥ 0");
@@ -54,10 +41,8 @@ float RequireExponent(double exponent) {
 class Phong final : public yarf::SurfaceModel {
  public:
   explicit Phong(const yarf::Properties& props)
-      : diffuse_(RequireNonNegative(props.Color("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f)),
-                                    "diffuse_reflectance")),
-        specular_(RequireNonNegative(
-            props.Color("specular_reflectance", Vec3(0.2f, 0.2f, 0.2f)), "specular_reflectance")),
+      : diffuse_(props.Reflectance("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f))),
+        specular_(props.Reflectance("specular_reflectance", Vec3(0.2f, 0.2f, 0.2f))),
         exponent_(RequireExponent(props.Float("exponent", 30.0))) {
     static constexpr const char* kChannel[] = {"red", "green", "blue"};
     for (int c = 0; c < 3; ++c)
@@ -83,7 +68,7 @@ class Phong final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool can_reflect = LobeAllowed(yarf::kScatterReflect, allowed);
+    const bool can_reflect = yarf::LobeAllowed(yarf::kScatterReflect, allowed);
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];

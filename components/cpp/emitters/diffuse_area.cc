@@ -18,8 +18,7 @@ namespace {
 using yarf::Vec3;
 
 Vec3 RequiredRadiance(const yarf::Properties& props) {
-  if (!props.Has("radiance")) throw yarf::Error("missing property 'radiance'");
-  const Vec3 radiance = props.Color("radiance", Vec3());
+  const Vec3 radiance = props.Color("radiance");
   for (int c = 0; c < 3; ++c)
     if (!(radiance[c] >= 0.0f && std::isfinite(radiance[c])))
       throw yarf::Error("property 'radiance' must be finite and non-negative in every channel");

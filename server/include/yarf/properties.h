@@ -50,11 +50,20 @@ class Properties {
     return Has(key) ? Get<Vec3>(key, Find(key), "vec3") : fallback;
   }
   // An RGB value; a plain float f is accepted as (f, f, f).
-  Vec3 Color(const std::string& key, Vec3 fallback) const {
-    if (!Has(key)) return fallback;
+  Vec3 Color(const std::string& key, Vec3 fallback) const { return Has(key) ? Color(key) : fallback; }
+  // A required RGB value.
+  Vec3 Color(const std::string& key) const {
     const Value& v = Find(key);
     if (auto* f = std::get_if<double>(&v)) return Vec3(float(*f), float(*f), float(*f));
     return Get<Rgb>(key, v, "rgb").value;
+  }
+  // An RGB reflectance: every channel in [0, 1].
+  Vec3 Reflectance(const std::string& key, Vec3 fallback) const {
+    const Vec3 rgb = Color(key, fallback);
+    for (int c = 0; c < 3; ++c)
+      if (!(rgb[c] >= 0.0f && rgb[c] <= 1.0f))
+        throw Error("property '" + key + "' must lie in [0, 1] in every channel");
+    return rgb;
   }
   Transform Matrix(const std::string& key, const Transform& fallback) const {
     return Has(key) ? Get<Transform>(key, Find(key), "transform") : fallback;

@@ -17,6 +17,13 @@ enum ScatterFlags : uint32_t {
   kScatterDelta = 4,
 };
 
+// Whether Sample may draw `lobe` (its ScatterFlags) under `allowed`: 0
+// allows every lobe; otherwise a lobe is allowed when all its flags are,
+// so kScatterReflect alone excludes a delta reflection.
+inline bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
+  return allowed == 0 || (lobe & ~allowed) == 0;
+}
+
 class SurfaceModel : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.SurfaceModel";

@@ -8,11 +8,10 @@
 #include <array>
 #include <cmath>
 #include <functional>
-#include <numeric>
 #include <random>
-#include <sstream>
 #include <vector>
 
+#include "testing/chi_square.h"
 #include "yarf/hash.h"
 #include "yarf/warps.h"
 
@@ -54,16 +53,6 @@ double CellIntegral(const Grid& grid, int row, int col, const Density2D& density
   return sum * (0.5 * da) * (0.5 * db);
 }
 
-// P(X ≥ statistic) for X ~ χ²(dof), by Wilson & Hilferty's cube-root
-// normal approximation: (X/k)^(1/3) is close to normal with mean
-// 1 - 2/(9k) and variance 2/(9k). Accurate to ~1e-3 in p for the hundreds
-// of degrees of freedom these tests have.
-double ChiSquareSurvival(double statistic, double dof) {
-  const double variance = 2.0 / (9.0 * dof);
-  const double z = (std::cbrt(statistic / dof) - (1.0 - variance)) / std::sqrt(variance);
-  return 0.5 * std::erfc(z / std::sqrt(2.0));
-}
-
 // Pearson's χ² test that `points` are distributed with `density` over the
 // grid (density in the grid's coordinates: it must integrate to the
 // fraction of samples expected inside; jumps only on cell edges). Cells expecting fewer than 5
@@ -87,38 +76,7 @@ testing::AssertionResult PassesChiSquare(const std::vector<Point2D>& points, int
     for (int col = 0; col < grid.cols; ++col)
       expected[row * grid.cols + col] = sample_count * CellIntegral(grid, row, col, density);
 
-  std::vector<int> order(cells);
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int x, int y) { return expected[x] < expected[y]; });
-  constexpr double kMinExpected = 5;
-  double statistic = 0, pooled_observed = 0, pooled_expected = 0;
-  int dof = -1;  // the counts' total is fixed
-  for (int cell : order) {
-    if (expected[cell] <= 0) {
-      if (observed[cell] > 0)
-        return testing::AssertionFailure()
-               << observed[cell] << " samples in cell " << cell << " where the pdf is 0";
-      continue;
-    }
-    if (expected[cell] < kMinExpected || (pooled_expected > 0 && pooled_expected < kMinExpected)) {
-      pooled_observed += observed[cell];
-      pooled_expected += expected[cell];
-      continue;
-    }
-    const double diff = observed[cell] - expected[cell];
-    statistic += diff * diff / expected[cell];
-    ++dof;
-  }
-  if (pooled_expected > 0) {
-    const double diff = pooled_observed - pooled_expected;
-    statistic += diff * diff / pooled_expected;
-    ++dof;
-  }
-  const double p = ChiSquareSurvival(statistic, dof);
-  std::ostringstream summary;
-  summary << "χ² = " << statistic << ", dof = " << dof << ", p = " << p;
-  if (dof < 1 || p < kSignificance) return testing::AssertionFailure() << summary.str();
-  return testing::AssertionSuccess() << summary.str();
+  return testing_support::PearsonChiSquareTest(observed, expected, kSignificance);
 }
 
 // Uniform floats in [0, 1) from a fixed-seed generator.
