@@ -8,8 +8,10 @@
 // SurfaceModel and Emitter once per batch, never per sample, so a
 // component in another process costs one call per bounce.
 //
-// Primary sample space: coordinates 0–1 film, 2–3 lens, then 7 per bounce
-// (3 light sample, 3 BSDF sample, 1 Russian roulette).
+// Primary sample space: coordinates 0–1 film, 2–3 lens, then 8 per bounce,
+// laid out so that each 2-D choice gets a pair (2k, 2k+1) of the sampler,
+// the pairs low-discrepancy samplers stratify jointly: light position,
+// BSDF direction, (emitter choice, BSDF lobe), (Russian roulette, unused).
 //
 // Properties:
 //   int max_depth  longest path in segments, Mitsuba's convention: 1 shows
@@ -26,7 +28,10 @@ namespace yarf {
 namespace {
 
 constexpr uint32_t kFirstBounceDimension = 4;
-constexpr uint32_t kDimensionsPerBounce = 7;
+constexpr uint32_t kDimensionsPerBounce = 8;
+// Offsets within a bounce's dimensions.
+constexpr uint32_t kLightPosition = 0, kBsdfDirection = 2, kLightChoice = 4, kBsdfLobe = 5,
+                   kRoulette = 6;
 
 float PowerHeuristic(float a, float b) {
   a *= a;
@@ -129,7 +134,7 @@ class PathTracer final : public Transport {
       const SurfaceModel& model = scene.Material(material);
       const bool sample_lights = scene.HasEmitters() && !(model.Lobes() & kScatterDelta);
       if (sample_lights) SampleLights(scene, points, model, paths, vertices, members, base);
-      ScatterBsdf(points, model, paths, vertices, members, base + 3, depth, sample_lights, next);
+      ScatterBsdf(points, model, paths, vertices, members, base, depth, sample_lights, next);
     }
     return next;
   }
@@ -168,7 +173,7 @@ class PathTracer final : public Transport {
   // Next-event estimation: one emitter sample per vertex, MIS-weighted.
   void SampleLights(const SceneView& scene, const PrimarySamples& points, const SurfaceModel& model,
                     std::vector<Path>& paths, const std::vector<Vertex>& vertices,
-                    const std::vector<uint32_t>& members, uint32_t dim) const {
+                    const std::vector<uint32_t>& members, uint32_t base) const {
     const size_t m = members.size();
     std::vector<float> wi(3 * m), wo(3 * m), uv(2 * m), f(3 * m), pdf(m);
     std::vector<float> light_w(3 * m), light_uv(2 * m), le(3 * m), light_pdf(m);
@@ -178,7 +183,8 @@ class PathTracer final : public Transport {
       const Vertex& v = vertices[members[j]];
       const uint32_t path = v.path;
       const EmitterSample s =
-          scene.SampleEmitter(points.Get(path, dim), points.Get(path, dim + 1), points.Get(path, dim + 2));
+          scene.SampleEmitter(points.Get(path, base + kLightChoice), points.Get(path, base + kLightPosition),
+                              points.Get(path, base + kLightPosition + 1));
       Vec3 to_light = s.position - v.position;
       const float dist = Length(to_light);
       to_light = dist > 0 ? to_light / dist : Vec3(0, 0, 1);
@@ -232,7 +238,7 @@ class PathTracer final : public Transport {
   // Samples the BSDF for each vertex, extends the path, applies roulette.
   void ScatterBsdf(const PrimarySamples& points, const SurfaceModel& model, std::vector<Path>& paths,
                    const std::vector<Vertex>& vertices, const std::vector<uint32_t>& members,
-                   uint32_t dim, int depth, bool sampled_lights, std::vector<uint32_t>& next) const {
+                   uint32_t base, int depth, bool sampled_lights, std::vector<uint32_t>& next) const {
     const size_t m = members.size();
     std::vector<float> wi(3 * m), uv(2 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m);
     std::vector<uint32_t> flags(m);
@@ -241,7 +247,9 @@ class PathTracer final : public Transport {
       v.wi.Store(&wi[3 * j]);
       uv[2 * j] = v.u;
       uv[2 * j + 1] = v.v;
-      for (uint32_t c = 0; c < 3; ++c) u[3 * j + c] = points.Get(v.path, dim + c);
+      u[3 * j] = points.Get(v.path, base + kBsdfLobe);
+      u[3 * j + 1] = points.Get(v.path, base + kBsdfDirection);
+      u[3 * j + 2] = points.Get(v.path, base + kBsdfDirection + 1);
     }
     model.Sample(wi, uv, u, 0, wo, weight, pdf, flags);
     for (size_t j = 0; j < m; ++j) {
@@ -259,7 +267,7 @@ class PathTracer final : public Transport {
       p.ray.tfar = kInfinity;
       if (depth >= rr_depth_) {
         const float q = std::min(MaxComponent(p.throughput), 0.95f);
-        if (points.Get(v.path, dim + 3) >= q) continue;
+        if (points.Get(v.path, base + kRoulette) >= q) continue;
         p.throughput *= 1.0f / q;
       }
       next.push_back(v.path);
