@@ -30,7 +30,7 @@ from yarf.server import LocalServer
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "cornell-box" / "scene.json"
 MITSUBA_SCENE = ROOT.parent / "shared" / "scenes" / "mitsuba-cbox" / "cbox-rgb.xml"
-LLVM = Path("/usr/lib/x86_64-linux-gnu/libLLVM-19.so.1")
+LLVM = Path("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")  # Debian package libllvm19
 THROUGHPUT_SPP = int(os.environ.get("YARF_BENCH_SPP", "64"))
 REFERENCE_SPP = int(os.environ.get("YARF_BENCH_REFERENCE_SPP", "1024"))
 EQUAL_TIME_SECONDS = float(os.environ.get("YARF_BENCH_SECONDS", "1.0"))

@@ -19,7 +19,7 @@
 //   int rr_depth   depth from which Russian roulette may end paths (5).
 
 #include <algorithm>
-#include <numeric>
+#include <unordered_map>
 #include <vector>
 
 #include "yarf/plugin.h"
@@ -39,16 +39,27 @@ float PowerHeuristic(float a, float b) {
   return a + b > 0 ? a / (a + b) : 0;
 }
 
-// Indices 0..keys.size()-1 grouped by key, one contiguous run per key.
+// Indices 0..keys.size()-1 grouped by key, groups in order of first
+// appearance. Linear: a batch meets few distinct materials and emitters.
 template <typename Key>
 std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key>& keys) {
-  std::vector<uint32_t> order(keys.size());
-  std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return keys[a] < keys[b]; });
   std::vector<std::pair<Key, std::vector<uint32_t>>> groups;
-  for (uint32_t i : order) {
-    if (groups.empty() || groups.back().first != keys[i]) groups.push_back({keys[i], {}});
-    groups.back().second.push_back(i);
+  std::unordered_map<Key, size_t> index;  // used once groups are many
+  constexpr size_t kLinearSearch = 16;
+  for (uint32_t i = 0; i < keys.size(); ++i) {
+    size_t g = groups.size();
+    if (groups.size() <= kLinearSearch) {
+      for (size_t j = 0; j < groups.size(); ++j)
+        if (groups[j].first == keys[i]) g = j;
+    } else if (auto it = index.find(keys[i]); it != index.end()) {
+      g = it->second;
+    }
+    if (g == groups.size()) {
+      groups.push_back({keys[i], {}});
+      if (groups.size() > kLinearSearch)
+        for (size_t j = index.size(); j < groups.size(); ++j) index[groups[j].first] = j;
+    }
+    groups[g].second.push_back(i);
   }
   return groups;
 }
@@ -67,7 +78,9 @@ struct Path {
 // A surface hit that scatters further.
 struct Vertex {
   uint32_t path;
-  Vec3 position, normal, wi;
+  Vec3 position;
+  Frame frame;  // frame.n is the geometric normal
+  Vec3 wi;
   float u, v;
 };
 
@@ -121,9 +134,9 @@ class PathTracer final : public Transport {
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
       if (!may_scatter) continue;
       const Ray& ray = rays[k];
-      Vertex v{active[k], ray.origin + ray.direction * hit.t, hit.normal,
-               Frame(hit.normal).ToLocal(-ray.direction), hit.u, hit.v};
-      vertices.push_back(v);
+      const Frame frame(hit.normal);
+      vertices.push_back({active[k], ray.origin + ray.direction * hit.t, frame,
+                          frame.ToLocal(-ray.direction), hit.u, hit.v});
       vertex_material.push_back(scene.MaterialOf(hit.shape));
     }
     AddEmission(scene, paths, active, rays, hits, emitted);
@@ -192,13 +205,13 @@ class PathTracer final : public Transport {
       light_pdf[j] = cos_light > 0 && dist > 0 ? s.pdf_area * dist * dist / cos_light : 0;
       emitters[j] = s.shape == kNoShape ? nullptr : scene.EmitterOf(s.shape);
       v.wi.Store(&wi[3 * j]);
-      Frame(v.normal).ToLocal(to_light).Store(&wo[3 * j]);
+      v.frame.ToLocal(to_light).Store(&wo[3 * j]);
       uv[2 * j] = v.u;
       uv[2 * j + 1] = v.v;
       Frame(s.normal).ToLocal(-to_light).Store(&light_w[3 * j]);
       light_uv[2 * j] = s.u;
       light_uv[2 * j + 1] = s.v;
-      shadow[j] = ShadowRay(v.position, v.normal, s.position);
+      shadow[j] = ShadowRay(v.position, v.frame.n, s.position);
     }
     model.Evaluate(wi, wo, uv, f);
     model.Pdf(wi, wo, uv, pdf);
@@ -260,8 +273,8 @@ class PathTracer final : public Transport {
       p.throughput *= w;
       p.bsdf_pdf = pdf[j];
       p.full_weight = !sampled_lights || (flags[j] & kScatterDelta);
-      const Vec3 dir = Normalize(Frame(v.normal).ToWorld(Vec3::Load(&wo[3 * j])));
-      p.ray.origin = OffsetRayOrigin(v.position, v.normal, dir);
+      const Vec3 dir = Normalize(v.frame.ToWorld(Vec3::Load(&wo[3 * j])));
+      p.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
       p.ray.direction = dir;
       p.ray.tnear = 0;
       p.ray.tfar = kInfinity;
