@@ -18,7 +18,7 @@ APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
 # Mitsuba's LLVM variant, for the benchmark only.
 BENCH_APT_PACKAGES := libllvm19
 
-.PHONY: all deps venv build stubs render test bench clean
+.PHONY: all deps venv build stubs lint render test bench clean
 
 all: build
 
@@ -59,7 +59,12 @@ render: build
 	@mkdir -p out
 	$(VENV)/bin/yarf render scenes/cornell-box/scene.json -o out/cornell-box.exr --spp $(SPP)
 
-test: build
+# Python style: formatted and lint-clean (ruff).
+lint: venv
+	$(VENV)/bin/ruff format --check bench tests clients/python
+	$(VENV)/bin/ruff check bench tests clients/python
+
+test: build lint
 	cd $(BUILD) && ctest --output-on-failure -j2
 	$(PY) -m pytest -q
 

@@ -63,8 +63,19 @@ def mitsuba_render(variant: str, spp: int, seed: int) -> tuple[np.ndarray, dict[
         env["DRJIT_LIBLLVM_PATH"] = str(LLVM)
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "image.npy"
-        command = [sys.executable, str(ROOT / "bench" / "mitsuba_render.py"), str(MITSUBA_SCENE),
-                   "--variant", variant, "--spp", str(spp), "--seed", str(seed), "--out", str(out)]
+        command = [
+            sys.executable,
+            str(ROOT / "bench" / "mitsuba_render.py"),
+            str(MITSUBA_SCENE),
+            "--variant",
+            variant,
+            "--spp",
+            str(spp),
+            "--seed",
+            str(seed),
+            "--out",
+            str(out),
+        ]
         result = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
         if result.returncode != 0:
             sys.exit(f"mitsuba {variant} failed:\n{result.stderr[-2000:]}")
@@ -122,15 +133,24 @@ def main() -> None:
         report["equal_time"] = {
             "budget_seconds": EQUAL_TIME_SECONDS,
             "yarf": {"spp": y_spp, "seconds": y_run["seconds"], "rmse": rmse(y_image, reference)},
-            "mitsuba_llvm_ad_rgb": {"spp": m_spp, "seconds": m_run["seconds"], "rmse": rmse(m_image, reference)},
+            "mitsuba_llvm_ad_rgb": {
+                "spp": m_spp,
+                "seconds": m_run["seconds"],
+                "rmse": rmse(m_image, reference),
+            },
         }
-        report["equal_spp_16"] = {"yarf_rmse": rmse(y16, reference), "mitsuba_llvm_ad_rgb_rmse": rmse(m16, reference)}
+        report["equal_spp_16"] = {
+            "yarf_rmse": rmse(y16, reference),
+            "mitsuba_llvm_ad_rgb_rmse": rmse(m16, reference),
+        }
 
     eq = report["equal_time"]
     ratios = {
         "rays_vs_embree_ceiling": yarf_rate / ceiling_rate,
-        "samples_vs_mitsuba_llvm": yarf["samples_per_second"] / mitsuba["llvm_ad_rgb"]["samples_per_second"],
-        "samples_vs_mitsuba_scalar": yarf["samples_per_second"] / mitsuba["scalar_rgb"]["samples_per_second"],
+        "samples_vs_mitsuba_llvm": yarf["samples_per_second"]
+        / mitsuba["llvm_ad_rgb"]["samples_per_second"],
+        "samples_vs_mitsuba_scalar": yarf["samples_per_second"]
+        / mitsuba["scalar_rgb"]["samples_per_second"],
         "equal_time_rmse_vs_mitsuba_llvm": eq["yarf"]["rmse"] / eq["mitsuba_llvm_ad_rgb"]["rmse"],
         "equal_spp_rmse_vs_mitsuba_llvm": report["equal_spp_16"]["yarf_rmse"]
         / report["equal_spp_16"]["mitsuba_llvm_ad_rgb_rmse"],
@@ -140,18 +160,26 @@ def main() -> None:
     out = ROOT / "out" / "bench"
     out.mkdir(parents=True, exist_ok=True)
     (out / "cornell_box.json").write_text(json.dumps(report, indent=2))
-    print(f"yarf: {yarf['samples_per_second'] / 1e6:.2f} M samples/s, "
-          f"{yarf['closest_hit_rays_per_second'] / 1e6:.2f} M closest-hit rays/s, "
-          f"{yarf['shadow_rays_per_second'] / 1e6:.2f} M shadow rays/s")
-    print(f"embree ceiling: {c_best / 1e6:.2f} M closest-hit rays/s, {s_best / 1e6:.2f} M shadow rays/s, "
-          f"{ceiling_rate / 1e6:.2f} M rays/s for yarf's mix")
+    print(
+        f"yarf: {yarf['samples_per_second'] / 1e6:.2f} M samples/s, "
+        f"{yarf['closest_hit_rays_per_second'] / 1e6:.2f} M closest-hit rays/s, "
+        f"{yarf['shadow_rays_per_second'] / 1e6:.2f} M shadow rays/s"
+    )
+    print(
+        f"embree ceiling: {c_best / 1e6:.2f} M closest-hit rays/s, "
+        f"{s_best / 1e6:.2f} M shadow rays/s, {ceiling_rate / 1e6:.2f} M rays/s for yarf's mix"
+    )
     for variant, stats in mitsuba.items():
         print(f"mitsuba {variant}: {stats['samples_per_second'] / 1e6:.2f} M samples/s")
-    print(f"equal time ({EQUAL_TIME_SECONDS:.1f} s): yarf {eq['yarf']['spp']} spp rmse {eq['yarf']['rmse']:.5f}, "
-          f"mitsuba llvm {eq['mitsuba_llvm_ad_rgb']['spp']} spp rmse {eq['mitsuba_llvm_ad_rgb']['rmse']:.5f}")
+    y_eq, m_eq = eq["yarf"], eq["mitsuba_llvm_ad_rgb"]
+    print(
+        f"equal time ({EQUAL_TIME_SECONDS:.1f} s): yarf {y_eq['spp']} spp rmse {y_eq['rmse']:.5f}, "
+        f"mitsuba llvm {m_eq['spp']} spp rmse {m_eq['rmse']:.5f}"
+    )
     for name, value in ratios.items():
         print(f"ratio {name}: {value:.3f}")
     print(f"written {out / 'cornell_box.json'}")
+    print("ratios " + json.dumps(ratios))
 
 
 if __name__ == "__main__":

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
+
 #include "components/registry.h"
 #include "kernel/scene_builder.h"
 #include "yarf/error.h"
@@ -150,6 +153,45 @@ TEST_F(SceneTest, ParsesPlyMeshes) {
   const Hit hit = Trace(*kernel, {0.5f, 0.5f, 0}, {0, 0, 1});
   ASSERT_TRUE(hit.Found());
   EXPECT_NEAR(hit.t, 6.0f, 1e-4f);
+}
+
+TEST_F(SceneTest, ParsesBinaryPlyMeshesOfEitherByteOrder) {
+  for (const bool big_endian : {false, true}) {
+    std::string ply = std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
+                      " 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    auto put = [&](auto value) {
+      char bytes[sizeof value];
+      std::memcpy(bytes, &value, sizeof value);
+      if (big_endian) std::reverse(bytes, bytes + sizeof value);
+      ply.append(bytes, sizeof value);
+    };
+    for (float v : {-1.f, -1.f, 2.f, 1.f, -1.f, 2.f, 0.f, 1.f, 2.f}) put(v);
+    put(uint8_t(3));
+    for (int32_t i : {0, 1, 2}) put(i);
+    v1::Scene scene = BaseScene();
+    v1::SceneShape* s = AddTriangle(scene.mutable_shapes());
+    s->mutable_mesh()->set_data(ply);
+    s->mutable_mesh()->set_format("ply");
+    auto kernel = Build(scene);
+    const Hit hit = Trace(*kernel, {0, 0, 0}, {0, 0, 1});
+    ASSERT_TRUE(hit.Found()) << (big_endian ? "big" : "little") << " endian";
+    EXPECT_NEAR(hit.t, 2.0f, 1e-5f);
+  }
+}
+
+TEST_F(SceneTest, MalformedMeshFilesAreNamedInTheError) {
+  v1::Scene scene = BaseScene();
+  v1::SceneShape* s = AddTriangle(scene.mutable_shapes());
+  s->set_name("broken");
+  s->mutable_mesh()->set_data("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nend_header\n");
+  s->mutable_mesh()->set_format("ply");
+  try {
+    Build(scene);
+    FAIL() << "a truncated PLY file was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("broken"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -1,0 +1,65 @@
+#include "kernel/film.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace yarf {
+namespace {
+
+v1::ReconstructionFilter Filter(v1::ReconstructionFilter::Kind kind) {
+  v1::ReconstructionFilter f;
+  f.set_kind(kind);
+  return f;
+}
+
+TEST(Film, BoxFilterAveragesTheSamplesInsideEachPixel) {
+  Film film(4, 2, Filter(v1::ReconstructionFilter::BOX));
+  film.Add(1.2f, 0.7f, {1, 2, 3});
+  film.Add(1.9f, 0.1f, {3, 2, 1});
+  film.Add(2.1f, 0.5f, {10, 10, 10});  // the next pixel
+  const std::vector<float> pixels = film.Pixels();
+  EXPECT_FLOAT_EQ(pixels[3 * 1 + 0], 2.0f);
+  EXPECT_FLOAT_EQ(pixels[3 * 1 + 2], 2.0f);
+  EXPECT_FLOAT_EQ(pixels[3 * 2 + 1], 10.0f);
+  EXPECT_FLOAT_EQ(pixels[3 * 0], 0.0f);
+}
+
+TEST(Film, ConstantRadianceGivesThatRadianceUnderEveryFilter) {
+  for (auto kind : {v1::ReconstructionFilter::BOX, v1::ReconstructionFilter::TENT,
+                    v1::ReconstructionFilter::GAUSSIAN}) {
+    Film film(8, 8, Filter(kind));
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 8);
+    for (int i = 0; i < 20000; ++i) film.Add(u(rng), u(rng), {0.25f, 0.5f, 1});
+    for (float v : film.Variances()) EXPECT_NEAR(v, 0.0f, 1e-6f);
+    const std::vector<float> pixels = film.Pixels();
+    for (size_t k = 0; k < pixels.size(); k += 3) EXPECT_NEAR(pixels[k + 2], 1.0f, 1e-5f) << kind;
+  }
+}
+
+TEST(Film, VarianceIsThatOfThePixelMean) {
+  // Box filter: n samples of a uniform [0, 1) value have mean variance 1/(12 n).
+  constexpr int kSamples = 4000;
+  Film film(1, 1, Filter(v1::ReconstructionFilter::BOX));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (int i = 0; i < kSamples; ++i) {
+    const float value = u(rng);
+    film.Add(u(rng), u(rng), {value, value, value});
+  }
+  EXPECT_NEAR(film.Variances()[0], 1.0 / (12.0 * kSamples), 0.1 / (12.0 * kSamples));
+  EXPECT_NEAR(film.Pixels()[0], 0.5f, 4 * std::sqrt(1.0 / (12.0 * kSamples)));
+}
+
+TEST(Film, IgnoresNonFiniteSamples) {
+  Film film(1, 1, Filter(v1::ReconstructionFilter::BOX));
+  film.Add(0.5f, 0.5f, {1, 1, 1});
+  film.Add(0.5f, 0.5f, {NAN, 1, 1});
+  film.Add(0.5f, 0.5f, {INFINITY, 1, 1});
+  EXPECT_FLOAT_EQ(film.Pixels()[0], 1.0f);
+}
+
+}  // namespace
+}  // namespace yarf
