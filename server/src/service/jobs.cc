@@ -93,12 +93,26 @@ void Job::RequestCancel() {
 bool Job::Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
                    uint32_t& height) const {
   std::lock_guard lock(film_mutex_);
-  if (!film_) return false;
-  pixels = film_->Pixels();
-  variances = film_->Variances();
-  width = film_->width();
-  height = film_->height();
+  if (film_) {
+    pixels = film_->Pixels();
+    variances = film_->Variances();
+  } else if (!final_pixels_.empty()) {
+    pixels = final_pixels_;
+    variances = final_variances_;
+  } else {
+    return false;
+  }
+  width = width_;
+  height = height_;
   return true;
+}
+
+void Job::KeepFinalImage() {
+  std::lock_guard lock(film_mutex_);
+  if (!film_) return;
+  final_pixels_ = film_->Pixels();
+  final_variances_ = film_->Variances();
+  film_.reset();
 }
 
 void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::filesystem::path& asset_root) {
@@ -119,6 +133,8 @@ void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::f
     {
       std::lock_guard lock(film_mutex_);
       film_ = std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
+      width_ = film_->width();
+      height_ = film_->height();
     }
     const KernelScene* counters = kernel.get();
     FilmTarget target(*film_, film_mutex_, options.spp(), options.seed(), cancel_, [&](uint32_t done) {
@@ -130,12 +146,14 @@ void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::f
     });
     transport->Prepare(*kernel);
     integrator->Render(*transport, *kernel, *sampler, target);
+    KeepFinalImage();
     Update([&](v1::JobStatus& s) {
       s.set_state(cancel_ ? v1::CANCELLED : v1::SUCCEEDED);
       s.set_closest_hit_rays(counters->ClosestHitRays());
       s.set_shadow_rays(counters->ShadowRays());
     });
   } catch (const std::exception& e) {
+    KeepFinalImage();
     Update([&](v1::JobStatus& s) {
       s.set_state(v1::FAILED);
       s.set_error(e.what());

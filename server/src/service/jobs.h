@@ -43,6 +43,7 @@ class Job {
 
  private:
   void Update(const std::function<void(v1::JobStatus&)>& change);
+  void KeepFinalImage();
 
   const std::string id_;
   const v1::SubmitRequest request_;
@@ -52,7 +53,11 @@ class Job {
   v1::JobStatus status_;
   uint64_t version_ = 0;
   std::chrono::steady_clock::time_point started_;
+  // The film while rendering; once the job ends only its estimates are
+  // kept (a film holds several times their size).
   std::unique_ptr<Film> film_;
+  std::vector<float> final_pixels_, final_variances_;
+  uint32_t width_ = 0, height_ = 0;
   mutable std::mutex film_mutex_;
 };
 
