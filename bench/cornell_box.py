@@ -33,7 +33,9 @@ MITSUBA_SCENE = ROOT.parent / "shared" / "scenes" / "mitsuba-cbox" / "cbox-rgb.x
 LLVM = Path("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")  # Debian package libllvm19
 THROUGHPUT_SPP = int(os.environ.get("YARF_BENCH_SPP", "64"))
 REFERENCE_SPP = int(os.environ.get("YARF_BENCH_REFERENCE_SPP", "1024"))
-EQUAL_TIME_SECONDS = float(os.environ.get("YARF_BENCH_SECONDS", "1.0"))
+EQUAL_TIME_SECONDS = float(os.environ.get("YARF_BENCH_SECONDS", "2.0"))
+# Independent equal-time renders per renderer; their mean squared error is reported.
+EQUAL_TIME_SEEDS = (7, 8, 9)
 
 
 def yarf_render(client: Client, spp: int, seed: int) -> tuple[np.ndarray, dict[str, float]]:
@@ -92,6 +94,11 @@ def rmse(image: np.ndarray, reference: np.ndarray) -> float:
     return float(np.sqrt(np.mean((image.astype(np.float64) - reference) ** 2)))
 
 
+def mean_rmse(images: list[np.ndarray], reference: np.ndarray) -> float:
+    """The root of the mean squared error over several independent images."""
+    return float(np.sqrt(np.mean([rmse(image, reference) ** 2 for image in images])))
+
+
 def spp_for(seconds: float, samples_per_second: float, pixels: int) -> int:
     return max(1, round(seconds * samples_per_second / pixels))
 
@@ -126,17 +133,21 @@ def main() -> None:
 
         y_spp = spp_for(EQUAL_TIME_SECONDS, yarf["samples_per_second"], pixels)
         m_spp = spp_for(EQUAL_TIME_SECONDS, mitsuba["llvm_ad_rgb"]["samples_per_second"], pixels)
-        y_image, y_run = yarf_render(client, y_spp, 7)
-        m_image, m_run = mitsuba_render("llvm_ad_rgb", m_spp, 7)
+        y_runs = [yarf_render(client, y_spp, seed) for seed in EQUAL_TIME_SEEDS]
+        m_runs = [mitsuba_render("llvm_ad_rgb", m_spp, seed) for seed in EQUAL_TIME_SEEDS]
         y16, _ = yarf_render(client, 16, 8)
         m16, _ = mitsuba_render("llvm_ad_rgb", 16, 8)
         report["equal_time"] = {
             "budget_seconds": EQUAL_TIME_SECONDS,
-            "yarf": {"spp": y_spp, "seconds": y_run["seconds"], "rmse": rmse(y_image, reference)},
+            "yarf": {
+                "spp": y_spp,
+                "seconds": float(np.mean([run["seconds"] for _, run in y_runs])),
+                "rmse": mean_rmse([image for image, _ in y_runs], reference),
+            },
             "mitsuba_llvm_ad_rgb": {
                 "spp": m_spp,
-                "seconds": m_run["seconds"],
-                "rmse": rmse(m_image, reference),
+                "seconds": float(np.mean([run["seconds"] for _, run in m_runs])),
+                "rmse": mean_rmse([image for image, _ in m_runs], reference),
             },
         }
         report["equal_spp_16"] = {
