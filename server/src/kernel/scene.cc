@@ -127,8 +127,18 @@ void KernelScene::Commit() {
     if (!s.look.emitter) continue;
     const uint32_t count = s.kind == Kind::kSphere ? 1 : uint32_t(meshes_[s.mesh].TriangleCount());
     for (uint32_t p = 0; p < count; ++p) {
+      EmittingPrimitive e{id, s.kind == Kind::kSphere, {}, {}, {}, 0, {}};
+      if (e.sphere) {
+        e.p0 = s.placed ? s.to_world.Point(s.center) : s.center;
+        e.radius = s.radius * (s.placed ? float(std::cbrt(std::abs(s.to_world.Determinant3()))) : 1.0f);
+      } else {
+        Vec3 v[3];
+        Triangle(s, p, v);
+        e.p0 = v[0], e.p1 = v[1], e.p2 = v[2];
+        e.normal = Normal(s, p, v[0]);
+      }
       emitter_area_ += PrimitiveArea(s, p);
-      emitting_.emplace_back(id, p);
+      emitting_.push_back(e);
       emitting_cdf_.push_back(emitter_area_);
     }
   }
@@ -254,25 +264,20 @@ EmitterSample KernelScene::SampleEmitter(float u0, float u1, float u2) const {
   const size_t k = std::min(size_t(std::upper_bound(emitting_cdf_.begin(), emitting_cdf_.end(), target) -
                                    emitting_cdf_.begin()),
                             emitting_.size() - 1);
-  const auto [shape_id, primitive] = emitting_[k];
-  const ShapeRecord& shape = shapes_[shape_id];
-  s.shape = shape_id;
+  const EmittingPrimitive& e = emitting_[k];
+  s.shape = e.shape;
   s.pdf_area = 1.0f / emitter_area_;
-  if (shape.kind == Kind::kSphere) {
-    const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
-    const float scale = shape.placed ? float(std::cbrt(std::abs(shape.to_world.Determinant3()))) : 1;
+  if (e.sphere) {
     const Vec3 d = SampleUniformSphere(u1, u2);
-    s.position = center + d * (shape.radius * scale);
-    s.normal = shape.look.flip_normals ? -d : d;
+    s.position = e.p0 + d * e.radius;
+    s.normal = shapes_[e.shape].look.flip_normals ? -d : d;
     return s;
   }
-  Vec3 v[3];
-  Triangle(shape, primitive, v);
   const auto b = SampleUniformTriangle(u1, u2);
-  s.position = v[0] * b[0] + v[1] * b[1] + v[2] * (1 - b[0] - b[1]);
+  s.position = e.p0 * b[0] + e.p1 * b[1] + e.p2 * (1 - b[0] - b[1]);
   s.u = b[1];
   s.v = 1 - b[0] - b[1];
-  s.normal = Normal(shape, primitive, s.position);
+  s.normal = e.normal;
   return s;
 }
 

@@ -102,8 +102,16 @@ class KernelScene final : public SceneView {
   std::vector<ShapeRecord> shapes_;
   // First shape id of each world-level Embree geometry (by geomID).
   std::vector<uint32_t> geometry_base_;
-  // Emitting primitives and the running sum of their areas.
-  std::vector<std::pair<uint32_t, uint32_t>> emitting_;
+  // Emitting primitives in world space, ready for light sampling, and the
+  // running sum of their areas.
+  struct EmittingPrimitive {
+    uint32_t shape;
+    bool sphere;
+    Vec3 p0, p1, p2;  // triangle corners; p0 is a sphere's centre
+    float radius;
+    Vec3 normal;  // a triangle's unit normal
+  };
+  std::vector<EmittingPrimitive> emitting_;
   std::vector<float> emitting_cdf_;
   float emitter_area_ = 0;
   mutable std::atomic<uint64_t> closest_hit_rays_{0}, shadow_rays_{0};
