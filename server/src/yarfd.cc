@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "service/component_service.h"
+#include "service/instance_services.h"
 #include "service/render_service.h"
 #include "service/server_options.h"
 
@@ -32,6 +33,11 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   yarf::RegistryServiceImpl registry_service(registry);
   yarf::ComponentServiceImpl component(registry, instances);
   yarf::FactoryServiceImpl factory(registry, instances);
+  yarf::SamplerServiceImpl sampler(instances);
+  yarf::GeneratorServiceImpl generator(instances);
+  yarf::WarpServiceImpl warp(instances);
+  yarf::SurfaceModelServiceImpl surface_model(instances);
+  yarf::EmitterServiceImpl emitter(instances);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -41,10 +47,10 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   // Batches and images are large.
   builder.SetMaxReceiveMessageSize(256 << 20);
   builder.SetMaxSendMessageSize(256 << 20);
-  builder.RegisterService(&render);
-  builder.RegisterService(&registry_service);
-  builder.RegisterService(&component);
-  builder.RegisterService(&factory);
+  for (grpc::Service* service : std::initializer_list<grpc::Service*>{
+           &render, &registry_service, &component, &factory, &sampler, &generator, &warp,
+           &surface_model, &emitter})
+    builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server) {
     std::cerr << "yarfd: cannot listen on " << options.listen << "\n";

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "kernel/image_io.h"
+#include "service/array_codec.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -13,15 +14,6 @@ grpc::Status NotFound(const std::string& id) {
 }
 
 bool Ended(v1::JobState s) { return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED; }
-
-void FillArray(v1::Array* array, const std::vector<float>& values, uint32_t height, uint32_t width) {
-  array->set_dtype(v1::Array::FLOAT32);
-  array->add_shape(height);
-  array->add_shape(width);
-  array->add_shape(3);
-  // Little-endian hosts only (x86-64, arm64): the bytes are the floats.
-  array->set_data(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
-}
 
 }  // namespace
 
@@ -73,8 +65,8 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext*, const v1::GetRes
         reply->set_image(EncodeImage(pixels, width, height, ImageFormat::kPng));
         break;
       default:
-        FillArray(reply->mutable_pixels(), pixels, height, width);
-        FillArray(reply->mutable_variance(), variances, height, width);
+        *reply->mutable_pixels() = FloatArray(pixels, {height, width, 3});
+        *reply->mutable_variance() = FloatArray(variances, {height, width, 3});
     }
   } catch (const Error& e) {
     return {grpc::StatusCode::INTERNAL, e.what()};

@@ -1,0 +1,162 @@
+#include "service/instance_services.h"
+
+#include "service/array_codec.h"
+#include "yarf/math.h"
+#include "yarf/surface.h"
+
+namespace yarf {
+namespace {
+
+// Largest batch one call may ask for, in values.
+constexpr uint64_t kMaxValues = uint64_t(1) << 26;
+
+// Runs `call` on the instance `handle` as interface I; maps a missing
+// instance, a wrong interface and bad input to gRPC statuses.
+template <typename I, typename Call>
+grpc::Status WithInstance(const InstanceTable& instances, uint64_t handle, Call&& call) {
+  std::shared_ptr<Component> instance = instances.Find(handle);
+  if (!instance) return {grpc::StatusCode::NOT_FOUND, "no instance " + std::to_string(handle)};
+  auto* typed = dynamic_cast<I*>(instance.get());
+  if (!typed)
+    return {grpc::StatusCode::FAILED_PRECONDITION, "instance " + std::to_string(handle) + " ('" +
+                                                       instance->Describe().class_name +
+                                                       "') does not implement " + I::kInterface};
+  try {
+    call(*typed);
+    return grpc::Status::OK;
+  } catch (const std::exception& e) {
+    return {grpc::StatusCode::INVALID_ARGUMENT, std::string(I::kInterface) + ": " + e.what()};
+  }
+}
+
+void CheckSize(uint64_t values) {
+  if (values > kMaxValues)
+    throw Error("batch of " + std::to_string(values) + " values exceeds " + std::to_string(kMaxValues));
+}
+
+// Forward, Inverse and Pdf share their shape checks.
+void WarpCall(const Warp& warp, const v1::WarpRequest& request, bool forward, bool inverse,
+              v1::WarpReply* reply) {
+  const uint32_t in_dims = forward ? warp.DomainDimensions() : warp.ImageDimensions();
+  const uint32_t out_dims = forward ? warp.ImageDimensions() : warp.DomainDimensions();
+  size_t n = 0;
+  const std::vector<float> in = FloatsOf(request.points(), {in_dims}, "points", n);
+  std::vector<float> out(n * out_dims), pdf(n);
+  if (forward) warp.Forward(in, out, pdf);
+  else if (inverse) warp.Inverse(in, out, pdf);
+  else warp.Pdf(in, pdf);
+  if (forward || inverse) *reply->mutable_points() = FloatArray(out, {uint32_t(n), out_dims});
+  *reply->mutable_pdf() = FloatArray(pdf, {uint32_t(n)});
+}
+
+}  // namespace
+
+grpc::Status SamplerServiceImpl::Generate(grpc::ServerContext*, const v1::GenerateSamplesRequest* request,
+                                          v1::GenerateSamplesReply* reply) {
+  return WithInstance<Sampler>(instances_, request->handle(), [&](const Sampler& sampler) {
+    CheckSize(uint64_t(request->count()) * request->dimensions());
+    std::vector<float> points(size_t(request->count()) * request->dimensions());
+    sampler.Generate(request->first_index(), request->count(), request->dimensions(), request->seed(), points);
+    *reply->mutable_points() = FloatArray(points, {request->count(), request->dimensions()});
+  });
+}
+
+grpc::Status GeneratorServiceImpl::Next(grpc::ServerContext*, const v1::GeneratorRequest* request,
+                                        v1::GeneratorReply* reply) {
+  return WithInstance<Generator>(instances_, request->handle(), [&](Generator& generator) {
+    CheckSize(request->count());
+    std::vector<float> values(request->count());
+    generator.Next(request->seed(), request->stream(), request->offset(), values);
+    *reply->mutable_values() = FloatArray(values, {request->count()});
+  });
+}
+
+grpc::Status WarpServiceImpl::Signature(grpc::ServerContext*, const v1::WarpSignatureRequest* request,
+                                        v1::WarpSignature* reply) {
+  return WithInstance<Warp>(instances_, request->handle(), [&](const Warp& warp) {
+    reply->set_domain_dimensions(warp.DomainDimensions());
+    reply->set_image_dimensions(warp.ImageDimensions());
+  });
+}
+
+grpc::Status WarpServiceImpl::Forward(grpc::ServerContext*, const v1::WarpRequest* request, v1::WarpReply* reply) {
+  return WithInstance<Warp>(instances_, request->handle(),
+                            [&](const Warp& warp) { WarpCall(warp, *request, true, false, reply); });
+}
+
+grpc::Status WarpServiceImpl::Inverse(grpc::ServerContext*, const v1::WarpRequest* request, v1::WarpReply* reply) {
+  return WithInstance<Warp>(instances_, request->handle(),
+                            [&](const Warp& warp) { WarpCall(warp, *request, false, true, reply); });
+}
+
+grpc::Status WarpServiceImpl::Pdf(grpc::ServerContext*, const v1::WarpRequest* request, v1::WarpReply* reply) {
+  return WithInstance<Warp>(instances_, request->handle(),
+                            [&](const Warp& warp) { WarpCall(warp, *request, false, false, reply); });
+}
+
+grpc::Status SurfaceModelServiceImpl::Evaluate(grpc::ServerContext*, const v1::SurfaceQuery* request,
+                                               v1::EvaluateSurfaceReply* reply) {
+  return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
+    size_t n = 0, n_wo = 0, n_uv = 0;
+    const auto wi = FloatsOf(request->wi(), {3}, "wi", n);
+    const auto wo = FloatsOf(request->wo(), {3}, "wo", n_wo);
+    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
+    if (n_wo != n || n_uv != n) throw Error("wi, wo and uv must have the same number of rows");
+    std::vector<float> value(3 * n);
+    model.Evaluate(wi, wo, uv, value);
+    *reply->mutable_value() = FloatArray(value, {uint32_t(n), 3});
+  });
+}
+
+grpc::Status SurfaceModelServiceImpl::Sample(grpc::ServerContext*, const v1::SampleSurfaceRequest* request,
+                                             v1::SampleSurfaceReply* reply) {
+  return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
+    size_t n = 0, n_uv = 0, n_u = 0;
+    const auto wi = FloatsOf(request->wi(), {3}, "wi", n);
+    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
+    const auto u = FloatsOf(request->uniform(), {3}, "uniform", n_u);
+    if (n_uv != n || n_u != n) throw Error("wi, uv and uniform must have the same number of rows");
+    std::vector<float> wo(3 * n), weight(3 * n), pdf(n);
+    std::vector<uint32_t> flags(n);
+    model.Sample(wi, uv, u, request->allowed(), wo, weight, pdf, flags);
+    *reply->mutable_wo() = FloatArray(wo, {uint32_t(n), 3});
+    *reply->mutable_weight() = FloatArray(weight, {uint32_t(n), 3});
+    *reply->mutable_pdf() = FloatArray(pdf, {uint32_t(n)});
+    *reply->mutable_flags() = Uint32Array(flags, {uint32_t(n)});
+  });
+}
+
+grpc::Status SurfaceModelServiceImpl::Pdf(grpc::ServerContext*, const v1::SurfaceQuery* request,
+                                          v1::PdfSurfaceReply* reply) {
+  return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
+    size_t n = 0, n_wo = 0, n_uv = 0;
+    const auto wi = FloatsOf(request->wi(), {3}, "wi", n);
+    const auto wo = FloatsOf(request->wo(), {3}, "wo", n_wo);
+    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
+    if (n_wo != n || n_uv != n) throw Error("wi, wo and uv must have the same number of rows");
+    std::vector<float> pdf(n);
+    model.Pdf(wi, wo, uv, pdf);
+    *reply->mutable_pdf() = FloatArray(pdf, {uint32_t(n)});
+  });
+}
+
+grpc::Status SurfaceModelServiceImpl::Lobes(grpc::ServerContext*, const v1::LobesRequest* request,
+                                            v1::LobesReply* reply) {
+  return WithInstance<SurfaceModel>(instances_, request->handle(),
+                                    [&](const SurfaceModel& model) { reply->set_flags(model.Lobes()); });
+}
+
+grpc::Status EmitterServiceImpl::Radiance(grpc::ServerContext*, const v1::RadianceRequest* request,
+                                          v1::RadianceReply* reply) {
+  return WithInstance<Emitter>(instances_, request->handle(), [&](const Emitter& emitter) {
+    size_t n = 0, n_uv = 0;
+    const auto w = FloatsOf(request->w(), {3}, "w", n);
+    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
+    if (n_uv != n) throw Error("w and uv must have the same number of rows");
+    std::vector<float> radiance(3 * n);
+    emitter.Radiance(w, uv, radiance);
+    *reply->mutable_radiance() = FloatArray(radiance, {uint32_t(n), 3});
+  });
+}
+
+}  // namespace yarf

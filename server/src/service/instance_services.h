@@ -1,0 +1,63 @@
+// The interfaces of instances made with Factory.Create, served over gRPC:
+// a remote caller uses an in-process component exactly as the kernel does.
+#pragma once
+
+#include "service/component_service.h"
+#include "yarf/v1/math.grpc.pb.h"
+#include "yarf/v1/surface.grpc.pb.h"
+
+namespace yarf {
+
+class SamplerServiceImpl final : public v1::Sampler::Service {
+ public:
+  explicit SamplerServiceImpl(const InstanceTable& instances) : instances_(instances) {}
+  grpc::Status Generate(grpc::ServerContext*, const v1::GenerateSamplesRequest*,
+                        v1::GenerateSamplesReply*) override;
+
+ private:
+  const InstanceTable& instances_;
+};
+
+class GeneratorServiceImpl final : public v1::Generator::Service {
+ public:
+  explicit GeneratorServiceImpl(const InstanceTable& instances) : instances_(instances) {}
+  grpc::Status Next(grpc::ServerContext*, const v1::GeneratorRequest*, v1::GeneratorReply*) override;
+
+ private:
+  const InstanceTable& instances_;
+};
+
+class WarpServiceImpl final : public v1::Warp::Service {
+ public:
+  explicit WarpServiceImpl(const InstanceTable& instances) : instances_(instances) {}
+  grpc::Status Signature(grpc::ServerContext*, const v1::WarpSignatureRequest*, v1::WarpSignature*) override;
+  grpc::Status Forward(grpc::ServerContext*, const v1::WarpRequest*, v1::WarpReply*) override;
+  grpc::Status Inverse(grpc::ServerContext*, const v1::WarpRequest*, v1::WarpReply*) override;
+  grpc::Status Pdf(grpc::ServerContext*, const v1::WarpRequest*, v1::WarpReply*) override;
+
+ private:
+  const InstanceTable& instances_;
+};
+
+class SurfaceModelServiceImpl final : public v1::SurfaceModel::Service {
+ public:
+  explicit SurfaceModelServiceImpl(const InstanceTable& instances) : instances_(instances) {}
+  grpc::Status Evaluate(grpc::ServerContext*, const v1::SurfaceQuery*, v1::EvaluateSurfaceReply*) override;
+  grpc::Status Sample(grpc::ServerContext*, const v1::SampleSurfaceRequest*, v1::SampleSurfaceReply*) override;
+  grpc::Status Pdf(grpc::ServerContext*, const v1::SurfaceQuery*, v1::PdfSurfaceReply*) override;
+  grpc::Status Lobes(grpc::ServerContext*, const v1::LobesRequest*, v1::LobesReply*) override;
+
+ private:
+  const InstanceTable& instances_;
+};
+
+class EmitterServiceImpl final : public v1::Emitter::Service {
+ public:
+  explicit EmitterServiceImpl(const InstanceTable& instances) : instances_(instances) {}
+  grpc::Status Radiance(grpc::ServerContext*, const v1::RadianceRequest*, v1::RadianceReply*) override;
+
+ private:
+  const InstanceTable& instances_;
+};
+
+}  // namespace yarf
