@@ -18,6 +18,7 @@ except ImportError as error:  # pragma: no cover - depends on the build
     ) from error
 
 from yarf.client import Client, RenderError, RenderResult, array_to_numpy
+from yarf.integrate import Integral, integrate
 from yarf.scene import (
     SceneError,
     component,
@@ -32,6 +33,7 @@ from yarf.server import LocalServer, ServerError, find_yarfd
 
 __all__ = [
     "Client",
+    "Integral",
     "LocalServer",
     "RenderError",
     "RenderResult",
@@ -41,6 +43,7 @@ __all__ = [
     "component",
     "find_yarfd",
     "inline_mesh_files",
+    "integrate",
     "load_scene",
     "properties",
     "rgb",

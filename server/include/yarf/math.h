@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "yarf/component.h"
+#include "yarf/error.h"
 
 namespace yarf {
 
@@ -43,9 +44,12 @@ class Integrator : public virtual Component {
                                       std::span<const double> upper, uint64_t evaluations,
                                       uint64_t seed, const Sampler& sampler) = 0;
   // The image mode: integrates a transport algorithm's Function over each
-  // pixel's footprint, feeding the target's film pass after pass.
+  // pixel's footprint, feeding the target's film pass after pass. An
+  // integrator without one says so when a job names it.
   virtual void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
-                      RenderTarget& target) = 0;
+                      RenderTarget& target) {
+    throw Error("integrator '" + Describe().class_name + "' does not render images");
+  }
 };
 
 // Point sets in [0,1)^d, addressed statelessly so that any coordinate of

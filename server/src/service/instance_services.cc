@@ -1,5 +1,6 @@
 #include "service/instance_services.h"
 
+#include "components/remote.h"
 #include "service/array_codec.h"
 #include "yarf/math.h"
 #include "yarf/surface.h"
@@ -50,6 +51,51 @@ void WarpCall(const Warp& warp, const v1::WarpRequest& request, bool forward, bo
 }
 
 }  // namespace
+
+grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext*, const v1::IntegrateRequest* request,
+                                              v1::IntegrateReply* reply) {
+  // The integrand and the sampler live as long as this call.
+  std::shared_ptr<Component> local_function, sampler_instance;
+  std::unique_ptr<Function> remote_function;
+  std::unique_ptr<Component> default_sampler;
+  Function* function = nullptr;
+  const Sampler* sampler = nullptr;
+  try {
+    if (!request->function_address().empty()) {
+      remote_function = std::make_unique<Remote<Function>>(request->function_address(), request->function_handle());
+      function = remote_function.get();
+    } else {
+      local_function = instances_.Find(request->function_handle());
+      function = dynamic_cast<Function*>(local_function.get());
+      if (!function)
+        return {grpc::StatusCode::NOT_FOUND, "no Function instance " + std::to_string(request->function_handle())};
+    }
+    if (request->sampler_handle() != 0) {
+      sampler_instance = instances_.Find(request->sampler_handle());
+      sampler = dynamic_cast<const Sampler*>(sampler_instance.get());
+      if (!sampler)
+        return {grpc::StatusCode::NOT_FOUND, "no Sampler instance " + std::to_string(request->sampler_handle())};
+    } else {
+      default_sampler = registry_.Create("independent", Properties{});
+      sampler = dynamic_cast<const Sampler*>(default_sampler.get());
+    }
+  } catch (const Error& e) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
+  }
+  return WithInstance<Integrator>(instances_, request->handle(), [&](Integrator& integrator) {
+    if (request->lower_size() != int(function->InputDimensions()) || request->upper_size() != request->lower_size())
+      throw Error("the box needs " + std::to_string(function->InputDimensions()) + " lower and upper bounds");
+    if (request->evaluations() == 0 || request->evaluations() > (uint64_t(1) << 36))
+      throw Error("evaluations must lie in [1, 2^36]");
+    const std::vector<double> lower(request->lower().begin(), request->lower().end());
+    const std::vector<double> upper(request->upper().begin(), request->upper().end());
+    const IntegrationResult result =
+        integrator.Integrate(*function, lower, upper, request->evaluations(), request->seed(), *sampler);
+    for (double e : result.estimate) reply->add_estimate(e);
+    for (double e : result.standard_error) reply->add_standard_error(e);
+    reply->set_evaluations(result.evaluations);
+  });
+}
 
 grpc::Status SamplerServiceImpl::Generate(grpc::ServerContext*, const v1::GenerateSamplesRequest* request,
                                           v1::GenerateSamplesReply* reply) {

@@ -8,6 +8,17 @@
 
 namespace yarf {
 
+class IntegratorServiceImpl final : public v1::Integrator::Service {
+ public:
+  IntegratorServiceImpl(const Registry& registry, const InstanceTable& instances)
+      : registry_(registry), instances_(instances) {}
+  grpc::Status Integrate(grpc::ServerContext*, const v1::IntegrateRequest*, v1::IntegrateReply*) override;
+
+ private:
+  const Registry& registry_;
+  const InstanceTable& instances_;
+};
+
 class SamplerServiceImpl final : public v1::Sampler::Service {
  public:
   explicit SamplerServiceImpl(const InstanceTable& instances) : instances_(instances) {}

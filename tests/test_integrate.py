@@ -1,0 +1,83 @@
+"""yarf.integrate: a numpy function served from this process, integrated by
+the server's C++ integrators, which call it back in batches."""
+
+from __future__ import annotations
+
+import grpc
+import numpy as np
+import pytest
+
+from yarf import Client, integrate
+
+
+def test_mean_sample_integrates_a_polynomial_within_its_error_bar(client: Client) -> None:
+    calls: list[int] = []
+
+    def f(x: np.ndarray) -> np.ndarray:
+        calls.append(x.shape[0])
+        return x[:, 0] ** 2 * x[:, 1] + x[:, 2]
+
+    result = integrate(
+        f, [0, 0, -1], [1, 2, 1], method="mean_sample", evaluations=20_000, seed=3, server=client
+    )
+    exact = 4.0 / 3.0  # ∫ x² y = (1/3)(2)(2); ∫ z over [-1, 1] vanishes
+    assert result.evaluations == 20_000
+    assert abs(result.estimate[0] - exact) < 4 * result.standard_error[0]
+    assert 0 < result.standard_error[0] < 0.05
+    # The server calls back in batches, not per point (the first call is our probe).
+    assert max(calls) >= 4096 and len(calls) <= 10
+
+
+def test_sobol_points_make_the_error_far_smaller(client: Client) -> None:
+    def f(x: np.ndarray) -> np.ndarray:
+        return np.exp(-np.sum(x**2, axis=1))
+
+    exact = (np.sqrt(np.pi) / 2 * 0.8427007929497149) ** 2  # ∫_0^1 e^{-t²} dt, squared
+    errors = {}
+    for sampler in ("independent", "sobol"):
+        result = integrate(
+            f,
+            [0, 0],
+            [1, 1],
+            method="mean_sample",
+            sampler=sampler,
+            evaluations=4096,
+            server=client,
+        )
+        errors[sampler] = abs(result.estimate[0] - exact)
+    assert errors["sobol"] < errors["independent"] / 5
+
+
+def test_vector_valued_functions_give_one_estimate_per_output(client: Client) -> None:
+    result = integrate(
+        lambda x: np.stack([np.ones(len(x)), x[:, 0]], axis=1),
+        [0],
+        [2],
+        method="mean_sample",
+        evaluations=8192,
+        server=client,
+    )
+    assert result.estimate.shape == (2,)
+    assert result.estimate[0] == pytest.approx(2.0, abs=1e-5)
+    assert result.estimate[1] == pytest.approx(2.0, abs=4 * result.standard_error[1])
+
+
+def test_a_failing_function_fails_the_call_with_its_own_message(client: Client) -> None:
+    def broken(x: np.ndarray) -> np.ndarray:
+        if len(x) > 1:
+            raise ZeroDivisionError("the integrand divided by zero")
+        return x[:, 0]
+
+    with pytest.raises(grpc.RpcError) as failure:
+        integrate(broken, [0], [1], method="mean_sample", evaluations=1000, server=client)
+    assert "the integrand divided by zero" in failure.value.details()
+    assert "remote function" in failure.value.details()
+
+    def wrong_length(x: np.ndarray) -> np.ndarray:
+        return np.zeros(max(1, len(x) // 2)) if len(x) > 1 else np.zeros(1)
+
+    with pytest.raises(grpc.RpcError) as short:
+        integrate(wrong_length, [0], [1], method="mean_sample", evaluations=1000, server=client)
+    assert "shape" in short.value.details()
+    # The server is still there.
+    assert client.is_serving()
