@@ -34,6 +34,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   yarf::ComponentServiceImpl component(registry, instances);
   yarf::FactoryServiceImpl factory(registry, instances);
   yarf::IntegratorServiceImpl integrator(registry, instances);
+  yarf::RootFinderServiceImpl root_finder(instances);
   yarf::SamplerServiceImpl sampler(instances);
   yarf::GeneratorServiceImpl generator(instances);
   yarf::WarpServiceImpl warp(instances);
@@ -49,7 +50,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   builder.SetMaxReceiveMessageSize(256 << 20);
   builder.SetMaxSendMessageSize(256 << 20);
   for (grpc::Service* service : std::initializer_list<grpc::Service*>{
-           &render, &registry_service, &component, &factory, &integrator, &sampler, &generator, &warp,
+           &render, &registry_service, &component, &factory, &integrator, &root_finder, &sampler, &generator, &warp,
            &surface_model, &emitter})
     builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();

@@ -50,31 +50,41 @@ void WarpCall(const Warp& warp, const v1::WarpRequest& request, bool forward, bo
   *reply->mutable_pdf() = FloatArray(pdf, {uint32_t(n)});
 }
 
+// A call's integrand: an instance on this host, or a Remote<Function>.
+struct FunctionArgument {
+  std::shared_ptr<Component> local;
+  std::unique_ptr<Function> remote;
+  Function* function = nullptr;
+};
+
+FunctionArgument ResolveFunction(const InstanceTable& instances, uint64_t handle, const std::string& address) {
+  FunctionArgument argument;
+  if (!address.empty()) {
+    argument.remote = std::make_unique<Remote<Function>>(address, handle);
+    argument.function = argument.remote.get();
+    return argument;
+  }
+  argument.local = instances.Find(handle);
+  argument.function = dynamic_cast<Function*>(argument.local.get());
+  if (!argument.function) throw Error("no Function instance " + std::to_string(handle));
+  return argument;
+}
+
 }  // namespace
 
 grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext*, const v1::IntegrateRequest* request,
                                               v1::IntegrateReply* reply) {
   // The integrand and the sampler live as long as this call.
-  std::shared_ptr<Component> local_function, sampler_instance;
-  std::unique_ptr<Function> remote_function;
+  FunctionArgument argument;
+  std::shared_ptr<Component> sampler_instance;
   std::unique_ptr<Component> default_sampler;
-  Function* function = nullptr;
   const Sampler* sampler = nullptr;
   try {
-    if (!request->function_address().empty()) {
-      remote_function = std::make_unique<Remote<Function>>(request->function_address(), request->function_handle());
-      function = remote_function.get();
-    } else {
-      local_function = instances_.Find(request->function_handle());
-      function = dynamic_cast<Function*>(local_function.get());
-      if (!function)
-        return {grpc::StatusCode::NOT_FOUND, "no Function instance " + std::to_string(request->function_handle())};
-    }
+    argument = ResolveFunction(instances_, request->function_handle(), request->function_address());
     if (request->sampler_handle() != 0) {
       sampler_instance = instances_.Find(request->sampler_handle());
       sampler = dynamic_cast<const Sampler*>(sampler_instance.get());
-      if (!sampler)
-        return {grpc::StatusCode::NOT_FOUND, "no Sampler instance " + std::to_string(request->sampler_handle())};
+      if (!sampler) throw Error("no Sampler instance " + std::to_string(request->sampler_handle()));
     } else {
       default_sampler = registry_.Create("independent", Properties{});
       sampler = dynamic_cast<const Sampler*>(default_sampler.get());
@@ -82,6 +92,7 @@ grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext*, const v1::In
   } catch (const Error& e) {
     return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
   }
+  Function* function = argument.function;
   return WithInstance<Integrator>(instances_, request->handle(), [&](Integrator& integrator) {
     if (request->lower_size() != int(function->InputDimensions()) || request->upper_size() != request->lower_size())
       throw Error("the box needs " + std::to_string(function->InputDimensions()) + " lower and upper bounds");
@@ -94,6 +105,22 @@ grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext*, const v1::In
     for (double e : result.estimate) reply->add_estimate(e);
     for (double e : result.standard_error) reply->add_standard_error(e);
     reply->set_evaluations(result.evaluations);
+  });
+}
+
+grpc::Status RootFinderServiceImpl::FindRoot(grpc::ServerContext*, const v1::FindRootRequest* request,
+                                             v1::FindRootReply* reply) {
+  FunctionArgument argument;
+  try {
+    argument = ResolveFunction(instances_, request->function_handle(), request->function_address());
+  } catch (const Error& e) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
+  }
+  return WithInstance<RootFinder>(instances_, request->handle(), [&](RootFinder& finder) {
+    const RootResult result = finder.FindRoot(*argument.function, request->lower(), request->upper(),
+                                              request->tolerance(), request->max_iterations());
+    reply->set_root(result.root);
+    reply->set_iterations(result.iterations);
   });
 }
 

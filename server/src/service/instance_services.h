@@ -19,6 +19,15 @@ class IntegratorServiceImpl final : public v1::Integrator::Service {
   const InstanceTable& instances_;
 };
 
+class RootFinderServiceImpl final : public v1::RootFinder::Service {
+ public:
+  explicit RootFinderServiceImpl(const InstanceTable& instances) : instances_(instances) {}
+  grpc::Status FindRoot(grpc::ServerContext*, const v1::FindRootRequest*, v1::FindRootReply*) override;
+
+ private:
+  const InstanceTable& instances_;
+};
+
 class SamplerServiceImpl final : public v1::Sampler::Service {
  public:
   explicit SamplerServiceImpl(const InstanceTable& instances) : instances_(instances) {}
