@@ -71,6 +71,8 @@ test: build lint
 bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
 	$(PY) bench/cornell_box.py
+	$(BUILD)/bin/integrator_throughput
+	$(PY) bench/integrators.py
 
 clean:
 	rm -rf $(BUILD) $(STAMPS) out

@@ -11,6 +11,7 @@ import pytest
 
 from yarf import Client, properties, rgb
 from yarf.client import array_to_numpy, numpy_to_array
+from yarf.integrate import serve_function
 from yarf.v1 import math_pb2, math_pb2_grpc, surface_pb2, surface_pb2_grpc
 
 MakeInstance = Callable[..., int]
@@ -138,3 +139,58 @@ def test_bad_batches_wrong_interfaces_and_released_handles_are_refused(
             math_pb2.GenerateSamplesRequest(handle=instance("sobol"), count=1 << 30, dimensions=64)
         )
     assert absurd.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+
+
+def test_cosine_hemisphere_warp_over_grpc_has_density_cos_over_pi(
+    client: Client, instance: MakeInstance
+) -> None:
+    warp = math_pb2_grpc.WarpStub(client.channel)
+    handle = instance("cosine_hemisphere")
+    signature = warp.Signature(math_pb2.WarpSignatureRequest(handle=handle))
+    assert (signature.domain_dimensions, signature.image_dimensions) == (2, 3)
+    uniform = np.random.default_rng(5).random((8192, 2), dtype=np.float32)
+    reply = warp.Forward(math_pb2.WarpRequest(handle=handle, points=numpy_to_array(uniform)))
+    directions, pdf = array_to_numpy(reply.points), array_to_numpy(reply.pdf)
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1, atol=1e-5)
+    np.testing.assert_allclose(pdf, directions[:, 2] / np.pi, rtol=1e-4, atol=1e-6)
+    # Cosine-weighted: E[cos θ] = 2/3.
+    assert abs(directions[:, 2].mean() - 2 / 3) < 0.01
+    back = warp.Inverse(math_pb2.WarpRequest(handle=handle, points=reply.points))
+    np.testing.assert_allclose(array_to_numpy(back.points), uniform, atol=1e-4)
+
+
+def test_root_finders_over_grpc_find_the_root_of_a_python_function(
+    client: Client, instance: MakeInstance
+) -> None:
+    finder = math_pb2_grpc.RootFinderStub(client.channel)
+
+    def cubic(x: np.ndarray) -> np.ndarray:
+        t = x[:, 0].astype(np.float64)
+        return np.stack([t**3 - 2 * t - 5, 3 * t**2 - 2], axis=1)
+
+    with serve_function(cubic, 1) as address:
+        for name in ("bisection", "newton", "brent"):
+            reply = finder.FindRoot(
+                math_pb2.FindRootRequest(
+                    handle=instance(name),
+                    function_address=address,
+                    lower=2,
+                    upper=3,
+                    tolerance=1e-6,
+                    max_iterations=100,
+                )
+            )
+            assert reply.root == pytest.approx(2.0945514815423265, abs=1e-5), name
+        with pytest.raises(grpc.RpcError) as no_bracket:
+            finder.FindRoot(
+                math_pb2.FindRootRequest(
+                    handle=instance("brent"),
+                    function_address=address,
+                    lower=3,
+                    upper=4,
+                    tolerance=1e-6,
+                    max_iterations=100,
+                )
+            )
+    assert no_bracket.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "bracket" in no_bracket.value.details()

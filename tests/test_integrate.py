@@ -81,3 +81,19 @@ def test_a_failing_function_fails_the_call_with_its_own_message(client: Client) 
     assert "shape" in short.value.details()
     # The server is still there.
     assert client.is_serving()
+
+
+def test_vegas_plus_finds_a_narrow_peak_that_mean_sample_misses(client: Client) -> None:
+    centre, width = 0.3, 0.02
+
+    def peak(x: np.ndarray) -> np.ndarray:
+        return np.exp(-np.sum((x - centre) ** 2, axis=1) / (2 * width**2))
+
+    exact = (width * np.sqrt(2 * np.pi)) ** 3  # the peak lies well inside the cube
+    vegas = integrate(peak, [0] * 3, [1] * 3, method="vegas+", evaluations=100_000, server=client)
+    plain = integrate(
+        peak, [0] * 3, [1] * 3, method="mean_sample", evaluations=100_000, server=client
+    )
+    assert abs(vegas.estimate[0] - exact) < 4 * vegas.standard_error[0]
+    assert abs(vegas.estimate[0] - exact) < 0.02 * exact
+    assert vegas.standard_error[0] < plain.standard_error[0] / 10

@@ -23,6 +23,8 @@ from yarf.server import LocalServer
 from yarf.v1 import math_pb2, math_pb2_grpc
 
 VectorFunction = Callable[[np.ndarray], np.ndarray]
+# Method names as people write them, for classes whose names cannot hold them.
+METHOD_CLASSES = {"vegas+": "vegas_plus"}
 
 
 @dataclass(frozen=True)
@@ -123,7 +125,7 @@ def integrate(
     if len(lower) != len(upper) or not lower:
         raise ValueError("lower and upper need one bound per dimension")
     with _connect(server) as client, serve_function(f, len(lower)) as address:
-        integrator = client.create(method, properties(**options)).handle
+        integrator = client.create(METHOD_CLASSES.get(method, method), properties(**options)).handle
         sampler_handle = client.create(sampler).handle
         try:
             reply = math_pb2_grpc.IntegratorStub(client.channel).Integrate(

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <vector>
 
+#include "integration_box.h"
 #include "yarf/hash.h"
 #include "yarf/plugin.h"
 
@@ -70,12 +71,9 @@ class MeanSampleIntegrator final : public Integrator {
                               std::span<const double> upper, uint64_t evaluations, uint64_t seed,
                               const Sampler& sampler) override {
     const uint32_t d = f.InputDimensions(), k = f.OutputDimensions();
-    if (lower.size() != d || upper.size() != d)
-      throw Error("integration box has " + std::to_string(lower.size()) + " dimensions, the function " +
-                  std::to_string(d));
+    CheckBoxDimensions(lower, upper, d);
     if (evaluations < 2) throw Error("need at least 2 evaluations");
-    double volume = 1;
-    for (uint32_t j = 0; j < d; ++j) volume *= upper[j] - lower[j];
+    const double volume = BoxVolume(lower, upper);
     std::vector<double> sum(k, 0.0), sum_sq(k, 0.0);
     constexpr uint64_t kBatch = 4096;
     std::vector<float> points, values;
@@ -84,11 +82,7 @@ class MeanSampleIntegrator final : public Integrator {
       points.resize(size_t(n) * d);
       values.resize(size_t(n) * k);
       sampler.Generate(first, n, d, seed, points);
-      for (uint32_t i = 0; i < n; ++i)
-        for (uint32_t j = 0; j < d; ++j) {
-          float& x = points[size_t(i) * d + j];
-          x = float(lower[j] + (upper[j] - lower[j]) * x);
-        }
+      MapToBox(points, lower, upper);
       f.Evaluate(points, values);
       for (uint32_t i = 0; i < n; ++i)
         for (uint32_t c = 0; c < k; ++c) {

@@ -17,6 +17,7 @@
 #include <cstdint>
 
 #include "yarf/hash.h"
+#include "yarf/owen.h"
 #include "yarf/plugin.h"
 
 namespace {
@@ -26,14 +27,6 @@ namespace {
 constexpr uint64_t kShuffleSalt = 0x5348554646ull;   // "SHUFF"
 constexpr uint64_t kScrambleSalt = 0x534352414dull;  // "SCRAM"
 
-// Byte swap (one instruction), then the bits within each byte.
-constexpr uint32_t ReverseBits(uint32_t v) {
-  v = __builtin_bswap32(v);
-  v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
-  return ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-}
-
 // Direction numbers of Sobol's second dimension: column i of its
 // generator matrix, the binary Pascal triangle read from the top bit.
 constexpr std::array<uint32_t, 32> kSecondDimension = [] {
@@ -42,7 +35,6 @@ constexpr std::array<uint32_t, 32> kSecondDimension = [] {
   for (int i = 1; i < 32; ++i) v[i] = v[i - 1] ^ (v[i - 1] >> 1);
   return v;
 }();
-
 
 // The second dimension's generator matrix applied a byte at a time: entry
 // [k][b] is the XOR of the direction numbers of the set bits of byte k.
@@ -58,27 +50,6 @@ constexpr std::array<std::array<uint32_t, 256>, 4> kSecondDimensionBytes = [] {
 constexpr uint32_t SobolSecond(uint32_t index) {
   return kSecondDimensionBytes[0][index & 0xff] ^ kSecondDimensionBytes[1][(index >> 8) & 0xff] ^
          kSecondDimensionBytes[2][(index >> 16) & 0xff] ^ kSecondDimensionBytes[3][index >> 24];
-}
-
-// Burley's nested uniform scramble (2020, after Laine & Karras 2011): in
-// bit-reversed order, each step (add, multiply by an odd constant, xor
-// with a multiple by an even constant) changes a bit only as a function
-// of itself and less significant bits. Read back in normal order, every
-// digit is flipped as a function of the digits above it: an Owen
-// scramble, which maps each elementary interval onto one of the same
-// shape and so keeps (0, m, 2)-nets nets.
-// The scramble on bit-reversed values: each bit depends on the lower ones.
-constexpr uint32_t LaineKarrasPermutation(uint32_t v, uint32_t seed) {
-  v ^= v * 0x3d20adeau;
-  v += seed;
-  v *= (seed >> 16) | 1u;
-  v ^= v * 0x05526c56u;
-  v ^= v * 0x53a22864u;
-  return v;
-}
-
-constexpr uint32_t NestedUniformScramble(uint32_t v, uint32_t seed) {
-  return ReverseBits(LaineKarrasPermutation(ReverseBits(v), seed));
 }
 
 // Per-dimension and per-pair salts, computed at compile time so that a
@@ -108,12 +79,13 @@ class Sobol final : public yarf::Sampler {
         block / kCachedSeeds;
     // Sobol's first dimension is the van der Corput sequence, the bit
     // reversal of the index, so the reversals around the scrambles cancel.
-    const uint32_t reversed_shuffled = LaineKarrasPermutation(ReverseBits(uint32_t(index)), shuffle_seed);
+    const uint32_t reversed_shuffled =
+        yarf::LaineKarrasPermutation(yarf::ReverseBits(uint32_t(index)), shuffle_seed);
     const uint32_t bits =
-        dimension % 2 == 0 ? reversed_shuffled : SobolSecond(ReverseBits(reversed_shuffled));
+        dimension % 2 == 0 ? reversed_shuffled : SobolSecond(yarf::ReverseBits(reversed_shuffled));
     const uint32_t scramble_seed = uint32_t(yarf::MixBits(seed ^ kScrambleSeeds[dimension % kCachedSeeds]) +
                                             (dimension / kCachedSeeds));
-    return yarf::ToUnitFloat(NestedUniformScramble(bits, scramble_seed));
+    return yarf::ToUnitFloat(yarf::NestedUniformScramble(bits, scramble_seed));
   }
 };
 

@@ -1,9 +1,10 @@
 // Sampling warps: maps from uniform numbers in [0,1)^2 to points of the
 // disk, the sphere and its parts, and triangles, each with the density it
 // produces (Shirley, "Nonuniform random point sets via warping", 1992).
-// Each warp is a pair SampleX / XPdf; a pdf returns 0 outside the warp's
-// domain so that callers and tests can evaluate it anywhere. Directions
-// are unit vectors in a local frame whose +z is the axis (the normal).
+// Each warp is a pair SampleX / XPdf, plus InvertX where the map is a
+// bijection; a pdf returns 0 outside the warp's image so that callers and
+// tests can evaluate it anywhere. Directions are unit vectors in a local
+// frame whose +z is the axis (the normal).
 // Also here: the scattering helpers BSDFs share (mirror reflection,
 // refraction, the Fresnel factor of a smooth dielectric).
 #pragma once
@@ -26,6 +27,28 @@ inline float SinFromCos(float cos_theta) {
   return std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
 }
 
+// Whether w is a unit vector up to the rounding of a float computation:
+// the image of every direction warp, off which its pdf is 0.
+inline bool OnUnitSphere(Vec3 w) { return std::abs(Dot(w, w) - 1.0f) <= 1e-3f; }
+
+// 1 - cos θ of a unit vector. Near the pole 1 - w.z cancels to nothing,
+// while sin²θ / (1 + cos θ) keeps the precision of w.x and w.y.
+inline float OneMinusCosTheta(Vec3 w) {
+  return w.z > 0 ? (w.x * w.x + w.y * w.y) / (1.0f + w.z) : 1.0f - w.z;
+}
+
+// A preimage coordinate clamped into [0, 1), the domain of every warp:
+// rounding (or a point off the image) must not leave it.
+inline float ClampToUnitInterval(float u) { return std::clamp(u, 0.0f, 0x1.fffffep-1f); }
+
+// The azimuth φ of w as the fraction φ / 2π in [0, 1): the inverse of the
+// φ = 2π·u1 that the spherical warps share.
+inline float AzimuthFraction(Vec3 w) {
+  float phi = std::atan2(w.y, w.x);
+  if (phi < 0) phi += 2 * kPi;
+  return ClampToUnitInterval(phi / (2 * kPi));
+}
+
 // Concentric map of the square onto the unit disk (Shirley & Chiu 1997):
 // it maps concentric squares to concentric circles, so strata of the
 // square stay compact on the disk, unlike the polar map's slivers.
@@ -44,9 +67,38 @@ inline std::array<float, 2> SampleConcentricDisk(float u0, float u1) {
   return {r * std::cos(phi), r * std::sin(phi)};
 }
 
-// Area density: uniform over the unit disk.
+// Area density: uniform over the unit disk. The rim is widened by a few
+// ulps so that points SampleConcentricDisk rounds just outside still count.
 inline float ConcentricDiskPdf(float x, float y) {
-  return x * x + y * y <= 1.0f ? kInvPi : 0.0f;
+  return x * x + y * y <= 1.0f + 1e-6f ? kInvPi : 0.0f;
+}
+
+// Inverse of SampleConcentricDisk. The disk splits into four quarters,
+// the angles within π/4 of an axis: on the quarters around the x axis the
+// square's coordinate a is ±r and b/a grows linearly with φ, on those
+// around the y axis the roles swap. Points outside the disk map to the
+// square's edge.
+inline std::array<float, 2> InvertConcentricDisk(float x, float y) {
+  const float r = std::sqrt(x * x + y * y);
+  float phi = std::atan2(y, x);
+  // φ in [-π/4, 7π/4), so that each quarter is one interval.
+  if (phi < -kPi / 4) phi += 2 * kPi;
+  float a, b;
+  if (phi < kPi / 4) {
+    a = r;
+    b = r * phi * (4 / kPi);
+  } else if (phi < 3 * kPi / 4) {
+    b = r;
+    a = r * (kPi / 2 - phi) * (4 / kPi);
+  } else if (phi < 5 * kPi / 4) {
+    // Here r = a < 0 and the angle SampleConcentricDisk forms is φ - π.
+    a = -r;
+    b = -r * (phi - kPi) * (4 / kPi);
+  } else {
+    b = -r;
+    a = -r * (3 * kPi / 2 - phi) * (4 / kPi);
+  }
+  return {ClampToUnitInterval(0.5f * (a + 1.0f)), ClampToUnitInterval(0.5f * (b + 1.0f))};
 }
 
 // Cosine-weighted hemisphere (Malley's method): points uniform on the
@@ -60,6 +112,12 @@ inline float CosineHemispherePdf(float cos_theta) {
   return cos_theta > 0 ? cos_theta * kInvPi : 0.0f;
 }
 
+// Inverse of SampleCosineHemisphere: the projection onto the disk, then
+// the disk's inverse.
+inline std::array<float, 2> InvertCosineHemisphere(Vec3 w) {
+  return InvertConcentricDisk(w.x, w.y);
+}
+
 // Uniform over the hemisphere z ≥ 0: cos θ is uniform in [0, 1]
 // (Archimedes' hat-box theorem).
 inline Vec3 SampleUniformHemisphere(float u0, float u1) {
@@ -71,6 +129,10 @@ inline float UniformHemispherePdf(float cos_theta) {
   return cos_theta >= 0 ? 1.0f / (2 * kPi) : 0.0f;
 }
 
+inline std::array<float, 2> InvertUniformHemisphere(Vec3 w) {
+  return {ClampToUnitInterval(w.z), AzimuthFraction(w)};
+}
+
 // Uniform over the sphere: cos θ is uniform in [-1, 1].
 inline Vec3 SampleUniformSphere(float u0, float u1) {
   const float cos_theta = 1.0f - 2.0f * u0;
@@ -78,6 +140,10 @@ inline Vec3 SampleUniformSphere(float u0, float u1) {
 }
 
 inline float UniformSpherePdf() { return 1.0f / (4 * kPi); }
+
+inline std::array<float, 2> InvertUniformSphere(Vec3 w) {
+  return {ClampToUnitInterval(0.5f * OneMinusCosTheta(w)), AzimuthFraction(w)};
+}
 
 // Uniform over the cone of directions within angle θmax of +z, given
 // cos θmax < 1: cos θ is uniform in [cos θmax, 1]. Written as 1 - u·(1 -
@@ -89,6 +155,12 @@ inline Vec3 SampleUniformCone(float u0, float u1, float cos_theta_max) {
 
 inline float UniformConePdf(float cos_theta, float cos_theta_max) {
   return cos_theta >= cos_theta_max ? 1.0f / (2 * kPi * (1.0f - cos_theta_max)) : 0.0f;
+}
+
+// Inverse of SampleUniformCone: u0 = (1 - cos θ) / (1 - cos θmax), with
+// 1 - cos θ taken from sin θ so that a narrow cone keeps its precision.
+inline std::array<float, 2> InvertUniformCone(Vec3 w, float cos_theta_max) {
+  return {ClampToUnitInterval(OneMinusCosTheta(w) / (1.0f - cos_theta_max)), AzimuthFraction(w)};
 }
 
 // Uniform over a triangle, as barycentrics (b0, b1, b2) of its vertices
@@ -109,6 +181,14 @@ inline std::array<float, 3> SampleUniformTriangle(float u0, float u1) {
 // Area density on a triangle of the given area.
 inline float UniformTrianglePdf(float area) { return 1.0f / area; }
 
+// Inverse of SampleUniformTriangle. Its two branches meet on b0 = b1:
+// u0 < u1 gives b1 > b0, and then b0 = u0 / 2, b0 + b1 = u1; otherwise
+// b1 = u1 / 2, b0 + b1 = u0. Only b0 and b1 are read.
+inline std::array<float, 2> InvertUniformTriangle(float b0, float b1) {
+  if (b1 > b0) return {ClampToUnitInterval(2 * b0), ClampToUnitInterval(b0 + b1)};
+  return {ClampToUnitInterval(b0 + b1), ClampToUnitInterval(2 * b1)};
+}
+
 // The Phong lobe: density ∝ cos^n θ around +z; cos θ = u^(1/(n+1)) inverts
 // its marginal CDF in cos θ.
 inline Vec3 SamplePhongLobe(float u0, float u1, float exponent) {
@@ -118,6 +198,88 @@ inline Vec3 SamplePhongLobe(float u0, float u1, float exponent) {
 
 inline float PhongLobePdf(float cos_theta, float exponent) {
   return cos_theta > 0 ? (exponent + 1.0f) / (2 * kPi) * std::pow(cos_theta, exponent) : 0.0f;
+}
+
+// Inverse of SamplePhongLobe: u0 = cos^(n+1) θ, evaluated as
+// exp((n+1)·log(1 - (1 - cos θ))) in double, because for a sharp lobe the
+// float cos θ is too coarse near 1 to carry u0.
+inline std::array<float, 2> InvertPhongLobe(Vec3 w, float exponent) {
+  if (w.z <= 0) return {0.0f, AzimuthFraction(w)};
+  const double u0 = std::exp((double(exponent) + 1.0) * std::log1p(-double(OneMinusCosTheta(w))));
+  return {ClampToUnitInterval(float(u0)), AzimuthFraction(w)};
+}
+
+// --- GGX microfacet normals -------------------------------------------------
+// The GGX (Trowbridge–Reitz) distribution with anisotropic roughness αx
+// along x and αy along y, and Heitz's sampling of the normals visible
+// from a direction wi ("Sampling the GGX Distribution of Visible Normals",
+// JCGT 2018). Microfacet normals m lie in the upper hemisphere; wi must
+// too (callers flip a direction arriving from below).
+
+// D(m) = 1 / (π αx αy ((mx/αx)² + (my/αy)² + mz²)²), normalised so that
+// ∫ D(m) cos θm dωm = 1 (the microfacets' projected area is the surface's).
+inline float GgxDistribution(Vec3 m, float alpha_x, float alpha_y) {
+  if (m.z <= 0) return 0.0f;
+  const float x = m.x / alpha_x, y = m.y / alpha_y;
+  const float e = x * x + y * y + m.z * m.z;
+  return 1.0f / (kPi * alpha_x * alpha_y * e * e);
+}
+
+// Smith's masking G1(w) = 1 / (1 + Λ(w)) with the GGX
+// Λ(w) = (-1 + √(1 + (αx² wx² + αy² wy²) / wz²)) / 2: the fraction of the
+// microfacets' projected area toward w that is not hidden by others.
+// 0 at and below the horizon. Written as 2 wz / (wz + √(wz² + αx² wx² +
+// αy² wy²)), the same value without dividing by wz², which overflows at
+// grazing angles.
+inline float GgxSmithG1(Vec3 w, float alpha_x, float alpha_y) {
+  if (w.z <= 0) return 0.0f;
+  const float ax = alpha_x * w.x, ay = alpha_y * w.y;
+  return 2.0f * w.z / (w.z + std::sqrt(w.z * w.z + ax * ax + ay * ay));
+}
+
+// The distribution of visible normals, a density over solid angle of m:
+// D_wi(m) = G1(wi) · max(0, wi·m) · D(m) / wi.z — normals weighted by the
+// area they show to wi, over the microsurface's projected area toward wi,
+// which is wi.z / G1(wi).
+inline float GgxVisibleNormalPdf(Vec3 wi, Vec3 m, float alpha_x, float alpha_y) {
+  if (wi.z <= 0) return 0.0f;
+  const float cos_wi_m = Dot(wi, m);
+  if (cos_wi_m <= 0) return 0.0f;
+  return GgxSmithG1(wi, alpha_x, alpha_y) * cos_wi_m * GgxDistribution(m, alpha_x, alpha_y) /
+         wi.z;
+}
+
+// Samples m with density GgxVisibleNormalPdf. GGX normals are those of
+// the upper half of an ellipsoid with radii (1/αx, 1/αy, 1); scaling
+// space by (αx, αy, 1) makes it the unit hemisphere and takes wi to vh.
+// The hemisphere's normals visible from vh are distributed like the points
+// of its projection along vh: a unit disk made of the projected half of
+// the dome (a half-disk) and of the base's projected half (a half-ellipse
+// squashed by cos θ of vh). So: sample the unit disk, squash the half that
+// stands for the ellipse, lift the point onto the hemisphere along vh, and
+// take the normal back to the ellipsoid.
+inline Vec3 SampleGgxVisibleNormal(Vec3 wi, float alpha_x, float alpha_y, float u0, float u1) {
+  const Vec3 vh = Normalize(Vec3(alpha_x * wi.x, alpha_y * wi.y, wi.z));
+  // A basis (t1, t2, vh); t1 is horizontal, arbitrary at normal incidence.
+  const float len2 = vh.x * vh.x + vh.y * vh.y;
+  const Vec3 t1 = len2 > 0 ? Vec3(-vh.y, vh.x, 0.0f) / std::sqrt(len2) : Vec3(1.0f, 0.0f, 0.0f);
+  const Vec3 t2 = Cross(vh, t1);
+  // Uniform point of the unit disk (polar map, as in the paper).
+  const float r = std::sqrt(u0);
+  const float phi = 2 * kPi * u1;
+  const float p1 = r * std::cos(phi);
+  float p2 = r * std::sin(phi);
+  // The half p2 < 0 covers the ellipse of half-height cos θ = vh.z: map
+  // p2 from [-h, h] (h = √(1 - p1²), the disk's half-chord) onto
+  // [-h·vh.z, h], which leaves p2 = h fixed and scales the rest linearly.
+  const float s = 0.5f * (1.0f + vh.z);
+  const float h = std::sqrt(std::max(0.0f, 1.0f - p1 * p1));
+  p2 = (1.0f - s) * h + s * p2;
+  // The point of the hemisphere above (p1, p2) along vh.
+  const Vec3 nh = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
+  // Back to the ellipsoid, the scaling (1/αx, 1/αy, 1): normals transform
+  // by its inverse transpose.
+  return Normalize(Vec3(alpha_x * nh.x, alpha_y * nh.y, std::max(0.0f, nh.z)));
 }
 
 // Mirror direction of w about the normal +z.

@@ -1,0 +1,268 @@
+// What vegas and vegas_plus share: the adaptive VEGAS map, the weighting of
+// iterations by inverse variance, the statistics of J f, the properties
+// that tune them and the iteration budget (see vegas.cc).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "integration_box.h"
+#include "yarf/math.h"
+#include "yarf/properties.h"
+
+namespace yarf {
+
+constexpr uint32_t kMinPointsPerIteration = 1000;
+constexpr uint32_t kMaxBatch = 16384;
+
+// The separable piecewise-linear map y -> x of the box and the statistics
+// that refine it.
+class AdaptiveMap {
+ public:
+  AdaptiveMap(std::span<const double> lower, std::span<const double> upper, uint32_t bins)
+      : dims_(uint32_t(lower.size())), bins_(bins), edges_(size_t(dims_) * (bins + 1)),
+        sums_(size_t(dims_) * bins, 0.0), mass_(size_t(dims_) * bins, 0.0) {
+    for (uint32_t j = 0; j < dims_; ++j)
+      for (uint32_t i = 0; i <= bins_; ++i)
+        edges_[size_t(j) * (bins_ + 1) + i] = lower[j] + (upper[j] - lower[j]) * i / bins_;
+  }
+
+  // x(y) for one point; returns the Jacobian and notes each axis's bin.
+  double Map(const double* y, float* x, uint32_t* bin) const {
+    double jacobian = 1;
+    for (uint32_t j = 0; j < dims_; ++j) {
+      const double t = y[j] * bins_;
+      const uint32_t i = std::min(uint32_t(t), bins_ - 1);
+      const double* e = &edges_[size_t(j) * (bins_ + 1)];
+      const double width = e[i + 1] - e[i];
+      x[j] = float(e[i] + (t - i) * width);
+      jacobian *= bins_ * width;
+      bin[j] = i;
+    }
+    return jacobian;
+  }
+
+  // Adds value = (J f)² of one point, with the weight of the point (the
+  // inverse of its sampling density), to the averages of the bins it fell in.
+  void Accumulate(const uint32_t* bin, double weight, double value) {
+    for (uint32_t j = 0; j < dims_; ++j) {
+      sums_[size_t(j) * bins_ + bin[j]] += weight * value;
+      mass_[size_t(j) * bins_ + bin[j]] += weight;
+    }
+  }
+
+  // Moves the edges of every axis so that each bin holds an equal share of
+  // the smoothed, damped weights, then starts collecting afresh.
+  void Refine(double alpha) {
+    std::vector<double> d(bins_), smooth(bins_), damped(bins_), edges(bins_ + 1);
+    for (uint32_t j = 0; j < dims_; ++j) {
+      for (uint32_t i = 0; i < bins_; ++i) {
+        const size_t b = size_t(j) * bins_ + i;
+        d[i] = mass_[b] > 0 ? sums_[b] / mass_[b] : 0;
+      }
+      smooth[0] = (7 * d[0] + d[1]) / 8;
+      smooth[bins_ - 1] = (d[bins_ - 2] + 7 * d[bins_ - 1]) / 8;
+      for (uint32_t i = 1; i + 1 < bins_; ++i) smooth[i] = (d[i - 1] + 6 * d[i] + d[i + 1]) / 8;
+      double total = 0;
+      for (double s : smooth) total += s;
+      // Nothing seen on this axis (f vanished at every point): keep the grid.
+      if (!(total > 0) || !std::isfinite(total)) continue;
+      double sum = 0;
+      for (uint32_t i = 0; i < bins_; ++i) {
+        const double r = smooth[i] / total;
+        damped[i] = r <= 0 ? 0 : r >= 1 ? 1 : std::pow((1 - r) / -std::log(r), alpha);
+        sum += damped[i];
+      }
+      double* e = &edges_[size_t(j) * (bins_ + 1)];
+      const double step = sum / bins_;
+      edges[0] = e[0];
+      edges[bins_] = e[bins_];
+      uint32_t i = 0;
+      double below = 0;  // damped weight of the old bins before bin i
+      for (uint32_t k = 1; k < bins_; ++k) {
+        const double target = k * step;
+        while (i + 1 < bins_ && below + damped[i] < target) below += damped[i++];
+        const double fraction = damped[i] > 0 ? std::clamp((target - below) / damped[i], 0.0, 1.0) : 1.0;
+        edges[k] = e[i] + fraction * (e[i + 1] - e[i]);
+      }
+      std::copy(edges.begin(), edges.end(), e);
+    }
+    std::fill(sums_.begin(), sums_.end(), 0.0);
+    std::fill(mass_.begin(), mass_.end(), 0.0);
+  }
+
+ private:
+  uint32_t dims_, bins_;
+  std::vector<double> edges_;    // [dims, bins + 1]
+  std::vector<double> sums_, mass_;  // [dims, bins]
+};
+
+// Iteration estimates of one output, combined by inverse variances.
+class Combination {
+ public:
+  void Add(double estimate, double variance) {
+    // An iteration without spread (a constant integrand) is exact up to
+    // rounding: it gets a weight that dominates the others but stays
+    // finite, and no error below what summing in double precision keeps.
+    const double floor = std::max(1e-24 * estimate * estimate, std::numeric_limits<double>::min());
+    estimates_.push_back(estimate);
+    weights_.push_back(1 / std::max(variance, floor));
+  }
+  double Estimate() const {
+    double sum = 0, weighted = 0;
+    for (size_t t = 0; t < estimates_.size(); ++t) {
+      sum += weights_[t];
+      weighted += weights_[t] * estimates_[t];
+    }
+    return weighted / sum;
+  }
+  double Error() const {
+    double sum = 0;
+    for (double w : weights_) sum += w;
+    return 1 / std::sqrt(sum);
+  }
+  // Near 1 when the iterations agree within their errors; much larger
+  // means the per-iteration errors are not to be trusted.
+  double ChiSquarePerDof() const {
+    if (estimates_.size() < 2) return 0;
+    const double mean = Estimate();
+    double chi2 = 0;
+    for (size_t t = 0; t < estimates_.size(); ++t)
+      chi2 += (estimates_[t] - mean) * (estimates_[t] - mean) * weights_[t];
+    return chi2 / double(estimates_.size() - 1);
+  }
+
+ private:
+  std::vector<double> estimates_, weights_;
+};
+
+// The result of the iterations kept, every output of f combined apart.
+inline IntegrationResult CombinedResult(const std::vector<Combination>& combined, uint64_t evaluations) {
+  IntegrationResult result;
+  result.evaluations = evaluations;
+  for (const Combination& c : combined) {
+    result.estimate.push_back(c.Estimate());
+    result.standard_error.push_back(c.Error());
+  }
+  return result;
+}
+
+// Mean and sum of squared deviations of a stream. The sums are of values
+// shifted by the first one, which keeps them precise when the spread is
+// small beside the mean (J f of a nearly constant f) without a division
+// per value.
+struct Moments {
+  uint64_t count = 0;
+  double shift = 0, sum = 0, sum_sq = 0;
+  void Add(double v) {
+    if (count++ == 0) shift = v;
+    const double s = v - shift;
+    sum += s;
+    sum_sq += s * s;
+  }
+  double Mean() const { return shift + sum / double(count); }
+  double SquaredDeviations() const { return std::max(0.0, sum_sq - sum * sum / double(count)); }
+};
+
+// Splits n points into equal batches of at most kMaxBatch, calling
+// visit(begin, count) for each in turn.
+template <typename Visit>
+void ForEachBatch(uint64_t n, Visit visit) {
+  const uint64_t batches = (n + kMaxBatch - 1) / kMaxBatch;
+  for (uint64_t b = 0; b < batches; ++b) {
+    const uint64_t begin = n * b / batches, end = n * (b + 1) / batches;
+    visit(begin, uint32_t(end - begin));
+  }
+}
+
+// The buffers of one call to f: the sampler's points u in the unit cube,
+// the points x of the box that the map makes of them with its Jacobian and
+// bins, and f(x).
+struct VegasBatch {
+  VegasBatch(uint32_t d, uint32_t k) : d(d), k(k) {}
+
+  // Draws `count` points from the sampler, from index `first` on.
+  void Draw(const Sampler& sampler, uint64_t first, uint32_t count, uint64_t seed) {
+    u.resize(size_t(count) * d);
+    points.resize(size_t(count) * d);
+    values.resize(size_t(count) * k);
+    jacobian.resize(count);
+    bins.resize(size_t(count) * d);
+    sampler.Generate(first, count, d, seed, u);
+  }
+  // Point i: y, placed in the unit cube from u, mapped onto the box.
+  void Place(const AdaptiveMap& map, uint32_t i, const double* y) {
+    jacobian[i] = map.Map(y, &points[size_t(i) * d], &bins[size_t(i) * d]);
+  }
+  // Adds J f of point i to the moments of every output, and (J f)² of the
+  // first output, with the point's weight, to the map's statistics.
+  void Accumulate(uint32_t i, std::vector<Moments>& moments, AdaptiveMap& map, double weight) const {
+    for (uint32_t c = 0; c < k; ++c) moments[c].Add(jacobian[i] * values[size_t(i) * k + c]);
+    const double driver = jacobian[i] * values[size_t(i) * k];
+    map.Accumulate(&bins[size_t(i) * d], weight, driver * driver);
+  }
+
+  uint32_t d, k;
+  std::vector<float> u, points, values;
+  std::vector<double> jacobian;
+  std::vector<uint32_t> bins;
+};
+
+// The properties of the map and the iterations, with `alpha` defaulting to
+// `default_alpha`.
+struct VegasSettings {
+  VegasSettings(const Properties& props, double default_alpha)
+      : bins(props.Int("bins", 50)), iterations(props.Int("iterations", 10)),
+        alpha(props.Float("alpha", default_alpha)),
+        // The default shrinks with `iterations` so that one iteration alone is valid.
+        discard(props.Int("discard", std::clamp<int64_t>(iterations - 1, 0, 2))) {
+    if (bins < 2 || bins > (1 << 20)) throw Error("property 'bins' must be in [2, 1048576]");
+    if (iterations < 1 || iterations > 100000) throw Error("property 'iterations' must be in [1, 100000]");
+    if (!(alpha >= 0) || !std::isfinite(alpha)) throw Error("property 'alpha' must be a finite number >= 0");
+  }
+
+  // Separate from the checks above so that an integrator can check its own
+  // properties (vegas_plus's beta) before this one.
+  void CheckDiscard() const {
+    if (discard < 0 || discard >= iterations)
+      throw Error("property 'discard' must be in [0, iterations - 1]");
+  }
+
+  // Iterations run for a budget: fewer than asked when each would get
+  // under kMinPointsPerIteration points, but at least one.
+  uint64_t IterationsFor(uint64_t evaluations) const {
+    return std::clamp<uint64_t>(evaluations / kMinPointsPerIteration, 1, uint64_t(iterations));
+  }
+  // Leading iterations left out, lowered to keep at least one.
+  uint64_t DiscardOf(uint64_t iterations_run) const {
+    return std::min<uint64_t>(uint64_t(discard), iterations_run - 1);
+  }
+
+  int64_t bins, iterations;
+  double alpha;
+  int64_t discard;
+};
+
+// Points of iteration t: the budget shared evenly, the remainder going to
+// the first iterations.
+inline uint64_t PointsOfIteration(uint64_t evaluations, uint64_t iterations, uint64_t t) {
+  return evaluations / iterations + (t < evaluations % iterations ? 1 : 0);
+}
+
+// The checks on a job; `name` names the integrator in the messages.
+inline void CheckVegasJob(const std::string& name, uint32_t d, uint32_t k, std::span<const double> lower,
+                          std::span<const double> upper, uint64_t evaluations) {
+  CheckBoxDimensions(lower, upper, d);
+  for (uint32_t j = 0; j < d; ++j)
+    if (!std::isfinite(lower[j]) || !std::isfinite(upper[j]))
+      throw Error("integration box bounds must be finite");
+  if (d == 0 || k == 0) throw Error(name + " needs a function with at least one input and one output");
+  if (evaluations < 2) throw Error("need at least 2 evaluations");
+}
+
+}  // namespace yarf

@@ -1,0 +1,346 @@
+// Tests of the vegas and vegas_plus integrators (vegas.cc, vegas_plus.cc),
+// loaded through the registry as yarfd loads them: known integrals within
+// their error bars, calibrated errors, the advantage of the adaptive grid
+// over plain Monte Carlo on a narrow peak and of adaptive stratification
+// over the grid alone on a double peak, the evaluation budget, batching
+// and the checks on properties.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "components/registry.h"
+#include "yarf/math.h"
+
+namespace yarf {
+namespace {
+
+constexpr const char* kVegasFamily[] = {"vegas", "vegas_plus"};
+constexpr double kPi = 3.14159265358979323846;
+
+// f(x, y, z) = (x² y + z + 1, 1); over [0,1]×[0,2]×[-1,1] the integrals
+// are 4/3 + 4 and the box's volume, 4.
+class Polynomial final : public Function {
+ public:
+  uint32_t InputDimensions() const override { return 3; }
+  uint32_t OutputDimensions() const override { return 2; }
+  void Evaluate(std::span<const float> points, std::span<float> values) override {
+    for (size_t i = 0; i < points.size() / 3; ++i) {
+      const float x = points[3 * i], y = points[3 * i + 1], z = points[3 * i + 2];
+      values[2 * i] = x * x * y + z + 1;
+      values[2 * i + 1] = 1;
+    }
+  }
+  static constexpr double kLower[] = {0, 0, -1}, kUpper[] = {1, 2, 1};
+  static constexpr double kExact = 4.0 / 3.0 + 4.0, kVolume = 4.0;
+};
+
+// Genz's product peak Π_j 1 / (a_j⁻² + (x_j - u_j)²) over the unit cube.
+class ProductPeak final : public Function {
+ public:
+  ProductPeak(std::vector<double> a, std::vector<double> u) : a_(std::move(a)), u_(std::move(u)) {}
+  uint32_t InputDimensions() const override { return uint32_t(a_.size()); }
+  uint32_t OutputDimensions() const override { return 1; }
+  void Evaluate(std::span<const float> points, std::span<float> values) override {
+    const size_t d = a_.size();
+    for (size_t i = 0; i < values.size(); ++i) {
+      double v = 1;
+      for (size_t j = 0; j < d; ++j) {
+        const double t = points[i * d + j] - u_[j];
+        v /= 1 / (a_[j] * a_[j]) + t * t;
+      }
+      values[i] = float(v);
+    }
+  }
+  double Exact() const {
+    double v = 1;
+    for (size_t j = 0; j < a_.size(); ++j)
+      v *= a_[j] * (std::atan(a_[j] * (1 - u_[j])) + std::atan(a_[j] * u_[j]));
+    return v;
+  }
+
+ private:
+  std::vector<double> a_, u_;
+};
+
+// A sum of Genz Gaussian peaks Σ_c exp(-Σ_j a_j² (x_j - u_cj)²) over the
+// unit cube; a_j = 1 / (σ √2) gives a normal density's shape of width σ.
+// Counts its calls and the smallest batch it was given.
+class GaussianPeaks final : public Function {
+ public:
+  GaussianPeaks(std::vector<double> a, std::vector<std::vector<double>> centres)
+      : a_(std::move(a)), centres_(std::move(centres)) {}
+  uint32_t InputDimensions() const override { return uint32_t(a_.size()); }
+  uint32_t OutputDimensions() const override { return 1; }
+  void Evaluate(std::span<const float> points, std::span<float> values) override {
+    ++calls;
+    smallest_batch = std::min<uint64_t>(smallest_batch, values.size());
+    points_seen += values.size();
+    const size_t d = a_.size();
+    for (size_t i = 0; i < values.size(); ++i) {
+      double v = 0;
+      for (const auto& u : centres_) {
+        double exponent = 0;
+        for (size_t j = 0; j < d; ++j) {
+          const double t = a_[j] * (points[i * d + j] - u[j]);
+          exponent += t * t;
+        }
+        v += std::exp(-exponent);
+      }
+      values[i] = float(v);
+    }
+  }
+  double Exact() const {
+    double sum = 0;
+    for (const auto& u : centres_) {
+      double v = 1;
+      for (size_t j = 0; j < a_.size(); ++j)
+        v *= std::sqrt(kPi) / (2 * a_[j]) * (std::erf(a_[j] * (1 - u[j])) + std::erf(a_[j] * u[j]));
+      sum += v;
+    }
+    return sum;
+  }
+
+  uint64_t calls = 0, smallest_batch = UINT64_MAX, points_seen = 0;
+
+ private:
+  std::vector<double> a_;
+  std::vector<std::vector<double>> centres_;
+};
+
+// A peak of width σ = 0.02 off the centre of the 4-cube.
+GaussianPeaks NarrowPeak() {
+  const double a = 1 / (0.02 * std::sqrt(2.0));
+  return GaussianPeaks({a, a, a, a}, {{0.35, 0.6, 0.45, 0.7}});
+}
+
+// Two peaks on the diagonal of the 4-cube: the grid's dense regions cross
+// in 2⁴ places, of which only two hold a peak.
+GaussianPeaks DoublePeak() {
+  const double a = 1 / (0.05 * std::sqrt(2.0));
+  return GaussianPeaks({a, a, a, a}, {{0.33, 0.33, 0.33, 0.33}, {0.67, 0.67, 0.67, 0.67}});
+}
+
+std::vector<double> Zeros(size_t d) { return std::vector<double>(d, 0.0); }
+std::vector<double> Ones(size_t d) { return std::vector<double>(d, 1.0); }
+
+class VegasTest : public testing::Test {
+ protected:
+  VegasTest() {
+    registry_.LoadDirectory(YARF_PLUGIN_DIR);
+    sampler_ = registry_.CreateAs<Sampler>("independent", Properties{});
+  }
+
+  std::unique_ptr<Integrator> Make(const std::string& name, const Properties& props = {}) const {
+    return registry_.CreateAs<Integrator>(name, props);
+  }
+
+  // Integrates f over the unit cube: the estimate must lie within 4σ of
+  // the exact value and, if `precise`, σ under 1% of it.
+  template <typename F>
+  void ExpectWithinErrors(Integrator& integrator, F& f, uint64_t evaluations, uint64_t seed,
+                          const char* name, bool precise) const {
+    const IntegrationResult r = integrator.Integrate(f, Zeros(f.InputDimensions()), Ones(f.InputDimensions()),
+                                                     evaluations, seed, *sampler_);
+    EXPECT_NEAR(r.estimate[0], f.Exact(), 4 * r.standard_error[0]) << name;
+    if (precise) {
+      EXPECT_LT(r.standard_error[0], 0.01 * f.Exact()) << name;
+    }
+  }
+  static constexpr bool kPrecise = true, kAnySigma = false;
+
+  // Root mean square of the relative error over `seeds` runs.
+  double RmsRelativeError(Integrator& integrator, GaussianPeaks& f, uint64_t evaluations,
+                          uint64_t seeds) const {
+    const auto lower = Zeros(f.InputDimensions()), upper = Ones(f.InputDimensions());
+    const double exact = f.Exact();
+    double sum = 0;
+    for (uint64_t seed = 0; seed < seeds; ++seed) {
+      const IntegrationResult r = integrator.Integrate(f, lower, upper, evaluations, seed, *sampler_);
+      sum += (r.estimate[0] - exact) * (r.estimate[0] - exact);
+    }
+    return std::sqrt(sum / double(seeds)) / exact;
+  }
+
+  // The RMS relative errors of `baseline` and of `contender` on f over
+  // 10 runs of 100000 points, reported under `label`.
+  std::pair<double, double> CompareErrors(const char* label, GaussianPeaks& f, const char* baseline,
+                                          const char* contender) const {
+    const double baseline_error = RmsRelativeError(*Make(baseline), f, 100000, 10);
+    const double contender_error = RmsRelativeError(*Make(contender), f, 100000, 10);
+    std::printf("[ measured ] %s, RMS relative error: %s %.3g, %s %.3g, ratio %.1f\n", label, baseline,
+                baseline_error, contender, contender_error, baseline_error / contender_error);
+    return {baseline_error, contender_error};
+  }
+
+  Registry registry_;
+  std::unique_ptr<Sampler> sampler_;
+};
+
+TEST_F(VegasTest, RegistersAsAnIntegrator) {
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    EXPECT_EQ(integrator->Describe().class_name, name);
+  }
+}
+
+TEST_F(VegasTest, EstimatesKnownIntegralsWithinTheirErrors) {
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    {
+      Polynomial f;
+      const IntegrationResult r =
+          integrator->Integrate(f, Polynomial::kLower, Polynomial::kUpper, 50000, 1, *sampler_);
+      ASSERT_EQ(r.estimate.size(), 2u);
+      EXPECT_NEAR(r.estimate[0], Polynomial::kExact, 4 * r.standard_error[0]) << name;
+      EXPECT_LT(r.standard_error[0], 0.01 * Polynomial::kExact) << name;
+      // The second output (the volume) is estimated too, with its own error.
+      EXPECT_NEAR(r.estimate[1], Polynomial::kVolume, 4 * r.standard_error[1] + 1e-9) << name;
+    }
+    ProductPeak product_peak({10, 15, 8}, {0.3, 0.55, 0.8});
+    ExpectWithinErrors(*integrator, product_peak, 50000, 2, name, kPrecise);
+    GaussianPeaks gaussian_peak({5, 7, 6, 8}, {{0.3, 0.6, 0.45, 0.7}});
+    ExpectWithinErrors(*integrator, gaussian_peak, 50000, 3, name, kPrecise);
+  }
+}
+
+TEST_F(VegasTest, HandlesOneToTenDimensions) {
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    GaussianPeaks one({10}, {{0.3}});
+    ExpectWithinErrors(*integrator, one, 20000, 4, name, kAnySigma);
+    GaussianPeaks ten(std::vector<double>(10, 4.0), {std::vector<double>(10, 0.4)});
+    ExpectWithinErrors(*integrator, ten, 100000, 5, name, kPrecise);
+  }
+}
+
+TEST_F(VegasTest, IntegratesAFlatFunctionExactly) {
+  // J f averages the same in every bin, so the grid stays uniform and
+  // every point gives the volume.
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    GaussianPeaks f({0, 0}, {{0.5, 0.5}});
+    const double lower[] = {-1, 2}, upper[] = {1, 5};
+    const IntegrationResult r = integrator->Integrate(f, lower, upper, 10000, 6, *sampler_);
+    EXPECT_NEAR(r.estimate[0], 6.0, 1e-9) << name;
+    EXPECT_LT(r.standard_error[0], 1e-9) << name;
+  }
+}
+
+TEST_F(VegasTest, ReportedErrorIsCalibrated) {
+  // Independent runs fall within 2σ of the exact value about 95% of the
+  // time when σ is right; 34 of 40 leaves room for chance.
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    GaussianPeaks f({12, 10, 14}, {{0.4, 0.65, 0.3}});
+    const double exact = f.Exact();
+    int within = 0;
+    for (uint64_t seed = 0; seed < 40; ++seed) {
+      const IntegrationResult r = integrator->Integrate(f, Zeros(3), Ones(3), 20000, seed, *sampler_);
+      if (std::abs(r.estimate[0] - exact) < 2 * r.standard_error[0]) ++within;
+    }
+    std::printf("[ measured ] %s: |error| < 2 sigma in %d of 40 runs\n", name, within);
+    EXPECT_GE(within, 34) << name;
+  }
+}
+
+TEST_F(VegasTest, VegasBeatsMeanSampleOnANarrowPeak) {
+  GaussianPeaks f = NarrowPeak();
+  const auto [plain_error, vegas_error] = CompareErrors("narrow peak", f, "mean_sample", "vegas");
+  EXPECT_GT(plain_error, 10 * vegas_error);
+}
+
+TEST_F(VegasTest, VegasPlusBeatsVegasOnADoublePeak) {
+  GaussianPeaks f = DoublePeak();
+  const auto [vegas_error, plus_error] = CompareErrors("double peak", f, "vegas", "vegas_plus");
+  EXPECT_LT(1.5 * plus_error, vegas_error);
+}
+
+TEST_F(VegasTest, SpendsTheBudgetInLargeBatches) {
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    for (uint64_t budget : {2ull, 999ull, 1000ull, 5000ull, 12345ull, 100001ull}) {
+      GaussianPeaks f({5, 5}, {{0.5, 0.5}});
+      const IntegrationResult r = integrator->Integrate(f, Zeros(2), Ones(2), budget, 7, *sampler_);
+      EXPECT_EQ(r.evaluations, budget) << name;
+      EXPECT_EQ(f.points_seen, budget) << name;
+      // Fewer iterations rather than calls of fewer than 1000 points.
+      EXPECT_GE(f.smallest_batch, std::min<uint64_t>(budget, 1000)) << name << " budget " << budget;
+      EXPECT_LE(f.calls, std::max<uint64_t>(1, budget / 1000)) << name << " budget " << budget;
+    }
+  }
+}
+
+TEST_F(VegasTest, IsDeterministicForASeed) {
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    GaussianPeaks f({5, 7}, {{0.3, 0.6}});
+    const auto a = integrator->Integrate(f, Zeros(2), Ones(2), 20000, 11, *sampler_);
+    const auto b = integrator->Integrate(f, Zeros(2), Ones(2), 20000, 11, *sampler_);
+    const auto c = integrator->Integrate(f, Zeros(2), Ones(2), 20000, 12, *sampler_);
+    EXPECT_EQ(a.estimate, b.estimate) << name;
+    EXPECT_EQ(a.standard_error, b.standard_error) << name;
+    EXPECT_NE(a.estimate, c.estimate) << name;
+  }
+}
+
+// The message of the error that creating `name` with `props` throws.
+std::string CreationError(const Registry& registry, const std::string& name, const Properties& props) {
+  try {
+    registry.CreateAs<Integrator>(name, props);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(VegasTest, RejectsBadPropertiesNamingThem) {
+  struct Case {
+    const char* integrator;
+    const char* key;
+    Properties::Value value;
+  };
+  const Case cases[] = {
+      {"vegas", "bins", int64_t(1)},          {"vegas_plus", "bins", int64_t(0)},
+      {"vegas", "alpha", -0.5},               {"vegas_plus", "alpha", -1.0},
+      {"vegas", "iterations", int64_t(0)},    {"vegas_plus", "iterations", int64_t(-3)},
+      {"vegas", "discard", int64_t(10)},      {"vegas_plus", "discard", int64_t(-1)},
+      {"vegas_plus", "beta", 1.5},            {"vegas_plus", "beta", -0.1},
+  };
+  for (const Case& c : cases) {
+    Properties props;
+    props.Set(c.key, c.value);
+    const std::string message = CreationError(registry_, c.integrator, props);
+    EXPECT_NE(message.find(std::string("'") + c.key + "'"), std::string::npos)
+        << c.integrator << " " << c.key << ": '" << message << "'";
+  }
+  // vegas has no stratification to tune.
+  Properties beta;
+  beta.Set("beta", 0.5);
+  EXPECT_NE(CreationError(registry_, "vegas", beta).find("beta"), std::string::npos);
+  // Limits are accepted.
+  Properties edge;
+  edge.Set("bins", int64_t(2));
+  edge.Set("alpha", 0.0);
+  edge.Set("iterations", int64_t(1));
+  edge.Set("beta", 1.0);
+  EXPECT_NO_THROW(Make("vegas_plus", edge));
+}
+
+TEST_F(VegasTest, RejectsABoxOfTheWrongDimension) {
+  for (const char* name : kVegasFamily) {
+    auto integrator = Make(name);
+    Polynomial f;
+    const double lower[] = {0, 0}, upper[] = {1, 1};
+    EXPECT_THROW(integrator->Integrate(f, lower, upper, 10000, 0, *sampler_), Error) << name;
+  }
+}
+
+}  // namespace
+}  // namespace yarf
