@@ -79,6 +79,18 @@ def test_unknown_material_class_is_an_error_naming_the_class(
     assert_still_renders()
 
 
+def test_an_integrator_without_an_image_mode_fails_the_job_saying_so(
+    client: Client, scene: scene_pb2.Scene, assert_still_renders: StillRenders
+) -> None:
+    scene.integrator.class_name = "simpson"
+    message = rejection_or_failure(client, scene)
+    assert "simpson" in message and "does not render images" in message, message
+    scene.integrator.class_name = "no_such_integrator"
+    message = rejection_or_failure(client, scene)
+    assert "no_such_integrator" in message, message
+    assert_still_renders()
+
+
 def test_absurd_resolution_is_rejected_naming_it(
     client: Client, scene: scene_pb2.Scene, assert_still_renders: StillRenders
 ) -> None:
