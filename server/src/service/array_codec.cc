@@ -43,6 +43,17 @@ std::vector<float> FloatsOf(const v1::Array& array, std::initializer_list<uint32
   return values;
 }
 
+std::vector<float> BatchDecoder::Floats(const v1::Array& array, std::initializer_list<uint32_t> trailing,
+                                        const std::string& what) {
+  size_t rows = 0;
+  std::vector<float> values = FloatsOf(array, trailing, what, rows);
+  if (!first_ && rows != rows_)
+    throw Error(what + " has " + std::to_string(rows) + " rows, the batch " + std::to_string(rows_));
+  rows_ = rows;
+  first_ = false;
+  return values;
+}
+
 v1::Array FloatArray(const std::vector<float>& values, std::initializer_list<uint32_t> shape) {
   return Encode(values, shape, v1::Array::FLOAT32);
 }

@@ -16,6 +16,19 @@ namespace yarf {
 std::vector<float> FloatsOf(const v1::Array& array, std::initializer_list<uint32_t> trailing,
                             const std::string& what, size_t& rows);
 
+// The arrays of one batched call, which must all have the same number of
+// rows; the first array decoded sets it.
+class BatchDecoder {
+ public:
+  std::vector<float> Floats(const v1::Array& array, std::initializer_list<uint32_t> trailing,
+                            const std::string& what);
+  uint32_t rows() const { return uint32_t(rows_); }
+
+ private:
+  size_t rows_ = 0;
+  bool first_ = true;
+};
+
 v1::Array FloatArray(const std::vector<float>& values, std::initializer_list<uint32_t> shape);
 v1::Array Uint32Array(const std::vector<uint32_t>& values, std::initializer_list<uint32_t> shape);
 

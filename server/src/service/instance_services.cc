@@ -40,14 +40,15 @@ void WarpCall(const Warp& warp, const v1::WarpRequest& request, bool forward, bo
               v1::WarpReply* reply) {
   const uint32_t in_dims = forward ? warp.DomainDimensions() : warp.ImageDimensions();
   const uint32_t out_dims = forward ? warp.ImageDimensions() : warp.DomainDimensions();
-  size_t n = 0;
-  const std::vector<float> in = FloatsOf(request.points(), {in_dims}, "points", n);
+  BatchDecoder batch;
+  const std::vector<float> in = batch.Floats(request.points(), {in_dims}, "points");
+  const uint32_t n = batch.rows();
   std::vector<float> out(n * out_dims), pdf(n);
   if (forward) warp.Forward(in, out, pdf);
   else if (inverse) warp.Inverse(in, out, pdf);
   else warp.Pdf(in, pdf);
-  if (forward || inverse) *reply->mutable_points() = FloatArray(out, {uint32_t(n), out_dims});
-  *reply->mutable_pdf() = FloatArray(pdf, {uint32_t(n)});
+  if (forward || inverse) *reply->mutable_points() = FloatArray(out, {n, out_dims});
+  *reply->mutable_pdf() = FloatArray(pdf, {n});
 }
 
 // A call's integrand: an instance on this host, or a Remote<Function>.
@@ -170,46 +171,46 @@ grpc::Status WarpServiceImpl::Pdf(grpc::ServerContext*, const v1::WarpRequest* r
 grpc::Status SurfaceModelServiceImpl::Evaluate(grpc::ServerContext*, const v1::SurfaceQuery* request,
                                                v1::EvaluateSurfaceReply* reply) {
   return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
-    size_t n = 0, n_wo = 0, n_uv = 0;
-    const auto wi = FloatsOf(request->wi(), {3}, "wi", n);
-    const auto wo = FloatsOf(request->wo(), {3}, "wo", n_wo);
-    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
-    if (n_wo != n || n_uv != n) throw Error("wi, wo and uv must have the same number of rows");
+    BatchDecoder batch;
+    const auto wi = batch.Floats(request->wi(), {3}, "wi");
+    const auto wo = batch.Floats(request->wo(), {3}, "wo");
+    const auto uv = batch.Floats(request->uv(), {2}, "uv");
+    const uint32_t n = batch.rows();
     std::vector<float> value(3 * n);
     model.Evaluate(wi, wo, uv, value);
-    *reply->mutable_value() = FloatArray(value, {uint32_t(n), 3});
+    *reply->mutable_value() = FloatArray(value, {n, 3});
   });
 }
 
 grpc::Status SurfaceModelServiceImpl::Sample(grpc::ServerContext*, const v1::SampleSurfaceRequest* request,
                                              v1::SampleSurfaceReply* reply) {
   return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
-    size_t n = 0, n_uv = 0, n_u = 0;
-    const auto wi = FloatsOf(request->wi(), {3}, "wi", n);
-    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
-    const auto u = FloatsOf(request->uniform(), {3}, "uniform", n_u);
-    if (n_uv != n || n_u != n) throw Error("wi, uv and uniform must have the same number of rows");
+    BatchDecoder batch;
+    const auto wi = batch.Floats(request->wi(), {3}, "wi");
+    const auto uv = batch.Floats(request->uv(), {2}, "uv");
+    const auto u = batch.Floats(request->uniform(), {3}, "uniform");
+    const uint32_t n = batch.rows();
     std::vector<float> wo(3 * n), weight(3 * n), pdf(n);
     std::vector<uint32_t> flags(n);
     model.Sample(wi, uv, u, request->allowed(), wo, weight, pdf, flags);
-    *reply->mutable_wo() = FloatArray(wo, {uint32_t(n), 3});
-    *reply->mutable_weight() = FloatArray(weight, {uint32_t(n), 3});
-    *reply->mutable_pdf() = FloatArray(pdf, {uint32_t(n)});
-    *reply->mutable_flags() = Uint32Array(flags, {uint32_t(n)});
+    *reply->mutable_wo() = FloatArray(wo, {n, 3});
+    *reply->mutable_weight() = FloatArray(weight, {n, 3});
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+    *reply->mutable_flags() = Uint32Array(flags, {n});
   });
 }
 
 grpc::Status SurfaceModelServiceImpl::Pdf(grpc::ServerContext*, const v1::SurfaceQuery* request,
                                           v1::PdfSurfaceReply* reply) {
   return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
-    size_t n = 0, n_wo = 0, n_uv = 0;
-    const auto wi = FloatsOf(request->wi(), {3}, "wi", n);
-    const auto wo = FloatsOf(request->wo(), {3}, "wo", n_wo);
-    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
-    if (n_wo != n || n_uv != n) throw Error("wi, wo and uv must have the same number of rows");
+    BatchDecoder batch;
+    const auto wi = batch.Floats(request->wi(), {3}, "wi");
+    const auto wo = batch.Floats(request->wo(), {3}, "wo");
+    const auto uv = batch.Floats(request->uv(), {2}, "uv");
+    const uint32_t n = batch.rows();
     std::vector<float> pdf(n);
     model.Pdf(wi, wo, uv, pdf);
-    *reply->mutable_pdf() = FloatArray(pdf, {uint32_t(n)});
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
   });
 }
 
@@ -222,13 +223,13 @@ grpc::Status SurfaceModelServiceImpl::Lobes(grpc::ServerContext*, const v1::Lobe
 grpc::Status EmitterServiceImpl::Radiance(grpc::ServerContext*, const v1::RadianceRequest* request,
                                           v1::RadianceReply* reply) {
   return WithInstance<Emitter>(instances_, request->handle(), [&](const Emitter& emitter) {
-    size_t n = 0, n_uv = 0;
-    const auto w = FloatsOf(request->w(), {3}, "w", n);
-    const auto uv = FloatsOf(request->uv(), {2}, "uv", n_uv);
-    if (n_uv != n) throw Error("w and uv must have the same number of rows");
+    BatchDecoder batch;
+    const auto w = batch.Floats(request->w(), {3}, "w");
+    const auto uv = batch.Floats(request->uv(), {2}, "uv");
+    const uint32_t n = batch.rows();
     std::vector<float> radiance(3 * n);
     emitter.Radiance(w, uv, radiance);
-    *reply->mutable_radiance() = FloatArray(radiance, {uint32_t(n), 3});
+    *reply->mutable_radiance() = FloatArray(radiance, {n, 3});
   });
 }
 
