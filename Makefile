@@ -73,6 +73,7 @@ bench: build
 	$(PY) bench/cornell_box.py
 	$(BUILD)/bin/integrator_throughput
 	$(PY) bench/integrators.py
+	$(PY) bench/render_integrators.py
 
 clean:
 	rm -rf $(BUILD) $(STAMPS) out

@@ -12,53 +12,15 @@
 //
 // Properties: int "tile_size" (default 32).
 
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
-
 #include <cmath>
 #include <vector>
 
+#include "image_passes.h"
 #include "integration_box.h"
-#include "yarf/hash.h"
 #include "yarf/plugin.h"
 
 namespace yarf {
 namespace {
-
-// The points of one tile's pixels for one sample index, produced lazily.
-class TilePoints final : public PrimarySamples {
- public:
-  TilePoints(const Sampler& sampler, uint64_t sample_index, uint32_t width, uint32_t height)
-      : sampler_(sampler), index_(sample_index), inv_width_(1.0f / width), inv_height_(1.0f / height) {}
-
-  void Reset(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, uint32_t width, uint64_t seed) {
-    pixels_.clear();
-    seeds_.clear();
-    for (uint32_t y = y0; y < y1; ++y)
-      for (uint32_t x = x0; x < x1; ++x) {
-        pixels_.push_back({x, y});
-        seeds_.push_back(Hash(seed, uint64_t(y) * width + x));
-      }
-  }
-
-  size_t Count() const override { return pixels_.size(); }
-  float Get(size_t i, uint32_t dimension) const override {
-    const float u = sampler_.Sample(index_, dimension, seeds_[i]);
-    if (dimension == 0) return (pixels_[i].x + u) * inv_width_;
-    if (dimension == 1) return (pixels_[i].y + u) * inv_height_;
-    return u;
-  }
-
- private:
-  struct Pixel {
-    uint32_t x, y;
-  };
-  const Sampler& sampler_;
-  uint64_t index_;
-  float inv_width_, inv_height_;
-  std::vector<Pixel> pixels_;
-  std::vector<uint64_t> seeds_;
-};
 
 class MeanSampleIntegrator final : public Integrator {
  public:
@@ -105,26 +67,15 @@ class MeanSampleIntegrator final : public Integrator {
 
   void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
               RenderTarget& target) override {
-    const uint32_t width = scene.FilmWidth(), height = scene.FilmHeight();
-    const uint32_t tiles_x = (width + tile_size_ - 1) / tile_size_;
-    const uint32_t tiles_y = (height + tile_size_ - 1) / tile_size_;
-    tbb::enumerable_thread_specific<FilmSamples> outputs;
-    for (uint32_t pass = 0; pass < target.SamplesPerPixel(); ++pass) {
-      if (target.Cancelled()) return;
-      tbb::parallel_for(uint32_t(0), tiles_x * tiles_y, [&](uint32_t tile) {
-        if (target.Cancelled()) return;
-        const uint32_t x0 = (tile % tiles_x) * tile_size_, y0 = (tile / tiles_x) * tile_size_;
-        TilePoints points(sampler, pass, width, height);
-        points.Reset(x0, y0, std::min(width, x0 + tile_size_), std::min(height, y0 + tile_size_), width,
-                     target.Seed());
-        FilmSamples& out = outputs.local();
-        out.Clear();
-        transport.Evaluate(scene, points, out);
-        target.Accumulate(out);
-      });
-      if (target.Cancelled()) return;
-      target.PassDone(pass + 1);
-    }
+    RenderPasses(
+        scene, target, tile_size_,
+        [&](uint32_t pass, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, FilmSamples& out) {
+          TilePoints points(sampler, pass, scene.FilmWidth(), scene.FilmHeight());
+          points.Reset(x0, y0, x1, y1, target.Seed());
+          transport.Evaluate(scene, points, out);
+          target.Accumulate(out);
+        },
+        [](uint32_t) {});
   }
 
  private:

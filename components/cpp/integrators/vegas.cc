@@ -64,6 +64,7 @@
 #include <span>
 #include <vector>
 
+#include "vegas_image.h"
 #include "vegas_map.h"
 #include "yarf/plugin.h"
 
@@ -114,6 +115,11 @@ class VegasIntegrator final : public Integrator {
       if (t + 1 < iterations && settings_.alpha > 0) map.Refine(settings_.alpha);
     }
     return CombinedResult(combined, evaluations);
+  }
+
+  void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
+              RenderTarget& target) override {
+    RenderWithVegasMap(transport, scene, sampler, target, uint32_t(settings_.bins), settings_.alpha);
   }
 
  private:

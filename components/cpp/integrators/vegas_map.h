@@ -36,25 +36,46 @@ class AdaptiveMap {
   double Map(const double* y, float* x, uint32_t* bin) const {
     double jacobian = 1;
     for (uint32_t j = 0; j < dims_; ++j) {
-      const double t = y[j] * bins_;
-      const uint32_t i = std::min(uint32_t(t), bins_ - 1);
-      const double* e = &edges_[size_t(j) * (bins_ + 1)];
-      const double width = e[i + 1] - e[i];
-      x[j] = float(e[i] + (t - i) * width);
-      jacobian *= bins_ * width;
-      bin[j] = i;
+      double xj;
+      jacobian *= MapAxis(j, y[j], xj, bin[j]);
+      x[j] = float(xj);
     }
     return jacobian;
+  }
+
+  // One axis alone: x_j(y_j), its bin, and its factor of the Jacobian.
+  double MapAxis(uint32_t j, double y, double& x, uint32_t& bin) const {
+    const double t = y * bins_;
+    const uint32_t i = std::min(uint32_t(t), bins_ - 1);
+    const double* e = &edges_[size_t(j) * (bins_ + 1)];
+    const double width = e[i + 1] - e[i];
+    x = e[i] + (t - i) * width;
+    bin = i;
+    return bins_ * width;
   }
 
   // Adds value = (J f)² of one point, with the weight of the point (the
   // inverse of its sampling density), to the averages of the bins it fell in.
   void Accumulate(const uint32_t* bin, double weight, double value) {
-    for (uint32_t j = 0; j < dims_; ++j) {
-      sums_[size_t(j) * bins_ + bin[j]] += weight * value;
-      mass_[size_t(j) * bins_ + bin[j]] += weight;
+    for (uint32_t j = 0; j < dims_; ++j) AccumulateAxis(j, bin[j], weight, value);
+  }
+  void AccumulateAxis(uint32_t j, uint32_t bin, double weight, double value) {
+    sums_[size_t(j) * bins_ + bin] += weight * value;
+    mass_[size_t(j) * bins_ + bin] += weight;
+  }
+  // Adds another map's statistics (collected by another thread) to these.
+  void Merge(const AdaptiveMap& other) {
+    for (size_t b = 0; b < sums_.size(); ++b) {
+      sums_[b] += other.sums_[b];
+      mass_[b] += other.mass_[b];
     }
   }
+  // Forgets the statistics, keeping the edges.
+  void ClearStatistics() {
+    std::fill(sums_.begin(), sums_.end(), 0.0);
+    std::fill(mass_.begin(), mass_.end(), 0.0);
+  }
+  uint32_t dimensions() const { return dims_; }
 
   // Moves the edges of every axis so that each bin holds an equal share of
   // the smoothed, damped weights, then starts collecting afresh.
@@ -92,8 +113,7 @@ class AdaptiveMap {
       }
       std::copy(edges.begin(), edges.end(), e);
     }
-    std::fill(sums_.begin(), sums_.end(), 0.0);
-    std::fill(mass_.begin(), mass_.end(), 0.0);
+    ClearStatistics();
   }
 
  private:

@@ -64,6 +64,7 @@
 #include <vector>
 
 #include "integration_box.h"
+#include "vegas_image.h"
 #include "vegas_map.h"
 #include "yarf/plugin.h"
 
@@ -225,6 +226,11 @@ class VegasPlusIntegrator final : public Integrator {
       if (t + 1 < iterations && settings_.alpha > 0) map.Refine(settings_.alpha);
     }
     return CombinedResult(combined, first);
+  }
+
+  void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
+              RenderTarget& target) override {
+    RenderWithVegasMap(transport, scene, sampler, target, uint32_t(settings_.bins), settings_.alpha);
   }
 
  private:

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "components/registry.h"
+#include "sampler_test_support.h"
 #include "yarf/hash.h"
 #include "yarf/math.h"
 
@@ -75,20 +76,7 @@ TEST_F(SamplerTest, TakesNoProperties) {
 TEST_F(SamplerTest, IsDeterministic) {
   for (const char* name : kSamplers) {
     const auto first = Make(name), second = Make(name);
-    for (uint64_t seed : {0ull, 1ull, 0x123456789abcdefull})
-      for (uint64_t index = 0; index < 300; index += 7)
-        for (uint32_t dimension = 0; dimension < 40; dimension += 3) {
-          const float value = first->Sample(index, dimension, seed);
-          EXPECT_EQ(value, first->Sample(index, dimension, seed)) << name;
-          EXPECT_EQ(value, second->Sample(index, dimension, seed)) << name;
-        }
-    // Generate is the same numbers in a block.
-    constexpr uint32_t kCount = 16, kDimensions = 5;
-    std::vector<float> block(kCount * kDimensions);
-    first->Generate(100, kCount, kDimensions, 9, block);
-    for (uint32_t i = 0; i < kCount; ++i)
-      for (uint32_t d = 0; d < kDimensions; ++d)
-        EXPECT_EQ(block[i * kDimensions + d], second->Sample(100 + i, d, 9)) << name;
+    testing_support::ExpectDeterministic(*first, *second, name);
   }
 }
 

@@ -111,7 +111,7 @@ class PathTracer final : public Transport {
     for (int depth = 1; !active.empty() && max_depth_ != 0; ++depth)
       active = Bounce(scene, points, paths, active, depth);
     const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
-    for (const Path& p : paths) out.Add(p.film_x * w, p.film_y * h, p.radiance);
+    for (uint32_t i = 0; i < n; ++i) out.Add(i, paths[i].film_x * w, paths[i].film_y * h, paths[i].radiance);
   }
 
  private:

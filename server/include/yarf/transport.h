@@ -25,17 +25,24 @@ class PrimarySamples {
   virtual float Get(size_t i, uint32_t dimension) const = 0;
 };
 
-// Film contributions of a batch: raster positions in pixels and RGB
-// radiance, one record per camera sample.
+// Film contributions of a batch: raster positions in pixels, RGB
+// radiance, and the point of the batch each came from (so that an
+// integrator can weight it, e.g. by its map's Jacobian).
 struct FilmSamples {
   std::vector<float> xy;
   std::vector<Vec3> rgb;
+  std::vector<uint32_t> point;
 
-  void Clear() { xy.clear(); rgb.clear(); }
-  void Add(float x, float y, Vec3 value) {
+  void Clear() {
+    xy.clear();
+    rgb.clear();
+    point.clear();
+  }
+  void Add(uint32_t from_point, float x, float y, Vec3 value) {
     xy.push_back(x);
     xy.push_back(y);
     rgb.push_back(value);
+    point.push_back(from_point);
   }
   size_t Count() const { return rgb.size(); }
 };

@@ -1,0 +1,87 @@
+// The image mode integrators share: sample passes over the film in tiles,
+// each tile's pixels one batch of primary-sample points.
+#pragma once
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "yarf/hash.h"
+#include "yarf/math.h"
+#include "yarf/transport.h"
+
+namespace yarf {
+
+// The points of one tile's pixels for one sample index, produced lazily:
+// the sampler's point number `index` of each pixel's own sequence, with
+// coordinates 0 and 1 placed inside the pixel. Warp() lets an integrator
+// remap the other coordinates.
+class TilePoints : public PrimarySamples {
+ public:
+  TilePoints(const Sampler& sampler, uint64_t index, uint32_t width, uint32_t height)
+      : sampler_(sampler), index_(index), width_(width), inv_width_(1.0f / width),
+        inv_height_(1.0f / height) {}
+  virtual ~TilePoints() = default;
+
+  virtual void Reset(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, uint64_t seed) {
+    pixels_.clear();
+    seeds_.clear();
+    for (uint32_t y = y0; y < y1; ++y)
+      for (uint32_t x = x0; x < x1; ++x) {
+        pixels_.push_back({x, y});
+        seeds_.push_back(Hash(seed, uint64_t(y) * width_ + x));
+      }
+  }
+
+  size_t Count() const override { return pixels_.size(); }
+  float Get(size_t i, uint32_t dimension) const override {
+    const float u = sampler_.Sample(index_, dimension, seeds_[i]);
+    if (dimension == 0) return (pixels_[i].x + u) * inv_width_;
+    if (dimension == 1) return (pixels_[i].y + u) * inv_height_;
+    return Warp(i, dimension, u);
+  }
+
+ protected:
+  virtual float Warp(size_t i, uint32_t dimension, float u) const { return u; }
+
+ private:
+  struct Pixel {
+    uint32_t x, y;
+  };
+  const Sampler& sampler_;
+  uint64_t index_;
+  uint32_t width_;
+  float inv_width_, inv_height_;
+  std::vector<Pixel> pixels_;
+  std::vector<uint64_t> seeds_;
+};
+
+// Runs target.SamplesPerPixel() passes; in each, every tile (in parallel)
+// calls render_tile(pass, x0, y0, x1, y1, out) with an emptied FilmSamples
+// to fill and accumulate, then end_pass(pass) runs on this thread. Stops
+// early, between tiles, when the target is cancelled.
+template <typename RenderTile, typename EndPass>
+void RenderPasses(const SceneView& scene, RenderTarget& target, uint32_t tile_size, RenderTile&& render_tile,
+                  EndPass&& end_pass) {
+  const uint32_t width = scene.FilmWidth(), height = scene.FilmHeight();
+  const uint32_t tiles_x = (width + tile_size - 1) / tile_size;
+  const uint32_t tiles_y = (height + tile_size - 1) / tile_size;
+  tbb::enumerable_thread_specific<FilmSamples> outputs;
+  for (uint32_t pass = 0; pass < target.SamplesPerPixel(); ++pass) {
+    if (target.Cancelled()) return;
+    tbb::parallel_for(uint32_t(0), tiles_x * tiles_y, [&](uint32_t tile) {
+      if (target.Cancelled()) return;
+      const uint32_t x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
+      FilmSamples& out = outputs.local();
+      out.Clear();
+      render_tile(pass, x0, y0, std::min(width, x0 + tile_size), std::min(height, y0 + tile_size), out);
+    });
+    if (target.Cancelled()) return;
+    end_pass(pass);
+    target.PassDone(pass + 1);
+  }
+}
+
+}  // namespace yarf

@@ -1,0 +1,38 @@
+"""Rendering with any integrator: the adaptive ones render the same
+expected image as mean-sample Monte Carlo (their maps change the variance,
+never the mean)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from yarf import Client, RenderResult
+from yarf.v1 import scene_pb2
+
+
+def image_mean(result: RenderResult) -> tuple[np.ndarray, np.ndarray]:
+    """Per-channel image mean and the variance of that mean."""
+    count = result.pixels.shape[0] * result.pixels.shape[1]
+    mean = result.pixels.astype(np.float64).mean(axis=(0, 1))
+    return mean, result.variance.astype(np.float64).sum(axis=(0, 1)) / count**2
+
+
+@pytest.mark.parametrize("integrator", ["vegas", "vegas_plus"])
+def test_adaptive_integrators_render_the_mean_sample_image_in_expectation(
+    client: Client, cornell_box: scene_pb2.Scene, integrator: str
+) -> None:
+    independent = scene_pb2.ComponentSpec(class_name="independent")
+    reference = client.render(cornell_box, spp=64, seed=11, sampler=independent)
+    adaptive = client.render(
+        cornell_box,
+        spp=32,
+        seed=12,
+        sampler=independent,
+        integrator=scene_pb2.ComponentSpec(class_name=integrator),
+    )
+    assert np.isfinite(adaptive.pixels).all()
+    (m_ref, v_ref), (m_ada, v_ada) = image_mean(reference), image_mean(adaptive)
+    z = (m_ada - m_ref) / np.sqrt(v_ref + v_ada)
+    assert (np.abs(z) < 5).all(), f"{integrator}: image means {m_ada} vs {m_ref}, z = {z}"
+    assert (np.abs(m_ada - m_ref) < 0.01 * m_ref).all()
