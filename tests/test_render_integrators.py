@@ -36,3 +36,12 @@ def test_adaptive_integrators_render_the_mean_sample_image_in_expectation(
     z = (m_ada - m_ref) / np.sqrt(v_ref + v_ada)
     assert (np.abs(z) < 5).all(), f"{integrator}: image means {m_ada} vs {m_ref}, z = {z}"
     assert (np.abs(m_ada - m_ref) < 0.01 * m_ref).all()
+
+
+def test_vegas_renders_the_same_image_for_the_same_seed(
+    client: Client, cornell_box: scene_pb2.Scene
+) -> None:
+    vegas = scene_pb2.ComponentSpec(class_name="vegas")
+    first = client.render(cornell_box, spp=8, seed=3, integrator=vegas)
+    second = client.render(cornell_box, spp=8, seed=3, integrator=vegas)
+    assert first.pixels.tobytes() == second.pixels.tobytes()

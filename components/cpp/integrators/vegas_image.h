@@ -13,8 +13,6 @@
 // then frozen.
 #pragma once
 
-#include <tbb/enumerable_thread_specific.h>
-
 #include <cmath>
 #include <vector>
 
@@ -77,16 +75,16 @@ inline void RenderWithVegasMap(Transport& transport, const SceneView& scene, con
   constexpr uint32_t kTileSize = 32;
   const std::vector<double> lower(kMappedDimensions, 0.0), upper(kMappedDimensions, 1.0);
   AdaptiveMap map(lower, upper, bins);
-  tbb::enumerable_thread_specific<AdaptiveMap> statistics([&] {
-    AdaptiveMap local = map;
-    local.ClearStatistics();
-    return local;
-  });
-  const uint32_t last_refinement = target.SamplesPerPixel() / 2;
-  auto refines_after = [&](uint32_t pass) {
-    const uint32_t done = pass + 1;
-    return alpha > 0 && done <= last_refinement && (done & (done - 1)) == 0;
-  };
+  // Statistics per tile, merged in tile order: the same job refines the
+  // same map however the tiles were shared among threads.
+  const uint32_t tiles_x = (scene.FilmWidth() + kTileSize - 1) / kTileSize;
+  const uint32_t tiles_y = (scene.FilmHeight() + kTileSize - 1) / kTileSize;
+  std::vector<AdaptiveMap> statistics;
+  const uint32_t last_refinement = alpha > 0 ? target.SamplesPerPixel() / 2 : 0;
+  if (last_refinement > 0) {
+    map.ClearStatistics();
+    statistics.assign(size_t(tiles_x) * tiles_y, map);
+  }
   RenderPasses(
       scene, target, kTileSize,
       [&](uint32_t pass, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, FilmSamples& out) {
@@ -100,16 +98,17 @@ inline void RenderWithVegasMap(Transport& transport, const SceneView& scene, con
           luminance[i] += Luminance(out.rgb[k]);
         }
         target.Accumulate(out);
-        if (alpha > 0 && pass + 1 <= last_refinement) {  // the map still learns
-          AdaptiveMap& local = statistics.local();
-          for (size_t i = 0; i < points.Count(); ++i) points.Train(i, luminance[i] * luminance[i], local);
+        if (pass + 1 <= last_refinement) {  // the map still learns
+          AdaptiveMap& tile = statistics[size_t(y0 / kTileSize) * tiles_x + x0 / kTileSize];
+          for (size_t i = 0; i < points.Count(); ++i) points.Train(i, luminance[i] * luminance[i], tile);
         }
       },
       [&](uint32_t pass) {
-        if (!refines_after(pass)) return;
-        for (AdaptiveMap& local : statistics) {
-          map.Merge(local);
-          local.ClearStatistics();
+        const uint32_t done = pass + 1;
+        if (done > last_refinement || (done & (done - 1)) != 0) return;  // after 1, 2, 4, 8...
+        for (AdaptiveMap& tile : statistics) {
+          map.Merge(tile);
+          tile.ClearStatistics();
         }
         map.Refine(alpha);
       });
