@@ -40,17 +40,12 @@ float RequireIndex(double ior, const std::string& property) {
   return float(ior);
 }
 
-class Dielectric final : public yarf::SurfaceModel {
+class Dielectric final : public yarf::DeltaSurfaceModel {
  public:
   explicit Dielectric(const yarf::Properties& props)
       : eta_(RequireIndex(props.Float("int_ior", 1.5046), "int_ior") /
              RequireIndex(props.Float("ext_ior", 1.000277), "ext_ior")) {}
 
-  // Delta lobes have no finite value or density.
-  void Evaluate(std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
-  }
 
   void Sample(std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
@@ -95,10 +90,6 @@ class Dielectric final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
-           std::span<float> pdf) const override {
-    std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
-  }
 
   uint32_t Lobes() const override { return kReflectLobe | kRefractLobe; }
 

@@ -24,16 +24,11 @@ using yarf::Vec3;
 
 constexpr uint32_t kMirrorLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 
-class Mirror final : public yarf::SurfaceModel {
+class Mirror final : public yarf::DeltaSurfaceModel {
  public:
   explicit Mirror(const yarf::Properties& props)
       : reflectance_(props.Reflectance("reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
 
-  // A delta lobe has no finite value or density.
-  void Evaluate(std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
-  }
 
   void Sample(std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
@@ -57,10 +52,6 @@ class Mirror final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
-           std::span<float> pdf) const override {
-    std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
-  }
 
   uint32_t Lobes() const override { return kMirrorLobe; }
 

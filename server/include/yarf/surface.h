@@ -3,6 +3,7 @@
 // toward the camera side, wo toward where light comes from.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 
@@ -42,6 +43,20 @@ class SurfaceModel : public virtual Component {
   virtual void Pdf(std::span<const float> wi, std::span<const float> wo,
                    std::span<const float> uv, std::span<float> pdf) const = 0;
   virtual uint32_t Lobes() const = 0;
+};
+
+// A model made only of delta lobes (mirror, smooth glass): no finite value
+// or density anywhere, so only Sample has work to do.
+class DeltaSurfaceModel : public SurfaceModel {
+ public:
+  void Evaluate(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+                std::span<float> value) const final {
+    std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
+  }
+  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+           std::span<float> pdf) const final {
+    std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
+  }
 };
 
 class Emitter : public virtual Component {
