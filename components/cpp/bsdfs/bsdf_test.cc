@@ -1,4 +1,4 @@
-// Tests of the surface plugins (bsdfs/*.cc and emitters/diffuse_area.cc),
+// Tests of the surface plugins (bsdfs/*.cc),
 // loaded from the plugin folder through the registry as yarfd loads them:
 // energy conservation, reciprocity, agreement of Sample with Pdf and
 // Evaluate, the distribution of sampled directions (Pearson's χ² test),
@@ -32,7 +32,7 @@ Vec3 EvaluateOne(const SurfaceModel& model, Vec3 wi, Vec3 wo) {
   const float uv[2] = {0, 0};
   wi.Store(in);
   wo.Store(out);
-  model.Evaluate(in, out, uv, value);
+  model.Evaluate(TransportMode::kRadiance, in, out, uv, value);
   return Vec3::Load(value);
 }
 
@@ -54,7 +54,8 @@ struct Scattered {
 // Sample for a batch of (wi, uniform) pairs in one call.
 std::vector<Scattered> SampleBatch(const SurfaceModel& model, const std::vector<Vec3>& wi,
                                    const std::vector<std::array<float, 3>>& uniform,
-                                   uint32_t allowed = 0) {
+                                   uint32_t allowed = 0,
+                                   TransportMode mode = TransportMode::kRadiance) {
   const size_t count = wi.size();
   std::vector<float> in(3 * count), uv(2 * count, 0.0f), u(3 * count), wo(3 * count),
       weight(3 * count), pdf(count);
@@ -63,7 +64,7 @@ std::vector<Scattered> SampleBatch(const SurfaceModel& model, const std::vector<
     wi[k].Store(&in[3 * k]);
     std::copy(uniform[k].begin(), uniform[k].end(), &u[3 * k]);
   }
-  model.Sample(in, uv, u, allowed, wo, weight, pdf, flags);
+  model.Sample(mode, in, uv, u, allowed, wo, weight, pdf, flags);
   std::vector<Scattered> out(count);
   for (size_t k = 0; k < count; ++k)
     out[k] = {Vec3::Load(&wo[3 * k]), Vec3::Load(&weight[3 * k]), pdf[k], flags[k]};
@@ -71,8 +72,8 @@ std::vector<Scattered> SampleBatch(const SurfaceModel& model, const std::vector<
 }
 
 Scattered SampleOne(const SurfaceModel& model, Vec3 wi, std::array<float, 3> uniform,
-                    uint32_t allowed = 0) {
-  return SampleBatch(model, {wi}, {uniform}, allowed)[0];
+                    uint32_t allowed = 0, TransportMode mode = TransportMode::kRadiance) {
+  return SampleBatch(model, {wi}, {uniform}, allowed, mode)[0];
 }
 
 // Uniform numbers from a hash: reproducible, and independent per (seed, k).
@@ -122,7 +123,7 @@ Vec3 AlbedoByQuadrature(const SurfaceModel& model, Vec3 wi) {
       wi.Store(&in[3 * k]);
       DirectionAt(-1.0 + (i + 0.5) * dz, -kPiDouble + (j + 0.5) * dphi).Store(&out[3 * k]);
     }
-  model.Evaluate(in, out, uv, value);
+  model.Evaluate(TransportMode::kRadiance, in, out, uv, value);
   double sum[3] = {0, 0, 0};
   for (size_t k = 0; k < count; ++k)
     for (int c = 0; c < 3; ++c) sum[c] += double(value[3 * k + c]) * std::abs(out[3 * k + 2]);
@@ -249,8 +250,11 @@ TEST_F(SurfaceModelTest, RegistersEveryModelWithItsInterface) {
 }
 
 TEST_F(SurfaceModelTest, LobesDescribeTheModels) {
-  EXPECT_EQ(Make("lambertian")->Lobes(), uint32_t(kScatterReflect));
-  EXPECT_EQ(Make("phong")->Lobes(), uint32_t(kScatterReflect));
+  EXPECT_EQ(Make("lambertian")->Lobes(), uint32_t(kScatterReflect | kScatterDiffuse));
+  EXPECT_EQ(Make("phong")->Lobes(), uint32_t(kScatterReflect | kScatterDiffuse | kScatterGlossy));
+  Properties glossy_only;
+  glossy_only.Set("diffuse_reflectance", 0.0);
+  EXPECT_EQ(Make("phong", glossy_only)->Lobes(), uint32_t(kScatterReflect | kScatterGlossy));
   EXPECT_EQ(Make("mirror")->Lobes(), uint32_t(kScatterReflect | kScatterDelta));
   EXPECT_EQ(Make("dielectric")->Lobes(),
             uint32_t(kScatterReflect | kScatterRefract | kScatterDelta));
@@ -379,7 +383,10 @@ TEST_F(SurfaceModelTest, SampleAgreesWithPdfAndEvaluate) {
         }
         ++produced;
         const std::string where = name + " wi " + Describe(wi) + " wo " + Describe(s.wo);
-        EXPECT_EQ(s.flags, uint32_t(kScatterReflect)) << where;
+        EXPECT_TRUE(s.flags == (kScatterReflect | kScatterDiffuse) ||
+                    s.flags == (kScatterReflect | kScatterGlossy))
+            << where;
+        EXPECT_EQ(s.flags & ~model->Lobes(), 0u) << where;
         EXPECT_NEAR(Length(s.wo), 1.0f, 1e-4f) << where;
         EXPECT_GT(wi.z * s.wo.z, 0.0f) << where;
         const float pdf = PdfOne(*model, wi, s.wo);
@@ -396,14 +403,40 @@ TEST_F(SurfaceModelTest, SampleHonoursAllowedLobes) {
   const std::array<float, 3> u = {0.3f, 0.6f, 0.2f};
   for (const char* name : {"lambertian", "phong"}) {
     const auto model = Make(name);
-    EXPECT_EQ(SampleOne(*model, wi, u, kScatterReflect).flags, uint32_t(kScatterReflect)) << name;
-    for (uint32_t allowed : {uint32_t(kScatterRefract), uint32_t(kScatterDelta)}) {
+    EXPECT_EQ(SampleOne(*model, wi, u, kScatterReflect | kScatterDiffuse).flags,
+              uint32_t(kScatterReflect | kScatterDiffuse))
+        << name;
+    for (uint32_t allowed : {uint32_t(kScatterRefract), uint32_t(kScatterDelta),
+                             uint32_t(kScatterReflect), uint32_t(kScatterReflect | kScatterDelta)}) {
       const Scattered none = SampleOne(*model, wi, u, allowed);
       EXPECT_EQ(none.flags, uint32_t(kScatterNone)) << name;
       EXPECT_EQ(none.pdf, 0.0f) << name;
       ExpectVecNear(none.weight, Vec3(), 0, name);
     }
   }
+}
+
+TEST_F(SurfaceModelTest, PhongRestrictedToOneLobeSamplesThatLobe) {
+  // Only the diffuse lobe: its weight is kd exactly. Only the glossy lobe:
+  // every sample is glossy, and the mean weight is the glossy lobe's
+  // albedo, ks at normal incidence.
+  Properties props;
+  props.Set("diffuse_reflectance", 0.5);
+  props.Set("specular_reflectance", 0.3);
+  props.Set("exponent", 20.0);
+  const auto model = Make("phong", props);
+  const Vec3 normal(0, 0, 1);
+  double glossy_sum = 0;
+  constexpr int kCount = 20000;
+  for (int k = 0; k < kCount; ++k) {
+    const Scattered d = SampleOne(*model, normal, Uniform3(5, k), kScatterReflect | kScatterDiffuse);
+    ASSERT_EQ(d.flags, uint32_t(kScatterReflect | kScatterDiffuse));
+    ExpectVecNear(d.weight, Vec3(0.5f, 0.5f, 0.5f), 1e-5f, "diffuse weight");
+    const Scattered g = SampleOne(*model, normal, Uniform3(6, k), kScatterReflect | kScatterGlossy);
+    ASSERT_TRUE(g.flags == (kScatterReflect | kScatterGlossy) || g.flags == kScatterNone);
+    glossy_sum += g.weight.x;
+  }
+  EXPECT_NEAR(glossy_sum / kCount, 0.3, 0.01);
 }
 
 TEST_F(SurfaceModelTest, PhongSamplesFollowItsPdf) {
@@ -574,6 +607,18 @@ TEST_F(DielectricTest, AllowedLobeCarriesItsFresnelFactor) {
   }
 }
 
+TEST_F(DielectricTest, ImportanceRefractsWithoutRadianceScaling) {
+  // Paths from the lights carry importance: the refracted weight is the
+  // Fresnel transmittance alone, so each sample's weight is 1.
+  const auto model = Make("dielectric");
+  for (Vec3 wi : Directions())
+    for (float u0 : {0.01f, 0.5f, 0.99f}) {
+      const Scattered s = SampleOne(*model, wi, {u0, 0.5f, 0.5f}, 0, TransportMode::kImportance);
+      if (s.flags == kScatterNone) continue;
+      EXPECT_NEAR(s.weight.x, 1.0f, 1e-5f) << "wi " << Describe(wi);
+    }
+}
+
 TEST_F(DielectricTest, DeltaLobesHaveNoValueOrDensity) {
   const auto model = Make("dielectric");
   for (Vec3 wi : Directions()) {
@@ -594,25 +639,6 @@ TEST_F(DielectricTest, MatchedIndicesPassStraightThrough) {
     ExpectVecNear(s.wo, -wi, 1e-6f, "direction");
     ExpectVecNear(s.weight, Vec3(1, 1, 1), 1e-6f, "weight");
   }
-}
-
-// --- diffuse_area emitter ----------------------------------------------------
-
-TEST_F(SurfaceModelTest, DiffuseAreaEmitsFromTheFrontOnly) {
-  Properties props;
-  props.Set("radiance", Rgb{Vec3(1, 2, 3)});
-  const auto emitter = registry_.CreateAs<Emitter>("diffuse_area", props);
-  EXPECT_EQ(emitter->Describe().interfaces, std::vector<std::string>{Emitter::kInterface});
-  const std::vector<float> w = {0, 0, 1, 0.6f, 0, 0.8f, 0, 0.6f, -0.8f, 1, 0, 0};
-  const std::vector<float> uv(8, 0.0f);
-  std::vector<float> radiance(12, -1.0f);
-  emitter->Radiance(w, uv, radiance);
-  EXPECT_EQ(radiance, (std::vector<float>{1, 2, 3, 1, 2, 3, 0, 0, 0, 0, 0, 0}));
-}
-
-TEST_F(SurfaceModelTest, DiffuseAreaNeedsRadiance) {
-  const std::string message = CreationError("diffuse_area", Properties());
-  EXPECT_NE(message.find("'radiance'"), std::string::npos) << message;
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 // and 1/η² for refraction, where η is the index on wo's side over the
 // index on wi's side: radiance transported across the boundary is
 // compressed into a smaller solid angle (pbrt, Mitsuba, Veach 1997 §5.2).
+// Paths carrying importance (from the lights) refract with weight 1.
 // When `allowed` excludes one lobe, the other is chosen always and its
 // weight carries its Fresnel factor.
 #include <algorithm>
@@ -47,7 +48,7 @@ class Dielectric final : public yarf::DeltaSurfaceModel {
              RequireIndex(props.Float("ext_ior", 1.000277), "ext_ior")) {}
 
 
-  void Sample(std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
@@ -77,9 +78,10 @@ class Dielectric final : public yarf::DeltaSurfaceModel {
         factor = fresnel;
         probability = reflect_share / total;
       } else {
-        // η of wo's side over wi's side.
+        // η of wo's side over wi's side; importance is not compressed.
         const float eta_rel = in.z > 0 ? eta_ : 1.0f / eta_;
-        factor = (1.0f - fresnel) / (eta_rel * eta_rel);
+        factor = 1.0f - fresnel;
+        if (mode == yarf::TransportMode::kRadiance) factor /= eta_rel * eta_rel;
         probability = refract_share / total;
       }
       out.Store(&wo[3 * k]);

@@ -23,12 +23,14 @@ namespace {
 
 using yarf::Vec3;
 
+constexpr uint32_t kLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
+
 class Lambertian final : public yarf::SurfaceModel {
  public:
   explicit Lambertian(const yarf::Properties& props)
       : reflectance_(props.Reflectance("reflectance", Vec3(0.5f, 0.5f, 0.5f))) {}
 
-  void Evaluate(std::span<const float> wi, std::span<const float> wo,
+  void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
     const size_t count = wi.size() / 3;
     for (size_t k = 0; k < count; ++k) {
@@ -37,12 +39,12 @@ class Lambertian final : public yarf::SurfaceModel {
     }
   }
 
-  void Sample(std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool can_reflect = yarf::LobeAllowed(yarf::kScatterReflect, allowed);
+    const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
     for (size_t k = 0; k < count; ++k) {
       const float wi_z = wi[3 * k + 2];
       Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);
@@ -60,7 +62,7 @@ class Lambertian final : public yarf::SurfaceModel {
       // f·|cos θo| / pdf = (ρ/π)·cos θo / (cos θo/π).
       reflectance_.Store(&weight[3 * k]);
       pdf[k] = density;
-      flags[k] = yarf::kScatterReflect;
+      flags[k] = kLobe;
     }
   }
 
@@ -73,7 +75,7 @@ class Lambertian final : public yarf::SurfaceModel {
     }
   }
 
-  uint32_t Lobes() const override { return yarf::kScatterReflect; }
+  uint32_t Lobes() const override { return kLobe; }
 
  private:
   Vec3 reflectance_;

@@ -30,7 +30,7 @@ class Mirror final : public yarf::DeltaSurfaceModel {
       : reflectance_(props.Reflectance("reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
 
 
-  void Sample(std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {

@@ -16,10 +16,12 @@
 //   exponent               float            default 30     n ≥ 0; larger is shinier
 // kd + ks must not exceed 1 in any channel (energy conservation).
 //
-// Lobes: reflection. Sample picks the diffuse or the glossy lobe with
-// probability proportional to the luminance of kd and ks, draws wo from
-// the cosine-weighted hemisphere or the cos^n lobe around the mirror
-// direction, and returns the density of the whole mixture.
+// Lobes: diffuse reflection (when kd > 0) and glossy reflection (when
+// ks > 0). Sample picks one of the allowed lobes with probability
+// proportional to the luminance of kd and ks, draws wo from the
+// cosine-weighted hemisphere or the cos^n lobe around the mirror
+// direction, and returns the density of the mixture of the allowed lobes
+// (and their value in the weight).
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -31,6 +33,9 @@
 namespace {
 
 using yarf::Vec3;
+
+constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
+constexpr uint32_t kGlossyLobe = yarf::kScatterReflect | yarf::kScatterGlossy;
 
 float RequireExponent(double exponent) {
   if (!(exponent >= 0.0 && std::isfinite(exponent)))
@@ -50,30 +55,34 @@ class Phong final : public yarf::SurfaceModel {
         throw yarf::Error(std::string("properties 'diffuse_reflectance' + 'specular_reflectance' "
                                       "exceed 1 in the ") +
                           kChannel[c] + " channel: the material would create energy");
-    const float diffuse_weight = yarf::Luminance(diffuse_);
-    const float specular_weight = yarf::Luminance(specular_);
-    const float total = diffuse_weight + specular_weight;
-    specular_probability_ = total > 0 ? specular_weight / total : 0.0f;
+    diffuse_weight_ = yarf::Luminance(diffuse_);
+    specular_weight_ = yarf::Luminance(specular_);
+    const float total = diffuse_weight_ + specular_weight_;
+    specular_probability_ = total > 0 ? specular_weight_ / total : 0.0f;
   }
 
-  void Evaluate(std::span<const float> wi, std::span<const float> wo,
+  void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
     const size_t count = wi.size() / 3;
     for (size_t k = 0; k < count; ++k)
-      Value(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k])).Store(&value[3 * k]);
+      Value(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]), true, true).Store(&value[3 * k]);
   }
 
-  void Sample(std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool can_reflect = yarf::LobeAllowed(yarf::kScatterReflect, allowed);
+    const bool diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed) && diffuse_weight_ > 0;
+    const bool glossy = yarf::LobeAllowed(kGlossyLobe, allowed) && specular_weight_ > 0;
+    const float total = (diffuse ? diffuse_weight_ : 0.0f) + (glossy ? specular_weight_ : 0.0f);
+    const float specular_probability = total > 0 ? (glossy ? specular_weight_ : 0.0f) / total : 0.0f;
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
       Vec3 out;
-      if (u[0] < specular_probability_) {
+      const bool specular = u[0] < specular_probability;
+      if (specular) {
         // The lobe is symmetric about the mirror direction: sample it in
         // a frame whose z axis is that direction.
         const yarf::Frame mirror(yarf::Reflect(in));
@@ -83,7 +92,7 @@ class Phong final : public yarf::SurfaceModel {
         if (in.z < 0) out.z = -out.z;
       }
       // Zero when the glossy lobe dipped below the surface.
-      const float density = can_reflect ? Density(in, out) : 0.0f;
+      const float density = total > 0 ? Density(in, out, specular_probability) : 0.0f;
       if (!(density > 0)) {
         Vec3().Store(&wo[3 * k]);
         Vec3().Store(&weight[3 * k]);
@@ -92,9 +101,9 @@ class Phong final : public yarf::SurfaceModel {
         continue;
       }
       out.Store(&wo[3 * k]);
-      (Value(in, out) * (std::abs(out.z) / density)).Store(&weight[3 * k]);
+      (Value(in, out, diffuse, glossy) * (std::abs(out.z) / density)).Store(&weight[3 * k]);
       pdf[k] = density;
-      flags[k] = yarf::kScatterReflect;
+      flags[k] = specular ? kGlossyLobe : kDiffuseLobe;
     }
   }
 
@@ -102,10 +111,12 @@ class Phong final : public yarf::SurfaceModel {
            std::span<float> pdf) const override {
     const size_t count = wi.size() / 3;
     for (size_t k = 0; k < count; ++k)
-      pdf[k] = Density(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]));
+      pdf[k] = Density(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]), specular_probability_);
   }
 
-  uint32_t Lobes() const override { return yarf::kScatterReflect; }
+  uint32_t Lobes() const override {
+    return (diffuse_weight_ > 0 ? kDiffuseLobe : 0u) | (specular_weight_ > 0 ? kGlossyLobe : 0u);
+  }
 
  private:
   // cos α between wo and the mirror direction of wi. Symmetric in wi and
@@ -113,26 +124,29 @@ class Phong final : public yarf::SurfaceModel {
   // to the other side, which makes it two-sided.
   static float CosToMirror(Vec3 wi, Vec3 wo) { return yarf::Dot(wo, yarf::Reflect(wi)); }
 
-  Vec3 Value(Vec3 wi, Vec3 wo) const {
+  // f of the lobes asked for.
+  Vec3 Value(Vec3 wi, Vec3 wo, bool diffuse, bool glossy) const {
     if (!(wi.z * wo.z > 0)) return Vec3();
     const float cos_alpha = CosToMirror(wi, wo);
-    const float glossy =
-        cos_alpha > 0 ? (exponent_ + 2.0f) / (2.0f * yarf::kPi) * std::pow(cos_alpha, exponent_)
-                      : 0.0f;
-    return diffuse_ * yarf::kInvPi + specular_ * glossy;
+    const float lobe = glossy && cos_alpha > 0
+                           ? (exponent_ + 2.0f) / (2.0f * yarf::kPi) * std::pow(cos_alpha, exponent_)
+                           : 0.0f;
+    return (diffuse ? diffuse_ * yarf::kInvPi : Vec3()) + specular_ * lobe;
   }
 
   // Density of the lobe mixture Sample draws from; the part of the glossy
   // lobe below the surface is lost (Sample returns no sample there).
-  float Density(Vec3 wi, Vec3 wo) const {
+  float Density(Vec3 wi, Vec3 wo, float specular_probability) const {
     if (!(wi.z * wo.z > 0)) return 0.0f;
-    return (1.0f - specular_probability_) * yarf::CosineHemispherePdf(std::abs(wo.z)) +
-           specular_probability_ * yarf::PhongLobePdf(CosToMirror(wi, wo), exponent_);
+    return (1.0f - specular_probability) * yarf::CosineHemispherePdf(std::abs(wo.z)) +
+           specular_probability * yarf::PhongLobePdf(CosToMirror(wi, wo), exponent_);
   }
 
   Vec3 diffuse_;
   Vec3 specular_;
   float exponent_;
+  // Luminances of kd and ks: the odds of sampling each lobe.
+  float diffuse_weight_ = 0, specular_weight_ = 0;
   float specular_probability_ = 0;
 };
 

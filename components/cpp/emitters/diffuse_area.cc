@@ -11,29 +11,40 @@
 #include <cstdint>
 #include <span>
 
+#include "intensity.h"
 #include "yarf/plugin.h"
+#include "yarf/warps.h"
 
 namespace {
 
 using yarf::Vec3;
 
-Vec3 RequiredRadiance(const yarf::Properties& props) {
-  const Vec3 radiance = props.Color("radiance");
-  for (int c = 0; c < 3; ++c)
-    if (!(radiance[c] >= 0.0f && std::isfinite(radiance[c])))
-      throw yarf::Error("property 'radiance' must be finite and non-negative in every channel");
-  return radiance;
-}
-
 class DiffuseArea final : public yarf::Emitter {
  public:
-  explicit DiffuseArea(const yarf::Properties& props) : radiance_(RequiredRadiance(props)) {}
+  explicit DiffuseArea(const yarf::Properties& props) : radiance_(yarf::RequiredIntensity(props, "radiance")) {}
 
   void Radiance(std::span<const float> w, std::span<const float> uv,
                 std::span<float> radiance) const override {
     const size_t count = w.size() / 3;
     for (size_t k = 0; k < count; ++k)
       (w[3 * k + 2] > 0 ? radiance_ : Vec3()).Store(&radiance[3 * k]);
+  }
+
+  // Cosine-weighted over the front hemisphere: emitted power goes as cos θ.
+  void SampleDirection(std::span<const float> uniform, std::span<float> w,
+                       std::span<float> pdf) const override {
+    const size_t count = uniform.size() / 2;
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 d = yarf::SampleCosineHemisphere(uniform[2 * k], uniform[2 * k + 1]);
+      d.Store(&w[3 * k]);
+      pdf[k] = yarf::CosineHemispherePdf(d.z);
+    }
+  }
+
+  void PdfDirection(std::span<const float> w, std::span<float> pdf) const override {
+    const size_t count = w.size() / 3;
+    for (size_t k = 0; k < count; ++k)
+      pdf[k] = w[3 * k + 2] > 0 ? yarf::CosineHemispherePdf(w[3 * k + 2]) : 0.0f;
   }
 
  private:

@@ -213,7 +213,7 @@ class PathTracer final : public Transport {
       light_uv[2 * j + 1] = s.v;
       shadow[j] = ShadowRay(v.position, v.frame.n, s.position);
     }
-    model.Evaluate(wi, wo, uv, f);
+    model.Evaluate(TransportMode::kRadiance, wi, wo, uv, f);
     model.Pdf(wi, wo, uv, pdf);
     std::vector<const Emitter*> keys = emitters;
     for (const auto& [emitter, group] : GroupBy(keys)) {
@@ -264,7 +264,7 @@ class PathTracer final : public Transport {
       u[3 * j + 1] = points.Get(v.path, base + kBsdfDirection);
       u[3 * j + 2] = points.Get(v.path, base + kBsdfDirection + 1);
     }
-    model.Sample(wi, uv, u, 0, wo, weight, pdf, flags);
+    model.Sample(TransportMode::kRadiance, wi, uv, u, 0, wo, weight, pdf, flags);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
       Path& p = paths[v.path];

@@ -11,12 +11,21 @@
 
 namespace yarf {
 
+// A lobe's flags: its side (reflect or refract) and its kind (diffuse,
+// glossy or delta).
 enum ScatterFlags : uint32_t {
   kScatterNone = 0,
   kScatterReflect = 1,
   kScatterRefract = 2,
   kScatterDelta = 4,
+  kScatterDiffuse = 8,
+  kScatterGlossy = 16,
 };
+
+// What a path carries: radiance from the lights (paths from the camera),
+// or importance from the camera (paths from the lights). Models that
+// refract scale radiance by 1/η² and importance not (Veach 1997, §5.2).
+enum class TransportMode : uint32_t { kRadiance = 0, kImportance = 1 };
 
 // Whether Sample may draw `lobe` (its ScatterFlags) under `allowed`: 0
 // allows every lobe; otherwise a lobe is allowed when all its flags are,
@@ -31,11 +40,11 @@ class SurfaceModel : public virtual Component {
   static constexpr const char* kMethods[] = {"Evaluate", "Sample", "Pdf", "Lobes"};
 
   // wi, wo: [N,3]; uv: [N,2]; value: [N,3] = f(wi, wo) in 1/sr, no cosine.
-  virtual void Evaluate(std::span<const float> wi, std::span<const float> wo,
+  virtual void Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo,
                         std::span<const float> uv, std::span<float> value) const = 0;
   // wi: [N,3]; uv: [N,2]; uniform: [N,3] -> wo [N,3], weight [N,3]
   // (f·|cos θo|/pdf), pdf [N], flags [N] (the lobe sampled).
-  virtual void Sample(std::span<const float> wi, std::span<const float> uv,
+  virtual void Sample(TransportMode mode, std::span<const float> wi, std::span<const float> uv,
                       std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
                       std::span<float> weight, std::span<float> pdf,
                       std::span<uint32_t> flags) const = 0;
@@ -49,8 +58,8 @@ class SurfaceModel : public virtual Component {
 // or density anywhere, so only Sample has work to do.
 class DeltaSurfaceModel : public SurfaceModel {
  public:
-  void Evaluate(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
-                std::span<float> value) const final {
+  void Evaluate(TransportMode, std::span<const float> wi, std::span<const float> wo,
+                std::span<const float> uv, std::span<float> value) const final {
     std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
   }
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
@@ -59,15 +68,24 @@ class DeltaSurfaceModel : public SurfaceModel {
   }
 };
 
+// Light leaving a surface, or a point. Directions are in the emitter's
+// local frame: the surface's shading frame, or a point light's own frame
+// (+z its axis).
 class Emitter : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Emitter";
-  static constexpr const char* kMethods[] = {"Radiance"};
+  static constexpr const char* kMethods[] = {"Radiance", "SampleDirection", "PdfDirection"};
 
-  // w: [N,3] local direction of travel away from the surface; uv: [N,2];
-  // radiance: [N,3] in W·m⁻²·sr⁻¹.
+  // w: [N,3] local direction of travel away from the emitter; uv: [N,2];
+  // radiance: [N,3] in W·m⁻²·sr⁻¹ (a point light: intensity, W·sr⁻¹).
   virtual void Radiance(std::span<const float> w, std::span<const float> uv,
                         std::span<float> radiance) const = 0;
+  // uniform: [N,2] -> w [N,3] local direction of emission, pdf [N] (solid
+  // angle), for paths that start at the light.
+  virtual void SampleDirection(std::span<const float> uniform, std::span<float> w,
+                               std::span<float> pdf) const = 0;
+  // pdf: [N], the solid-angle density SampleDirection has for w [N,3].
+  virtual void PdfDirection(std::span<const float> w, std::span<float> pdf) const = 0;
 };
 
 }  // namespace yarf

@@ -177,7 +177,7 @@ grpc::Status SurfaceModelServiceImpl::Evaluate(grpc::ServerContext*, const v1::S
     const auto uv = batch.Floats(request->uv(), {2}, "uv");
     const uint32_t n = batch.rows();
     std::vector<float> value(3 * n);
-    model.Evaluate(wi, wo, uv, value);
+    model.Evaluate(TransportMode(request->mode()), wi, wo, uv, value);
     *reply->mutable_value() = FloatArray(value, {n, 3});
   });
 }
@@ -192,7 +192,7 @@ grpc::Status SurfaceModelServiceImpl::Sample(grpc::ServerContext*, const v1::Sam
     const uint32_t n = batch.rows();
     std::vector<float> wo(3 * n), weight(3 * n), pdf(n);
     std::vector<uint32_t> flags(n);
-    model.Sample(wi, uv, u, request->allowed(), wo, weight, pdf, flags);
+    model.Sample(TransportMode(request->mode()), wi, uv, u, request->allowed(), wo, weight, pdf, flags);
     *reply->mutable_wo() = FloatArray(wo, {n, 3});
     *reply->mutable_weight() = FloatArray(weight, {n, 3});
     *reply->mutable_pdf() = FloatArray(pdf, {n});
@@ -230,6 +230,32 @@ grpc::Status EmitterServiceImpl::Radiance(grpc::ServerContext*, const v1::Radian
     std::vector<float> radiance(3 * n);
     emitter.Radiance(w, uv, radiance);
     *reply->mutable_radiance() = FloatArray(radiance, {n, 3});
+  });
+}
+
+grpc::Status EmitterServiceImpl::SampleDirection(grpc::ServerContext*,
+                                                 const v1::SampleDirectionRequest* request,
+                                                 v1::SampleDirectionReply* reply) {
+  return WithInstance<Emitter>(instances_, request->handle(), [&](const Emitter& emitter) {
+    BatchDecoder batch;
+    const auto u = batch.Floats(request->uniform(), {2}, "uniform");
+    const uint32_t n = batch.rows();
+    std::vector<float> w(3 * n), pdf(n);
+    emitter.SampleDirection(u, w, pdf);
+    *reply->mutable_w() = FloatArray(w, {n, 3});
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+  });
+}
+
+grpc::Status EmitterServiceImpl::PdfDirection(grpc::ServerContext*, const v1::PdfDirectionRequest* request,
+                                              v1::PdfDirectionReply* reply) {
+  return WithInstance<Emitter>(instances_, request->handle(), [&](const Emitter& emitter) {
+    BatchDecoder batch;
+    const auto w = batch.Floats(request->w(), {3}, "w");
+    const uint32_t n = batch.rows();
+    std::vector<float> pdf(n);
+    emitter.PdfDirection(w, pdf);
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
   });
 }
 

@@ -75,6 +75,10 @@ class EmitterServiceImpl final : public v1::Emitter::Service {
  public:
   explicit EmitterServiceImpl(const InstanceTable& instances) : instances_(instances) {}
   grpc::Status Radiance(grpc::ServerContext*, const v1::RadianceRequest*, v1::RadianceReply*) override;
+  grpc::Status SampleDirection(grpc::ServerContext*, const v1::SampleDirectionRequest*,
+                               v1::SampleDirectionReply*) override;
+  grpc::Status PdfDirection(grpc::ServerContext*, const v1::PdfDirectionRequest*,
+                            v1::PdfDirectionReply*) override;
 
  private:
   const InstanceTable& instances_;

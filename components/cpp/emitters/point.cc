@@ -1,0 +1,52 @@
+// point — an isotropic point light
+//
+// A light with no extent placed by the scene's Light.to_world. It has no
+// radiance, only intensity: Radiance returns I in W·sr⁻¹ toward every
+// direction, and total power is 4π·I.
+//
+// Parameters
+//   intensity   rgb (or float)   required   W·sr⁻¹, per channel ≥ 0
+#include <cstdint>
+#include <span>
+
+#include "intensity.h"
+#include "yarf/plugin.h"
+#include "yarf/warps.h"
+
+namespace {
+
+using yarf::Vec3;
+
+class PointLight final : public yarf::Emitter {
+ public:
+  explicit PointLight(const yarf::Properties& props)
+      : intensity_(yarf::RequiredIntensity(props, "intensity")) {}
+
+  void Radiance(std::span<const float> w, std::span<const float> uv,
+                std::span<float> radiance) const override {
+    const size_t count = w.size() / 3;
+    for (size_t k = 0; k < count; ++k) intensity_.Store(&radiance[3 * k]);
+  }
+
+  void SampleDirection(std::span<const float> uniform, std::span<float> w,
+                       std::span<float> pdf) const override {
+    const size_t count = uniform.size() / 2;
+    for (size_t k = 0; k < count; ++k) {
+      yarf::SampleUniformSphere(uniform[2 * k], uniform[2 * k + 1]).Store(&w[3 * k]);
+      pdf[k] = yarf::UniformSpherePdf();
+    }
+  }
+
+  void PdfDirection(std::span<const float> w, std::span<float> pdf) const override {
+    std::fill(pdf.begin(), pdf.begin() + w.size() / 3, yarf::UniformSpherePdf());
+  }
+
+ private:
+  Vec3 intensity_;
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<PointLight>(registrar, "point", "1.0.0", "Isotropic point light of given intensity");
+}
