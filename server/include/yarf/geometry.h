@@ -21,6 +21,8 @@ struct Ray {
   float tnear = 0;
   Vec3 direction;
   float tfar = kInfinity;
+  // When in the shutter interval, in [0, 1]: where moving shapes are.
+  float time = 0;
 };
 
 struct Hit {
