@@ -44,7 +44,7 @@ RaySets MakeRays(const KernelScene& scene, size_t count) {
   RaySets sets;
   std::vector<Ray> camera(count);
   for (size_t i = 0; i < count; ++i)
-    camera[i] = scene.CameraRay(Uniform(i, 0), Uniform(i, 1), 0.5f, 0.5f);
+    camera[i] = scene.CameraRay(Uniform(i, 0), Uniform(i, 1), 0.5f, 0.5f, 0.0f);
   std::vector<Hit> hits(count);
   scene.Intersect(camera, hits);
   sets.closest.assign(camera.begin(), camera.begin() + count / 4);
@@ -55,7 +55,7 @@ RaySets MakeRays(const KernelScene& scene, size_t count) {
     const Frame frame(hits[k].normal);
     const Vec3 d = frame.ToWorld(SampleCosineHemisphere(Uniform(i, 2), Uniform(i, 3)));
     if (sets.closest.size() < count) sets.closest.push_back({OffsetRayOrigin(p, hits[k].normal, d), 0, d, kInfinity});
-    const EmitterSample s = scene.SampleEmitter(Uniform(i, 4), Uniform(i, 5), Uniform(i, 6));
+    const LightSample s = scene.SampleLight(Uniform(i, 4), Uniform(i, 5), Uniform(i, 6));
     if (sets.shadow.size() < count && Length(s.position - p) > 0)
       sets.shadow.push_back(ShadowRay(p, hits[k].normal, s.position));
   }

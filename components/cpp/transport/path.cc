@@ -8,15 +8,24 @@
 // SurfaceModel and Emitter once per batch, never per sample, so a
 // component in another process costs one call per bounce.
 //
-// Primary sample space: coordinates 0–1 film, 2–3 lens, then 8 per bounce,
-// laid out so that each 2-D choice gets a pair (2k, 2k+1) of the sampler,
-// the pairs low-discrepancy samplers stratify jointly: light position,
-// BSDF direction, (emitter choice, BSDF lobe), (Russian roulette, unused).
+// Primary sample space: coordinates 0–1 film, 2–3 lens, 4 time, then 8 per
+// bounce from 6 on, laid out so that each 2-D choice gets a pair (2k, 2k+1)
+// of the sampler, the pairs low-discrepancy samplers stratify jointly:
+// light position, BSDF direction, (light choice, BSDF lobe), (Russian
+// roulette, unused). Point and spot lights are sampled by next-event
+// estimation only (nothing hits them).
+//
+// Paths that scatter from a diffuse lobe may be made to end there (their
+// light from the next vertex is still counted): with diffuse_indirect
+// false the tracer computes exactly the paths a distribution ray tracer
+// does, E (glossy|specular)* any-lobe L, for checking one against the
+// other.
 //
 // Properties:
 //   int max_depth  longest path in segments, Mitsuba's convention: 1 shows
 //                  emitters only, 2 direct light; -1 (default) unbounded.
 //   int rr_depth   depth from which Russian roulette may end paths (5).
+//   bool diffuse_indirect   whether paths go on after a diffuse bounce (true).
 
 #include <algorithm>
 #include <unordered_map>
@@ -27,7 +36,7 @@
 namespace yarf {
 namespace {
 
-constexpr uint32_t kFirstBounceDimension = 4;
+constexpr uint32_t kFirstBounceDimension = kTransportDimension;
 constexpr uint32_t kDimensionsPerBounce = 8;
 // Offsets within a bounce's dimensions.
 constexpr uint32_t kLightPosition = 0, kBsdfDirection = 2, kLightChoice = 4, kBsdfLobe = 5,
@@ -73,6 +82,8 @@ struct Path {
   // next takes full weight (camera ray, delta lobe, or no light sample).
   float bsdf_pdf = 0;
   bool full_weight = true;
+  // The path ends at the next hit, after gathering its emission.
+  bool last = false;
 };
 
 // A surface hit that scatters further.
@@ -82,12 +93,14 @@ struct Vertex {
   Frame frame;  // frame.n is the geometric normal
   Vec3 wi;
   float u, v;
+  float time;
 };
 
 class PathTracer final : public Transport {
  public:
   explicit PathTracer(const Properties& props)
-      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))) {
+      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))),
+        diffuse_indirect_(props.Bool("diffuse_indirect", true)) {
     if (max_depth_ < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
     if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
   }
@@ -103,9 +116,10 @@ class PathTracer final : public Transport {
     active.reserve(n);
     for (uint32_t i = 0; i < n; ++i) {
       Path& p = paths[i];
-      p.film_x = points.Get(i, 0);
-      p.film_y = points.Get(i, 1);
-      p.ray = scene.CameraRay(p.film_x, p.film_y, points.Get(i, 2), points.Get(i, 3));
+      p.film_x = points.Get(i, kFilmDimension);
+      p.film_y = points.Get(i, kFilmDimension + 1);
+      p.ray = scene.CameraRay(p.film_x, p.film_y, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
+                              scene.ShutterTime(points.Get(i, kTimeDimension)));
       active.push_back(i);
     }
     for (int depth = 1; !active.empty() && max_depth_ != 0; ++depth)
@@ -132,11 +146,11 @@ class PathTracer final : public Transport {
       const Hit& hit = hits[k];
       if (!hit.Found()) continue;
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
-      if (!may_scatter) continue;
+      if (!may_scatter || paths[active[k]].last) continue;
       const Ray& ray = rays[k];
       const Frame frame(hit.normal);
       vertices.push_back({active[k], ray.origin + ray.direction * hit.t, frame,
-                          frame.ToLocal(-ray.direction), hit.u, hit.v});
+                          frame.ToLocal(-ray.direction), hit.u, hit.v, ray.time});
       vertex_material.push_back(scene.MaterialOf(hit.shape));
     }
     AddEmission(scene, paths, active, rays, hits, emitted);
@@ -145,7 +159,10 @@ class PathTracer final : public Transport {
     std::vector<uint32_t> next;
     for (const auto& [material, members] : GroupBy(vertex_material)) {
       const SurfaceModel& model = scene.Material(material);
-      const bool sample_lights = scene.HasEmitters() && !(model.Lobes() & kScatterDelta);
+      // Purely specular models gain nothing from light samples.
+      const uint32_t lobes = model.Lobes();
+      const bool sample_lights =
+          scene.HasLights() && ((lobes & (kScatterDiffuse | kScatterGlossy)) || !(lobes & kScatterDelta));
       if (sample_lights) SampleLights(scene, points, model, paths, vertices, members, base);
       ScatterBsdf(points, model, paths, vertices, members, base, depth, sample_lights, next);
     }
@@ -175,7 +192,7 @@ class PathTracer final : public Transport {
         if (!p.full_weight) {
           const float cos_light = std::abs(w[3 * j + 2]);
           const float light_pdf =
-              cos_light > 0 ? scene.EmitterPdfArea(hits[k].shape) * hits[k].t * hits[k].t / cos_light : 0;
+              cos_light > 0 ? scene.LightPdfArea(hits[k].shape) * hits[k].t * hits[k].t / cos_light : 0;
           weight = PowerHeuristic(p.bsdf_pdf, light_pdf);
         }
         p.radiance += p.throughput * Vec3::Load(&le[3 * j]) * weight;
@@ -192,18 +209,22 @@ class PathTracer final : public Transport {
     std::vector<float> light_w(3 * m), light_uv(2 * m), le(3 * m), light_pdf(m);
     std::vector<Ray> shadow(m);
     std::vector<const Emitter*> emitters(m);
+    std::vector<uint8_t> delta(m);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
       const uint32_t path = v.path;
-      const EmitterSample s =
-          scene.SampleEmitter(points.Get(path, base + kLightChoice), points.Get(path, base + kLightPosition),
-                              points.Get(path, base + kLightPosition + 1));
+      const LightSample s =
+          scene.SampleLight(points.Get(path, base + kLightChoice), points.Get(path, base + kLightPosition),
+                            points.Get(path, base + kLightPosition + 1));
       Vec3 to_light = s.position - v.position;
       const float dist = Length(to_light);
       to_light = dist > 0 ? to_light / dist : Vec3(0, 0, 1);
-      const float cos_light = std::abs(Dot(s.normal, to_light));
-      light_pdf[j] = cos_light > 0 && dist > 0 ? s.pdf_area * dist * dist / cos_light : 0;
-      emitters[j] = s.shape == kNoShape ? nullptr : scene.EmitterOf(s.shape);
+      // A point light has no area: its "pdf" per solid angle is the
+      // choice's probability times d², and nothing else can sample it.
+      const float cos_light = s.delta_position ? 1.0f : std::abs(Dot(s.normal, to_light));
+      light_pdf[j] = cos_light > 0 && dist > 0 ? s.pdf * dist * dist / cos_light : 0;
+      delta[j] = s.delta_position;
+      emitters[j] = s.emitter;
       v.wi.Store(&wi[3 * j]);
       v.frame.ToLocal(to_light).Store(&wo[3 * j]);
       uv[2 * j] = v.u;
@@ -212,6 +233,8 @@ class PathTracer final : public Transport {
       light_uv[2 * j] = s.u;
       light_uv[2 * j + 1] = s.v;
       shadow[j] = ShadowRay(v.position, v.frame.n, s.position);
+      shadow[j].time = v.time;
+      if (s.delta_position) shadow[j].tfar = std::max(0.0f, Length(s.position - shadow[j].origin));
     }
     model.Evaluate(TransportMode::kRadiance, wi, wo, uv, f);
     model.Pdf(wi, wo, uv, pdf);
@@ -235,8 +258,9 @@ class PathTracer final : public Transport {
       if (!emitters[j] || light_pdf[j] <= 0) continue;
       const Path& p = paths[vertices[members[j]].path];
       const float cos_surface = std::abs(wo[3 * j + 2]);
+      const float mis = delta[j] ? 1.0f : PowerHeuristic(light_pdf[j], pdf[j]);
       const Vec3 c = p.throughput * Vec3::Load(&f[3 * j]) * Vec3::Load(&le[3 * j]) *
-                     (cos_surface * PowerHeuristic(light_pdf[j], pdf[j]) / light_pdf[j]);
+                     (cos_surface * mis / light_pdf[j]);
       if (MaxComponent(c) <= 0) continue;
       rays.push_back(shadow[j]);
       owners.push_back(vertices[members[j]].path);
@@ -273,11 +297,12 @@ class PathTracer final : public Transport {
       p.throughput *= w;
       p.bsdf_pdf = pdf[j];
       p.full_weight = !sampled_lights || (flags[j] & kScatterDelta);
+      p.last = !diffuse_indirect_ && (flags[j] & kScatterDiffuse);
       const Vec3 dir = Normalize(v.frame.ToWorld(Vec3::Load(&wo[3 * j])));
       p.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
       p.ray.direction = dir;
       p.ray.tnear = 0;
-      p.ray.tfar = kInfinity;
+      p.ray.tfar = kInfinity;  // p.ray.time stays: a path lives at one instant
       if (depth >= rr_depth_) {
         const float q = std::min(MaxComponent(p.throughput), 0.95f);
         if (points.Get(v.path, base + kRoulette) >= q) continue;
@@ -289,6 +314,7 @@ class PathTracer final : public Transport {
 
   int max_depth_;
   int rr_depth_;
+  bool diffuse_indirect_;
 };
 
 }  // namespace

@@ -16,8 +16,13 @@
 namespace yarf {
 
 // N points of [0,1)^d. Coordinates 0 and 1 place the sample on the film
-// (x to the right, y down, over the whole image), 2 and 3 on the lens; the
-// rest belong to the transport. Produced lazily in process.
+// (x to the right, y down, over the whole image), 2 and 3 on the lens, 4 in
+// the shutter interval; 5 is unused, so that the transport's own
+// coordinates, from 6 on, come in the pairs (2k, 2k+1) that samplers
+// stratify jointly. Produced lazily in process.
+inline constexpr uint32_t kFilmDimension = 0, kLensDimension = 2, kTimeDimension = 4,
+                           kTransportDimension = 6;
+
 class PrimarySamples {
  public:
   virtual ~PrimarySamples() = default;
@@ -28,10 +33,17 @@ class PrimarySamples {
 // Film contributions of a batch: raster positions in pixels, RGB
 // radiance, and the point of the batch each came from (so that an
 // integrator can weight it, e.g. by its map's Jacobian).
+//
+// Camera samples (the default) estimate the radiance at their position:
+// the film averages them per pixel under its filter. Splats (`splats`
+// set; methods that start paths at the lights) are summed instead, each
+// spread by the normalised filter and the sum divided by the number of
+// passes: one pass of W×H points must give each pixel's value once.
 struct FilmSamples {
   std::vector<float> xy;
   std::vector<Vec3> rgb;
   std::vector<uint32_t> point;
+  bool splats = false;
 
   void Clear() {
     xy.clear();
@@ -47,13 +59,36 @@ struct FilmSamples {
   size_t Count() const { return rgb.size(); }
 };
 
-struct EmitterSample {
+// A point on a light, for next-event estimation or to start a light path.
+struct LightSample {
   Vec3 position;
+  // A surface's normal there; a point light's axis (+z of its frame). The
+  // emitter's local frame is Frame(normal).
   Vec3 normal;
-  // Density with respect to area, 1/unit².
-  float pdf_area = 0;
+  // Density of the choice: per unit area on a surface; for a point light
+  // (delta_position), the probability of choosing it.
+  float pdf = 0;
+  bool delta_position = false;
+  // nullptr when there was nothing to sample.
+  const Emitter* emitter = nullptr;
+  // The emitting shape and its surface parameters (surfaces only).
   uint32_t shape = kNoShape;
   float u = 0, v = 0;
+};
+
+// The camera seen from a point of the scene, for paths from the lights.
+struct CameraConnection {
+  // The point of the lens the connection ends at, and the view axis.
+  Vec3 lens_point;
+  Vec3 axis;
+  // Where the point appears on the film, in pixels.
+  float raster_x = 0, raster_y = 0;
+  // W = 1/(A cos³θ): radiance L leaving the point toward the lens, at
+  // distance d and cosine cos_p to its surface, splats L·W·cos_p/d² (A is
+  // the film's area on the plane at distance 1; θ the angle to the axis).
+  // The same value is the density, per solid angle, of the camera's ray
+  // directions over the whole film.
+  float importance = 0;
 };
 
 // What a transport algorithm may ask of the scene of its job.
@@ -66,13 +101,23 @@ class SceneView : public Intersector {
   virtual uint32_t MaterialOf(uint32_t shape) const = 0;
   // nullptr when the shape does not emit.
   virtual const Emitter* EmitterOf(uint32_t shape) const = 0;
-  virtual bool HasEmitters() const = 0;
-  // A point on the emitting surfaces, uniform in area.
-  virtual EmitterSample SampleEmitter(float u0, float u1, float u2) const = 0;
-  // The area density SampleEmitter has at any point of `shape`.
-  virtual float EmitterPdfArea(uint32_t shape) const = 0;
-  // The camera ray through film position (x, y) ∈ [0,1)² and lens (u, v).
-  virtual Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v) const = 0;
+  // Lights are the emitting shapes and the point lights.
+  virtual bool HasLights() const = 0;
+  // A light chosen uniformly (u_choice), then a point on it uniform in
+  // area (u0, u1).
+  virtual LightSample SampleLight(float u_choice, float u0, float u1) const = 0;
+  // The area density SampleLight has at any point of the emitting `shape`.
+  virtual float LightPdfArea(uint32_t shape) const = 0;
+  // The time in the shutter interval for primary coordinate u.
+  virtual float ShutterTime(float u) const = 0;
+  // The camera ray through film position (x, y) ∈ [0,1)² and lens (u, v)
+  // at `time`.
+  virtual Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v, float time) const = 0;
+  // The camera seen from p through lens position (u, v): false when p is
+  // off the film, behind the camera or outside its clip range.
+  virtual bool ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const = 0;
+  // Whether the lens has area (thin lens) or is a point (pinhole).
+  virtual bool CameraHasLens() const = 0;
   virtual uint32_t FilmWidth() const = 0;
   virtual uint32_t FilmHeight() const = 0;
 };

@@ -41,18 +41,45 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
     throw Error("camera: need 0 <= near_clip < far_clip (far_clip 0 = unbounded)");
   near_clip_ = float(camera.near_clip());
   far_clip_ = float(camera.far_clip());
+  if (!(camera.shutter() >= 0 && camera.shutter() <= 1))
+    throw Error("camera: shutter must lie in [0, 1], got " + std::to_string(camera.shutter()));
+  shutter_ = float(camera.shutter());
+  inv_film_area_ = 1.0f / (4 * tan_half_x_ * tan_half_y_);
 }
 
-Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v) const {
+Vec3 Camera::LensPoint(float lens_u, float lens_v) const {
+  if (!(lens_radius_ > 0)) return {0, 0, 0};
+  const auto disk = SampleConcentricDisk(lens_u, lens_v);
+  return {disk[0] * lens_radius_, disk[1] * lens_radius_, 0};
+}
+
+bool Camera::Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float* film_x,
+                     float* film_y, float* importance) const {
+  const Vec3 lens = LensPoint(lens_u, lens_v);
+  const Vec3 rel = p - origin_;
+  const Vec3 local{Dot(rel, right_), Dot(rel, up_), Dot(rel, forward_)};
+  if (!(local.z > near_clip_) || (far_clip_ > 0 && local.z > far_clip_)) return false;
+  // The ray from the lens point through p meets the plane in focus where
+  // the ray through the lens centre from film position `dir` does.
+  const Vec3 to_p = local - lens;
+  const float focus = lens_radius_ > 0 ? focus_distance_ : 1.0f;
+  const Vec3 on_focus = lens + to_p * (focus / to_p.z);
+  const float dir_x = on_focus.x / focus, dir_y = on_focus.y / focus;
+  *film_x = 0.5f * (dir_x / tan_half_x_ + 1);
+  *film_y = 0.5f * (1 - dir_y / tan_half_y_);
+  if (!(*film_x >= 0 && *film_x < 1 && *film_y >= 0 && *film_y < 1)) return false;
+  const float cos_theta = to_p.z / Length(to_p);
+  *importance = inv_film_area_ / (cos_theta * cos_theta * cos_theta);
+  *lens_point = origin_ + right_ * lens.x + up_ * lens.y;
+  return true;
+}
+
+Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v, float time) const {
   // Direction in camera space (x right, y up, z forward) through the image
   // plane at z = 1.
   Vec3 dir{(2 * film_x - 1) * tan_half_x_, (1 - 2 * film_y) * tan_half_y_, 1};
-  Vec3 lens{0, 0, 0};
-  if (lens_radius_ > 0) {
-    const auto disk = SampleConcentricDisk(lens_u, lens_v);
-    lens = Vec3(disk[0] * lens_radius_, disk[1] * lens_radius_, 0);
-    dir = dir * focus_distance_ - lens;
-  }
+  const Vec3 lens = LensPoint(lens_u, lens_v);
+  if (lens_radius_ > 0) dir = dir * focus_distance_ - lens;
   const float inv_len = 1.0f / Length(dir);
   const Vec3 d = dir * inv_len;  // d.z is the cosine to the view axis
   Ray ray;
@@ -60,6 +87,7 @@ Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v) con
   ray.direction = right_ * d.x + up_ * d.y + forward_ * d.z;
   ray.tnear = near_clip_ / d.z;
   ray.tfar = far_clip_ > 0 ? far_clip_ / d.z : kInfinity;
+  ray.time = time;
   return ray;
 }
 

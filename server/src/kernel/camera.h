@@ -13,13 +13,27 @@ class Camera {
 
   // The ray through film position (x, y) ∈ [0,1)² (x right, y down) and
   // lens position (u, v) ∈ [0,1)², in world space with a unit direction.
-  Ray Generate(float film_x, float film_y, float lens_u, float lens_v) const;
+  Ray Generate(float film_x, float film_y, float lens_u, float lens_v, float time) const;
+  // Where world point p appears on the film through lens position (u, v):
+  // false when it does not. Raster positions in [0,1)².
+  bool Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float* film_x,
+               float* film_y, float* importance) const;
+  // The shutter's time for a uniform u: u·shutter.
+  float Time(float u) const { return u * shutter_; }
+  bool HasLens() const { return lens_radius_ > 0; }
+  Vec3 axis() const { return forward_; }
 
  private:
+  // The point of the lens for (u, v), camera space.
+  Vec3 LensPoint(float lens_u, float lens_v) const;
+
   Vec3 origin_, right_, up_, forward_;
   float tan_half_x_ = 0, tan_half_y_ = 0;
   float lens_radius_ = 0, focus_distance_ = 1;
   float near_clip_ = 0, far_clip_ = 0;
+  float shutter_ = 0;
+  // 1/A, A the film's area on the plane at distance 1.
+  float inv_film_area_ = 0;
 };
 
 }  // namespace yarf

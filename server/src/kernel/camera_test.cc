@@ -18,7 +18,7 @@ v1::Camera LookAlongZ(double fov) {
 }
 
 TEST(Camera, CentreRayLooksAtTheTarget) {
-  const Ray r = Camera(LookAlongZ(40), 64, 64).Generate(0.5f, 0.5f, 0.5f, 0.5f);
+  const Ray r = Camera(LookAlongZ(40), 64, 64).Generate(0.5f, 0.5f, 0.5f, 0.5f, 0.0f);
   EXPECT_NEAR(r.direction.z, 1.0f, 1e-6f);
   EXPECT_NEAR(r.origin.x, 1.0f, 1e-6f);
 }
@@ -27,9 +27,9 @@ TEST(Camera, FilmEdgeIsHalfTheFieldOfViewAlongTheSmallerAxis) {
   v1::Camera spec = LookAlongZ(40);
   spec.set_fov_axis(v1::Camera::SMALLER);
   const Camera camera(spec, 200, 100);  // smaller axis: y
-  const Ray top = camera.Generate(0.5f, 0.0f, 0.5f, 0.5f);
+  const Ray top = camera.Generate(0.5f, 0.0f, 0.5f, 0.5f, 0.0f);
   EXPECT_NEAR(std::atan2(top.direction.y, top.direction.z) * 180 / kPi, 20.0, 1e-3);
-  const Ray right = camera.Generate(1.0f, 0.5f, 0.5f, 0.5f);
+  const Ray right = camera.Generate(1.0f, 0.5f, 0.5f, 0.5f, 0.0f);
   EXPECT_NEAR(std::atan2(-right.direction.x, right.direction.z), std::atan(2 * std::tan(20 * kPi / 180)), 1e-4);
 }
 
@@ -39,11 +39,48 @@ TEST(Camera, ThinLensFocusesEveryLensPointOnTheFocalPlane) {
   spec.set_lens_radius(0.5);
   spec.set_focus_distance(4);
   const Camera camera(spec, 64, 64);
-  const Ray a = camera.Generate(0.3f, 0.6f, 0.1f, 0.9f), b = camera.Generate(0.3f, 0.6f, 0.8f, 0.2f);
+  const Ray a = camera.Generate(0.3f, 0.6f, 0.1f, 0.9f, 0.0f), b = camera.Generate(0.3f, 0.6f, 0.8f, 0.2f, 0.0f);
   EXPECT_GT(Length(a.origin - b.origin), 0.1f);
   const Vec3 pa = a.origin + a.direction * (4 / a.direction.z);
   const Vec3 pb = b.origin + b.direction * (4 / b.direction.z);
   EXPECT_NEAR(Length(pa - pb), 0.0f, 1e-4f);
+}
+
+TEST(Camera, ConnectFindsTheFilmPositionWhoseRayPassesThroughThePoint) {
+  for (const bool lens : {false, true}) {
+    v1::Camera spec = LookAlongZ(50);
+    if (lens) {
+      spec.set_model(v1::Camera::THIN_LENS);
+      spec.set_lens_radius(0.3);
+      spec.set_focus_distance(3);
+    }
+    const Camera camera(spec, 80, 60);
+    const Vec3 p(1.7f, -0.4f, 6.0f);
+    Vec3 lens_point;
+    float x = 0, y = 0, importance = 0;
+    ASSERT_TRUE(camera.Connect(p, 0.2f, 0.7f, &lens_point, &x, &y, &importance)) << lens;
+    const Ray ray = camera.Generate(x, y, 0.2f, 0.7f, 0.0f);
+    EXPECT_NEAR(Length(ray.origin - lens_point), 0.0f, 1e-5f) << lens;
+    const Vec3 to_p = Normalize(p - ray.origin);
+    EXPECT_NEAR(Dot(to_p, ray.direction), 1.0f, 1e-6f) << lens;
+    // 1/(A cos³θ), A the film's area at distance 1.
+    const float tan_x = std::tan(25 * kPi / 180), tan_y = tan_x * 60 / 80;
+    const float cos_theta = ray.direction.z;
+    EXPECT_NEAR(importance, 1 / (4 * tan_x * tan_y * cos_theta * cos_theta * cos_theta), 1e-4f);
+    // Behind the camera, or off the film: not seen.
+    EXPECT_FALSE(camera.Connect(Vec3(1, 0, -3), 0.2f, 0.7f, &lens_point, &x, &y, &importance));
+    EXPECT_FALSE(camera.Connect(Vec3(40, 0, 3), 0.2f, 0.7f, &lens_point, &x, &y, &importance));
+  }
+}
+
+TEST(Camera, ShutterScalesTime) {
+  v1::Camera spec = LookAlongZ(40);
+  EXPECT_EQ(Camera(spec, 8, 8).Time(0.7f), 0.0f);
+  spec.set_shutter(0.5);
+  EXPECT_EQ(Camera(spec, 8, 8).Time(0.5f), 0.25f);
+  EXPECT_EQ(Camera(spec, 8, 8).Generate(0.5f, 0.5f, 0.5f, 0.5f, 0.25f).time, 0.25f);
+  spec.set_shutter(2);
+  EXPECT_ANY_THROW(Camera(spec, 8, 8));
 }
 
 TEST(Camera, RejectsDegeneratePlacement) {

@@ -10,6 +10,11 @@ ReconstructionFilter::ReconstructionFilter(const v1::ReconstructionFilter& filte
   radius_ = float(filter.radius() > 0 ? filter.radius() : defaults[kind_]);
   if (kind_ == v1::ReconstructionFilter::GAUSSIAN)
     gaussian_offset_ = std::exp(-radius_ * radius_ / (2 * 0.25f));
+  // Midpoint rule: the weights are smooth enough for 4096 steps.
+  constexpr int kSteps = 4096;
+  double sum = 0;
+  for (int i = 0; i < kSteps; ++i) sum += Weight1(-radius_ + (i + 0.5f) * 2 * radius_ / kSteps);
+  integral_1d_ = float(sum * 2 * radius_ / kSteps);
 }
 
 float ReconstructionFilter::Weight1(float d) const {
@@ -28,8 +33,8 @@ float ReconstructionFilter::Weight1(float d) const {
 Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
     : width_(width), height_(height), filter_(filter), pixels_(size_t(width) * height) {}
 
-void Film::Add(float x, float y, Vec3 value) {
-  if (!(std::isfinite(value.x) && std::isfinite(value.y) && std::isfinite(value.z))) return;
+template <typename Visit>
+void Film::ForEachPixelInFilter(float x, float y, Visit&& visit) const {
   const float r = filter_.radius();
   // Pixel (i, j) has its centre at (i + 0.5, j + 0.5).
   const int x0 = std::max(0, int(std::ceil(x - r - 0.5f)));
@@ -39,17 +44,51 @@ void Film::Add(float x, float y, Vec3 value) {
   for (int j = y0; j <= y1; ++j)
     for (int i = x0; i <= x1; ++i) {
       const double w = filter_.Weight(i + 0.5f - x, j + 0.5f - y);
-      if (w <= 0) continue;
-      Pixel& p = pixels_[size_t(j) * width_ + i];
-      p.weight += w;
-      p.weight_sq += w * w;
-      for (int c = 0; c < 3; ++c) {
-        const double l = value[c];
-        p.sum[c] += w * l;
-        p.sum_wsq[c] += w * w * l;
-        p.sum_sq[c] += w * w * l * l;
-      }
+      if (w > 0) visit(size_t(j) * width_ + i, w);
     }
+}
+
+namespace {
+bool Finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+}  // namespace
+
+void Film::Add(float x, float y, Vec3 value) {
+  if (!Finite(value)) return;
+  ForEachPixelInFilter(x, y, [&](size_t k, double w) {
+    Pixel& p = pixels_[k];
+    p.weight += w;
+    p.weight_sq += w * w;
+    for (int c = 0; c < 3; ++c) {
+      const double l = value[c];
+      p.sum[c] += w * l;
+      p.sum_wsq[c] += w * w * l;
+      p.sum_sq[c] += w * w * l * l;
+    }
+  });
+}
+
+void Film::Splat(float x, float y, Vec3 value) {
+  if (!Finite(value) || !(std::isfinite(x) && std::isfinite(y))) return;
+  if (splats_.pass.empty()) {
+    splats_.pass.assign(pixels_.size() * 3, 0.0);
+    splats_.sum.assign(pixels_.size() * 3, 0.0);
+    splats_.sum_sq.assign(pixels_.size() * 3, 0.0);
+  }
+  const double scale = 1.0 / filter_.Integral();
+  ForEachPixelInFilter(x, y, [&](size_t k, double w) {
+    for (int c = 0; c < 3; ++c) splats_.pass[3 * k + c] += w * scale * value[c];
+  });
+}
+
+void Film::EndPass() {
+  ++passes_;
+  if (splats_.pass.empty()) return;
+  for (size_t i = 0; i < splats_.pass.size(); ++i) {
+    splats_.sum[i] += splats_.pass[i];
+    splats_.sum_sq[i] += splats_.pass[i] * splats_.pass[i];
+    splats_.pass[i] = 0;
+  }
+  splats_.passes = passes_;
 }
 
 std::vector<float> Film::Pixels() const {
@@ -57,6 +96,8 @@ std::vector<float> Film::Pixels() const {
   for (size_t k = 0; k < pixels_.size(); ++k)
     if (pixels_[k].weight > 0)
       for (int c = 0; c < 3; ++c) out[k * 3 + c] = float(pixels_[k].sum[c] / pixels_[k].weight);
+  if (splats_.passes > 0)
+    for (size_t i = 0; i < out.size(); ++i) out[i] += float(splats_.sum[i] / splats_.passes);
   return out;
 }
 
@@ -75,6 +116,13 @@ std::vector<float> Film::Variances() const {
       out[k * 3 + c] = float(std::max(0.0, ss) / (p.weight * p.weight) * n_eff / (n_eff - 1));
     }
   }
+  // The splat value is a mean over passes: the variance of that mean.
+  const double n = splats_.passes;
+  if (n > 1)
+    for (size_t i = 0; i < out.size(); ++i) {
+      const double m = splats_.sum[i] / n;
+      out[i] += float(std::max(0.0, splats_.sum_sq[i] / n - m * m) / (n - 1));
+    }
   return out;
 }
 

@@ -1,5 +1,7 @@
 // The RGB film: a weighted-average estimate per pixel under a
-// reconstruction filter, with the variance of each estimate.
+// reconstruction filter, with the variance of each estimate; plus, for
+// methods that start paths at the lights, a splat image: contributions
+// summed under the normalised filter, divided by the number of passes.
 #pragma once
 
 #include <cstdint>
@@ -15,12 +17,15 @@ class ReconstructionFilter {
   explicit ReconstructionFilter(const v1::ReconstructionFilter& filter);
   float radius() const { return radius_; }
   float Weight(float dx, float dy) const { return Weight1(dx) * Weight1(dy); }
+  // ∫∫ Weight over the plane, in pixels².
+  float Integral() const { return integral_1d_ * integral_1d_; }
 
  private:
   float Weight1(float d) const;
   v1::ReconstructionFilter::Kind kind_;
   float radius_;
   float gaussian_offset_ = 0;
+  float integral_1d_ = 1;
 };
 
 class Film {
@@ -31,6 +36,11 @@ class Film {
   uint32_t height() const { return height_; }
   // A camera sample of radiance `value` at raster position (x, y) in pixels.
   void Add(float x, float y, Vec3 value);
+  // A contribution to the current pass's splat image.
+  void Splat(float x, float y, Vec3 value);
+  // Closes a sample pass: its splat image becomes one more independent
+  // estimate of the pixels' splat values.
+  void EndPass();
   // Pixel estimates and their variances, row-major [height, width, 3].
   std::vector<float> Pixels() const;
   std::vector<float> Variances() const;
@@ -42,9 +52,21 @@ class Film {
     double sum_wsq[3] = {0, 0, 0};  // Σ w² L
     double sum_sq[3] = {0, 0, 0};   // Σ w² L²
   };
+  // Splat images: the open pass, and over closed passes Σ and Σ of
+  // squares (allocated with the first splat).
+  struct Splats {
+    std::vector<double> pass, sum, sum_sq;
+    uint32_t passes = 0;
+  };
+
+  template <typename Visit>
+  void ForEachPixelInFilter(float x, float y, Visit&& visit) const;
+
   uint32_t width_, height_;
   ReconstructionFilter filter_;
   std::vector<Pixel> pixels_;
+  Splats splats_;
+  uint32_t passes_ = 0;
 };
 
 }  // namespace yarf

@@ -25,7 +25,7 @@ class FilmTarget final : public RenderTarget {
   uint64_t Seed() const override { return seed_; }
   bool Cancelled() const override { return cancel_.load(std::memory_order_relaxed); }
   void Accumulate(const FilmSamples& samples) override;
-  void PassDone(uint32_t samples_done) override { on_pass_(samples_done); }
+  void PassDone(uint32_t samples_done) override;
 
  private:
   Film& film_;

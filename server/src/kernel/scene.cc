@@ -87,8 +87,18 @@ void KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const Sha
   groups_[group].shapes.push_back(record);
 }
 
-void KernelScene::AddPlacement(uint32_t group, const Transform& to_world) {
-  placements_.emplace_back(group, to_world);
+void KernelScene::AddPlacement(uint32_t group, const Transform& to_world,
+                               const std::optional<Transform>& to_world_end) {
+  placements_.push_back({group, to_world, to_world_end});
+}
+
+void KernelScene::AddLight(const Emitter* emitter, const Transform& to_world) {
+  Light light;
+  light.first = light.end = uint32_t(emitting_.size());
+  light.emitter = emitter;
+  light.position = to_world.Point(Vec3(0, 0, 0));
+  light.axis = Normalize(to_world.Vector(Vec3(0, 0, 1)));
+  lights_.push_back(light);
 }
 
 void KernelScene::Commit() {
@@ -102,19 +112,29 @@ void KernelScene::Commit() {
     rtcSetSceneBuildQuality(groups_[g].scene, RTC_BUILD_QUALITY_HIGH);
     rtcCommitScene(groups_[g].scene);
   }
-  for (const auto& [group, to_world] : placements_) {
+  for (const Placement& placement : placements_) {
     RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(geom, groups_[group].scene);
-    float m[12];
-    for (int i = 0; i < 12; ++i) m[i] = float(to_world.m[i]);
-    rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m);
+    rtcSetGeometryInstancedScene(geom, groups_[placement.group].scene);
+    const auto set_transform = [&](uint32_t step, const Transform& t) {
+      float m[12];
+      for (int i = 0; i < 12; ++i) m[i] = float(t.m[i]);
+      rtcSetGeometryTransform(geom, step, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m);
+    };
+    if (placement.to_world_end) {
+      // Embree interpolates the matrices linearly over time [0, 1].
+      rtcSetGeometryTimeStepCount(geom, 2);
+      set_transform(1, *placement.to_world_end);
+    }
+    set_transform(0, placement.to_world);
     rtcCommitGeometry(geom);
     rtcAttachGeometry(groups_[kWorld].scene, geom);
     rtcReleaseGeometry(geom);
     geometry_base_.push_back(uint32_t(shapes_.size()));
-    for (ShapeRecord s : groups_[group].shapes) {
+    for (ShapeRecord s : groups_[placement.group].shapes) {
       s.placed = true;
-      s.to_world = to_world;
+      s.to_world = placement.to_world;
+      s.moving = placement.to_world_end.has_value();
+      if (s.moving) s.to_world_end = *placement.to_world_end;
       shapes_.push_back(s);
     }
   }
@@ -122,12 +142,20 @@ void KernelScene::Commit() {
   rtcCommitScene(groups_[kWorld].scene);
   device_.Check("scene build");
 
+  // Surface lights follow the point lights already added, one per
+  // emitting shape placement.
+  shape_light_pdf_.assign(shapes_.size(), 0.0f);
+  const size_t point_lights = lights_.size();
   for (uint32_t id = 0; id < shapes_.size(); ++id) {
     const ShapeRecord& s = shapes_[id];
     if (!s.look.emitter) continue;
+    if (s.moving) throw Error("shape '" + s.look.name + "' moves and emits: moving lights are not supported");
+    Light light;
+    light.first = uint32_t(emitting_.size());
+    light.emitter = s.look.emitter;
     const uint32_t count = s.kind == Kind::kSphere ? 1 : uint32_t(meshes_[s.mesh].TriangleCount());
     for (uint32_t p = 0; p < count; ++p) {
-      EmittingPrimitive e{id, s.kind == Kind::kSphere, {}, {}, {}, 0, {}};
+      EmittingPrimitive e{id, s.kind == Kind::kSphere, {}, {}, {}, 0, {}, 0};
       if (e.sphere) {
         e.p0 = s.placed ? s.to_world.Point(s.center) : s.center;
         e.radius = s.radius * (s.placed ? float(std::cbrt(std::abs(s.to_world.Determinant3()))) : 1.0f);
@@ -135,13 +163,17 @@ void KernelScene::Commit() {
         Vec3 v[3];
         Triangle(s, p, v);
         e.p0 = v[0], e.p1 = v[1], e.p2 = v[2];
-        e.normal = Normal(s, p, v[0]);
+        e.normal = Normal(s, p, v[0], 0);
       }
-      emitter_area_ += PrimitiveArea(s, p);
+      light.area += PrimitiveArea(s, p);
+      e.cdf = light.area;
       emitting_.push_back(e);
-      emitting_cdf_.push_back(emitter_area_);
     }
+    light.end = uint32_t(emitting_.size());
+    if (light.area > 0) lights_.push_back(light);
   }
+  for (size_t l = point_lights; l < lights_.size(); ++l)
+    shape_light_pdf_[emitting_[lights_[l].first].shape] = 1.0f / (float(lights_.size()) * lights_[l].area);
 }
 
 void KernelScene::Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const {
@@ -165,12 +197,16 @@ float KernelScene::PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) c
   return 0.5f * Length(Cross(v[1] - v[0], v[2] - v[0]));
 }
 
-Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position) const {
+Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position,
+                         float time) const {
+  Transform to_world = shape.to_world;
+  if (shape.moving)
+    for (int i = 0; i < 16; ++i) to_world.m[i] += time * (shape.to_world_end.m[i] - to_world.m[i]);
   if (shape.kind == Kind::kTriangles) {
     const Vec3 n = face_normals_[shape.mesh][primitive];  // flipped already
-    return shape.placed ? Normalize(shape.to_world.Normal(n)) : n;
+    return shape.placed ? Normalize(to_world.Normal(n)) : n;
   }
-  const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
+  const Vec3 center = shape.placed ? to_world.Point(shape.center) : shape.center;
   const Vec3 n = Normalize(position - center);
   return shape.look.flip_normals ? -n : n;
 }
@@ -194,7 +230,7 @@ void LoadPacket(std::span<const Ray> rays, size_t first, size_t count, Packet& r
     ray.dir_z[k] = r.direction.z;
     ray.tnear[k] = r.tnear;
     ray.tfar[k] = r.tfar;
-    ray.time[k] = 0;
+    ray.time[k] = r.time;
     ray.mask[k] = 0xFFFFFFFFu;
     ray.id[k] = 0;
     ray.flags[k] = 0;
@@ -237,7 +273,7 @@ void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) cons
       hit.u = packet.hit.u[k];
       hit.v = packet.hit.v[k];
       const Ray& ray = rays[first + k];
-      hit.normal = Normal(shapes_[hit.shape], hit.primitive, ray.origin + ray.direction * hit.t);
+      hit.normal = Normal(shapes_[hit.shape], hit.primitive, ray.origin + ray.direction * hit.t, ray.time);
     }
   }
   closest_hit_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
@@ -257,23 +293,35 @@ void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occlude
   shadow_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
 }
 
-EmitterSample KernelScene::SampleEmitter(float u0, float u1, float u2) const {
-  EmitterSample s;
-  if (emitting_.empty()) return s;
-  const float target = u0 * emitter_area_;
-  const size_t k = std::min(size_t(std::upper_bound(emitting_cdf_.begin(), emitting_cdf_.end(), target) -
-                                   emitting_cdf_.begin()),
-                            emitting_.size() - 1);
-  const EmittingPrimitive& e = emitting_[k];
+LightSample KernelScene::SampleLight(float u_choice, float u0, float u1) const {
+  LightSample s;
+  if (lights_.empty()) return s;
+  // One number chooses the light and, rescaled, the primitive within it.
+  const float scaled = u_choice * float(lights_.size());
+  const size_t index = std::min(size_t(scaled), lights_.size() - 1);
+  const float u_primitive = std::min(scaled - float(index), 0x1.fffffep-1f);
+  const Light& light = lights_[index];
+  s.emitter = light.emitter;
+  if (light.first == light.end) {
+    s.position = light.position;
+    s.normal = light.axis;
+    s.pdf = 1.0f / float(lights_.size());
+    s.delta_position = true;
+    return s;
+  }
+  const auto begin = emitting_.begin() + light.first, end = emitting_.begin() + light.end;
+  const auto it = std::upper_bound(begin, end, u_primitive * light.area,
+                                   [](float target, const EmittingPrimitive& e) { return target < e.cdf; });
+  const EmittingPrimitive& e = it == end ? *(end - 1) : *it;
   s.shape = e.shape;
-  s.pdf_area = 1.0f / emitter_area_;
+  s.pdf = shape_light_pdf_[e.shape];
   if (e.sphere) {
-    const Vec3 d = SampleUniformSphere(u1, u2);
+    const Vec3 d = SampleUniformSphere(u0, u1);
     s.position = e.p0 + d * e.radius;
     s.normal = shapes_[e.shape].look.flip_normals ? -d : d;
     return s;
   }
-  const auto b = SampleUniformTriangle(u1, u2);
+  const auto b = SampleUniformTriangle(u0, u1);
   s.position = e.p0 * b[0] + e.p1 * b[1] + e.p2 * (1 - b[0] - b[1]);
   s.u = b[1];
   s.v = 1 - b[0] - b[1];
@@ -281,8 +329,13 @@ EmitterSample KernelScene::SampleEmitter(float u0, float u1, float u2) const {
   return s;
 }
 
-float KernelScene::EmitterPdfArea(uint32_t shape) const {
-  return shapes_[shape].look.emitter && emitter_area_ > 0 ? 1.0f / emitter_area_ : 0.0f;
+bool KernelScene::ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const {
+  float x = 0, y = 0;
+  if (!camera_.Connect(p, lens_u, lens_v, &out.lens_point, &x, &y, &out.importance)) return false;
+  out.axis = camera_.axis();
+  out.raster_x = x * float(width_);
+  out.raster_y = y * float(height_);
+  return true;
 }
 
 }  // namespace yarf

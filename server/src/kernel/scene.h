@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,8 +43,12 @@ class KernelScene final : public SceneView {
   void AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look);
   void AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look);
   // Places a group (not kWorld) in the world; nested placements arrive
-  // here already flattened, with composed transforms.
-  void AddPlacement(uint32_t group, const Transform& to_world);
+  // here already flattened, with composed transforms. With `to_world_end`
+  // the placement moves from to_world to it over the shutter interval.
+  void AddPlacement(uint32_t group, const Transform& to_world,
+                    const std::optional<Transform>& to_world_end = std::nullopt);
+  // A light without a surface (point, spot), placed by to_world.
+  void AddLight(const Emitter* emitter, const Transform& to_world);
   void Commit();
 
   // SceneView
@@ -53,12 +58,15 @@ class KernelScene final : public SceneView {
   const SurfaceModel& Material(uint32_t material) const override { return *materials_[material]; }
   uint32_t MaterialOf(uint32_t shape) const override { return shapes_[shape].look.material; }
   const Emitter* EmitterOf(uint32_t shape) const override { return shapes_[shape].look.emitter; }
-  bool HasEmitters() const override { return emitter_area_ > 0; }
-  EmitterSample SampleEmitter(float u0, float u1, float u2) const override;
-  float EmitterPdfArea(uint32_t shape) const override;
-  Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v) const override {
-    return camera_.Generate(film_x, film_y, lens_u, lens_v);
+  bool HasLights() const override { return !lights_.empty(); }
+  LightSample SampleLight(float u_choice, float u0, float u1) const override;
+  float LightPdfArea(uint32_t shape) const override { return shape_light_pdf_[shape]; }
+  float ShutterTime(float u) const override { return camera_.Time(u); }
+  Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v, float time) const override {
+    return camera_.Generate(film_x, film_y, lens_u, lens_v, time);
   }
+  bool ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const override;
+  bool CameraHasLens() const override { return camera_.HasLens(); }
   uint32_t FilmWidth() const override { return width_; }
   uint32_t FilmHeight() const override { return height_; }
 
@@ -77,14 +85,22 @@ class KernelScene final : public SceneView {
     float radius = 0;
     bool placed = false;  // false: world geometry, already in world space
     Transform to_world;
+    // Placed shapes that move: where they are when the shutter closes.
+    bool moving = false;
+    Transform to_world_end;
     ShapeLook look;
+  };
+  struct Placement {
+    uint32_t group;
+    Transform to_world;
+    std::optional<Transform> to_world_end;
   };
   struct Group {
     RTCScene scene = nullptr;
     std::vector<ShapeRecord> shapes;
   };
 
-  Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position) const;
+  Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position, float time) const;
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
   float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
 
@@ -95,25 +111,35 @@ class KernelScene final : public SceneView {
   std::vector<std::unique_ptr<Emitter>> emitters_;
   std::vector<TriangleMesh> meshes_;
   std::vector<Group> groups_;
-  std::vector<std::pair<uint32_t, Transform>> placements_;
+  std::vector<Placement> placements_;
   // Unit normals of each mesh's triangles in the mesh's own space.
   std::vector<std::vector<Vec3>> face_normals_;
   // Every shape placement; Hit::shape indexes it.
   std::vector<ShapeRecord> shapes_;
   // First shape id of each world-level Embree geometry (by geomID).
   std::vector<uint32_t> geometry_base_;
-  // Emitting primitives in world space, ready for light sampling, and the
-  // running sum of their areas.
+  // Emitting primitives in world space, ready for light sampling, with
+  // the running sum of their areas within their light.
   struct EmittingPrimitive {
     uint32_t shape;
     bool sphere;
     Vec3 p0, p1, p2;  // triangle corners; p0 is a sphere's centre
     float radius;
     Vec3 normal;  // a triangle's unit normal
+    float cdf;
   };
   std::vector<EmittingPrimitive> emitting_;
-  std::vector<float> emitting_cdf_;
-  float emitter_area_ = 0;
+  // A light: an emitting shape's primitives [first, end) in emitting_, or
+  // a point light (first == end).
+  struct Light {
+    uint32_t first = 0, end = 0;
+    float area = 0;
+    const Emitter* emitter = nullptr;
+    Vec3 position, axis;  // point lights
+  };
+  std::vector<Light> lights_;
+  // SampleLight's area density on each shape (0 when it does not emit).
+  std::vector<float> shape_light_pdf_;
   mutable std::atomic<uint64_t> closest_hit_rays_{0}, shadow_rays_{0};
 };
 

@@ -17,6 +17,10 @@ std::string ShapeName(const v1::SceneShape& shape, size_t index) {
   return "shape " + std::to_string(index) + (shape.name().empty() ? "" : " ('" + shape.name() + "')");
 }
 
+std::string LightName(const v1::Light& light, size_t index) {
+  return "light " + std::to_string(index) + (light.name().empty() ? "" : " ('" + light.name() + "')");
+}
+
 Transform ShapeTransform(const v1::SceneShape& shape, const std::string& what) {
   return shape.has_to_world() ? FromProto(shape.to_world(), what + " to_world") : Transform{};
 }
@@ -37,6 +41,12 @@ void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& sh
     if (s.has_to_world()) {
       const Transform t = FromProto(s.to_world(), what + " to_world");
       if (std::abs(t.Determinant3()) < 1e-30) throw Error(what + ": degenerate to_world");
+    }
+    if (s.has_to_world_end()) {
+      if (!where.empty()) throw Error(what + ": only shapes placed in the world may move (to_world_end)");
+      if (s.has_emitter()) throw Error(what + " moves and emits: moving lights are not supported");
+      const Transform t = FromProto(s.to_world_end(), what + " to_world_end");
+      if (std::abs(t.Determinant3()) < 1e-30) throw Error(what + ": degenerate to_world_end");
     }
     if (s.has_mesh() && s.mesh().source_case() == v1::Mesh::SOURCE_NOT_SET) {
       if (s.mesh().positions_size() % 3 != 0 || s.mesh().indices_size() % 3 != 0 ||
@@ -78,6 +88,14 @@ class Builder {
       materials_[m.name()] = kernel_->AddMaterial(
           Create<SurfaceModel>(m.class_name(), m.properties(), what));
     }
+    for (int i = 0; i < scene_.lights_size(); ++i) {
+      const v1::Light& light = scene_.lights(i);
+      const std::string what = LightName(light, i);
+      const Emitter* emitter =
+          kernel_->AddEmitter(Create<Emitter>(light.emitter().class_name(), light.emitter().properties(), what));
+      kernel_->AddLight(emitter, light.has_to_world() ? FromProto(light.to_world(), what + " to_world")
+                                                      : Transform{});
+    }
     AddShapes(KernelScene::kWorld, scene_.shapes(), "");
     for (const v1::Group& g : scene_.groups()) {
       groups_[g.name()] = {&g, kernel_->NewGroup()};
@@ -112,17 +130,30 @@ class Builder {
         look.emitter = kernel_->AddEmitter(
             Create<Emitter>(s.emitter().class_name(), s.emitter().properties(), what + " emitter"));
       const Transform to_world = ShapeTransform(s, what);
-      if (s.has_sphere()) {
-        const auto& c = s.sphere().center();
-        const float scale = float(std::cbrt(std::abs(to_world.Determinant3())));
-        kernel_->AddSphere(group, to_world.Point(Vec3(float(c.x()), float(c.y()), float(c.z()))),
-                           float(s.sphere().radius()) * scale, look);
+      if (s.has_to_world_end()) {
+        // Embree moves instances: a moving shape is one in a group of its own.
+        const uint32_t own = kernel_->NewGroup();
+        kernel_->AddPlacement(own, to_world, FromProto(s.to_world_end(), what + " to_world_end"));
+        AddShape(own, s, look, Transform{}, what);
         continue;
       }
-      TriangleMesh mesh = s.has_mesh() ? LoadMesh(s.mesh(), what) : Rectangle();
-      for (Vec3& p : mesh.positions) p = to_world.Point(p);
-      kernel_->AddMesh(group, std::move(mesh), look);
+      AddShape(group, s, look, to_world, what);
     }
+  }
+
+  // The shape's geometry, moved to where `to_world` puts it.
+  void AddShape(uint32_t group, const v1::SceneShape& s, const ShapeLook& look, const Transform& to_world,
+                const std::string& what) {
+    if (s.has_sphere()) {
+      const auto& c = s.sphere().center();
+      const float scale = float(std::cbrt(std::abs(to_world.Determinant3())));
+      kernel_->AddSphere(group, to_world.Point(Vec3(float(c.x()), float(c.y()), float(c.z()))),
+                         float(s.sphere().radius()) * scale, look);
+      return;
+    }
+    TriangleMesh mesh = s.has_mesh() ? LoadMesh(s.mesh(), what) : Rectangle();
+    for (Vec3& p : mesh.positions) p = to_world.Point(p);
+    kernel_->AddMesh(group, std::move(mesh), look);
   }
 
   TriangleMesh LoadMesh(const v1::Mesh& mesh, const std::string& what) {
@@ -223,6 +254,13 @@ void ValidateScene(const v1::Scene& scene) {
     if (!materials.insert(m.name()).second) throw Error("material '" + m.name() + "' defined twice");
   }
   ValidateShapes(scene.shapes(), materials, "");
+  for (int i = 0; i < scene.lights_size(); ++i) {
+    const v1::Light& light = scene.lights(i);
+    if (light.emitter().class_name().empty()) throw Error(LightName(light, i) + " has no emitter class");
+    if (light.has_to_world() &&
+        std::abs(FromProto(light.to_world(), LightName(light, i) + " to_world").Determinant3()) < 1e-30)
+      throw Error(LightName(light, i) + ": degenerate to_world");
+  }
   for (const v1::Group& g : scene.groups()) ValidateShapes(g.shapes(), materials, "group '" + g.name() + "' ");
   if (CountPlacements(scene) > SceneLimits::kMaxPlacements)
     throw Error("instancing expands to more than " + std::to_string(SceneLimits::kMaxPlacements) + " placements");
