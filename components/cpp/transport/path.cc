@@ -28,9 +28,9 @@
 //   bool diffuse_indirect   whether paths go on after a diffuse bounce (true).
 
 #include <algorithm>
-#include <unordered_map>
 #include <vector>
 
+#include "wavefront.h"
 #include "yarf/plugin.h"
 
 namespace yarf {
@@ -41,37 +41,6 @@ constexpr uint32_t kDimensionsPerBounce = 8;
 // Offsets within a bounce's dimensions.
 constexpr uint32_t kLightPosition = 0, kBsdfDirection = 2, kLightChoice = 4, kBsdfLobe = 5,
                    kRoulette = 6;
-
-float PowerHeuristic(float a, float b) {
-  a *= a;
-  b *= b;
-  return a + b > 0 ? a / (a + b) : 0;
-}
-
-// Indices 0..keys.size()-1 grouped by key, groups in order of first
-// appearance. Linear: a batch meets few distinct materials and emitters.
-template <typename Key>
-std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key>& keys) {
-  std::vector<std::pair<Key, std::vector<uint32_t>>> groups;
-  std::unordered_map<Key, size_t> index;  // used once groups are many
-  constexpr size_t kLinearSearch = 16;
-  for (uint32_t i = 0; i < keys.size(); ++i) {
-    size_t g = groups.size();
-    if (groups.size() <= kLinearSearch) {
-      for (size_t j = 0; j < groups.size(); ++j)
-        if (groups[j].first == keys[i]) g = j;
-    } else if (auto it = index.find(keys[i]); it != index.end()) {
-      g = it->second;
-    }
-    if (g == groups.size()) {
-      groups.push_back({keys[i], {}});
-      if (groups.size() > kLinearSearch)
-        for (size_t j = index.size(); j < groups.size(); ++j) index[groups[j].first] = j;
-    }
-    groups[g].second.push_back(i);
-  }
-  return groups;
-}
 
 struct Path {
   float film_x = 0, film_y = 0;

@@ -118,6 +118,9 @@ class SceneView : public Intersector {
   virtual bool ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const = 0;
   // Whether the lens has area (thin lens) or is a point (pinhole).
   virtual bool CameraHasLens() const = 0;
+  // Density per solid angle of camera ray directions over the whole
+  // film, 1/(A cos³θ) (CameraConnection::importance), 0 off the film.
+  virtual float CameraDirectionPdf(Vec3 direction) const = 0;
   virtual uint32_t FilmWidth() const = 0;
   virtual uint32_t FilmHeight() const = 0;
 };

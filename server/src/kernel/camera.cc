@@ -74,6 +74,15 @@ bool Camera::Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float
   return true;
 }
 
+float Camera::DirectionPdf(Vec3 direction) const {
+  const Vec3 d = Normalize(direction);
+  const float cos_theta = Dot(d, forward_);
+  if (!(cos_theta > 0)) return 0;
+  const float x = Dot(d, right_) / cos_theta, y = Dot(d, up_) / cos_theta;
+  if (std::abs(x) > tan_half_x_ || std::abs(y) > tan_half_y_) return 0;
+  return inv_film_area_ / (cos_theta * cos_theta * cos_theta);
+}
+
 Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v, float time) const {
   // Direction in camera space (x right, y up, z forward) through the image
   // plane at z = 1.

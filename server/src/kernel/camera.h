@@ -18,6 +18,9 @@ class Camera {
   // false when it does not. Raster positions in [0,1)².
   bool Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float* film_x,
                float* film_y, float* importance) const;
+  // 1/(A cos³θ) for a world direction leaving the lens inside the field
+  // of view, 0 outside.
+  float DirectionPdf(Vec3 direction) const;
   // The shutter's time for a uniform u: u·shutter.
   float Time(float u) const { return u * shutter_; }
   bool HasLens() const { return lens_radius_ > 0; }

@@ -67,6 +67,7 @@ class KernelScene final : public SceneView {
   }
   bool ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const override;
   bool CameraHasLens() const override { return camera_.HasLens(); }
+  float CameraDirectionPdf(Vec3 direction) const override { return camera_.DirectionPdf(direction); }
   uint32_t FilmWidth() const override { return width_; }
   uint32_t FilmHeight() const override { return height_; }
 

@@ -1,0 +1,398 @@
+// bdpt — bidirectional path tracing (Veach & Guibas 1995, Lafortune &
+// Willems 1993; Veach 1997 ch. 10).
+//
+// Each point of primary sample space grows a camera subpath and a light
+// subpath and combines them in every way: s light vertices joined to t
+// camera vertices, for all s ≥ 0, t ≥ 1 with s + t − 1 ≤ max_depth
+// segments. s = 0 is the camera path hitting an emitter; t = 1 joins a
+// light subpath vertex to the camera and splats wherever it appears on
+// the film. Strategies are weighted by the power heuristic, evaluated with
+// the ratio recurrence over per-vertex forward and reverse area densities
+// (Veach §10.2; the formulation pbrt popularised). Every contribution is a
+// splat (FilmSamples::splats): the film sums them and divides by passes.
+//
+// Both subpaths advance as wavefronts, and every connection of a batch is
+// evaluated together: each SurfaceModel and Emitter is called once per
+// bounce per subpath direction and once per connection round, never per
+// sample. The light subpath's vertex 0 serves the s = 1 strategies.
+//
+// Primary sample space: 0–1 film, 2–3 lens, 4 time; (6, 7) light
+// position, (8, 9) emission direction, 10 light choice; from 12, four per
+// camera bounce (direction pair, lobe, unused), then four per light bounce.
+//
+// Properties:
+//   int max_depth  longest path in segments (Mitsuba's convention), ≥ 1,
+//                  default 8; bidirectional weights need it finite.
+
+#include <algorithm>
+#include <vector>
+
+#include "wavefront.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr uint32_t kLightPosition = kTransportDimension, kEmission = kTransportDimension + 2,
+                   kLightChoice = kTransportDimension + 4, kFirstBounce = kTransportDimension + 6,
+                   kPerBounce = 4;
+
+struct Vertex {
+  enum class Kind : uint8_t { kCamera, kLight, kSurface };
+  Kind kind = Kind::kSurface;
+  // Sampled from a delta lobe (surfaces) or a light with no area.
+  bool delta = false;
+  Vec3 p;
+  // The geometric normal; a point light's or the camera's axis.
+  Vec3 n;
+  // Toward the previous vertex of its subpath, world space.
+  Vec3 wi;
+  Vec3 beta;
+  // Area densities of generating this vertex from its predecessor, and
+  // from its successor by the other subpath's sampler.
+  float pdf_fwd = 0, pdf_rev = 0;
+  uint32_t material = 0, shape = kNoShape;
+  float u = 0, v = 0;
+  const Emitter* emitter = nullptr;
+
+  bool OnSurface() const { return kind == Kind::kSurface || (kind == Kind::kLight && !delta); }
+  // Converts a solid-angle density of the direction from here toward
+  // `next` into an area density at next.
+  float ToArea(float pdf, const Vertex& next) const {
+    const Vec3 d = next.p - p;
+    const float dist2 = Dot(d, d);
+    if (!(dist2 > 0)) return 0;
+    if (next.OnSurface()) pdf *= std::abs(Dot(next.n, d)) / std::sqrt(dist2);
+    return pdf / dist2;
+  }
+};
+
+// Subpaths of a batch: up to `capacity` vertices per point.
+struct Subpaths {
+  std::vector<Vertex> vertices;
+  std::vector<uint32_t> count;
+  uint32_t capacity = 0;
+  Subpaths(size_t n, uint32_t capacity_) : vertices(n * capacity_), count(n, 0), capacity(capacity_) {}
+  Vertex& at(size_t path, uint32_t k) { return vertices[path * capacity + k]; }
+  const Vertex& at(size_t path, uint32_t k) const { return vertices[path * capacity + k]; }
+};
+
+// A walk in progress: the ray leaving the last vertex and the solid-angle
+// density its direction was sampled with.
+struct Walker {
+  Ray ray;
+  Vec3 beta;
+  float pdf_dir = 0;
+};
+
+float Remap0(float f) { return f != 0 ? f : 1; }
+
+class Bdpt final : public Transport {
+ public:
+  explicit Bdpt(const Properties& props) : max_depth_(int(props.Int("max_depth", 8))) {
+    if (max_depth_ < 1)
+      throw Error("property 'max_depth' must be >= 1: bidirectional weights need a finite depth");
+  }
+
+  uint32_t Dimensions() const override { return kFirstBounce + 2 * kPerBounce * uint32_t(max_depth_); }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    out.splats = true;
+    const size_t n = points.Count();
+    const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
+    Subpaths camera(n, uint32_t(max_depth_) + 1), light(n, uint32_t(max_depth_));
+    std::vector<float> time(n), raster(2 * n);
+    std::vector<Walker> walkers(n);
+    std::vector<uint32_t> active;
+    for (uint32_t i = 0; i < n; ++i) {
+      time[i] = scene.ShutterTime(points.Get(i, kTimeDimension));
+      const float fx = points.Get(i, kFilmDimension), fy = points.Get(i, kFilmDimension + 1);
+      raster[2 * i] = fx * w;
+      raster[2 * i + 1] = fy * h;
+      const Ray ray = scene.CameraRay(fx, fy, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), time[i]);
+      Vertex& c = camera.at(i, 0);
+      c.kind = Vertex::Kind::kCamera;
+      c.p = ray.origin;
+      c.n = ray.direction;  // only its role as "not a surface" matters
+      c.beta = Vec3(1, 1, 1);
+      camera.count[i] = 1;
+      walkers[i] = {ray, Vec3(1, 1, 1), scene.CameraDirectionPdf(ray.direction)};
+      if (walkers[i].pdf_dir > 0) active.push_back(i);
+    }
+    Walk(scene, points, TransportMode::kRadiance, kFirstBounce, camera, walkers, active);
+
+    active.clear();
+    if (scene.HasLights()) {
+      const std::vector<LightStart> starts = StartLightPaths(scene, points, kLightChoice, kLightPosition, kEmission);
+      for (uint32_t i = 0; i < n; ++i) {
+        const LightStart& s = starts[i];
+        if (!s.light.emitter || !(s.light.pdf > 0)) continue;
+        Vertex& l = light.at(i, 0);
+        l.kind = Vertex::Kind::kLight;
+        l.delta = s.light.delta_position;
+        l.p = s.light.position;
+        l.n = s.light.normal;
+        l.beta = Vec3(1, 1, 1) * (1.0f / s.light.pdf);
+        l.pdf_fwd = s.light.pdf;
+        l.shape = s.light.shape;
+        l.u = s.light.u;
+        l.v = s.light.v;
+        l.emitter = s.light.emitter;
+        light.count[i] = 1;
+        if (!s.Valid()) continue;
+        walkers[i] = {s.FirstRay(time[i]), s.Throughput(), s.pdf_direction};
+        if (MaxComponent(walkers[i].beta) > 0) active.push_back(i);
+      }
+      Walk(scene, points, TransportMode::kImportance, kFirstBounce + kPerBounce * uint32_t(max_depth_), light,
+           walkers, active);
+    }
+    Connect(scene, points, camera, light, raster, time, out);
+  }
+
+ private:
+  // Extends the subpaths of `active` until they leave the scene, fail to
+  // scatter or fill their capacity. Sets each new vertex's forward density
+  // and its predecessor's reverse one.
+  void Walk(const SceneView& scene, const PrimarySamples& points, TransportMode mode, uint32_t first_dimension,
+            Subpaths& paths, std::vector<Walker>& walkers, std::vector<uint32_t> active) const {
+    for (uint32_t bounce = 0; !active.empty(); ++bounce) {
+      std::vector<Ray> rays(active.size());
+      std::vector<Hit> hits(active.size());
+      for (size_t k = 0; k < active.size(); ++k) rays[k] = walkers[active[k]].ray;
+      scene.Intersect(rays, hits);
+      std::vector<ScatterQuery> queries;
+      std::vector<uint32_t> scattering;
+      const uint32_t base = first_dimension + kPerBounce * bounce;
+      for (size_t k = 0; k < active.size(); ++k) {
+        const uint32_t i = active[k];
+        if (!hits[k].Found() || paths.count[i] == paths.capacity) continue;
+        Vertex& prev = paths.at(i, paths.count[i] - 1);
+        Vertex& v = paths.at(i, paths.count[i]++);
+        v = Vertex{};
+        v.p = rays[k].origin + rays[k].direction * hits[k].t;
+        v.n = hits[k].normal;
+        v.wi = -rays[k].direction;
+        v.beta = walkers[i].beta;
+        v.pdf_fwd = prev.ToArea(walkers[i].pdf_dir, v);
+        v.material = scene.MaterialOf(hits[k].shape);
+        v.shape = hits[k].shape;
+        v.u = hits[k].u;
+        v.v = hits[k].v;
+        v.emitter = scene.EmitterOf(hits[k].shape);
+        if (paths.count[i] == paths.capacity) continue;
+        ScatterQuery q{v.material, Frame(v.n).ToLocal(v.wi), v.u, v.v};
+        q.uniform[0] = points.Get(i, base + 2);
+        q.uniform[1] = points.Get(i, base);
+        q.uniform[2] = points.Get(i, base + 1);
+        queries.push_back(q);
+        scattering.push_back(i);
+      }
+      const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, mode, 0, queries);
+      std::vector<uint32_t> next;
+      for (size_t q = 0; q < queries.size(); ++q) {
+        const uint32_t i = scattering[q];
+        const ScatterAnswer& a = sampled[q];
+        if (!(a.pdf > 0) || !(MaxComponent(a.weight) > 0)) continue;
+        Vertex& v = paths.at(i, paths.count[i] - 1);
+        Vertex& prev = paths.at(i, paths.count[i] - 2);
+        const Frame frame(v.n);
+        const Vec3 dir = Normalize(frame.ToWorld(a.wo));
+        Walker& walker = walkers[i];
+        walker.beta *= a.weight;
+        walker.pdf_dir = a.pdf;
+        float pdf_rev = a.pdf_reverse;
+        if (a.flags & kScatterDelta) {
+          v.delta = true;
+          walker.pdf_dir = pdf_rev = 0;
+        }
+        prev.pdf_rev = v.ToArea(pdf_rev, prev);
+        walker.ray.origin = OffsetRayOrigin(v.p, v.n, dir);
+        walker.ray.direction = dir;
+        walker.ray.tnear = 0;
+        walker.ray.tfar = kInfinity;
+        next.push_back(i);
+      }
+      active = std::move(next);
+    }
+  }
+
+  // One way of joining the subpaths of a point.
+  struct Join {
+    uint32_t path = 0;
+    uint32_t s = 0, t = 0;
+    // Indices into the query lists (or none).
+    uint32_t light_surface = kNone, camera_surface = kNone, emitter = kNone;
+    CameraConnection camera;  // t = 1
+    static constexpr uint32_t kNone = 0xFFFFFFFFu;
+  };
+
+  void Connect(const SceneView& scene, const PrimarySamples& points, const Subpaths& camera, const Subpaths& light,
+               const std::vector<float>& raster, const std::vector<float>& time, FilmSamples& out) const {
+    std::vector<Join> joins;
+    std::vector<SurfaceQuery> light_queries, camera_queries;
+    std::vector<EmitterQuery> emitter_queries;
+    const auto local = [](const Vertex& v, Vec3 w) { return Frame(v.n).ToLocal(w); };
+    for (uint32_t i = 0; i < camera.count.size(); ++i)
+      for (uint32_t t = 1; t <= camera.count[i]; ++t)
+        for (uint32_t s = 0; s <= light.count[i]; ++s) {
+          if (s + t < 2 || int(s + t) - 1 > max_depth_) continue;
+          Join j;
+          j.path = i;
+          j.s = s;
+          j.t = t;
+          const Vertex& pt = camera.at(i, t - 1);
+          if (s == 0) {
+            if (!pt.emitter) continue;
+            j.emitter = uint32_t(emitter_queries.size());
+            emitter_queries.push_back({pt.emitter, local(pt, pt.wi), pt.u, pt.v});
+            joins.push_back(j);
+            continue;
+          }
+          const Vertex& qs = light.at(i, s - 1);
+          if (qs.kind == Vertex::Kind::kSurface && qs.delta) continue;
+          if (t == 1) {
+            if (!scene.ConnectToCamera(qs.p, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
+                                       j.camera))
+              continue;
+          } else if (pt.delta) {
+            continue;
+          }
+          const Vec3 target = t == 1 ? j.camera.lens_point : pt.p;
+          const Vec3 d = target - qs.p;
+          if (!(Dot(d, d) > 0)) continue;
+          const Vec3 to_pt = Normalize(d);
+          if (s == 1) {
+            j.emitter = uint32_t(emitter_queries.size());
+            emitter_queries.push_back({qs.emitter, local(qs, to_pt), qs.u, qs.v});
+          } else {
+            j.light_surface = uint32_t(light_queries.size());
+            light_queries.push_back({qs.material, local(qs, qs.wi), local(qs, to_pt), qs.u, qs.v});
+          }
+          if (t > 1) {
+            j.camera_surface = uint32_t(camera_queries.size());
+            camera_queries.push_back({pt.material, local(pt, pt.wi), local(pt, -to_pt), pt.u, pt.v});
+          }
+          joins.push_back(j);
+        }
+    const std::vector<SurfaceAnswer> at_light = EvaluateSurfaces(scene, TransportMode::kImportance, light_queries);
+    const std::vector<SurfaceAnswer> at_camera = EvaluateSurfaces(scene, TransportMode::kRadiance, camera_queries);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(emitter_queries);
+
+    std::vector<Ray> shadow;
+    std::vector<Vec3> values;
+    std::vector<uint32_t> owners;
+    std::vector<float> xy;
+    for (const Join& j : joins) {
+      const Vertex& pt = camera.at(j.path, j.t - 1);
+      float x = raster[2 * j.path], y = raster[2 * j.path + 1];
+      if (j.s == 0) {
+        const Vec3 value = pt.beta * emitted[j.emitter].radiance;
+        if (!(MaxComponent(value) > 0)) continue;
+        const float weight = Weight(scene, camera, light, j, nullptr, nullptr, emitted[j.emitter].pdf_direction);
+        out.Add(j.path, x, y, value * weight);
+        continue;
+      }
+      const Vertex& qs = light.at(j.path, j.s - 1);
+      const Vec3 target = j.t == 1 ? j.camera.lens_point : pt.p;
+      const Vec3 d = target - qs.p;
+      const float dist2 = Dot(d, d);
+      const Vec3 to_pt = d / std::sqrt(dist2);
+      // Light end: the emitter's radiance, or f·beta of a surface; with the
+      // cosine there when it has a surface.
+      Vec3 value = qs.beta;
+      const float cos_qs = qs.OnSurface() ? std::abs(Dot(qs.n, to_pt)) : 1.0f;
+      value *= (j.s == 1 ? emitted[j.emitter].radiance : at_light[j.light_surface].f) * cos_qs;
+      if (j.t == 1) {
+        value *= j.camera.importance / dist2;
+        x = j.camera.raster_x;
+        y = j.camera.raster_y;
+      } else {
+        value *= pt.beta * at_camera[j.camera_surface].f * (std::abs(Dot(pt.n, to_pt)) / dist2);
+      }
+      if (!(MaxComponent(value) > 0)) continue;
+      const SurfaceAnswer* light_answer = j.s > 1 ? &at_light[j.light_surface] : nullptr;
+      const SurfaceAnswer* camera_answer = j.t > 1 ? &at_camera[j.camera_surface] : nullptr;
+      const float weight = Weight(scene, camera, light, j, light_answer, camera_answer,
+                                  j.s == 1 ? emitted[j.emitter].pdf_direction : 0);
+      Ray ray = j.t == 1 ? RayToLens(qs.p, qs.OnSurface() ? qs.n : Vec3(), target, time[j.path])
+                         : (qs.OnSurface() ? ShadowRay(qs.p, qs.n, pt.p) : ShadowRay(pt.p, pt.n, qs.p));
+      ray.time = time[j.path];
+      if (j.t > 1 && !qs.OnSurface()) ray.tfar = std::max(0.0f, Length(qs.p - ray.origin));
+      shadow.push_back(ray);
+      values.push_back(value * weight);
+      owners.push_back(j.path);
+      xy.push_back(x);
+      xy.push_back(y);
+    }
+    std::vector<uint8_t> occluded(shadow.size());
+    scene.Occluded(shadow, occluded);
+    for (size_t k = 0; k < shadow.size(); ++k)
+      if (!occluded[k]) out.Add(owners[k], xy[2 * k], xy[2 * k + 1], values[k]);
+  }
+
+  // The power-heuristic weight of strategy (s, t) against every other way
+  // of sampling the same path. `light_answer`/`camera_answer` hold the
+  // connection's densities at surface endpoints; `emitter_pdf` the
+  // emitter's direction density (s = 1: toward pt; s = 0: toward pt−1).
+  float Weight(const SceneView& scene, const Subpaths& camera, const Subpaths& light, const Join& j,
+               const SurfaceAnswer* light_answer, const SurfaceAnswer* camera_answer, float emitter_pdf) const {
+    const uint32_t s = j.s, t = j.t, i = j.path;
+    // Copies of the vertices whose densities the connection changes.
+    Vertex pt = camera.at(i, t - 1);
+    Vertex pt_minus = t > 1 ? camera.at(i, t - 2) : Vertex{};
+    Vertex qs = s > 0 ? light.at(i, s - 1) : Vertex{};
+    Vertex qs_minus = s > 1 ? light.at(i, s - 2) : Vertex{};
+    if (t == 1) {
+      // The camera vertex sampled by the connection.
+      pt = Vertex{};
+      pt.kind = Vertex::Kind::kCamera;
+      pt.p = j.camera.lens_point;
+      pt.n = j.camera.axis;
+    }
+    if (s > 0) {
+      // qs as sampled from pt.
+      const float pdf = t == 1 ? j.camera.importance : camera_answer->pdf;
+      qs.pdf_rev = pt.ToArea(pdf, qs);
+      // pt as sampled from qs.
+      pt.pdf_rev = qs.ToArea(s == 1 ? emitter_pdf : light_answer->pdf, pt);
+      if (t > 1) pt_minus.pdf_rev = pt.ToArea(camera_answer->pdf_reverse, pt_minus);
+      if (s > 1) qs_minus.pdf_rev = qs.ToArea(light_answer->pdf_reverse, qs_minus);
+    } else {
+      // pt as a light sample, and pt−1 as sampled from it.
+      pt.pdf_rev = scene.LightPdfArea(pt.shape);
+      pt_minus.pdf_rev = pt.ToArea(emitter_pdf, pt_minus);
+    }
+    const auto camera_vertex = [&](uint32_t k) -> const Vertex& {
+      return k == t - 1 ? pt : k == t - 2 ? pt_minus : camera.at(i, k);
+    };
+    const auto light_vertex = [&](uint32_t k) -> const Vertex& {
+      return k == s - 1 ? qs : k == s - 2 ? qs_minus : light.at(i, k);
+    };
+    float sum = 0, ratio = 1;
+    for (uint32_t k = t - 1; k >= 1; --k) {
+      const Vertex& v = camera_vertex(k);
+      ratio *= Remap0(v.pdf_rev) / Remap0(v.pdf_fwd);
+      const bool delta = (k == t - 1 ? false : v.delta) || camera_vertex(k - 1).delta;
+      if (!delta) sum += ratio * ratio;
+    }
+    ratio = 1;
+    for (int k = int(s) - 1; k >= 0; --k) {
+      const Vertex& v = light_vertex(uint32_t(k));
+      ratio *= Remap0(v.pdf_rev) / Remap0(v.pdf_fwd);
+      const bool self_delta = k == int(s) - 1 ? false : v.delta;
+      const bool before_delta = k > 0 ? light_vertex(uint32_t(k - 1)).delta : v.delta;
+      if (!self_delta && !before_delta) sum += ratio * ratio;
+    }
+    return 1 / (1 + sum);
+  }
+
+  int max_depth_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::Bdpt>(registrar, "bdpt", "1.0.0",
+                             "bidirectional path tracer: every connection strategy, power-heuristic MIS");
+}

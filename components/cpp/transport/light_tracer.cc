@@ -1,0 +1,225 @@
+// light — the light tracer (Dutré, Lafortune & Willems; Veach §10.2).
+//
+// Paths start at the lights and are connected, at every vertex, to the
+// camera; each connection splats to wherever on the film the vertex
+// appears. Surfaces scatter importance (TransportMode::kImportance), so
+// glass does not scale it by 1/η². The light tracer sees no path whose
+// vertex next to the camera is specular (a mirror or glass seen directly):
+// such pixels stay black, as in every light tracer. Paths advance as a
+// wavefront: each bounce calls each SurfaceModel and Emitter once.
+//
+// Primary sample space: 0–1 film (unused: the film position comes from
+// the connection), 2–3 lens, 4 time; then (6, 7) light position, (8, 9)
+// emission direction, (10) light choice; from 12 on, 4 per bounce: the
+// BSDF direction pair, then (lobe choice, Russian roulette).
+//
+// Properties:
+//   int max_depth  longest path in segments, counting the one to the
+//                  camera (Mitsuba's convention); -1 (default) unbounded.
+//   int rr_depth   bounces after which Russian roulette may end paths (5).
+
+#include <algorithm>
+#include <vector>
+
+#include "wavefront.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr uint32_t kLightPosition = kTransportDimension, kEmission = kTransportDimension + 2,
+                   kLightChoice = kTransportDimension + 4, kFirstBounce = kTransportDimension + 6,
+                   kPerBounce = 4;
+
+struct LightPath {
+  Ray ray;
+  Vec3 throughput;
+};
+
+class LightTracer final : public Transport {
+ public:
+  explicit LightTracer(const Properties& props)
+      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))) {
+    if (max_depth_ < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
+    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
+  }
+
+  uint32_t Dimensions() const override {
+    return kFirstBounce + kPerBounce * uint32_t(max_depth_ < 0 ? 64 : max_depth_);
+  }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    out.splats = true;
+    const size_t n = points.Count();
+    if (max_depth_ == 0 || !scene.HasLights()) return;
+    const std::vector<LightStart> starts = StartLightPaths(scene, points, kLightChoice, kLightPosition, kEmission);
+    std::vector<float> time(n);
+    for (uint32_t i = 0; i < n; ++i) time[i] = scene.ShutterTime(points.Get(i, kTimeDimension));
+    ConnectLightsToCamera(scene, points, starts, time, out);
+
+    std::vector<LightPath> paths(n);
+    std::vector<uint32_t> active;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (!starts[i].Valid()) continue;
+      paths[i] = {starts[i].FirstRay(time[i]), starts[i].Throughput()};
+      if (MaxComponent(paths[i].throughput) > 0) active.push_back(i);
+    }
+    // A vertex after `bounce` segments reaches the camera in bounce + 1.
+    for (int bounce = 1; !active.empty() && (max_depth_ < 0 || bounce + 1 <= max_depth_); ++bounce)
+      active = Bounce(scene, points, paths, active, bounce, out);
+  }
+
+ private:
+  // Paths of one segment: the light seen directly by the camera.
+  void ConnectLightsToCamera(const SceneView& scene, const PrimarySamples& points,
+                             const std::vector<LightStart>& starts, const std::vector<float>& time,
+                             FilmSamples& out) const {
+    std::vector<EmitterQuery> queries;
+    std::vector<CameraConnection> connections;
+    std::vector<uint32_t> owners;
+    for (uint32_t i = 0; i < starts.size(); ++i) {
+      const LightSample& l = starts[i].light;
+      if (!l.emitter || !(l.pdf > 0)) continue;
+      CameraConnection c;
+      if (!scene.ConnectToCamera(l.position, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), c))
+        continue;
+      const Vec3 to_camera = Normalize(c.lens_point - l.position);
+      queries.push_back({l.emitter, Frame(l.normal).ToLocal(to_camera), l.u, l.v});
+      connections.push_back(c);
+      owners.push_back(i);
+    }
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(queries);
+    std::vector<Ray> rays;
+    std::vector<Vec3> values;
+    std::vector<uint32_t> kept;
+    for (size_t k = 0; k < owners.size(); ++k) {
+      const LightSample& l = starts[owners[k]].light;
+      const CameraConnection& c = connections[k];
+      const Vec3 d = c.lens_point - l.position;
+      const float dist2 = Dot(d, d);
+      const float cos = l.delta_position ? 1.0f : std::abs(queries[k].w.z);
+      const Vec3 value = emitted[k].radiance * (cos * c.importance / (dist2 * l.pdf));
+      if (!(MaxComponent(value) > 0)) continue;
+      rays.push_back(RayToLens(l.position, l.delta_position ? Vec3() : l.normal, c.lens_point, time[owners[k]]));
+      values.push_back(value);
+      kept.push_back(uint32_t(k));
+    }
+    SplatVisible(rays, values, [&](size_t q) { return connections[kept[q]]; },
+                 [&](size_t q) { return owners[kept[q]]; }, scene, out);
+  }
+
+  // Intersects, connects every hit to the camera, scatters; returns the
+  // paths that go on.
+  std::vector<uint32_t> Bounce(const SceneView& scene, const PrimarySamples& points, std::vector<LightPath>& paths,
+                               const std::vector<uint32_t>& active, int bounce, FilmSamples& out) const {
+    std::vector<Ray> rays(active.size());
+    std::vector<Hit> hits(active.size());
+    for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
+    scene.Intersect(rays, hits);
+
+    struct Vertex {
+      uint32_t path;
+      Vec3 position;
+      Frame frame;
+      float time;
+    };
+    std::vector<Vertex> vertices;
+    std::vector<SurfaceQuery> to_camera;
+    std::vector<CameraConnection> connections;
+    std::vector<uint32_t> connected;  // into vertices
+    for (size_t k = 0; k < active.size(); ++k) {
+      if (!hits[k].Found()) continue;
+      const Ray& ray = rays[k];
+      const Frame frame(hits[k].normal);
+      const Vertex v{active[k], ray.origin + ray.direction * hits[k].t, frame, ray.time};
+      const uint32_t material = scene.MaterialOf(hits[k].shape);
+      CameraConnection c;
+      if (scene.ConnectToCamera(v.position, points.Get(v.path, kLensDimension),
+                                points.Get(v.path, kLensDimension + 1), c)) {
+        to_camera.push_back({material, frame.ToLocal(-ray.direction),
+                             frame.ToLocal(Normalize(c.lens_point - v.position)), hits[k].u, hits[k].v});
+        connections.push_back(c);
+        connected.push_back(uint32_t(vertices.size()));
+      }
+      vertices.push_back(v);
+    }
+    // Splat the connections that carry light.
+    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kImportance, to_camera);
+    std::vector<Ray> shadow;
+    std::vector<Vec3> values;
+    std::vector<uint32_t> kept;
+    for (size_t q = 0; q < connected.size(); ++q) {
+      const Vertex& v = vertices[connected[q]];
+      const CameraConnection& c = connections[q];
+      const Vec3 d = c.lens_point - v.position;
+      const Vec3 value =
+          paths[v.path].throughput * f[q].f * (std::abs(to_camera[q].wo.z) * c.importance / Dot(d, d));
+      if (!(MaxComponent(value) > 0)) continue;
+      shadow.push_back(RayToLens(v.position, v.frame.n, c.lens_point, v.time));
+      values.push_back(value);
+      kept.push_back(uint32_t(q));
+    }
+    SplatVisible(shadow, values, [&](size_t k) { return connections[kept[k]]; },
+                 [&](size_t k) { return vertices[connected[kept[k]]].path; }, scene, out);
+
+    // Scatter importance onward.
+    if (max_depth_ >= 0 && bounce + 2 > max_depth_) return {};
+    const uint32_t base = kFirstBounce + kPerBounce * uint32_t(bounce - 1);
+    std::vector<ScatterQuery> queries;
+    std::vector<uint32_t> scattering;  // into vertices
+    for (size_t k = 0, j = 0; k < active.size(); ++k) {
+      if (!hits[k].Found()) continue;
+      const Vertex& v = vertices[j++];
+      ScatterQuery q{scene.MaterialOf(hits[k].shape), v.frame.ToLocal(-rays[k].direction), hits[k].u, hits[k].v};
+      q.uniform[0] = points.Get(v.path, base + 2);
+      q.uniform[1] = points.Get(v.path, base);
+      q.uniform[2] = points.Get(v.path, base + 1);
+      queries.push_back(q);
+      scattering.push_back(uint32_t(j - 1));
+    }
+    const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kImportance, 0, queries);
+    std::vector<uint32_t> next;
+    for (size_t q = 0; q < queries.size(); ++q) {
+      const Vertex& v = vertices[scattering[q]];
+      LightPath& p = paths[v.path];
+      if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
+      p.throughput *= sampled[q].weight;
+      const Vec3 dir = Normalize(v.frame.ToWorld(sampled[q].wo));
+      p.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
+      p.ray.direction = dir;
+      p.ray.tnear = 0;
+      p.ray.tfar = kInfinity;
+      if (bounce >= rr_depth_) {
+        const float survive = std::min(MaxComponent(p.throughput), 0.95f);
+        if (points.Get(v.path, base + 3) >= survive) continue;
+        p.throughput *= 1.0f / survive;
+      }
+      next.push_back(v.path);
+    }
+    return next;
+  }
+
+  // Traces the shadow rays and splats the values whose rays are clear.
+  template <typename ConnectionOf, typename PointOf>
+  static void SplatVisible(const std::vector<Ray>& rays, const std::vector<Vec3>& values, ConnectionOf connection,
+                           PointOf point, const SceneView& scene, FilmSamples& out) {
+    std::vector<uint8_t> occluded(rays.size());
+    scene.Occluded(rays, occluded);
+    for (size_t k = 0; k < rays.size(); ++k)
+      if (!occluded[k]) {
+        const CameraConnection c = connection(k);
+        out.Add(uint32_t(point(k)), c.raster_x, c.raster_y, values[k]);
+      }
+  }
+
+  int max_depth_;
+  int rr_depth_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::LightTracer>(registrar, "light", "1.0.0",
+                                    "light tracer: paths from the lights, connected to the camera");
+}

@@ -1,0 +1,239 @@
+// What the wavefront transports share: grouping a batch by material or
+// emitter so that each component is called once per group, and the power
+// heuristic of multiple importance sampling.
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace yarf {
+
+// Veach's power heuristic with β = 2 for two strategies.
+inline float PowerHeuristic(float a, float b) {
+  a *= a;
+  b *= b;
+  return a + b > 0 ? a / (a + b) : 0;
+}
+
+// Indices 0..keys.size()-1 grouped by key, groups in order of first
+// appearance. Linear while groups are few, as a batch's materials are.
+template <typename Key>
+std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key>& keys) {
+  std::vector<std::pair<Key, std::vector<uint32_t>>> groups;
+  std::unordered_map<Key, size_t> index;  // used once groups are many
+  constexpr size_t kLinearSearch = 16;
+  for (uint32_t i = 0; i < keys.size(); ++i) {
+    size_t g = groups.size();
+    if (groups.size() <= kLinearSearch) {
+      for (size_t j = 0; j < groups.size(); ++j)
+        if (groups[j].first == keys[i]) g = j;
+    } else if (auto it = index.find(keys[i]); it != index.end()) {
+      g = it->second;
+    }
+    if (g == groups.size()) {
+      groups.push_back({keys[i], {}});
+      if (groups.size() > kLinearSearch)
+        for (size_t j = index.size(); j < groups.size(); ++j) index[groups[j].first] = j;
+    }
+    groups[g].second.push_back(i);
+  }
+  return groups;
+}
+
+}  // namespace yarf
+
+#include "yarf/transport.h"
+
+namespace yarf {
+
+// A SurfaceModel query at a vertex, directions in its local frame: wi
+// toward where the path came from, wo toward where it goes.
+struct SurfaceQuery {
+  uint32_t material;
+  Vec3 wi, wo;
+  float u = 0, v = 0;
+};
+struct SurfaceAnswer {
+  Vec3 f;
+  // Densities of sampling wo given wi, and wi given wo (solid angle).
+  float pdf = 0, pdf_reverse = 0;
+};
+
+// f and both densities of every query: one call each per material.
+inline std::vector<SurfaceAnswer> EvaluateSurfaces(const SceneView& scene, TransportMode mode,
+                                                   const std::vector<SurfaceQuery>& queries) {
+  std::vector<SurfaceAnswer> answers(queries.size());
+  std::vector<uint32_t> keys(queries.size());
+  for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
+  for (const auto& [material, members] : GroupBy(keys)) {
+    const size_t m = members.size();
+    std::vector<float> wi(3 * m), wo(3 * m), uv(2 * m), f(3 * m), pdf(m), reverse(m);
+    for (size_t j = 0; j < m; ++j) {
+      const SurfaceQuery& q = queries[members[j]];
+      q.wi.Store(&wi[3 * j]);
+      q.wo.Store(&wo[3 * j]);
+      uv[2 * j] = q.u;
+      uv[2 * j + 1] = q.v;
+    }
+    const SurfaceModel& model = scene.Material(material);
+    model.Evaluate(mode, wi, wo, uv, f);
+    model.Pdf(wi, wo, uv, pdf);
+    model.Pdf(wo, wi, uv, reverse);
+    for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&f[3 * j]), pdf[j], reverse[j]};
+  }
+  return answers;
+}
+
+// A SurfaceModel sample at a vertex: wi toward where the path came from.
+struct ScatterQuery {
+  uint32_t material;
+  Vec3 wi;
+  float u = 0, v = 0;
+  // Lobe choice, then the direction's two numbers.
+  float uniform[3] = {0, 0, 0};
+};
+struct ScatterAnswer {
+  Vec3 wo, weight;
+  float pdf = 0, pdf_reverse = 0;
+  uint32_t flags = kScatterNone;
+};
+
+// Samples every query, with the reverse density (wi given wo) that
+// bidirectional weights need: one call each per material.
+inline std::vector<ScatterAnswer> SampleSurfaces(const SceneView& scene, TransportMode mode, uint32_t allowed,
+                                                 const std::vector<ScatterQuery>& queries) {
+  std::vector<ScatterAnswer> answers(queries.size());
+  std::vector<uint32_t> keys(queries.size());
+  for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
+  for (const auto& [material, members] : GroupBy(keys)) {
+    const size_t m = members.size();
+    std::vector<float> wi(3 * m), uv(2 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m), reverse(m);
+    std::vector<uint32_t> flags(m);
+    for (size_t j = 0; j < m; ++j) {
+      const ScatterQuery& q = queries[members[j]];
+      q.wi.Store(&wi[3 * j]);
+      uv[2 * j] = q.u;
+      uv[2 * j + 1] = q.v;
+      std::copy_n(q.uniform, 3, &u[3 * j]);
+    }
+    const SurfaceModel& model = scene.Material(material);
+    model.Sample(mode, wi, uv, u, allowed, wo, weight, pdf, flags);
+    model.Pdf(wo, wi, uv, reverse);
+    for (size_t j = 0; j < m; ++j)
+      answers[members[j]] = {Vec3::Load(&wo[3 * j]), Vec3::Load(&weight[3 * j]), pdf[j], reverse[j], flags[j]};
+  }
+  return answers;
+}
+
+// An Emitter query: w in the emitter's local frame, leaving it.
+struct EmitterQuery {
+  const Emitter* emitter;
+  Vec3 w;
+  float u = 0, v = 0;
+};
+struct EmitterAnswer {
+  Vec3 radiance;
+  // SampleDirection's density for w.
+  float pdf_direction = 0;
+};
+
+// Radiance (and direction density) of every query: one call each per emitter.
+inline std::vector<EmitterAnswer> EvaluateEmitters(const std::vector<EmitterQuery>& queries) {
+  std::vector<EmitterAnswer> answers(queries.size());
+  std::vector<const Emitter*> keys(queries.size());
+  for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].emitter;
+  for (const auto& [emitter, members] : GroupBy(keys)) {
+    if (!emitter) continue;
+    const size_t m = members.size();
+    std::vector<float> w(3 * m), uv(2 * m), radiance(3 * m), pdf(m);
+    for (size_t j = 0; j < m; ++j) {
+      const EmitterQuery& q = queries[members[j]];
+      q.w.Store(&w[3 * j]);
+      uv[2 * j] = q.u;
+      uv[2 * j + 1] = q.v;
+    }
+    emitter->Radiance(w, uv, radiance);
+    emitter->PdfDirection(w, pdf);
+    for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&radiance[3 * j]), pdf[j]};
+  }
+  return answers;
+}
+
+// Where light paths start: a point on a light and a direction leaving it.
+struct LightStart {
+  LightSample light;
+  // Direction of emission, world space, and its density (solid angle).
+  Vec3 direction;
+  float pdf_direction = 0;
+  // Radiance (a point light: intensity) along it.
+  Vec3 radiance;
+  bool Valid() const { return light.emitter && pdf_direction > 0 && light.pdf > 0; }
+  // Throughput of the first segment: L·|cos|/(p_position·p_direction).
+  Vec3 Throughput() const {
+    const float cos = light.delta_position ? 1.0f : std::abs(Dot(light.normal, direction));
+    return radiance * (cos / (light.pdf * pdf_direction));
+  }
+  // The first ray, leaving the light's surface.
+  Ray FirstRay(float time) const {
+    Ray ray;
+    ray.origin = light.delta_position ? light.position
+                                      : OffsetRayOrigin(light.position, light.normal, direction);
+    ray.direction = direction;
+    ray.time = time;
+    return ray;
+  }
+};
+
+// One light path start per point, from the given coordinates: light choice
+// `choice`, position (position, position + 1), direction (direction,
+// direction + 1). One SampleDirection and Radiance call per emitter.
+inline std::vector<LightStart> StartLightPaths(const SceneView& scene, const PrimarySamples& points,
+                                               uint32_t choice, uint32_t position, uint32_t direction) {
+  const size_t n = points.Count();
+  std::vector<LightStart> starts(n);
+  std::vector<const Emitter*> keys(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    starts[i].light = scene.SampleLight(points.Get(i, choice), points.Get(i, position), points.Get(i, position + 1));
+    keys[i] = starts[i].light.emitter;
+  }
+  for (const auto& [emitter, members] : GroupBy(keys)) {
+    if (!emitter) continue;
+    const size_t m = members.size();
+    std::vector<float> u(2 * m), w(3 * m), pdf(m), uv(2 * m), radiance(3 * m);
+    for (size_t j = 0; j < m; ++j) {
+      u[2 * j] = points.Get(members[j], direction);
+      u[2 * j + 1] = points.Get(members[j], direction + 1);
+      uv[2 * j] = starts[members[j]].light.u;
+      uv[2 * j + 1] = starts[members[j]].light.v;
+    }
+    emitter->SampleDirection(u, w, pdf);
+    emitter->Radiance(w, uv, radiance);
+    for (size_t j = 0; j < m; ++j) {
+      LightStart& s = starts[members[j]];
+      s.direction = Normalize(Frame(s.light.normal).ToWorld(Vec3::Load(&w[3 * j])));
+      s.pdf_direction = pdf[j];
+      s.radiance = Vec3::Load(&radiance[3 * j]);
+    }
+  }
+  return starts;
+}
+
+// The shadow ray from a scene point (normal n; zero for a point light) to
+// a point of the lens.
+inline Ray RayToLens(Vec3 p, Vec3 n, Vec3 lens_point, float time) {
+  Ray ray;
+  if (Length(n) > 0) {
+    ray = ShadowRay(p, n, lens_point);
+  } else {
+    const Vec3 d = lens_point - p;
+    ray.origin = p;
+    ray.tfar = Length(d);
+    ray.direction = ray.tfar > 0 ? d / ray.tfar : Vec3(0, 0, 1);
+  }
+  ray.time = time;
+  return ray;
+}
+
+}  // namespace yarf
