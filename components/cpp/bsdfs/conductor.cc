@@ -1,0 +1,81 @@
+// conductor — smooth metal
+//
+// An optically smooth conductor (Mitsuba 3's `conductor`): all light is
+// reflected into the mirror direction, scaled by the conductor's Fresnel
+// reflectance F(cos θi) for its complex index of refraction η + iκ
+// (relative to the outside medium, per RGB channel) and by
+// specular_reflectance. A Dirac delta lobe, so Evaluate and Pdf return 0
+// and only Sample finds it. One-sided, as in Mitsuba: light arriving from
+// below (wi.z ≤ 0) is not reflected.
+//
+// Parameters
+//   material               string           default "none"
+//       A named metal of metals.h ("Ag", "Al", "Au", "Cu"), or "none": the
+//       index given by eta and k.
+//   eta                    rgb (or float)   default 0    real part η ≥ 0 of the index
+//   k                      rgb (or float)   default 1    imaginary part κ ≥ 0
+//       The defaults η = 0, κ = 1 make F = 1 at every angle: a perfect
+//       mirror, as Mitsuba's material "none". Not with a named material.
+//   specular_reflectance   rgb (or float)   default 1
+//       A factor on the Fresnel reflectance, per channel in [0, 1].
+//
+// Lobes: delta reflection. Sample returns wo = (-wi.x, -wi.y, wi.z),
+// weight = specular_reflectance · F(cos θi), pdf = 1 (the only lobe).
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "metals.h"
+#include "microfacet.h"
+#include "yarf/plugin.h"
+#include "yarf/warps.h"
+
+namespace {
+
+using yarf::Vec3;
+
+constexpr uint32_t kMirrorLobe = yarf::kScatterReflect | yarf::kScatterDelta;
+
+class Conductor final : public yarf::DeltaSurfaceModel {
+ public:
+  explicit Conductor(const yarf::Properties& props)
+      : ior_(yarf::metals::ReadConductorIor(props)),
+        specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
+
+  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+              std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
+              std::span<float> weight, std::span<float> pdf,
+              std::span<uint32_t> flags) const override {
+    const size_t count = wi.size() / 3;
+    const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 in = Vec3::Load(&wi[3 * k]);
+      if (!can_reflect || !(in.z > 0)) {
+        Vec3().Store(&wo[3 * k]);
+        Vec3().Store(&weight[3 * k]);
+        pdf[k] = 0;
+        flags[k] = yarf::kScatterNone;
+        continue;
+      }
+      yarf::Reflect(in).Store(&wo[3 * k]);
+      (specular_ * yarf::microfacet::FresnelConductor(in.z, ior_.eta, ior_.k))
+          .Store(&weight[3 * k]);
+      pdf[k] = 1.0f;
+      flags[k] = kMirrorLobe;
+    }
+  }
+
+  uint32_t Lobes() const override { return kMirrorLobe; }
+
+ private:
+  yarf::metals::ComplexIor ior_;
+  Vec3 specular_;
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<Conductor>(registrar, "conductor", "1.0.0",
+                            "Smooth conductor: mirror reflection with the Fresnel factor of a "
+                            "complex index of refraction (one-sided)");
+}

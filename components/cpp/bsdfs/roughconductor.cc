@@ -1,0 +1,133 @@
+// roughconductor — rough metal (GGX microfacets)
+//
+// A conductor whose surface is made of mirror microfacets with GGX
+// (Trowbridge–Reitz) normals (Walter et al., "Microfacet models for
+// refraction through rough surfaces", EGSR 2007):
+//
+//   f(wi, wo) = R · F(wi·h) · D(h) · G2(wi, wo) / (4 cos θi cos θo)
+//
+// with h = (wi + wo)/|wi + wo|, D the GGX distribution of roughness
+// (αu, αv), G2 Smith's height-correlated masking-shadowing (microfacet.h),
+// F the Fresnel reflectance of the complex index η + iκ per RGB channel
+// (as in conductor.cc) and R = specular_reflectance. Light that the
+// microsurface would scatter more than once is lost (single scattering:
+// the albedo drops below R·F as roughness grows). One-sided, as Mitsuba
+// 3's `roughconductor`: 0 unless wi and wo both lie above (z > 0).
+//
+// Parameters
+//   alpha                  float            default 0.1      GGX roughness α > 0
+//   alpha_u, alpha_v       float                             anisotropic roughness along the
+//       shading frame's x and y, instead of alpha (both or neither)
+//   distribution           string           default "ggx"    the only one
+//   material               string           default "none"   a named metal (metals.h)
+//   eta, k                 rgb (or float)   default 0, 1     complex index η + iκ, with
+//       material "none" (the defaults make F = 1: a perfect mirror)
+//   specular_reflectance   rgb (or float)   default 1        R, per channel in [0, 1]
+//
+// Lobes: glossy reflection. Sample draws a microfacet normal from the
+// normals visible from wi (Heitz, JCGT 2018) and reflects wi about it:
+// pdf = G1(wi) D(h) / (4 cos θi), weight = R · F · G2 / G1(wi). A normal
+// that reflects below the horizon gives no sample.
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "metals.h"
+#include "microfacet.h"
+#include "yarf/plugin.h"
+#include "yarf/warps.h"
+
+namespace {
+
+using yarf::Vec3;
+namespace mf = yarf::microfacet;
+
+constexpr uint32_t kLobe = yarf::kScatterReflect | yarf::kScatterGlossy;
+
+class RoughConductor final : public yarf::SurfaceModel {
+ public:
+  explicit RoughConductor(const yarf::Properties& props)
+      : roughness_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/true)),
+        ior_(yarf::metals::ReadConductorIor(props)),
+        specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
+
+  void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
+                std::span<const float> uv, std::span<float> value) const override {
+    const size_t count = wi.size() / 3;
+    for (size_t k = 0; k < count; ++k)
+      Value(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k])).Store(&value[3 * k]);
+  }
+
+  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+              std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
+              std::span<float> weight, std::span<float> pdf,
+              std::span<uint32_t> flags) const override {
+    const size_t count = wi.size() / 3;
+    const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 in = Vec3::Load(&wi[3 * k]);
+      const float* u = &uniform[3 * k];
+      Vec3 out;
+      float density = 0;
+      if (can_reflect && in.z > 0) {
+        const Vec3 m = yarf::SampleGgxVisibleNormal(in, roughness_.alpha_x, roughness_.alpha_y,
+                                                    u[1], u[2]);
+        out = mf::ReflectAbout(in, m);
+        // Density and value both from (wi, wo), as Pdf and Evaluate see them.
+        density = Density(in, out);
+      }
+      if (!(density > 0)) {
+        Vec3().Store(&wo[3 * k]);
+        Vec3().Store(&weight[3 * k]);
+        pdf[k] = 0;
+        flags[k] = yarf::kScatterNone;
+        continue;
+      }
+      out.Store(&wo[3 * k]);
+      (Value(in, out) * (out.z / density)).Store(&weight[3 * k]);
+      pdf[k] = density;
+      flags[k] = kLobe;
+    }
+  }
+
+  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+           std::span<float> pdf) const override {
+    const size_t count = wi.size() / 3;
+    for (size_t k = 0; k < count; ++k)
+      pdf[k] = Density(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]));
+  }
+
+  uint32_t Lobes() const override { return kLobe; }
+
+ private:
+  Vec3 Value(Vec3 wi, Vec3 wo) const {
+    if (!(wi.z > 0 && wo.z > 0)) return Vec3();
+    const Vec3 h = yarf::Normalize(wi + wo);
+    const float d = yarf::GgxDistribution(h, roughness_.alpha_x, roughness_.alpha_y);
+    const float g = mf::SmithG2(wi, wo, roughness_.alpha_x, roughness_.alpha_y);
+    const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(wi, h), ior_.eta, ior_.k);
+    return specular_ * fresnel * (d * g / (4.0f * wi.z * wo.z));
+  }
+
+  // The density of visible normals, D_wi(h) = G1(wi) (wi·h) D(h) / cos θi,
+  // times the Jacobian 1 / (4 wi·h) of reflection about h.
+  float Density(Vec3 wi, Vec3 wo) const {
+    if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
+    const Vec3 h = yarf::Normalize(wi + wo);
+    return yarf::GgxSmithG1(wi, roughness_.alpha_x, roughness_.alpha_y) *
+           yarf::GgxDistribution(h, roughness_.alpha_x, roughness_.alpha_y) / (4.0f * wi.z);
+  }
+
+  mf::Roughness roughness_;
+  yarf::metals::ComplexIor ior_;
+  Vec3 specular_;
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<RoughConductor>(
+      registrar, "roughconductor", "1.0.0",
+      "Rough conductor: GGX microfacets with a complex-index Fresnel factor (one-sided)");
+}
