@@ -1,12 +1,17 @@
 // What the wavefront transports share: grouping a batch by material or
-// emitter so that each component is called once per group, and the power
+// emitter so that each component is called once per group, batched
+// SurfaceModel and Emitter calls, light path starts, and the power
 // heuristic of multiple importance sampling.
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <unordered_map>
 #include <utility>
 #include <vector>
+
+#include "yarf/transport.h"
 
 namespace yarf {
 
@@ -42,11 +47,6 @@ std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key
   return groups;
 }
 
-}  // namespace yarf
-
-#include "yarf/transport.h"
-
-namespace yarf {
 
 // A SurfaceModel query at a vertex, directions in its local frame: wi
 // toward where the path came from, wo toward where it goes.

@@ -108,6 +108,13 @@ class SceneView : public Intersector {
   virtual LightSample SampleLight(float u_choice, float u0, float u1) const = 0;
   // The area density SampleLight has at any point of the emitting `shape`.
   virtual float LightPdfArea(uint32_t shape) const = 0;
+  // Light `light` of LightCount() gathered into one point as seen from p,
+  // for methods that want hard shadows: a mesh light's area-weighted
+  // centroid and mean normal, with pdf = 1/area; a sphere's point facing
+  // p, with pdf = 1/(πr²), its cross-section; a point light as it is
+  // (delta_position, pdf 1).
+  virtual uint32_t LightCount() const = 0;
+  virtual LightSample LightPoint(uint32_t light, Vec3 seen_from) const = 0;
   // The time in the shutter interval for primary coordinate u.
   virtual float ShutterTime(float u) const = 0;
   // The camera ray through film position (x, y) ∈ [0,1)² and lens (u, v)

@@ -165,12 +165,18 @@ void KernelScene::Commit() {
         e.p0 = v[0], e.p1 = v[1], e.p2 = v[2];
         e.normal = Normal(s, p, v[0], 0);
       }
-      light.area += PrimitiveArea(s, p);
+      const float area = PrimitiveArea(s, p);
+      light.area += area;
+      light.position += (e.sphere ? e.p0 : (e.p0 + e.p1 + e.p2) / 3.0f) * area;
+      light.axis += e.normal * area;
       e.cdf = light.area;
       emitting_.push_back(e);
     }
     light.end = uint32_t(emitting_.size());
-    if (light.area > 0) lights_.push_back(light);
+    if (!(light.area > 0)) continue;
+    light.position = light.position / light.area;
+    light.axis = Length(light.axis) > 0 ? Normalize(light.axis) : emitting_[light.first].normal;
+    lights_.push_back(light);
   }
   for (size_t l = point_lights; l < lights_.size(); ++l)
     shape_light_pdf_[emitting_[lights_[l].first].shape] = 1.0f / (float(lights_.size()) * lights_[l].area);
@@ -326,6 +332,33 @@ LightSample KernelScene::SampleLight(float u_choice, float u0, float u1) const {
   s.u = b[1];
   s.v = 1 - b[0] - b[1];
   s.normal = e.normal;
+  return s;
+}
+
+LightSample KernelScene::LightPoint(uint32_t index, Vec3 seen_from) const {
+  const Light& light = lights_[index];
+  LightSample s;
+  s.emitter = light.emitter;
+  if (light.first == light.end) {
+    s.position = light.position;
+    s.normal = light.axis;
+    s.pdf = 1;
+    s.delta_position = true;
+    return s;
+  }
+  const EmittingPrimitive& first = emitting_[light.first];
+  s.shape = first.shape;
+  if (first.sphere) {
+    const Vec3 to = seen_from - first.p0;
+    const Vec3 d = Length(to) > 0 ? Normalize(to) : Vec3(0, 0, 1);
+    s.position = first.p0 + d * first.radius;
+    s.normal = shapes_[first.shape].look.flip_normals ? -d : d;
+    s.pdf = 1 / (kPi * first.radius * first.radius);
+    return s;
+  }
+  s.position = light.position;
+  s.normal = light.axis;
+  s.pdf = 1 / light.area;
   return s;
 }
 

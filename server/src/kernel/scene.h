@@ -61,6 +61,8 @@ class KernelScene final : public SceneView {
   bool HasLights() const override { return !lights_.empty(); }
   LightSample SampleLight(float u_choice, float u0, float u1) const override;
   float LightPdfArea(uint32_t shape) const override { return shape_light_pdf_[shape]; }
+  uint32_t LightCount() const override { return uint32_t(lights_.size()); }
+  LightSample LightPoint(uint32_t light, Vec3 seen_from) const override;
   float ShutterTime(float u) const override { return camera_.Time(u); }
   Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v, float time) const override {
     return camera_.Generate(film_x, film_y, lens_u, lens_v, time);
@@ -136,7 +138,9 @@ class KernelScene final : public SceneView {
     uint32_t first = 0, end = 0;
     float area = 0;
     const Emitter* emitter = nullptr;
-    Vec3 position, axis;  // point lights
+    // Point lights: where they are and their axis; surfaces: the
+    // area-weighted centroid and mean normal.
+    Vec3 position, axis;
   };
   std::vector<Light> lights_;
   // SampleLight's area density on each shape (0 when it does not emit).

@@ -1,0 +1,209 @@
+// distribution — distribution ray tracing (Cook, Porter & Carpenter 1984).
+//
+// Rays distributed over the lens (depth of field), the shutter interval
+// (motion blur), the area of the lights (soft shadows) and the glossy
+// lobes of the surfaces (blurry reflection and refraction). At every hit
+// one light sample (next-event estimation, no MIS) with the whole BSDF;
+// the path goes on only through non-diffuse lobes (glossy and specular),
+// so diffuse surfaces receive direct light only. Emitters count when seen
+// directly or through specular lobes, which light samples cannot reach.
+// On models whose lobes are all diffuse or all non-diffuse, this computes
+// the path integral over E (glossy|specular)* any-lobe L: the same as the
+// path tracer with diffuse_indirect = false, by another estimator.
+//
+// Paths advance as a wavefront (one call per SurfaceModel and Emitter per
+// bounce). Primary sample space as the path tracer's: 0–1 film, 2–3 lens,
+// 4 time, then 8 per bounce from 6: light position pair, direction pair,
+// (light choice, lobe choice), (Russian roulette, unused).
+//
+// Properties:
+//   int max_depth  longest path in segments (Mitsuba's convention), -1
+//                  (default) unbounded.
+//   int rr_depth   depth from which Russian roulette may end paths (5).
+
+#include <algorithm>
+#include <vector>
+
+#include "wavefront.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr uint32_t kPerBounce = 8;
+constexpr uint32_t kLightPosition = 0, kDirection = 2, kLightChoice = 4, kLobe = 5, kRoulette = 6;
+// Every lobe but the diffuse ones.
+constexpr uint32_t kOnward = kScatterReflect | kScatterRefract | kScatterGlossy | kScatterDelta;
+
+struct Path {
+  float film_x = 0, film_y = 0;
+  Ray ray;
+  Vec3 throughput{1, 1, 1};
+  Vec3 radiance;
+  // Whether an emitter hit next counts: camera rays and specular bounces.
+  bool sees_emitters = true;
+};
+
+class DistributionRayTracer final : public Transport {
+ public:
+  explicit DistributionRayTracer(const Properties& props)
+      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))) {
+    if (max_depth_ < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
+    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
+  }
+
+  uint32_t Dimensions() const override {
+    return kTransportDimension + kPerBounce * uint32_t(max_depth_ < 0 ? 64 : max_depth_);
+  }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    const size_t n = points.Count();
+    std::vector<Path> paths(n);
+    std::vector<uint32_t> active;
+    for (uint32_t i = 0; i < n; ++i) {
+      Path& p = paths[i];
+      p.film_x = points.Get(i, kFilmDimension);
+      p.film_y = points.Get(i, kFilmDimension + 1);
+      p.ray = scene.CameraRay(p.film_x, p.film_y, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
+                              scene.ShutterTime(points.Get(i, kTimeDimension)));
+      active.push_back(i);
+    }
+    for (int depth = 1; !active.empty() && max_depth_ != 0; ++depth)
+      active = Bounce(scene, points, paths, active, depth);
+    const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
+    for (uint32_t i = 0; i < n; ++i) out.Add(i, paths[i].film_x * w, paths[i].film_y * h, paths[i].radiance);
+  }
+
+ private:
+  struct Vertex {
+    uint32_t path;
+    Vec3 position;
+    Frame frame;
+    Vec3 wi;
+    uint32_t material;
+    float u, v;
+  };
+
+  std::vector<uint32_t> Bounce(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
+                               const std::vector<uint32_t>& active, int depth) const {
+    std::vector<Ray> rays(active.size());
+    std::vector<Hit> hits(active.size());
+    for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
+    scene.Intersect(rays, hits);
+    std::vector<Vertex> vertices;
+    std::vector<EmitterQuery> seen;
+    std::vector<uint32_t> seen_by;
+    for (size_t k = 0; k < active.size(); ++k) {
+      if (!hits[k].Found()) continue;
+      const Frame frame(hits[k].normal);
+      const Vec3 wi = frame.ToLocal(-rays[k].direction);
+      const Emitter* emitter = scene.EmitterOf(hits[k].shape);
+      if (emitter && paths[active[k]].sees_emitters) {
+        seen.push_back({emitter, wi, hits[k].u, hits[k].v});
+        seen_by.push_back(active[k]);
+      }
+      vertices.push_back({active[k], rays[k].origin + rays[k].direction * hits[k].t, frame, wi,
+                          scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v});
+    }
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
+    for (size_t q = 0; q < seen.size(); ++q)
+      paths[seen_by[q]].radiance += paths[seen_by[q]].throughput * emitted[q].radiance;
+    if (max_depth_ >= 0 && depth >= max_depth_) return {};
+    const uint32_t base = kTransportDimension + kPerBounce * uint32_t(depth - 1);
+    SampleLights(scene, points, paths, vertices, base);
+    return Continue(scene, points, paths, vertices, base, depth);
+  }
+
+  // One light sample per vertex, the whole BSDF, no MIS.
+  void SampleLights(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
+                    const std::vector<Vertex>& vertices, uint32_t base) const {
+    if (!scene.HasLights()) return;
+    std::vector<SurfaceQuery> surfaces;
+    std::vector<EmitterQuery> lights;
+    std::vector<LightSample> samples;
+    std::vector<uint32_t> owners;
+    std::vector<Ray> shadow;
+    for (uint32_t k = 0; k < vertices.size(); ++k) {
+      const Vertex& v = vertices[k];
+      const uint32_t lobes = scene.Material(v.material).Lobes();
+      if ((lobes & kScatterDelta) && !(lobes & (kScatterDiffuse | kScatterGlossy))) continue;
+      const LightSample s =
+          scene.SampleLight(points.Get(v.path, base + kLightChoice), points.Get(v.path, base + kLightPosition),
+                            points.Get(v.path, base + kLightPosition + 1));
+      const Vec3 d = s.position - v.position;
+      if (!s.emitter || !(s.pdf > 0) || !(Dot(d, d) > 0)) continue;
+      const Vec3 to_light = Normalize(d);
+      surfaces.push_back({v.material, v.wi, v.frame.ToLocal(to_light), v.u, v.v});
+      lights.push_back({s.emitter, Frame(s.normal).ToLocal(-to_light), s.u, s.v});
+      samples.push_back(s);
+      owners.push_back(k);
+      Ray ray = ShadowRay(v.position, v.frame.n, s.position);
+      if (s.delta_position) ray.tfar = std::max(0.0f, Length(s.position - ray.origin));
+      ray.time = paths[v.path].ray.time;
+      shadow.push_back(ray);
+    }
+    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
+    const std::vector<EmitterAnswer> le = EvaluateEmitters(lights);
+    std::vector<uint8_t> occluded(shadow.size());
+    scene.Occluded(shadow, occluded);
+    for (size_t q = 0; q < shadow.size(); ++q) {
+      if (occluded[q]) continue;
+      const LightSample& s = samples[q];
+      const Vertex& v = vertices[owners[q]];
+      const Vec3 d = s.position - v.position;
+      const float cos_light = s.delta_position ? 1.0f : std::abs(lights[q].w.z);
+      const float g = std::abs(surfaces[q].wo.z) * cos_light / (Dot(d, d) * s.pdf);
+      paths[v.path].radiance += paths[v.path].throughput * f[q].f * le[q].radiance * g;
+    }
+  }
+
+  // Goes on through the non-diffuse lobes.
+  std::vector<uint32_t> Continue(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
+                                 const std::vector<Vertex>& vertices, uint32_t base, int depth) const {
+    std::vector<ScatterQuery> queries;
+    std::vector<uint32_t> owners;
+    for (uint32_t k = 0; k < vertices.size(); ++k) {
+      const Vertex& v = vertices[k];
+      ScatterQuery q{v.material, v.wi, v.u, v.v};
+      q.uniform[0] = points.Get(v.path, base + kLobe);
+      q.uniform[1] = points.Get(v.path, base + kDirection);
+      q.uniform[2] = points.Get(v.path, base + kDirection + 1);
+      queries.push_back(q);
+      owners.push_back(k);
+    }
+    const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, kOnward, queries);
+    std::vector<uint32_t> next;
+    for (size_t q = 0; q < queries.size(); ++q) {
+      const ScatterAnswer& a = sampled[q];
+      if (!(a.pdf > 0) || !(MaxComponent(a.weight) > 0)) continue;
+      const Vertex& v = vertices[owners[q]];
+      Path& p = paths[v.path];
+      p.throughput *= a.weight;
+      p.sees_emitters = (a.flags & kScatterDelta) != 0;
+      const Vec3 dir = Normalize(v.frame.ToWorld(a.wo));
+      p.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
+      p.ray.direction = dir;
+      p.ray.tnear = 0;
+      p.ray.tfar = kInfinity;
+      if (depth >= rr_depth_) {
+        const float survive = std::min(MaxComponent(p.throughput), 0.95f);
+        if (points.Get(v.path, base + kRoulette) >= survive) continue;
+        p.throughput *= 1.0f / survive;
+      }
+      next.push_back(v.path);
+    }
+    return next;
+  }
+
+  int max_depth_;
+  int rr_depth_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::DistributionRayTracer>(
+      registrar, "distribution", "1.0.0",
+      "distribution ray tracer: depth of field, motion blur, soft shadows, glossy reflection");
+}

@@ -1,0 +1,187 @@
+// whitted — Whitted's recursive ray tracer (1980).
+//
+// Camera rays; at each hit the light of every light source gathered into
+// one point (LightPoint: a mesh light's centroid, a sphere's facing
+// point, a point light itself) with one shadow ray each, so shadows are
+// hard; and, on surfaces with delta lobes, both the mirror reflection and
+// the refraction traced further, each weighted by its Fresnel factor. No
+// diffuse or glossy interreflection. Everything is deterministic but the
+// position within the pixel, so passes only antialias.
+//
+// Rays advance level by level as a wavefront: each level intersects all
+// its rays and calls each SurfaceModel and Emitter once per group.
+//
+// Primary sample space: 0–1 film, 2–3 lens, 4 time; nothing more.
+//
+// Properties:
+//   int max_depth  longest path in segments, counting the shadow ray
+//                  (Mitsuba's convention: 1 shows emitters only); default 6.
+
+#include <vector>
+
+#include "wavefront.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+// A ray of the tree: the point it serves and what it carries to it.
+struct Branch {
+  uint32_t point;
+  Ray ray;
+  Vec3 weight;
+};
+
+class Whitted final : public Transport {
+ public:
+  explicit Whitted(const Properties& props) : max_depth_(int(props.Int("max_depth", 6))) {
+    if (max_depth_ < 0) throw Error("property 'max_depth' must be >= 0");
+  }
+
+  uint32_t Dimensions() const override { return kTransportDimension; }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    const size_t n = points.Count();
+    std::vector<Vec3> radiance(n);
+    std::vector<Branch> level(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      const float time = scene.ShutterTime(points.Get(i, kTimeDimension));
+      level[i] = {i,
+                  scene.CameraRay(points.Get(i, kFilmDimension), points.Get(i, kFilmDimension + 1),
+                                  points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), time),
+                  Vec3(1, 1, 1)};
+    }
+    for (int depth = 1; !level.empty() && depth <= max_depth_; ++depth)
+      level = Trace(scene, level, depth, radiance);
+    const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
+    for (uint32_t i = 0; i < n; ++i)
+      out.Add(i, points.Get(i, kFilmDimension) * w, points.Get(i, kFilmDimension + 1) * h, radiance[i]);
+  }
+
+ private:
+  struct Vertex {
+    uint32_t branch;
+    Vec3 position;
+    Frame frame;
+    Vec3 wi;
+    uint32_t material;
+    float u, v;
+  };
+
+  // Shades the hits of one level; returns the next level's rays.
+  std::vector<Branch> Trace(const SceneView& scene, const std::vector<Branch>& level, int depth,
+                            std::vector<Vec3>& radiance) const {
+    std::vector<Ray> rays(level.size());
+    std::vector<Hit> hits(level.size());
+    for (size_t k = 0; k < level.size(); ++k) rays[k] = level[k].ray;
+    scene.Intersect(rays, hits);
+
+    std::vector<Vertex> vertices;
+    std::vector<EmitterQuery> seen;
+    std::vector<uint32_t> seen_by;
+    for (size_t k = 0; k < level.size(); ++k) {
+      if (!hits[k].Found()) continue;
+      const Frame frame(hits[k].normal);
+      const Vec3 wi = frame.ToLocal(-rays[k].direction);
+      if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
+        seen.push_back({emitter, wi, hits[k].u, hits[k].v});
+        seen_by.push_back(uint32_t(k));
+      }
+      vertices.push_back({uint32_t(k), rays[k].origin + rays[k].direction * hits[k].t, frame, wi,
+                          scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v});
+    }
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
+    for (size_t q = 0; q < seen.size(); ++q) {
+      const Branch& b = level[seen_by[q]];
+      radiance[b.point] += b.weight * emitted[q].radiance;
+    }
+    if (depth >= max_depth_) return {};
+    AddDirectLight(scene, level, vertices, radiance);
+    return Spawn(scene, level, vertices);
+  }
+
+  // Every light, as one point, through one shadow ray each.
+  void AddDirectLight(const SceneView& scene, const std::vector<Branch>& level, const std::vector<Vertex>& vertices,
+                      std::vector<Vec3>& radiance) const {
+    std::vector<SurfaceQuery> surfaces;
+    std::vector<EmitterQuery> lights;
+    std::vector<LightSample> samples;
+    std::vector<uint32_t> owners;
+    std::vector<Ray> shadow;
+    for (uint32_t k = 0; k < vertices.size(); ++k) {
+      const Vertex& v = vertices[k];
+      const uint32_t lobes = scene.Material(v.material).Lobes();
+      if ((lobes & kScatterDelta) && !(lobes & (kScatterDiffuse | kScatterGlossy))) continue;
+      for (uint32_t l = 0; l < scene.LightCount(); ++l) {
+        const LightSample s = scene.LightPoint(l, v.position);
+        const Vec3 d = s.position - v.position;
+        if (!(Dot(d, d) > 0)) continue;
+        const Vec3 to_light = Normalize(d);
+        surfaces.push_back({v.material, v.wi, v.frame.ToLocal(to_light), v.u, v.v});
+        lights.push_back({s.emitter, Frame(s.normal).ToLocal(-to_light), s.u, s.v});
+        samples.push_back(s);
+        owners.push_back(k);
+        Ray ray = ShadowRay(v.position, v.frame.n, s.position);
+        if (s.delta_position) ray.tfar = std::max(0.0f, Length(s.position - ray.origin));
+        ray.time = level[v.branch].ray.time;
+        shadow.push_back(ray);
+      }
+    }
+    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
+    const std::vector<EmitterAnswer> le = EvaluateEmitters(lights);
+    std::vector<uint8_t> occluded(shadow.size());
+    scene.Occluded(shadow, occluded);
+    for (size_t q = 0; q < shadow.size(); ++q) {
+      if (occluded[q]) continue;
+      const LightSample& s = samples[q];
+      const Vec3 d = s.position - vertices[owners[q]].position;
+      const float cos_light = s.delta_position ? 1.0f : std::abs(lights[q].w.z);
+      const float g = std::abs(surfaces[q].wo.z) * cos_light / (Dot(d, d) * s.pdf);
+      const Branch& b = level[vertices[owners[q]].branch];
+      radiance[b.point] += b.weight * f[q].f * le[q].radiance * g;
+    }
+  }
+
+  // Both delta lobes of every vertex that has them, each with its weight.
+  std::vector<Branch> Spawn(const SceneView& scene, const std::vector<Branch>& level,
+                            const std::vector<Vertex>& vertices) const {
+    std::vector<ScatterQuery> queries;
+    std::vector<uint32_t> owners;
+    for (uint32_t k = 0; k < vertices.size(); ++k) {
+      const Vertex& v = vertices[k];
+      if (!(scene.Material(v.material).Lobes() & kScatterDelta)) continue;
+      ScatterQuery q{v.material, v.wi, v.u, v.v};
+      q.uniform[0] = q.uniform[1] = q.uniform[2] = 0.5f;
+      queries.push_back(q);
+      owners.push_back(k);
+    }
+    std::vector<Branch> next;
+    for (const uint32_t side : {kScatterReflect, kScatterRefract}) {
+      const std::vector<ScatterAnswer> sampled =
+          SampleSurfaces(scene, TransportMode::kRadiance, side | kScatterDelta, queries);
+      for (size_t q = 0; q < queries.size(); ++q) {
+        if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
+        const Vertex& v = vertices[owners[q]];
+        const Branch& parent = level[v.branch];
+        Branch b{parent.point, parent.ray, parent.weight * sampled[q].weight};
+        const Vec3 dir = Normalize(v.frame.ToWorld(sampled[q].wo));
+        b.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
+        b.ray.direction = dir;
+        b.ray.tnear = 0;
+        b.ray.tfar = kInfinity;
+        next.push_back(b);
+      }
+    }
+    return next;
+  }
+
+  int max_depth_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::Whitted>(registrar, "whitted", "1.0.0",
+                                "Whitted ray tracer: hard shadows, mirror reflection and refraction");
+}
