@@ -40,8 +40,10 @@ constexpr uint32_t kLightPosition = kTransportDimension, kEmission = kTransportD
 struct Vertex {
   enum class Kind : uint8_t { kCamera, kLight, kSurface };
   Kind kind = Kind::kSurface;
-  // Sampled from a delta lobe (surfaces) or a light with no area.
+  // Scattered through a delta lobe (surfaces).
   bool delta = false;
+  // A light with no area (point and spot lights).
+  bool delta_position = false;
   Vec3 p;
   // The geometric normal; a point light's or the camera's axis.
   Vec3 n;
@@ -55,7 +57,7 @@ struct Vertex {
   float u = 0, v = 0;
   const Emitter* emitter = nullptr;
 
-  bool OnSurface() const { return kind == Kind::kSurface || (kind == Kind::kLight && !delta); }
+  bool OnSurface() const { return kind == Kind::kSurface || (kind == Kind::kLight && !delta_position); }
   // Converts a solid-angle density of the direction from here toward
   // `next` into an area density at next.
   float ToArea(float pdf, const Vertex& next) const {
@@ -129,7 +131,7 @@ class Bdpt final : public Transport {
         if (!s.light.emitter || !(s.light.pdf > 0)) continue;
         Vertex& l = light.at(i, 0);
         l.kind = Vertex::Kind::kLight;
-        l.delta = s.light.delta_position;
+        l.delta_position = s.light.delta_position;
         l.p = s.light.position;
         l.n = s.light.normal;
         l.beta = Vec3(1, 1, 1) * (1.0f / s.light.pdf);
@@ -250,6 +252,8 @@ class Bdpt final : public Transport {
           }
           const Vertex& qs = light.at(i, s - 1);
           if (qs.kind == Vertex::Kind::kSurface && qs.delta) continue;
+          // A point light is a delta on the film: never seen directly.
+          if (s == 1 && t == 1 && qs.delta_position) continue;
           if (t == 1) {
             if (!scene.ConnectToCamera(qs.p, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
                                        j.camera))
@@ -380,7 +384,8 @@ class Bdpt final : public Transport {
       const Vertex& v = light_vertex(uint32_t(k));
       ratio *= Remap0(v.pdf_rev) / Remap0(v.pdf_fwd);
       const bool self_delta = k == int(s) - 1 ? false : v.delta;
-      const bool before_delta = k > 0 ? light_vertex(uint32_t(k - 1)).delta : v.delta;
+      // Strategy (k, ·) needs vertex k − 1 to connect; s = 0 needs a light with area.
+      const bool before_delta = k > 0 ? light_vertex(uint32_t(k - 1)).delta : v.delta_position;
       if (!self_delta && !before_delta) sum += ratio * ratio;
     }
     return 1 / (1 + sum);

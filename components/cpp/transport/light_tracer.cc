@@ -70,7 +70,7 @@ class LightTracer final : public Transport {
   }
 
  private:
-  // Paths of one segment: the light seen directly by the camera.
+  // Paths of one segment: a surface light seen directly by the camera.
   void ConnectLightsToCamera(const SceneView& scene, const PrimarySamples& points,
                              const std::vector<LightStart>& starts, const std::vector<float>& time,
                              FilmSamples& out) const {
@@ -79,7 +79,9 @@ class LightTracer final : public Transport {
     std::vector<uint32_t> owners;
     for (uint32_t i = 0; i < starts.size(); ++i) {
       const LightSample& l = starts[i].light;
-      if (!l.emitter || !(l.pdf > 0)) continue;
+      // A point light is a delta on the film: the camera never sees it,
+      // as camera rays never hit it.
+      if (!l.emitter || !(l.pdf > 0) || l.delta_position) continue;
       CameraConnection c;
       if (!scene.ConnectToCamera(l.position, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), c))
         continue;
