@@ -91,7 +91,7 @@ PROBES = [(0.5, 0.5), (0.02, 0.02), (0.98, 0.02), (0.02, 0.98), (0.98, 0.98)]
 def hit_plane(
     origin: np.ndarray, d: np.ndarray, axis: int, level: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Distance to the plane coordinate[axis] = level (inf when parallel or behind) and the point."""
+    """Distance to the plane coordinate[axis] = level (inf if parallel or behind), and the point."""
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (level - origin[..., axis]) / d[..., axis]
     t = np.where(t > 1e-6, t, np.inf)
