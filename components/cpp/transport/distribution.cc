@@ -118,43 +118,19 @@ class DistributionRayTracer final : public Transport {
   void SampleLights(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
                     const std::vector<Vertex>& vertices, uint32_t base) const {
     if (!scene.HasLights()) return;
-    std::vector<SurfaceQuery> surfaces;
-    std::vector<EmitterQuery> lights;
-    std::vector<LightSample> samples;
+    std::vector<LightConnection> connections;
     std::vector<uint32_t> owners;
-    std::vector<Ray> shadow;
-    for (uint32_t k = 0; k < vertices.size(); ++k) {
-      const Vertex& v = vertices[k];
-      const uint32_t lobes = scene.Material(v.material).Lobes();
-      if ((lobes & kScatterDelta) && !(lobes & (kScatterDiffuse | kScatterGlossy))) continue;
+    for (const Vertex& v : vertices) {
+      if (!SamplesLights(scene.Material(v.material).Lobes())) continue;
       const LightSample s =
           scene.SampleLight(points.Get(v.path, base + kLightChoice), points.Get(v.path, base + kLightPosition),
                             points.Get(v.path, base + kLightPosition + 1));
-      const Vec3 d = s.position - v.position;
-      if (!s.emitter || !(s.pdf > 0) || !(Dot(d, d) > 0)) continue;
-      const Vec3 to_light = Normalize(d);
-      surfaces.push_back({v.material, v.wi, v.frame.ToLocal(to_light), v.u, v.v});
-      lights.push_back({s.emitter, Frame(s.normal).ToLocal(-to_light), s.u, s.v});
-      samples.push_back(s);
-      owners.push_back(k);
-      Ray ray = ShadowRay(v.position, v.frame.n, s.position);
-      if (s.delta_position) ray.tfar = std::max(0.0f, Length(s.position - ray.origin));
-      ray.time = paths[v.path].ray.time;
-      shadow.push_back(ray);
+      if (!s.emitter) continue;
+      connections.push_back({v.material, v.position, v.frame, v.wi, v.u, v.v, paths[v.path].ray.time, s});
+      owners.push_back(v.path);
     }
-    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
-    const std::vector<EmitterAnswer> le = EvaluateEmitters(lights);
-    std::vector<uint8_t> occluded(shadow.size());
-    scene.Occluded(shadow, occluded);
-    for (size_t q = 0; q < shadow.size(); ++q) {
-      if (occluded[q]) continue;
-      const LightSample& s = samples[q];
-      const Vertex& v = vertices[owners[q]];
-      const Vec3 d = s.position - v.position;
-      const float cos_light = s.delta_position ? 1.0f : std::abs(lights[q].w.z);
-      const float g = std::abs(surfaces[q].wo.z) * cos_light / (Dot(d, d) * s.pdf);
-      paths[v.path].radiance += paths[v.path].throughput * f[q].f * le[q].radiance * g;
-    }
+    const std::vector<Vec3> light = DirectLight(scene, connections);
+    for (size_t k = 0; k < owners.size(); ++k) paths[owners[k]].radiance += paths[owners[k]].throughput * light[k];
   }
 
   // Goes on through the non-diffuse lobes.

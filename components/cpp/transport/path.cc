@@ -128,10 +128,7 @@ class PathTracer final : public Transport {
     std::vector<uint32_t> next;
     for (const auto& [material, members] : GroupBy(vertex_material)) {
       const SurfaceModel& model = scene.Material(material);
-      // Purely specular models gain nothing from light samples.
-      const uint32_t lobes = model.Lobes();
-      const bool sample_lights =
-          scene.HasLights() && ((lobes & (kScatterDiffuse | kScatterGlossy)) || !(lobes & kScatterDelta));
+      const bool sample_lights = scene.HasLights() && SamplesLights(model.Lobes());
       if (sample_lights) SampleLights(scene, points, model, paths, vertices, members, base);
       ScatterBsdf(points, model, paths, vertices, members, base, depth, sample_lights, next);
     }

@@ -15,6 +15,13 @@
 
 namespace yarf {
 
+// Whether light samples can find anything at a surface with these lobes:
+// all but purely specular ones (a model without kind flags counts as not
+// specular).
+inline bool SamplesLights(uint32_t lobes) {
+  return (lobes & (kScatterDiffuse | kScatterGlossy)) || !(lobes & kScatterDelta);
+}
+
 // Veach's power heuristic with β = 2 for two strategies.
 inline float PowerHeuristic(float a, float b) {
   a *= a;
@@ -234,6 +241,55 @@ inline Ray RayToLens(Vec3 p, Vec3 n, Vec3 lens_point, float time) {
   }
   ray.time = time;
   return ray;
+}
+
+}  // namespace yarf
+
+namespace yarf {
+
+// A surface point joined to a chosen point of a light (next-event
+// estimation without MIS): directions in the vertex's local frame.
+struct LightConnection {
+  uint32_t material;
+  Vec3 position;
+  Frame frame;
+  Vec3 wi;
+  float u = 0, v = 0;
+  float time = 0;
+  LightSample light;
+};
+
+// f·L·|cos|·|cos'|/(d²·pdf) of each connection whose shadow ray is clear,
+// zero otherwise: one call per material and per emitter, one ray batch.
+inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<LightConnection>& connections) {
+  const size_t n = connections.size();
+  std::vector<SurfaceQuery> surfaces(n);
+  std::vector<EmitterQuery> lights(n);
+  std::vector<Ray> shadow(n);
+  for (size_t k = 0; k < n; ++k) {
+    const LightConnection& c = connections[k];
+    const Vec3 to_light = Normalize(c.light.position - c.position);
+    surfaces[k] = {c.material, c.wi, c.frame.ToLocal(to_light), c.u, c.v};
+    lights[k] = {c.light.emitter, Frame(c.light.normal).ToLocal(-to_light), c.light.u, c.light.v};
+    shadow[k] = ShadowRay(c.position, c.frame.n, c.light.position);
+    // A point light has no surface to stop short of.
+    if (c.light.delta_position) shadow[k].tfar = std::max(0.0f, Length(c.light.position - shadow[k].origin));
+    shadow[k].time = c.time;
+  }
+  const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
+  const std::vector<EmitterAnswer> le = EvaluateEmitters(lights);
+  std::vector<uint8_t> occluded(n);
+  scene.Occluded(shadow, occluded);
+  std::vector<Vec3> out(n);
+  for (size_t k = 0; k < n; ++k) {
+    const LightConnection& c = connections[k];
+    const Vec3 d = c.light.position - c.position;
+    const float dist2 = Dot(d, d);
+    if (occluded[k] || !(dist2 > 0) || !(c.light.pdf > 0)) continue;
+    const float cos_light = c.light.delta_position ? 1.0f : std::abs(lights[k].w.z);
+    out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * cos_light / (dist2 * c.light.pdf));
+  }
+  return out;
 }
 
 }  // namespace yarf

@@ -103,42 +103,19 @@ class Whitted final : public Transport {
   // Every light, as one point, through one shadow ray each.
   void AddDirectLight(const SceneView& scene, const std::vector<Branch>& level, const std::vector<Vertex>& vertices,
                       std::vector<Vec3>& radiance) const {
-    std::vector<SurfaceQuery> surfaces;
-    std::vector<EmitterQuery> lights;
-    std::vector<LightSample> samples;
-    std::vector<uint32_t> owners;
-    std::vector<Ray> shadow;
-    for (uint32_t k = 0; k < vertices.size(); ++k) {
-      const Vertex& v = vertices[k];
-      const uint32_t lobes = scene.Material(v.material).Lobes();
-      if ((lobes & kScatterDelta) && !(lobes & (kScatterDiffuse | kScatterGlossy))) continue;
-      for (uint32_t l = 0; l < scene.LightCount(); ++l) {
-        const LightSample s = scene.LightPoint(l, v.position);
-        const Vec3 d = s.position - v.position;
-        if (!(Dot(d, d) > 0)) continue;
-        const Vec3 to_light = Normalize(d);
-        surfaces.push_back({v.material, v.wi, v.frame.ToLocal(to_light), v.u, v.v});
-        lights.push_back({s.emitter, Frame(s.normal).ToLocal(-to_light), s.u, s.v});
-        samples.push_back(s);
-        owners.push_back(k);
-        Ray ray = ShadowRay(v.position, v.frame.n, s.position);
-        if (s.delta_position) ray.tfar = std::max(0.0f, Length(s.position - ray.origin));
-        ray.time = level[v.branch].ray.time;
-        shadow.push_back(ray);
-      }
+    std::vector<LightConnection> connections;
+    for (const Vertex& v : vertices) {
+      if (!SamplesLights(scene.Material(v.material).Lobes())) continue;
+      for (uint32_t l = 0; l < scene.LightCount(); ++l)
+        connections.push_back({v.material, v.position, v.frame, v.wi, v.u, v.v, level[v.branch].ray.time,
+                               scene.LightPoint(l, v.position)});
     }
-    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
-    const std::vector<EmitterAnswer> le = EvaluateEmitters(lights);
-    std::vector<uint8_t> occluded(shadow.size());
-    scene.Occluded(shadow, occluded);
-    for (size_t q = 0; q < shadow.size(); ++q) {
-      if (occluded[q]) continue;
-      const LightSample& s = samples[q];
-      const Vec3 d = s.position - vertices[owners[q]].position;
-      const float cos_light = s.delta_position ? 1.0f : std::abs(lights[q].w.z);
-      const float g = std::abs(surfaces[q].wo.z) * cos_light / (Dot(d, d) * s.pdf);
-      const Branch& b = level[vertices[owners[q]].branch];
-      radiance[b.point] += b.weight * f[q].f * le[q].radiance * g;
+    const std::vector<Vec3> light = DirectLight(scene, connections);
+    size_t k = 0;
+    for (const Vertex& v : vertices) {
+      if (!SamplesLights(scene.Material(v.material).Lobes())) continue;
+      const Branch& b = level[v.branch];
+      for (uint32_t l = 0; l < scene.LightCount(); ++l) radiance[b.point] += b.weight * light[k++];
     }
   }
 
