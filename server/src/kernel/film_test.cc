@@ -26,6 +26,49 @@ TEST(Film, BoxFilterAveragesTheSamplesInsideEachPixel) {
   EXPECT_FLOAT_EQ(pixels[3 * 0], 0.0f);
 }
 
+TEST(Film, SplatsAreSummedPerPassAndAveragedOverPasses) {
+  // One pass of width×height uniformly placed splats of value L estimates
+  // L in every pixel (away from the border, under any filter).
+  for (auto kind : {v1::ReconstructionFilter::BOX, v1::ReconstructionFilter::TENT,
+                    v1::ReconstructionFilter::GAUSSIAN}) {
+    Film film(16, 16, Filter(kind));
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0, 16);
+    constexpr int kPasses = 400;
+    for (int pass = 0; pass < kPasses; ++pass) {
+      for (int i = 0; i < 16 * 16; ++i) film.Splat(u(rng), u(rng), {2, 2, 2});
+      film.EndPass();
+    }
+    const std::vector<float> pixels = film.Pixels(), variances = film.Variances();
+    double sum = 0, within = 0;
+    int count = 0;
+    for (int y = 3; y < 13; ++y)
+      for (int x = 3; x < 13; ++x) {
+        const size_t k = 3 * (size_t(y) * 16 + x);
+        sum += pixels[k];
+        // Each pass is a Poisson-like count: variance of the mean ≈ 2²·1/passes.
+        within += std::abs(pixels[k] - 2) < 5 * std::sqrt(variances[k]);
+        ++count;
+      }
+    EXPECT_NEAR(sum / count, 2.0, 0.05) << kind;
+    EXPECT_EQ(within, count) << kind;
+    EXPECT_NEAR(variances[3 * (8 * 16 + 8)], 4.0 / kPasses, 4.0 / kPasses) << kind;
+  }
+}
+
+TEST(Film, CameraSamplesAndSplatsAdd) {
+  Film film(1, 1, Filter(v1::ReconstructionFilter::BOX));
+  film.Add(0.5f, 0.5f, {1, 1, 1});
+  film.Splat(0.5f, 0.5f, {3, 3, 3});
+  film.EndPass();
+  film.Splat(0.5f, 0.5f, {1, 1, 1});
+  film.EndPass();
+  // 1 from the camera sample, (3 + 1)/2 passes from the splats.
+  EXPECT_FLOAT_EQ(film.Pixels()[0], 3.0f);
+  // The passes gave 3 and 1: sample variance 2, variance of their mean 1.
+  EXPECT_FLOAT_EQ(film.Variances()[0], 2.0f / 2.0f);
+}
+
 TEST(Film, ConstantRadianceGivesThatRadianceUnderEveryFilter) {
   for (auto kind : {v1::ReconstructionFilter::BOX, v1::ReconstructionFilter::TENT,
                     v1::ReconstructionFilter::GAUSSIAN}) {
