@@ -3,89 +3,25 @@
 // energy conservation, reciprocity, agreement of Sample with Pdf and
 // Evaluate, the distribution of sampled directions (Pearson's χ² test),
 // the delta lobes' directions and probabilities, and property checking.
+// The fixture and the batch-call helpers are surface_test_support.h's.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
-#include <memory>
-#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "components/registry.h"
-#include "testing/chi_square.h"
-#include "yarf/hash.h"
+#include "surface_test_support.h"
 #include "yarf/surface.h"
 #include "yarf/warps.h"
 
 namespace yarf {
 namespace {
 
-constexpr double kPiDouble = 3.14159265358979323846;
-
-// --- Calling the batch interface one direction at a time ------------------
-
-Vec3 EvaluateOne(const SurfaceModel& model, Vec3 wi, Vec3 wo) {
-  float in[3], out[3], value[3];
-  const float uv[2] = {0, 0};
-  wi.Store(in);
-  wo.Store(out);
-  model.Evaluate(TransportMode::kRadiance, in, out, uv, value);
-  return Vec3::Load(value);
-}
-
-float PdfOne(const SurfaceModel& model, Vec3 wi, Vec3 wo) {
-  float in[3], out[3], pdf[1];
-  const float uv[2] = {0, 0};
-  wi.Store(in);
-  wo.Store(out);
-  model.Pdf(in, out, uv, pdf);
-  return pdf[0];
-}
-
-struct Scattered {
-  Vec3 wo, weight;
-  float pdf = 0;
-  uint32_t flags = kScatterNone;
-};
-
-// Sample for a batch of (wi, uniform) pairs in one call.
-std::vector<Scattered> SampleBatch(const SurfaceModel& model, const std::vector<Vec3>& wi,
-                                   const std::vector<std::array<float, 3>>& uniform,
-                                   uint32_t allowed = 0,
-                                   TransportMode mode = TransportMode::kRadiance) {
-  const size_t count = wi.size();
-  std::vector<float> in(3 * count), uv(2 * count, 0.0f), u(3 * count), wo(3 * count),
-      weight(3 * count), pdf(count);
-  std::vector<uint32_t> flags(count);
-  for (size_t k = 0; k < count; ++k) {
-    wi[k].Store(&in[3 * k]);
-    std::copy(uniform[k].begin(), uniform[k].end(), &u[3 * k]);
-  }
-  model.Sample(mode, in, uv, u, allowed, wo, weight, pdf, flags);
-  std::vector<Scattered> out(count);
-  for (size_t k = 0; k < count; ++k)
-    out[k] = {Vec3::Load(&wo[3 * k]), Vec3::Load(&weight[3 * k]), pdf[k], flags[k]};
-  return out;
-}
-
-Scattered SampleOne(const SurfaceModel& model, Vec3 wi, std::array<float, 3> uniform,
-                    uint32_t allowed = 0, TransportMode mode = TransportMode::kRadiance) {
-  return SampleBatch(model, {wi}, {uniform}, allowed, mode)[0];
-}
-
-// Uniform numbers from a hash: reproducible, and independent per (seed, k).
-std::array<float, 3> Uniform3(uint64_t seed, uint64_t k) {
-  return {ToUnitFloat(uint32_t(Hash(seed, k, 0) >> 32)),
-          ToUnitFloat(uint32_t(Hash(seed, k, 1) >> 32)),
-          ToUnitFloat(uint32_t(Hash(seed, k, 2) >> 32))};
-}
-
-Vec3 DirectionAt(double cos_theta, double phi) {
-  return SphericalDirection(SinFromCos(float(cos_theta)), float(cos_theta), float(phi));
-}
+using namespace surface_testing;  // NOLINT: the shared helpers, in every test
 
 // Incident directions from normal to near-grazing incidence, on both
 // sides (the reflectors are two-sided).
@@ -97,106 +33,49 @@ std::vector<Vec3> IncidentDirections() {
   return out;
 }
 
-std::string Describe(Vec3 v) {
-  std::ostringstream s;
-  s << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-  return s.str();
-}
-
-void ExpectVecNear(Vec3 actual, Vec3 expected, float relative, const std::string& what) {
-  for (int c = 0; c < 3; ++c)
-    EXPECT_NEAR(actual[c], expected[c], relative * std::max(1.0f, std::abs(expected[c])))
-        << what << " channel " << c << ": " << Describe(actual) << " vs " << Describe(expected);
-}
-
 // --- Directional albedo: ∫ f(wi, wo) |cos θo| dωo --------------------------
 
 // By the midpoint rule over the sphere in (cos θo, φo), in one batch.
 Vec3 AlbedoByQuadrature(const SurfaceModel& model, Vec3 wi) {
   constexpr int kRows = 1000, kCols = 400;
   const double dz = 2.0 / kRows, dphi = 2 * kPiDouble / kCols;
-  const size_t count = size_t(kRows) * kCols;
-  std::vector<float> in(3 * count), out(3 * count), uv(2 * count, 0.0f), value(3 * count);
+  std::vector<Vec3> wo;
+  wo.reserve(size_t(kRows) * kCols);
   for (int i = 0; i < kRows; ++i)
-    for (int j = 0; j < kCols; ++j) {
-      const size_t k = size_t(i) * kCols + j;
-      wi.Store(&in[3 * k]);
-      DirectionAt(-1.0 + (i + 0.5) * dz, -kPiDouble + (j + 0.5) * dphi).Store(&out[3 * k]);
-    }
-  model.Evaluate(TransportMode::kRadiance, in, out, uv, value);
+    for (int j = 0; j < kCols; ++j)
+      wo.push_back(DirectionAt(-1.0 + (i + 0.5) * dz, -kPiDouble + (j + 0.5) * dphi));
+  const std::vector<Vec3> value = EvaluateBatch(model, wi, wo, TransportMode::kRadiance);
   double sum[3] = {0, 0, 0};
-  for (size_t k = 0; k < count; ++k)
-    for (int c = 0; c < 3; ++c) sum[c] += double(value[3 * k + c]) * std::abs(out[3 * k + 2]);
+  for (size_t k = 0; k < wo.size(); ++k)
+    for (int c = 0; c < 3; ++c) sum[c] += double(value[k][c]) * std::abs(wo[k].z);
   return Vec3(float(sum[0] * dz * dphi), float(sum[1] * dz * dphi), float(sum[2] * dz * dphi));
-}
-
-struct MeanWithError {
-  Vec3 mean, standard_error;
-};
-
-// As the mean of Sample's weight (an unbiased estimate of the albedo).
-MeanWithError AlbedoBySampling(const SurfaceModel& model, Vec3 wi, int count, uint64_t seed) {
-  std::vector<Vec3> in(count, wi);
-  std::vector<std::array<float, 3>> uniform(count);
-  for (int k = 0; k < count; ++k) uniform[k] = Uniform3(seed, k);
-  double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
-  for (const Scattered& s : SampleBatch(model, in, uniform))
-    for (int c = 0; c < 3; ++c) {
-      sum[c] += s.weight[c];
-      sum2[c] += double(s.weight[c]) * s.weight[c];
-    }
-  MeanWithError out;
-  float mean[3], error[3];
-  for (int c = 0; c < 3; ++c) {
-    mean[c] = float(sum[c] / count);
-    const double variance = std::max(0.0, sum2[c] / count - mean[c] * double(mean[c]));
-    error[c] = float(std::sqrt(variance / count));
-  }
-  return {Vec3(mean[0], mean[1], mean[2]), Vec3(error[0], error[1], error[2])};
 }
 
 // --- Pearson's χ² test of sampled directions ---------------------------
 
-// Directions binned in (cos θ, φ) cells, which have equal solid angle
-// (dω = d cos θ dφ); the expected count of a cell is N ∫ pdf over it by
-// 5-point Gauss–Legendre quadrature per coordinate (its nodes lie inside
-// the cell, so the pdf's jump at the horizon, a cell edge, is integrated
-// on the correct side). Cells expecting fewer than 5 samples are
-// pooled; a sample where the pdf is 0 fails at once.
+// The expected count of a (cos θ, φ) cell is N ∫ pdf over it by
+// Gauss–Legendre quadrature in cos θ and φ, one pdf call per node; a
+// sample where the pdf is 0 fails at once.
 testing::AssertionResult DirectionsFollowPdf(const std::vector<Vec3>& directions,
                                              int sample_count,
                                              const std::function<double(Vec3)>& pdf) {
-  constexpr int kRows = 50, kCols = 100;
-  constexpr double kSignificance = 0.01;
-  static constexpr double kNodes[] = {-0.9061798459386640, -0.5384693101056831, 0.0,
-                                      0.5384693101056831, 0.9061798459386640};
-  static constexpr double kWeights[] = {0.2369268850561891, 0.4786286704993665,
-                                        0.5688888888888889, 0.4786286704993665,
-                                        0.2369268850561891};
-  const double dz = 2.0 / kRows, dphi = 2 * kPiDouble / kCols;
-  std::vector<double> observed(kRows * kCols, 0.0), expected(kRows * kCols, 0.0);
-  for (Vec3 w : directions) {
-    const double z = std::clamp(double(w.z), -1.0, 1.0);
-    const double phi = std::atan2(double(w.y), double(w.x));
-    const int row = std::min(int((z + 1.0) / 2.0 * kRows), kRows - 1);
-    const int col = std::clamp(int((phi + kPiDouble) / (2 * kPiDouble) * kCols), 0, kCols - 1);
-    observed[row * kCols + col] += 1;
-  }
-  for (int row = 0; row < kRows; ++row)
-    for (int col = 0; col < kCols; ++col) {
+  const double dz = 2.0 / kChiRows, dphi = 2 * kPiDouble / kChiCols;
+  std::vector<double> expected(kChiRows * kChiCols, 0.0);
+  for (int row = 0; row < kChiRows; ++row)
+    for (int col = 0; col < kChiCols; ++col) {
       const double z_mid = -1.0 + (row + 0.5) * dz, phi_mid = -kPiDouble + (col + 0.5) * dphi;
       double sum = 0;
       for (int s = 0; s < 5; ++s)
         for (int t = 0; t < 5; ++t)
-          sum += kWeights[s] * kWeights[t] *
-                 pdf(DirectionAt(z_mid + 0.5 * dz * kNodes[s], phi_mid + 0.5 * dphi * kNodes[t]));
-      expected[row * kCols + col] = sample_count * sum * (0.5 * dz) * (0.5 * dphi);
+          sum += kGaussWeights[s] * kGaussWeights[t] *
+                 pdf(DirectionAt(z_mid + 0.5 * dz * kGaussNodes[s],
+                                 phi_mid + 0.5 * dphi * kGaussNodes[t]));
+      expected[row * kChiCols + col] = sample_count * sum * (0.5 * dz) * (0.5 * dphi);
     }
-
-  return testing_support::PearsonChiSquareTest(observed, expected, kSignificance);
+  return CellsFollowExpected(directions, expected);
 }
 
-// --- Fixture: the plugins, loaded as yarfd loads them ----------------------
+// --- Phong materials and the fixture -----------------------------------------
 
 Properties PhongProperties(Vec3 diffuse, Vec3 specular, double exponent) {
   Properties props;
@@ -214,39 +93,13 @@ std::vector<Properties> PhongVariants() {
           PhongProperties(Vec3(0.0f, 0.0f, 0.0f), Vec3(1.0f, 1.0f, 1.0f), 1.0)};
 }
 
-class SurfaceModelTest : public testing::Test {
- protected:
-  SurfaceModelTest() { registry_.LoadDirectory(YARF_PLUGIN_DIR); }
-
-  std::unique_ptr<SurfaceModel> Make(const std::string& name,
-                                     const Properties& props = Properties()) const {
-    return registry_.CreateAs<SurfaceModel>(name, props);
-  }
-
-  // The message of the Error that creating `name` with `props` throws.
-  std::string CreationError(const std::string& name, const Properties& props) const {
-    try {
-      registry_.Create(name, props);
-    } catch (const Error& e) {
-      return e.what();
-    }
-    return "";
-  }
-
-  Registry registry_;
-};
+class SurfaceModelTest : public SurfacePluginTest {};
 
 // --- Registration and properties -------------------------------------------
 
 TEST_F(SurfaceModelTest, RegistersEveryModelWithItsInterface) {
-  for (const char* name : {"lambertian", "phong", "mirror", "dielectric"}) {
-    ASSERT_TRUE(registry_.Has(name)) << name;
-    const auto model = Make(name);
-    const ComponentInfo& info = model->Describe();
-    EXPECT_EQ(info.class_name, name);
-    EXPECT_EQ(info.interfaces, std::vector<std::string>{SurfaceModel::kInterface}) << name;
-    EXPECT_FALSE(info.summary.empty()) << name;
-  }
+  for (const char* name : {"lambertian", "phong", "mirror", "dielectric"})
+    ASSERT_NO_FATAL_FAILURE(ExpectRegisteredSurfaceModel(name));
 }
 
 TEST_F(SurfaceModelTest, LobesDescribeTheModels) {
@@ -305,7 +158,7 @@ TEST_F(SurfaceModelTest, LambertianAlbedoIsItsReflectance) {
   for (Vec3 wi : IncidentDirections()) {
     ExpectVecNear(AlbedoByQuadrature(*model, wi), reflectance, 0.01f,
                   "quadrature at wi " + Describe(wi));
-    ExpectVecNear(AlbedoBySampling(*model, wi, 10000, 1).mean, reflectance, 0.01f,
+    ExpectVecNear(MeanWeight(SampleMany(*model, wi, 10000, 1)).mean, reflectance, 0.01f,
                   "sampling at wi " + Describe(wi));
   }
   const Vec3 default_albedo = AlbedoByQuadrature(*Make("lambertian"), Vec3(0, 0, 1));
@@ -317,7 +170,7 @@ TEST_F(SurfaceModelTest, PhongConservesEnergy) {
     const auto model = Make("phong", props);
     for (Vec3 wi : IncidentDirections()) {
       const Vec3 quadrature = AlbedoByQuadrature(*model, wi);
-      const MeanWithError sampled = AlbedoBySampling(*model, wi, 200000, 7);
+      const MeanWithError sampled = MeanWeight(SampleMany(*model, wi, 200000, 7));
       for (int c = 0; c < 3; ++c) {
         const std::string where = "wi " + Describe(wi) + " channel " + std::to_string(c);
         EXPECT_LE(quadrature[c], 1.0f + 2e-3f) << where;

@@ -27,6 +27,7 @@
 
 #include "metals.h"
 #include "microfacet.h"
+#include "scatter_rows.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -48,20 +49,16 @@ class Conductor final : public yarf::DeltaSurfaceModel {
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       if (!can_reflect || !(in.z > 0)) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      yarf::Reflect(in).Store(&wo[3 * k]);
-      (specular_ * yarf::microfacet::FresnelConductor(in.z, ior_.eta, ior_.k))
-          .Store(&weight[3 * k]);
-      pdf[k] = 1.0f;
-      flags[k] = kMirrorLobe;
+      rows.Store(k, yarf::Reflect(in),
+                 specular_ * yarf::microfacet::FresnelConductor(in.z, ior_.eta, ior_.k), 1.0f,
+                 kMirrorLobe);
     }
   }
 

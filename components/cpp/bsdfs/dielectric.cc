@@ -25,6 +25,8 @@
 #include <span>
 #include <string>
 
+#include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -35,18 +37,10 @@ using yarf::Vec3;
 constexpr uint32_t kReflectLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 constexpr uint32_t kRefractLobe = yarf::kScatterRefract | yarf::kScatterDelta;
 
-float RequireIndex(double ior, const std::string& property) {
-  if (!(ior > 0.0 && std::isfinite(ior)))
-    throw yarf::Error("property '" + property + "' must be a finite number > 0");
-  return float(ior);
-}
-
 class Dielectric final : public yarf::DeltaSurfaceModel {
  public:
   explicit Dielectric(const yarf::Properties& props)
-      : eta_(RequireIndex(props.Float("int_ior", 1.5046), "int_ior") /
-             RequireIndex(props.Float("ext_ior", 1.000277), "ext_ior")) {}
-
+      : eta_(yarf::ReadRelativeIndex(props, 1.5046, 1.000277)) {}
 
   void Sample(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
@@ -55,6 +49,7 @@ class Dielectric final : public yarf::DeltaSurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
     const bool can_refract = yarf::LobeAllowed(kRefractLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float fresnel = yarf::FresnelDielectric(in.z, eta_);
@@ -66,10 +61,7 @@ class Dielectric final : public yarf::DeltaSurfaceModel {
       Vec3 out;
       const bool reflect = uniform[3 * k] * total < reflect_share;
       if (!(total > 0) || in.z == 0 || (!reflect && !yarf::Refract(in, eta_, &out))) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
       float factor, probability;
@@ -84,14 +76,10 @@ class Dielectric final : public yarf::DeltaSurfaceModel {
         if (mode == yarf::TransportMode::kRadiance) factor /= eta_rel * eta_rel;
         probability = refract_share / total;
       }
-      out.Store(&wo[3 * k]);
       const float w = factor / probability;
-      Vec3(w, w, w).Store(&weight[3 * k]);
-      pdf[k] = probability;
-      flags[k] = reflect ? kReflectLobe : kRefractLobe;
+      rows.Store(k, out, Vec3(w, w, w), probability, reflect ? kReflectLobe : kRefractLobe);
     }
   }
-
 
   uint32_t Lobes() const override { return kReflectLobe | kRefractLobe; }
 

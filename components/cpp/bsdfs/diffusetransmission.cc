@@ -27,6 +27,8 @@
 #include <span>
 #include <string>
 
+#include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -42,24 +44,18 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
   explicit DiffuseTransmission(const yarf::Properties& props)
       : reflectance_(props.Reflectance("reflectance", Vec3(0.25f, 0.25f, 0.25f))),
         transmittance_(props.Reflectance("transmittance", Vec3(0.25f, 0.25f, 0.25f))) {
-    static constexpr const char* kChannel[] = {"red", "green", "blue"};
-    for (int c = 0; c < 3; ++c)
-      if (reflectance_[c] + transmittance_[c] > 1.0f)
-        throw yarf::Error(std::string("properties 'reflectance' + 'transmittance' exceed 1 in "
-                                      "the ") +
-                          kChannel[c] + " channel: the material would create energy");
+    yarf::RequireEnergyConserving(reflectance_, transmittance_, "reflectance", "transmittance");
     reflect_weight_ = yarf::MaxComponent(reflectance_);
     transmit_weight_ = yarf::MaxComponent(transmittance_);
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k) {
-      const float product = wi[3 * k + 2] * wo[3 * k + 2];
+    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) {
+      const float product = in.z * out.z;
       const Vec3 f = product > 0 ? reflectance_ : (product < 0 ? transmittance_ : Vec3());
-      (f * yarf::kInvPi).Store(&value[3 * k]);
-    }
+      return f * yarf::kInvPi;
+    });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -72,6 +68,7 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
     const float transmit_share =
         yarf::LobeAllowed(kTransmitLobe, allowed) ? transmit_weight_ : 0.0f;
     const float total = reflect_share + transmit_share;
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const float wi_z = wi[3 * k + 2];
       const float* u = &uniform[3 * k];
@@ -84,30 +81,23 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
                                 ? probability * yarf::CosineHemispherePdf(std::abs(out.z))
                                 : 0.0f;
       if (!(density > 0)) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      out.Store(&wo[3 * k]);
       // f·|cos θo| / pdf = (colour/π)·|cos θo| / (probability·|cos θo|/π).
-      ((reflect ? reflectance_ : transmittance_) / probability).Store(&weight[3 * k]);
-      pdf[k] = density;
-      flags[k] = reflect ? kReflectLobe : kTransmitLobe;
+      rows.Store(k, out, (reflect ? reflectance_ : transmittance_) / probability, density,
+                 reflect ? kReflectLobe : kTransmitLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const size_t count = wi.size() / 3;
     const float total = reflect_weight_ + transmit_weight_;
-    for (size_t k = 0; k < count; ++k) {
-      const float product = wi[3 * k + 2] * wo[3 * k + 2];
+    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
+      const float product = in.z * out.z;
       const float share = product > 0 ? reflect_weight_ : (product < 0 ? transmit_weight_ : 0.0f);
-      pdf[k] = total > 0 ? share / total * yarf::CosineHemispherePdf(std::abs(wo[3 * k + 2]))
-                         : 0.0f;
-    }
+      return total > 0 ? share / total * yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
+    });
   }
 
   uint32_t Lobes() const override {

@@ -16,6 +16,7 @@
 #include <span>
 #include <string>
 
+#include "scatter_rows.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -32,11 +33,9 @@ class Lambertian final : public yarf::SurfaceModel {
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k) {
-      const bool same_side = wi[3 * k + 2] * wo[3 * k + 2] > 0;
-      (same_side ? reflectance_ * yarf::kInvPi : Vec3()).Store(&value[3 * k]);
-    }
+    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) {
+      return in.z * out.z > 0 ? reflectance_ * yarf::kInvPi : Vec3();
+    });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -45,6 +44,7 @@ class Lambertian final : public yarf::SurfaceModel {
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const float wi_z = wi[3 * k + 2];
       Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);
@@ -52,27 +52,19 @@ class Lambertian final : public yarf::SurfaceModel {
       if (wi_z < 0) out.z = -out.z;
       const float density = yarf::CosineHemispherePdf(std::abs(out.z));
       if (!can_reflect || wi_z == 0 || density <= 0) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      out.Store(&wo[3 * k]);
       // f·|cos θo| / pdf = (ρ/π)·cos θo / (cos θo/π).
-      reflectance_.Store(&weight[3 * k]);
-      pdf[k] = density;
-      flags[k] = kLobe;
+      rows.Store(k, out, reflectance_, density, kLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k) {
-      const float wo_z = wo[3 * k + 2];
-      pdf[k] = wi[3 * k + 2] * wo_z > 0 ? yarf::CosineHemispherePdf(std::abs(wo_z)) : 0.0f;
-    }
+    yarf::PdfEach(wi, wo, pdf, [](Vec3 in, Vec3 out) {
+      return in.z * out.z > 0 ? yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
+    });
   }
 
   uint32_t Lobes() const override { return kLobe; }

@@ -1,8 +1,9 @@
 // Pieces the microfacet and coated surface models share (bsdfs/rough*.cc,
-// conductor.cc, plastic.cc, thindielectric.cc): their properties
-// (roughness, indices of refraction), Smith's joint masking-shadowing,
-// reflection and refraction about a microfacet normal, the Fresnel factor
-// of a conductor and the hemispherical averages the coated models need.
+// conductor.cc, plastic.cc): their roughness property, Smith's joint
+// masking-shadowing, reflection and refraction about a microfacet normal,
+// the Fresnel factor of a conductor and the hemispherical averages the
+// coated models need. Indices of refraction are read in
+// surface_properties.h.
 // GGX's D, its G1 and the sampling of visible normals are in yarf/warps.h.
 //
 // Microfacet normals m lie in the upper hemisphere (m.z > 0); +z is the
@@ -21,7 +22,7 @@
 
 namespace yarf::microfacet {
 
-// --- Properties ------------------------------------------------------------
+// --- Roughness -------------------------------------------------------------
 
 // Roughness below this is raised to it: a GGX lobe narrower than float
 // directions can resolve is a mirror in all but name.
@@ -63,19 +64,6 @@ inline Roughness ReadRoughness(const Properties& props, double fallback, bool an
                 "' is missing: anisotropic roughness needs both 'alpha_u' and 'alpha_v'");
   return {RequireAlpha(props.Float("alpha_u"), "alpha_u"),
           RequireAlpha(props.Float("alpha_v"), "alpha_v")};
-}
-
-inline float RequireIndex(double ior, const std::string& property) {
-  if (!(ior > 0.0 && std::isfinite(ior)))
-    throw Error("property '" + property + "' must be a finite number > 0");
-  return float(ior);
-}
-
-// int_ior / ext_ior, the relative index of the inside (-z) over the
-// outside (+z), from the properties with the given defaults.
-inline float ReadRelativeIndex(const Properties& props, double int_ior, double ext_ior) {
-  return RequireIndex(props.Float("int_ior", int_ior), "int_ior") /
-         RequireIndex(props.Float("ext_ior", ext_ior), "ext_ior");
 }
 
 // --- Geometry about a microfacet -------------------------------------------

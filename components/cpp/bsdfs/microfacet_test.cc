@@ -9,136 +9,34 @@
 // the limit α → 0 against the smooth model; for the delta lobes, exact
 // directions and probabilities; and property checking.
 //
-// The batch-call and χ² helpers follow bsdf_test.cc's (which keeps its
-// own in an anonymous namespace); the sphere quadrature here is uniform
-// in θ rather than cos θ, to resolve lobes near the pole.
+// The fixture, batch-call and χ² binning helpers are
+// surface_test_support.h's, shared with bsdf_test.cc; the sphere
+// quadrature here is uniform in θ rather than cos θ, to resolve lobes
+// near the pole.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <initializer_list>
-#include <memory>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "components/registry.h"
 #include "metals.h"
 #include "microfacet.h"
-#include "testing/chi_square.h"
-#include "yarf/hash.h"
+#include "surface_test_support.h"
 #include "yarf/surface.h"
 #include "yarf/warps.h"
 
 namespace yarf {
 namespace {
 
+using namespace surface_testing;  // NOLINT: the shared helpers, in every test
 namespace mf = microfacet;
 
-constexpr double kPiDouble = 3.14159265358979323846;
 constexpr TransportMode kRadiance = TransportMode::kRadiance;
 constexpr TransportMode kImportance = TransportMode::kImportance;
-
-// --- Calling the batch interface -------------------------------------------
-
-Vec3 EvaluateOne(const SurfaceModel& model, Vec3 wi, Vec3 wo, TransportMode mode = kRadiance) {
-  float in[3], out[3], value[3];
-  const float uv[2] = {0, 0};
-  wi.Store(in);
-  wo.Store(out);
-  model.Evaluate(mode, in, out, uv, value);
-  return Vec3::Load(value);
-}
-
-float PdfOne(const SurfaceModel& model, Vec3 wi, Vec3 wo) {
-  float in[3], out[3], pdf[1];
-  const float uv[2] = {0, 0};
-  wi.Store(in);
-  wo.Store(out);
-  model.Pdf(in, out, uv, pdf);
-  return pdf[0];
-}
-
-// Pdf and Evaluate of one wi against many wo, in one call each.
-std::vector<float> PdfBatch(const SurfaceModel& model, Vec3 wi, const std::vector<Vec3>& wo) {
-  const size_t count = wo.size();
-  std::vector<float> in(3 * count), out(3 * count), uv(2 * count, 0.0f), pdf(count);
-  for (size_t k = 0; k < count; ++k) {
-    wi.Store(&in[3 * k]);
-    wo[k].Store(&out[3 * k]);
-  }
-  model.Pdf(in, out, uv, pdf);
-  return pdf;
-}
-
-std::vector<Vec3> EvaluateBatch(const SurfaceModel& model, Vec3 wi, const std::vector<Vec3>& wo,
-                                TransportMode mode) {
-  const size_t count = wo.size();
-  std::vector<float> in(3 * count), out(3 * count), uv(2 * count, 0.0f), value(3 * count);
-  for (size_t k = 0; k < count; ++k) {
-    wi.Store(&in[3 * k]);
-    wo[k].Store(&out[3 * k]);
-  }
-  model.Evaluate(mode, in, out, uv, value);
-  std::vector<Vec3> result(count);
-  for (size_t k = 0; k < count; ++k) result[k] = Vec3::Load(&value[3 * k]);
-  return result;
-}
-
-struct Scattered {
-  Vec3 wo, weight;
-  float pdf = 0;
-  uint32_t flags = kScatterNone;
-};
-
-std::vector<Scattered> SampleBatch(const SurfaceModel& model, const std::vector<Vec3>& wi,
-                                   const std::vector<std::array<float, 3>>& uniform,
-                                   uint32_t allowed = 0, TransportMode mode = kRadiance) {
-  const size_t count = wi.size();
-  std::vector<float> in(3 * count), uv(2 * count, 0.0f), u(3 * count), wo(3 * count),
-      weight(3 * count), pdf(count);
-  std::vector<uint32_t> flags(count);
-  for (size_t k = 0; k < count; ++k) {
-    wi[k].Store(&in[3 * k]);
-    std::copy(uniform[k].begin(), uniform[k].end(), &u[3 * k]);
-  }
-  model.Sample(mode, in, uv, u, allowed, wo, weight, pdf, flags);
-  std::vector<Scattered> out(count);
-  for (size_t k = 0; k < count; ++k)
-    out[k] = {Vec3::Load(&wo[3 * k]), Vec3::Load(&weight[3 * k]), pdf[k], flags[k]};
-  return out;
-}
-
-Scattered SampleOne(const SurfaceModel& model, Vec3 wi, std::array<float, 3> uniform,
-                    uint32_t allowed = 0, TransportMode mode = kRadiance) {
-  return SampleBatch(model, {wi}, {uniform}, allowed, mode)[0];
-}
-
-// Uniform numbers from a hash: reproducible, and independent per (seed, k).
-std::array<float, 3> Uniform3(uint64_t seed, uint64_t k) {
-  return {ToUnitFloat(uint32_t(Hash(seed, k, 0) >> 32)),
-          ToUnitFloat(uint32_t(Hash(seed, k, 1) >> 32)),
-          ToUnitFloat(uint32_t(Hash(seed, k, 2) >> 32))};
-}
-
-// `count` samples at one wi. With `stratify_lobe`, the lobe choice
-// uniform[0] is (k + ½)/count.
-std::vector<Scattered> SampleMany(const SurfaceModel& model, Vec3 wi, int count, uint64_t seed,
-                                  uint32_t allowed = 0, TransportMode mode = kRadiance,
-                                  bool stratify_lobe = false) {
-  std::vector<std::array<float, 3>> uniform(count);
-  for (int k = 0; k < count; ++k) {
-    uniform[k] = Uniform3(seed, k);
-    if (stratify_lobe) uniform[k][0] = (k + 0.5f) / count;
-  }
-  return SampleBatch(model, std::vector<Vec3>(count, wi), uniform, allowed, mode);
-}
-
-Vec3 DirectionAt(double cos_theta, double phi) {
-  return SphericalDirection(SinFromCos(float(cos_theta)), float(cos_theta), float(phi));
-}
 
 // Incident directions from normal to grazing incidence (cos θ = 0.05).
 std::vector<Vec3> Above() {
@@ -153,18 +51,6 @@ std::vector<Vec3> BothSides() {
   std::vector<Vec3> out = Above();
   for (Vec3 w : Above()) out.push_back(Vec3(w.y, w.x, -w.z));
   return out;
-}
-
-std::string Describe(Vec3 v) {
-  std::ostringstream s;
-  s << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-  return s.str();
-}
-
-void ExpectVecNear(Vec3 actual, Vec3 expected, float relative, const std::string& what) {
-  for (int c = 0; c < 3; ++c)
-    EXPECT_NEAR(actual[c], expected[c], relative * std::max(1.0f, std::abs(expected[c])))
-        << what << " channel " << c << ": " << Describe(actual) << " vs " << Describe(expected);
 }
 
 Properties Props(std::initializer_list<std::pair<std::string, Properties::Value>> values) {
@@ -218,80 +104,41 @@ SphereIntegrals IntegrateOverSphere(const SurfaceModel& model, Vec3 wi,
   return {pdf_sum, Vec3(float(albedo[0]), float(albedo[1]), float(albedo[2]))};
 }
 
-struct MeanWithError {
-  Vec3 mean, standard_error;
-  double success = 0;  // fraction of the samples that Sample produced
-};
-
-// The mean of Sample's weight: an unbiased estimate of the albedo.
-MeanWithError MeanWeight(const std::vector<Scattered>& samples) {
-  double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
-  int produced = 0;
-  for (const Scattered& s : samples) {
-    if (s.pdf > 0) ++produced;
-    for (int c = 0; c < 3; ++c) {
-      sum[c] += s.weight[c];
-      sum2[c] += double(s.weight[c]) * s.weight[c];
-    }
-  }
-  const double n = double(samples.size());
-  float mean[3], error[3];
-  for (int c = 0; c < 3; ++c) {
-    mean[c] = float(sum[c] / n);
-    error[c] = float(std::sqrt(std::max(0.0, sum2[c] / n - mean[c] * double(mean[c])) / n));
-  }
-  return {Vec3(mean[0], mean[1], mean[2]), Vec3(error[0], error[1], error[2]), produced / n};
-}
-
 // --- Pearson's χ² test of sampled directions -------------------------------
 
-// Directions binned in (cos θ, φ) cells of equal solid angle; the expected
-// count of a cell is N ∫ pdf over it, by 5-point Gauss–Legendre quadrature
-// in θ (dω = sin θ dθ dφ) on each of a few slices of it, and across it in
-// φ (all pdf values in one Pdf call). The two rows at the poles, where a
-// lobe around the normal (a refraction, narrower than its microfacets'
-// spread) lies whole, are cut in many more slices. Cells expecting fewer
-// than 5 samples are pooled.
+// The expected count of a (cos θ, φ) cell is N ∫ pdf over it, by 5-point
+// Gauss–Legendre quadrature in θ (dω = sin θ dθ dφ) on each of a few
+// slices of it, and across it in φ (all pdf values in one Pdf call). The
+// two rows at the poles, where a lobe around the normal (a refraction,
+// narrower than its microfacets' spread) lies whole, are cut in many more
+// slices.
 testing::AssertionResult DirectionsFollowPdf(const SurfaceModel& model, Vec3 wi,
                                              const std::vector<Vec3>& directions,
                                              int sample_count) {
-  constexpr int kRows = 50, kCols = 100, kSlices = 4, kPoleSlices = 32;
-  constexpr double kSignificance = 0.01;
-  static constexpr double kNodes[] = {-0.9061798459386640, -0.5384693101056831, 0.0,
-                                      0.5384693101056831, 0.9061798459386640};
-  static constexpr double kWeights[] = {0.2369268850561891, 0.4786286704993665,
-                                        0.5688888888888889, 0.4786286704993665,
-                                        0.2369268850561891};
-  const double dz = 2.0 / kRows, dphi = 2 * kPiDouble / kCols;
-  std::vector<double> observed(kRows * kCols, 0.0), expected(kRows * kCols, 0.0);
-  for (Vec3 w : directions) {
-    const double z = std::clamp(double(w.z), -1.0, 1.0);
-    const double phi = std::atan2(double(w.y), double(w.x));
-    const int row = std::min(int((z + 1.0) / 2.0 * kRows), kRows - 1);
-    const int col = std::clamp(int((phi + kPiDouble) / (2 * kPiDouble) * kCols), 0, kCols - 1);
-    observed[row * kCols + col] += 1;
-  }
+  constexpr int kSlices = 4, kPoleSlices = 32;
+  const double dz = 2.0 / kChiRows, dphi = 2 * kPiDouble / kChiCols;
+  std::vector<double> expected(kChiRows * kChiCols, 0.0);
   std::vector<Vec3> nodes;
   std::vector<double> weights;  // of each node: its share of N ∫ pdf dω
   std::vector<int> cells;       // the cell of each node
-  for (int row = 0; row < kRows; ++row) {
+  for (int row = 0; row < kChiRows; ++row) {
     // θ decreases as cos θ grows: the row spans θ in [theta_top, theta_bottom].
     const double theta_top = std::acos(std::min(1.0, -1.0 + (row + 1) * dz));
     const double theta_bottom = std::acos(std::max(-1.0, -1.0 + row * dz));
-    const int slices = row == 0 || row == kRows - 1 ? kPoleSlices : kSlices;
+    const int slices = row == 0 || row == kChiRows - 1 ? kPoleSlices : kSlices;
     const double dtheta = (theta_bottom - theta_top) / slices;
-    for (int col = 0; col < kCols; ++col) {
+    for (int col = 0; col < kChiCols; ++col) {
       const double phi_mid = -kPiDouble + (col + 0.5) * dphi;
       for (int slice = 0; slice < slices; ++slice) {
         const double theta_mid = theta_top + (slice + 0.5) * dtheta;
         for (int s = 0; s < 5; ++s) {
-          const double theta = theta_mid + 0.5 * dtheta * kNodes[s];
+          const double theta = theta_mid + 0.5 * dtheta * kGaussNodes[s];
           for (int t = 0; t < 5; ++t) {
             nodes.push_back(SphericalDirection(float(std::sin(theta)), float(std::cos(theta)),
-                                               float(phi_mid + 0.5 * dphi * kNodes[t])));
-            weights.push_back(sample_count * kWeights[s] * kWeights[t] * std::sin(theta) *
-                              (0.5 * dtheta) * (0.5 * dphi));
-            cells.push_back(row * kCols + col);
+                                               float(phi_mid + 0.5 * dphi * kGaussNodes[t])));
+            weights.push_back(sample_count * kGaussWeights[s] * kGaussWeights[t] *
+                              std::sin(theta) * (0.5 * dtheta) * (0.5 * dphi));
+            cells.push_back(row * kChiCols + col);
           }
         }
       }
@@ -299,7 +146,7 @@ testing::AssertionResult DirectionsFollowPdf(const SurfaceModel& model, Vec3 wi,
   }
   const std::vector<float> pdf = PdfBatch(model, wi, nodes);
   for (size_t k = 0; k < nodes.size(); ++k) expected[cells[k]] += weights[k] * pdf[k];
-  return testing_support::PearsonChiSquareTest(observed, expected, kSignificance);
+  return CellsFollowExpected(directions, expected);
 }
 
 // The finite-lobe samples of `count` draws at wi follow Pdf.
@@ -311,26 +158,10 @@ testing::AssertionResult SamplesFollowPdf(const SurfaceModel& model, Vec3 wi, in
   return DirectionsFollowPdf(model, wi, directions, count);
 }
 
-// --- Fixtures: the plugins, loaded as yarfd loads them ---------------------
+// --- Fixtures ----------------------------------------------------------------
 
-class MicrofacetTest : public testing::Test {
+class MicrofacetTest : public SurfacePluginTest {
  protected:
-  MicrofacetTest() { registry_.LoadDirectory(YARF_PLUGIN_DIR); }
-
-  std::unique_ptr<SurfaceModel> Make(const std::string& name,
-                                     const Properties& props = Properties()) const {
-    return registry_.CreateAs<SurfaceModel>(name, props);
-  }
-
-  std::string CreationError(const std::string& name, const Properties& props) const {
-    try {
-      registry_.Create(name, props);
-    } catch (const Error& e) {
-      return e.what();
-    }
-    return "";
-  }
-
   // Every sample with pdf > 0 has the pdf Pdf gives and the weight
   // Evaluate·|cos θo|/Pdf; its flags are one of the model's lobes, on the
   // side they say. Returns the number of samples produced.
@@ -362,7 +193,38 @@ class MicrofacetTest : public testing::Test {
     return produced;
   }
 
-  Registry registry_;
+  // For the rough model `name` at α = 0.2 and 0.6: ∫ Pdf dωo is at most 1,
+  // and it is the fraction of 100000 draws (from `seed`) at each wi that
+  // Sample turns into a sample.
+  void ExpectPdfIntegratesToTheRateOfSamples(const std::string& name,
+                                             std::initializer_list<Vec3> incident,
+                                             uint64_t seed) const {
+    for (double alpha : {0.2, 0.6}) {
+      const auto model = Make(name, Props({{"alpha", alpha}}));
+      for (Vec3 wi : incident) {
+        const double integral = IntegrateOverSphere(*model, wi).pdf;
+        const double rate = MeanWeight(SampleMany(*model, wi, 100000, seed)).success;
+        EXPECT_LE(integral, 1.0 + 2e-3) << "alpha " << alpha << ", wi " << Describe(wi);
+        EXPECT_NEAR(integral, rate, 6e-3) << "alpha " << alpha << ", wi " << Describe(wi);
+      }
+    }
+  }
+
+  // f(a, b) = f(b, a) for 2000 pairs of directions on the sphere (from
+  // seeds `seed` and `seed` + 1), and f and Pdf are 0 unless both lie
+  // above: the one-sided rough models.
+  static void ExpectReciprocalAndOneSided(const SurfaceModel& model, uint64_t seed) {
+    for (uint64_t k = 0; k < 2000; ++k) {
+      const auto u = Uniform3(seed, k), v = Uniform3(seed + 1, k);
+      const Vec3 a = SampleUniformSphere(u[0], u[1]), b = SampleUniformSphere(v[0], v[1]);
+      const Vec3 f = EvaluateOne(model, a, b);
+      ExpectVecNear(f, EvaluateOne(model, b, a), 1e-4f, "f(a, b) vs f(b, a)");
+      if (a.z <= 0 || b.z <= 0) {
+        ExpectVecNear(f, Vec3(), 0, "below");
+        EXPECT_EQ(PdfOne(model, a, b), 0.0f);
+      }
+    }
+  }
 };
 
 class ConductorTest : public MicrofacetTest {};
@@ -527,14 +389,7 @@ TEST_F(MicrofacetTest, ChiSquareTestTellsCloseModelsApart) {
 // --- Registration and properties -------------------------------------------
 
 TEST_F(MicrofacetTest, RegistersEveryModelWithItsInterfaceAndLobes) {
-  for (const char* name : kNewModels) {
-    ASSERT_TRUE(registry_.Has(name)) << name;
-    const auto model = Make(name);
-    const ComponentInfo& info = model->Describe();
-    EXPECT_EQ(info.class_name, name);
-    EXPECT_EQ(info.interfaces, std::vector<std::string>{SurfaceModel::kInterface}) << name;
-    EXPECT_FALSE(info.summary.empty()) << name;
-  }
+  for (const char* name : kNewModels) ASSERT_NO_FATAL_FAILURE(ExpectRegisteredSurfaceModel(name));
   EXPECT_EQ(Make("conductor")->Lobes(), uint32_t(kScatterReflect | kScatterDelta));
   EXPECT_EQ(Make("roughconductor")->Lobes(), uint32_t(kScatterReflect | kScatterGlossy));
   EXPECT_EQ(Make("roughdielectric")->Lobes(),
@@ -664,31 +519,15 @@ TEST_F(RoughConductorTest, SampleAgreesWithPdfAndEvaluate) {
 }
 
 TEST_F(RoughConductorTest, PdfIntegratesToTheRateOfSamples) {
-  for (double alpha : {0.2, 0.6}) {
-    const auto model = Make("roughconductor", Props({{"alpha", alpha}}));
-    for (Vec3 wi : {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)}) {
-      const double integral = IntegrateOverSphere(*model, wi).pdf;
-      const double rate = MeanWeight(SampleMany(*model, wi, 100000, 84)).success;
-      EXPECT_LE(integral, 1.0 + 2e-3) << "alpha " << alpha << ", wi " << Describe(wi);
-      EXPECT_NEAR(integral, rate, 6e-3) << "alpha " << alpha << ", wi " << Describe(wi);
-    }
-  }
+  ExpectPdfIntegratesToTheRateOfSamples(
+      "roughconductor", {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)}, 84);
 }
 
 TEST_F(RoughConductorTest, IsReciprocalAndOneSided) {
   const auto model = Make("roughconductor", Props({{"alpha_u", 0.2},
                                                    {"alpha_v", 0.5},
                                                    {"material", std::string("Cu")}}));
-  for (uint64_t k = 0; k < 2000; ++k) {
-    const auto u = Uniform3(85, k), v = Uniform3(86, k);
-    const Vec3 a = SampleUniformSphere(u[0], u[1]), b = SampleUniformSphere(v[0], v[1]);
-    const Vec3 f = EvaluateOne(*model, a, b);
-    ExpectVecNear(f, EvaluateOne(*model, b, a), 1e-4f, "f(a, b) vs f(b, a)");
-    if (a.z <= 0 || b.z <= 0) {
-      ExpectVecNear(f, Vec3(), 0, "below");
-      EXPECT_EQ(PdfOne(*model, a, b), 0.0f);
-    }
-  }
+  ExpectReciprocalAndOneSided(*model, 85);
 }
 
 TEST_F(RoughConductorTest, ConservesEnergy) {
@@ -764,16 +603,10 @@ TEST_F(RoughDielectricTest, SampleAgreesWithPdfAndEvaluate) {
 }
 
 TEST_F(RoughDielectricTest, PdfIntegratesToTheRateOfSamples) {
-  for (double alpha : {0.2, 0.6}) {
-    const auto model = Make("roughdielectric", Props({{"alpha", alpha}}));
-    for (Vec3 wi : {Vec3(0, 0, 1), DirectionAt(0.2, 1.0), DirectionAt(-0.9, 0.3),
-                    DirectionAt(-0.4, -1.0)}) {
-      const double integral = IntegrateOverSphere(*model, wi).pdf;
-      const double rate = MeanWeight(SampleMany(*model, wi, 100000, 93)).success;
-      EXPECT_LE(integral, 1.0 + 2e-3) << "alpha " << alpha << ", wi " << Describe(wi);
-      EXPECT_NEAR(integral, rate, 6e-3) << "alpha " << alpha << ", wi " << Describe(wi);
-    }
-  }
+  ExpectPdfIntegratesToTheRateOfSamples("roughdielectric",
+                                        {Vec3(0, 0, 1), DirectionAt(0.2, 1.0),
+                                         DirectionAt(-0.9, 0.3), DirectionAt(-0.4, -1.0)},
+                                        93);
 }
 
 TEST_F(RoughDielectricTest, GeneralisedReciprocity) {
@@ -1002,29 +835,13 @@ TEST_F(RoughPlasticTest, SampleAgreesWithPdfAndEvaluate) {
 }
 
 TEST_F(RoughPlasticTest, PdfIntegratesToTheRateOfSamples) {
-  for (double alpha : {0.2, 0.6}) {
-    const auto model = Make("roughplastic", Props({{"alpha", alpha}}));
-    for (Vec3 wi : {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)}) {
-      const double integral = IntegrateOverSphere(*model, wi).pdf;
-      const double rate = MeanWeight(SampleMany(*model, wi, 100000, 113)).success;
-      EXPECT_LE(integral, 1.0 + 2e-3) << "alpha " << alpha << ", wi " << Describe(wi);
-      EXPECT_NEAR(integral, rate, 6e-3) << "alpha " << alpha << ", wi " << Describe(wi);
-    }
-  }
+  ExpectPdfIntegratesToTheRateOfSamples(
+      "roughplastic", {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)}, 113);
 }
 
 TEST_F(RoughPlasticTest, IsReciprocalAndOneSided) {
   const auto model = Make("roughplastic", Props({{"alpha", 0.3}}));
-  for (uint64_t k = 0; k < 2000; ++k) {
-    const auto u = Uniform3(114, k), v = Uniform3(115, k);
-    const Vec3 a = SampleUniformSphere(u[0], u[1]), b = SampleUniformSphere(v[0], v[1]);
-    const Vec3 f = EvaluateOne(*model, a, b);
-    ExpectVecNear(f, EvaluateOne(*model, b, a), 1e-4f, "f(a, b) vs f(b, a)");
-    if (a.z <= 0 || b.z <= 0) {
-      ExpectVecNear(f, Vec3(), 0, "below");
-      EXPECT_EQ(PdfOne(*model, a, b), 0.0f);
-    }
-  }
+  ExpectReciprocalAndOneSided(*model, 114);
 }
 
 TEST_F(RoughPlasticTest, ConservesEnergy) {

@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 
+#include "scatter_rows.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -29,29 +30,22 @@ class Mirror final : public yarf::DeltaSurfaceModel {
   explicit Mirror(const yarf::Properties& props)
       : reflectance_(props.Reflectance("reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
 
-
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       if (!can_reflect || in.z == 0) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      yarf::Reflect(in).Store(&wo[3 * k]);
-      reflectance_.Store(&weight[3 * k]);
-      pdf[k] = 1.0f;
-      flags[k] = kMirrorLobe;
+      rows.Store(k, yarf::Reflect(in), reflectance_, 1.0f, kMirrorLobe);
     }
   }
-
 
   uint32_t Lobes() const override { return kMirrorLobe; }
 

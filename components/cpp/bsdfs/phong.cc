@@ -27,6 +27,8 @@
 #include <span>
 #include <string>
 
+#include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -49,12 +51,8 @@ class Phong final : public yarf::SurfaceModel {
       : diffuse_(props.Reflectance("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f))),
         specular_(props.Reflectance("specular_reflectance", Vec3(0.2f, 0.2f, 0.2f))),
         exponent_(RequireExponent(props.Float("exponent", 30.0))) {
-    static constexpr const char* kChannel[] = {"red", "green", "blue"};
-    for (int c = 0; c < 3; ++c)
-      if (diffuse_[c] + specular_[c] > 1.0f)
-        throw yarf::Error(std::string("properties 'diffuse_reflectance' + 'specular_reflectance' "
-                                      "exceed 1 in the ") +
-                          kChannel[c] + " channel: the material would create energy");
+    yarf::RequireEnergyConserving(diffuse_, specular_, "diffuse_reflectance",
+                                  "specular_reflectance");
     diffuse_weight_ = yarf::Luminance(diffuse_);
     specular_weight_ = yarf::Luminance(specular_);
     const float total = diffuse_weight_ + specular_weight_;
@@ -63,9 +61,8 @@ class Phong final : public yarf::SurfaceModel {
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k)
-      Value(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]), true, true).Store(&value[3 * k]);
+    yarf::EvaluateEach(wi, wo, value,
+                       [&](Vec3 in, Vec3 out) { return Value(in, out, true, true); });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -77,6 +74,7 @@ class Phong final : public yarf::SurfaceModel {
     const bool glossy = yarf::LobeAllowed(kGlossyLobe, allowed) && specular_weight_ > 0;
     const float total = (diffuse ? diffuse_weight_ : 0.0f) + (glossy ? specular_weight_ : 0.0f);
     const float specular_probability = total > 0 ? (glossy ? specular_weight_ : 0.0f) / total : 0.0f;
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
@@ -94,24 +92,18 @@ class Phong final : public yarf::SurfaceModel {
       // Zero when the glossy lobe dipped below the surface.
       const float density = total > 0 ? Density(in, out, specular_probability) : 0.0f;
       if (!(density > 0)) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      out.Store(&wo[3 * k]);
-      (Value(in, out, diffuse, glossy) * (std::abs(out.z) / density)).Store(&weight[3 * k]);
-      pdf[k] = density;
-      flags[k] = specular ? kGlossyLobe : kDiffuseLobe;
+      rows.Store(k, out, Value(in, out, diffuse, glossy) * (std::abs(out.z) / density), density,
+                 specular ? kGlossyLobe : kDiffuseLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k)
-      pdf[k] = Density(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]), specular_probability_);
+    yarf::PdfEach(wi, wo, pdf,
+                  [&](Vec3 in, Vec3 out) { return Density(in, out, specular_probability_); });
   }
 
   uint32_t Lobes() const override {

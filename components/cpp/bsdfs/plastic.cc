@@ -34,7 +34,10 @@
 #include <span>
 #include <string>
 
+#include "coating.h"
 #include "microfacet.h"
+#include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -46,33 +49,22 @@ namespace mf = yarf::microfacet;
 constexpr uint32_t kSpecularLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 
-float Mean(Vec3 v) { return (v.x + v.y + v.z) / 3.0f; }
-
 class Plastic final : public yarf::SurfaceModel {
  public:
   explicit Plastic(const yarf::Properties& props)
       : diffuse_(props.Reflectance("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f))),
         specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))),
-        eta_(mf::ReadRelativeIndex(props, 1.49, 1.000277)) {
+        eta_(yarf::ReadRelativeIndex(props, 1.49, 1.000277)),
+        lobes_(yarf::coating::WeighLobes(diffuse_, specular_)) {
     const bool nonlinear = props.Bool("nonlinear", false);
-    const float internal = mf::FresnelDiffuseReflectance(1.0f / eta_);
-    float scaled[3];
-    for (int c = 0; c < 3; ++c) {
-      const float rho = diffuse_[c];
-      scaled[c] = rho / (1.0f - (nonlinear ? rho * internal : internal)) / (eta_ * eta_);
-    }
-    scaled_diffuse_ = Vec3::Load(scaled);
-    has_diffuse_ = Mean(diffuse_) > 0;
-    has_specular_ = Mean(specular_) > 0;
-    const float total = Mean(diffuse_) + Mean(specular_);
-    specular_weight_ = total > 0 ? Mean(specular_) / total : 0.0f;
+    // A smooth coating's r̄ is F_dr,int.
+    scaled_diffuse_ = yarf::coating::ScaledDiffuse(
+        diffuse_, mf::FresnelDiffuseReflectance(1.0f / eta_), nonlinear, eta_);
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k)
-      Diffuse(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k])).Store(&value[3 * k]);
+    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) { return Diffuse(in, out); });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -80,8 +72,9 @@ class Plastic final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool specular = has_specular_ && yarf::LobeAllowed(kSpecularLobe, allowed);
-    const bool diffuse = has_diffuse_ && yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const bool specular = lobes_.has_specular && yarf::LobeAllowed(kSpecularLobe, allowed);
+    const bool diffuse = lobes_.has_diffuse && yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
@@ -102,38 +95,30 @@ class Plastic final : public yarf::SurfaceModel {
         }
       }
       if (!(density > 0)) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      out.Store(&wo[3 * k]);
-      w.Store(&weight[3 * k]);
-      pdf[k] = density;
-      flags[k] = pick_specular ? kSpecularLobe : kDiffuseLobe;
+      rows.Store(k, out, w, density, pick_specular ? kSpecularLobe : kDiffuseLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k) {
-      const float wi_z = wi[3 * k + 2], wo_z = wo[3 * k + 2];
-      pdf[k] = has_diffuse_ && wi_z > 0 && wo_z > 0
-                   ? (1.0f - SpecularProbability(wi_z, has_specular_, true)) *
-                         yarf::CosineHemispherePdf(wo_z)
-                   : 0.0f;
-    }
+    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
+      return lobes_.has_diffuse && in.z > 0 && out.z > 0
+                 ? (1.0f - SpecularProbability(in.z, lobes_.has_specular, true)) *
+                       yarf::CosineHemispherePdf(out.z)
+                 : 0.0f;
+    });
   }
 
   uint32_t Lobes() const override {
-    return (has_specular_ ? kSpecularLobe : 0u) | (has_diffuse_ ? kDiffuseLobe : 0u);
+    return (lobes_.has_specular ? kSpecularLobe : 0u) | (lobes_.has_diffuse ? kDiffuseLobe : 0u);
   }
 
  private:
   Vec3 Diffuse(Vec3 wi, Vec3 wo) const {
-    if (!(wi.z > 0 && wo.z > 0) || !has_diffuse_) return Vec3();
+    if (!(wi.z > 0 && wo.z > 0) || !lobes_.has_diffuse) return Vec3();
     const float transmitted =
         (1.0f - yarf::FresnelDielectric(wi.z, eta_)) * (1.0f - yarf::FresnelDielectric(wo.z, eta_));
     return scaled_diffuse_ * (transmitted * yarf::kInvPi);
@@ -144,19 +129,18 @@ class Plastic final : public yarf::SurfaceModel {
     if (!specular) return 0.0f;
     if (!diffuse) return 1.0f;
     const float fresnel = yarf::FresnelDielectric(cos_i, eta_);
-    const float s = fresnel * specular_weight_;
-    const float d = (1.0f - fresnel) * (1.0f - specular_weight_);
+    const float s = fresnel * lobes_.specular_weight;
+    const float d = (1.0f - fresnel) * (1.0f - lobes_.specular_weight);
     return s / (s + d);
   }
 
   Vec3 diffuse_;
   Vec3 specular_;
   float eta_;
+  yarf::coating::LobeWeights lobes_;
   // ρ' / η² per channel: the diffuse lobe's value before the two Fresnel
   // transmissions and 1/π.
   Vec3 scaled_diffuse_;
-  bool has_diffuse_ = false, has_specular_ = false;
-  float specular_weight_ = 0;
 };
 
 }  // namespace

@@ -35,6 +35,7 @@
 
 #include "metals.h"
 #include "microfacet.h"
+#include "scatter_rows.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -54,9 +55,7 @@ class RoughConductor final : public yarf::SurfaceModel {
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k)
-      Value(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k])).Store(&value[3 * k]);
+    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) { return Value(in, out); });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -65,6 +64,7 @@ class RoughConductor final : public yarf::SurfaceModel {
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
@@ -78,24 +78,16 @@ class RoughConductor final : public yarf::SurfaceModel {
         density = Density(in, out);
       }
       if (!(density > 0)) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      out.Store(&wo[3 * k]);
-      (Value(in, out) * (out.z / density)).Store(&weight[3 * k]);
-      pdf[k] = density;
-      flags[k] = kLobe;
+      rows.Store(k, out, Value(in, out) * (out.z / density), density, kLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k)
-      pdf[k] = Density(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]));
+    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) { return Density(in, out); });
   }
 
   uint32_t Lobes() const override { return kLobe; }

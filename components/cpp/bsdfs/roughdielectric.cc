@@ -44,6 +44,8 @@
 #include <string>
 
 #include "microfacet.h"
+#include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -66,19 +68,16 @@ float RequireDistinctIndices(float eta) {
 class RoughDielectric final : public yarf::SurfaceModel {
  public:
   explicit RoughDielectric(const yarf::Properties& props)
-      : eta_(RequireDistinctIndices(mf::ReadRelativeIndex(props, 1.5046, 1.000277))),
+      : eta_(RequireDistinctIndices(yarf::ReadRelativeIndex(props, 1.5046, 1.000277))),
         roughness_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/true)) {}
 
   void Evaluate(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k) {
+    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) {
       Local local;
-      const float f = At(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]), &local)
-                          ? Value(local, mode)
-                          : 0.0f;
-      Vec3(f, f, f).Store(&value[3 * k]);
-    }
+      const float f = At(in, out, &local) ? Value(local, mode) : 0.0f;
+      return Vec3(f, f, f);
+    });
   }
 
   void Sample(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> uv,
@@ -88,6 +87,7 @@ class RoughDielectric final : public yarf::SurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
     const bool can_refract = yarf::LobeAllowed(kRefractLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
@@ -122,29 +122,22 @@ class RoughDielectric final : public yarf::SurfaceModel {
         if (total > 0) density = local.density * (reflect ? reflect_share : refract_share) / total;
       }
       if (!(density > 0)) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      out.Store(&wo[3 * k]);
       const float w = Value(local, mode) * std::abs(out.z) / density;
-      Vec3(w, w, w).Store(&weight[3 * k]);
-      pdf[k] = density;
-      flags[k] = reflect ? kReflectLobe : kRefractLobe;
+      rows.Store(k, out, Vec3(w, w, w), density, reflect ? kReflectLobe : kRefractLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k) {
+    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
       Local local;
-      pdf[k] = At(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]), &local)
-                   ? local.density * (local.reflect ? local.fresnel : 1.0f - local.fresnel)
-                   : 0.0f;
-    }
+      return At(in, out, &local)
+                 ? local.density * (local.reflect ? local.fresnel : 1.0f - local.fresnel)
+                 : 0.0f;
+    });
   }
 
   uint32_t Lobes() const override { return kReflectLobe | kRefractLobe; }

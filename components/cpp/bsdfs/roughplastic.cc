@@ -46,7 +46,10 @@
 #include <string>
 #include <utility>
 
+#include "coating.h"
 #include "microfacet.h"
+#include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -58,37 +61,26 @@ namespace mf = yarf::microfacet;
 constexpr uint32_t kGlossyLobe = yarf::kScatterReflect | yarf::kScatterGlossy;
 constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 
-float Mean(Vec3 v) { return (v.x + v.y + v.z) / 3.0f; }
-
 class RoughPlastic final : public yarf::SurfaceModel {
  public:
   explicit RoughPlastic(const yarf::Properties& props)
       : diffuse_(props.Reflectance("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f))),
         specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))),
         alpha_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/false).alpha_x),
-        eta_(mf::ReadRelativeIndex(props, 1.49, 1.000277)) {
+        eta_(yarf::ReadRelativeIndex(props, 1.49, 1.000277)),
+        lobes_(yarf::coating::WeighLobes(diffuse_, specular_)) {
     const bool nonlinear = props.Bool("nonlinear", false);
     for (int i = 0; i < kTableSize; ++i)
       transmittance_[i] =
           1.0f - mf::RoughDielectricReflectance(float(i) / (kTableSize - 1), alpha_, eta_);
-    const double internal = InternalReflectance(alpha_, eta_);
-    float scaled[3];
-    for (int c = 0; c < 3; ++c) {
-      const float rho = diffuse_[c];
-      scaled[c] = rho / (1.0f - float(nonlinear ? rho * internal : internal)) / (eta_ * eta_);
-    }
-    scaled_diffuse_ = Vec3::Load(scaled);
-    has_diffuse_ = Mean(diffuse_) > 0;
-    has_glossy_ = Mean(specular_) > 0;
-    const float total = Mean(diffuse_) + Mean(specular_);
-    glossy_weight_ = total > 0 ? Mean(specular_) / total : 0.0f;
+    scaled_diffuse_ = yarf::coating::ScaledDiffuse(diffuse_, InternalReflectance(alpha_, eta_),
+                                                   nonlinear, eta_);
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k)
-      Value(Vec3::Load(&wi[3 * k]), Vec3::Load(&wo[3 * k]), true, true).Store(&value[3 * k]);
+    yarf::EvaluateEach(wi, wo, value,
+                       [&](Vec3 in, Vec3 out) { return Value(in, out, true, true); });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -96,8 +88,9 @@ class RoughPlastic final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool glossy = has_glossy_ && yarf::LobeAllowed(kGlossyLobe, allowed);
-    const bool diffuse = has_diffuse_ && yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const bool glossy = lobes_.has_specular && yarf::LobeAllowed(kGlossyLobe, allowed);
+    const bool diffuse = lobes_.has_diffuse && yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
@@ -113,31 +106,25 @@ class RoughPlastic final : public yarf::SurfaceModel {
         density = Density(in, out, p_glossy);
       }
       if (!(density > 0)) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      out.Store(&wo[3 * k]);
-      (Value(in, out, glossy, diffuse) * (out.z / density)).Store(&weight[3 * k]);
-      pdf[k] = density;
-      flags[k] = pick_glossy ? kGlossyLobe : kDiffuseLobe;
+      rows.Store(k, out, Value(in, out, glossy, diffuse) * (out.z / density), density,
+                 pick_glossy ? kGlossyLobe : kDiffuseLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const size_t count = wi.size() / 3;
-    for (size_t k = 0; k < count; ++k) {
-      const Vec3 in = Vec3::Load(&wi[3 * k]);
-      const float p_glossy = in.z > 0 ? GlossyProbability(in.z, has_glossy_, has_diffuse_) : 0.0f;
-      pdf[k] = has_glossy_ || has_diffuse_ ? Density(in, Vec3::Load(&wo[3 * k]), p_glossy) : 0.0f;
-    }
+    const bool glossy = lobes_.has_specular, diffuse = lobes_.has_diffuse;
+    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
+      const float p_glossy = in.z > 0 ? GlossyProbability(in.z, glossy, diffuse) : 0.0f;
+      return glossy || diffuse ? Density(in, out, p_glossy) : 0.0f;
+    });
   }
 
   uint32_t Lobes() const override {
-    return (has_glossy_ ? kGlossyLobe : 0u) | (has_diffuse_ ? kDiffuseLobe : 0u);
+    return (lobes_.has_specular ? kGlossyLobe : 0u) | (lobes_.has_diffuse ? kDiffuseLobe : 0u);
   }
 
  private:
@@ -173,8 +160,8 @@ class RoughPlastic final : public yarf::SurfaceModel {
     if (!glossy) return 0.0f;
     if (!diffuse) return 1.0f;
     const float t = Transmittance(cos_i);
-    const float g = (1.0f - t) * glossy_weight_;
-    const float d = t * (1.0f - glossy_weight_);
+    const float g = (1.0f - t) * lobes_.specular_weight;
+    const float d = t * (1.0f - lobes_.specular_weight);
     return g + d > 0 ? g / (g + d) : 0.0f;
   }
 
@@ -182,13 +169,13 @@ class RoughPlastic final : public yarf::SurfaceModel {
   Vec3 Value(Vec3 wi, Vec3 wo, bool glossy, bool diffuse) const {
     if (!(wi.z > 0 && wo.z > 0)) return Vec3();
     Vec3 out;
-    if (glossy && has_glossy_) {
+    if (glossy && lobes_.has_specular) {
       const Vec3 h = yarf::Normalize(wi + wo);
       const float fresnel = yarf::FresnelDielectric(yarf::Dot(wi, h), eta_);
       out += specular_ * (fresnel * yarf::GgxDistribution(h, alpha_, alpha_) *
                           mf::SmithG2(wi, wo, alpha_, alpha_) / (4.0f * wi.z * wo.z));
     }
-    if (diffuse && has_diffuse_)
+    if (diffuse && lobes_.has_diffuse)
       out += scaled_diffuse_ * (Transmittance(wi.z) * Transmittance(wo.z) * yarf::kInvPi);
     return out;
   }
@@ -210,12 +197,11 @@ class RoughPlastic final : public yarf::SurfaceModel {
   Vec3 specular_;
   float alpha_;
   float eta_;
+  yarf::coating::LobeWeights lobes_;
   std::array<float, kTableSize> transmittance_{};
   // ρ' / η² per channel: the diffuse lobe's value before the two
   // transmittances and 1/π.
   Vec3 scaled_diffuse_;
-  bool has_diffuse_ = false, has_glossy_ = false;
-  float glossy_weight_ = 0;
 };
 
 }  // namespace

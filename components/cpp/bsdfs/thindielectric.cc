@@ -27,7 +27,8 @@
 #include <span>
 #include <string>
 
-#include "microfacet.h"
+#include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/warps.h"
 
@@ -41,7 +42,7 @@ constexpr uint32_t kTransmitLobe = yarf::kScatterRefract | yarf::kScatterDelta;
 class ThinDielectric final : public yarf::DeltaSurfaceModel {
  public:
   explicit ThinDielectric(const yarf::Properties& props)
-      : eta_(yarf::microfacet::ReadRelativeIndex(props, 1.5046, 1.000277)) {}
+      : eta_(yarf::ReadRelativeIndex(props, 1.5046, 1.000277)) {}
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
@@ -50,6 +51,7 @@ class ThinDielectric final : public yarf::DeltaSurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
     const bool can_transmit = yarf::LobeAllowed(kTransmitLobe, allowed);
+    const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float reflectance = Reflectance(std::abs(in.z));
@@ -58,17 +60,13 @@ class ThinDielectric final : public yarf::DeltaSurfaceModel {
       const float total = reflect_share + transmit_share;
       const bool reflect = uniform[3 * k] * total < reflect_share;
       if (!(total > 0) || in.z == 0) {
-        Vec3().Store(&wo[3 * k]);
-        Vec3().Store(&weight[3 * k]);
-        pdf[k] = 0;
-        flags[k] = yarf::kScatterNone;
+        rows.StoreNoSample(k);
         continue;
       }
-      (reflect ? yarf::Reflect(in) : -in).Store(&wo[3 * k]);
       // The weight, factor / probability, is the allowed lobes' total.
-      Vec3(total, total, total).Store(&weight[3 * k]);
-      pdf[k] = (reflect ? reflect_share : transmit_share) / total;
-      flags[k] = reflect ? kReflectLobe : kTransmitLobe;
+      rows.Store(k, reflect ? yarf::Reflect(in) : -in, Vec3(total, total, total),
+                 (reflect ? reflect_share : transmit_share) / total,
+                 reflect ? kReflectLobe : kTransmitLobe);
     }
   }
 

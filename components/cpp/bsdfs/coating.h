@@ -1,0 +1,41 @@
+// The diffuse base under a dielectric coating, as plastic.cc and
+// roughplastic.cc (Mitsuba 3's `plastic` and `roughplastic`) both model
+// it: the base's value, corrected for the light the coating reflects back
+// inside, and Mitsuba's odds of sampling the coating's lobe or the base's.
+// How the coating itself reflects and transmits differs between the two
+// and stays in each file.
+#pragma once
+
+#include "yarf/vecmath.h"
+
+namespace yarf::coating {
+
+// The mean of the channels, by which Mitsuba weighs the lobes.
+inline float Mean(Vec3 v) { return (v.x + v.y + v.z) / 3.0f; }
+
+// ρ' / η² per channel: the base's value before the coating's two
+// transmissions and 1/π, with ρ' = ρ / (1 - r̄) or, nonlinear, ρ / (1 - ρ r̄),
+// where r̄ is the coating's reflectance, from inside, of diffuse light.
+// (A float r̄ widened to double gives the float products exactly.)
+inline Vec3 ScaledDiffuse(Vec3 rho, double internal, bool nonlinear, float eta) {
+  float scaled[3];
+  for (int c = 0; c < 3; ++c)
+    scaled[c] = rho[c] / (1.0f - float(nonlinear ? rho[c] * internal : internal)) / (eta * eta);
+  return Vec3::Load(scaled);
+}
+
+// Which lobes a coated material has, and the weight s = mean(R) /
+// (mean(R) + mean(ρ)) of the coating's among them. "Specular" is the
+// coating's lobe, as in Mitsuba (R = specular_reflectance): a delta lobe
+// in plastic.cc, a glossy one in roughplastic.cc.
+struct LobeWeights {
+  bool has_diffuse = false, has_specular = false;
+  float specular_weight = 0;
+};
+
+inline LobeWeights WeighLobes(Vec3 diffuse, Vec3 specular) {
+  const float total = Mean(diffuse) + Mean(specular);
+  return {Mean(diffuse) > 0, Mean(specular) > 0, total > 0 ? Mean(specular) / total : 0.0f};
+}
+
+}  // namespace yarf::coating
