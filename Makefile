@@ -14,11 +14,11 @@ SPP ?= 256
 APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
   libembree-dev libtbb-dev libopenimageio-dev openimageio-tools \
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc \
-  libgtest-dev libtinyobjloader-dev
+  libgtest-dev libtinyobjloader-dev libpugixml-dev zlib1g-dev clang-14 libclang-rt-14-dev
 # Mitsuba's LLVM variant, for the benchmark only.
 BENCH_APT_PACKAGES := libllvm19
 
-.PHONY: all deps venv build stubs lint render test bench clean
+.PHONY: all deps venv build stubs lint render test fuzz bench clean
 
 all: build
 
@@ -67,6 +67,16 @@ lint: venv
 test: build lint
 	cd $(BUILD) && ctest --output-on-failure -j2
 	$(PY) -m pytest -q
+	$(MAKE) --no-print-directory fuzz
+
+# The scene importers under libFuzzer (clang, apart from the main build):
+# FUZZ_RUNS inputs per importer, seeded with the test scenes.
+FUZZ_RUNS ?= 20000
+fuzz: deps
+	@test -f $(BUILD)/fuzz/build.ninja || cmake -S fuzz -B $(BUILD)/fuzz -G Ninja \
+	  -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo
+	cmake --build $(BUILD)/fuzz -j2
+	fuzz/run.sh $(BUILD)/fuzz $(FUZZ_RUNS)
 
 bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
@@ -74,6 +84,7 @@ bench: build
 	$(BUILD)/bin/integrator_throughput
 	$(PY) bench/integrators.py
 	$(PY) bench/render_integrators.py
+	$(PY) bench/light_transport.py
 
 clean:
 	rm -rf $(BUILD) $(STAMPS) out

@@ -17,6 +17,8 @@ box) or the sharpest plate, α = 0.005 (MIS scene), is in view.
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,8 +26,8 @@ import pytest
 from conftest import REPO
 from imagestats import block_z_test
 
-from yarf import Client, RenderResult, component, load_scene, properties, rgb
-from yarf.v1 import scene_pb2
+from yarf import Client, LocalServer, RenderResult, component, load_scene, properties, rgb
+from yarf.v1 import render_pb2, scene_pb2
 
 SCENES = {
     "cornell-box": REPO / "scenes" / "cornell-box" / "scene.json",
@@ -135,3 +137,28 @@ def test_rmse_between_methods_falls_like_one_over_root_spp(client: Client) -> No
     low, high = rmse(8), rmse(128)
     # Sixteen times the samples: a quarter of the error, within noise.
     assert 3.0 < low / high < 5.3, f"RMSE {low:.5f} at 8 spp, {high:.5f} at 128 spp"
+
+
+def test_cli_renders_with_the_transport_asked_for(server: LocalServer, tmp_path: Path) -> None:
+    script = Path(sys.executable).parent / "yarf"
+    base = [str(script), "render", str(SCENES["cornell-box"]), "--spp", "2"]
+    base += ["--server", server.address, "-q"]
+    output = tmp_path / "bdpt.png"
+    run = subprocess.run(
+        [*base, "-o", str(output), "--transport", "bdpt", "--max-depth", "3"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stderr
+    assert output.read_bytes()[:4] == b"\x89PNG"
+    with server.client() as client:
+        assert client.list()[0].state == render_pb2.SUCCEEDED
+    unknown = subprocess.run(
+        [*base, "-o", str(tmp_path / "x.png"), "--transport", "no_such_transport"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert unknown.returncode != 0
+    assert "no_such_transport" in unknown.stderr and "Traceback" not in unknown.stderr

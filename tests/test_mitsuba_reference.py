@@ -11,11 +11,11 @@ mean must agree within 1%.
 from __future__ import annotations
 
 import time
-from statistics import NormalDist
 
 import numpy as np
 import pytest
 from conftest import SHARED
+from imagestats import block_z_test
 
 from yarf import Client, RenderResult
 from yarf.v1 import scene_pb2
@@ -61,12 +61,6 @@ def yarf_render(client: Client, cornell_box: scene_pb2.Scene) -> RenderResult:
     return client.render(cornell_box, spp=YARF_SPP, seed=7, timeout=120)
 
 
-def block_means(image: np.ndarray) -> np.ndarray:
-    height, width, channels = image.shape
-    blocks = image.reshape(height // BLOCK, BLOCK, width // BLOCK, BLOCK, channels)
-    return blocks.mean(axis=(1, 3))
-
-
 def test_cornell_box_blocks_match_mitsuba_within_noise(
     yarf_render: RenderResult, mitsuba_reference: tuple[np.ndarray, np.ndarray]
 ) -> None:
@@ -75,30 +69,13 @@ def test_cornell_box_blocks_match_mitsuba_within_noise(
     variance = yarf_render.variance.astype(np.float64)
     assert pixels.shape == reference.shape == (SIZE, SIZE, 3)
 
-    # A block's mean averages BLOCK² independent pixels: its variance is
-    # the mean of their variances over BLOCK².
-    difference = block_means(pixels) - block_means(reference)
-    block_variance = (block_means(variance) + block_means(reference_variance)) / BLOCK**2
-    z = np.zeros_like(difference)
-    noisy = block_variance > 0
-    z[noisy] = difference[noisy] / np.sqrt(block_variance[noisy])
-    # Blocks without noise in either image (nothing visible) must agree exactly.
-    z[~noisy & (difference != 0)] = np.inf
-
-    alpha = 1.0 - (1.0 - FAMILY_ALPHA) ** (1.0 / z.size)
-    threshold = NormalDist().inv_cdf(1.0 - alpha / 2.0)
-    failing = np.argwhere(np.abs(z) >= threshold)
-    worst = sorted(failing.tolist(), key=lambda index: -abs(z[tuple(index)]))[:10]
-    details = "\n".join(
-        f"  block (row {row}, column {column}) channel {channel}: "
-        f"yarf {block_means(pixels)[row, column, channel]:.5f}, "
-        f"Mitsuba {block_means(reference)[row, column, channel]:.5f}, "
-        f"z = {z[row, column, channel]:+.1f}"
-        for row, column, channel in worst
+    test = block_z_test(
+        pixels, variance, reference, reference_variance, block=BLOCK, family_alpha=FAMILY_ALPHA
     )
+    failing = test.failing
     assert len(failing) == 0, (
-        f"{len(failing)} of {z.size} block means differ from Mitsuba's beyond "
-        f"|z| < {threshold:.2f} (Šidák, family α = {FAMILY_ALPHA}); worst:\n{details}"
+        f"{len(failing)} of {test.z.size} block means differ from Mitsuba's beyond "
+        f"|z| < {test.threshold:.2f} (Šidák, family α = {FAMILY_ALPHA}); worst:\n{test.report()}"
     )
 
 

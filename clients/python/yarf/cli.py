@@ -3,6 +3,10 @@
 Without ``--server`` the command uses a yarfd on 127.0.0.1:50051 when one
 answers there, and otherwise starts one on this machine for the command's
 duration (the embedded default).
+
+Mitsuba 3 (.xml) and pbrt-v4 (.pbrt) scenes render directly: yarf-import
+converts them (its warnings are shown), and their sample count is the
+default of ``--spp``. ``yarf convert`` writes the converted scene.
 """
 
 from __future__ import annotations
@@ -17,9 +21,19 @@ import grpc
 from tqdm import tqdm
 
 from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, Client
-from yarf.scene import SceneError, load_scene
+from yarf.scene import (
+    IMPORTED_SUFFIXES,
+    JSON_SUFFIXES,
+    TEXT_SUFFIXES,
+    ImportedScene,
+    SceneError,
+    import_scene,
+    inline_mesh_files,
+    load_scene,
+    write_scene,
+)
 from yarf.server import LocalServer, ServerError
-from yarf.v1 import render_pb2
+from yarf.v1 import render_pb2, scene_pb2
 
 OUTPUT_FORMATS = {
     ".exr": render_pb2.GetResultRequest.EXR,
@@ -78,6 +92,40 @@ def _follow(client: Client, job_id: str, *, total: int | None, quiet: bool) -> r
     return last
 
 
+def _parameters(definitions: Sequence[str]) -> dict[str, str]:
+    """``["res=64", ...]`` from ``-D`` options as a mapping."""
+    parameters: dict[str, str] = {}
+    for definition in definitions:
+        name, equals, value = definition.partition("=")
+        if not equals or not name:
+            raise CommandError(f"-D needs NAME=VALUE, got {definition!r}", exit_code=2)
+        parameters[name] = value
+    return parameters
+
+
+def _import(path: Path, definitions: Sequence[str], *, inline_files: bool) -> ImportedScene:
+    """Converts a Mitsuba or pbrt scene, showing what was ignored or approximated."""
+    imported = import_scene(path, parameters=_parameters(definitions), inline_files=inline_files)
+    for warning in imported.warnings:
+        _say(f"warning: {warning}")
+    return imported
+
+
+def _transport(args: argparse.Namespace, scene: scene_pb2.Scene) -> scene_pb2.ComponentSpec | None:
+    """The job's transport: --transport and --max-depth over the scene's choice."""
+    if not args.transport and args.max_depth is None:
+        return None
+    spec = scene_pb2.ComponentSpec()
+    if args.transport and args.transport != scene.transport.class_name:
+        spec.class_name = args.transport
+    else:
+        spec.CopyFrom(scene.transport)
+        spec.class_name = spec.class_name or "path"
+    if args.max_depth is not None:
+        spec.properties.values["max_depth"].int_value = args.max_depth
+    return spec
+
+
 def render_command(args: argparse.Namespace) -> int:
     output = Path(args.output)
     output_format = OUTPUT_FORMATS.get(output.suffix.lower())
@@ -88,11 +136,21 @@ def render_command(args: argparse.Namespace) -> int:
             exit_code=2,
         )
     scene_path = Path(args.scene)
-    scene = load_scene(scene_path)
+    spp = args.spp
+    if scene_path.suffix.lower() in IMPORTED_SUFFIXES:
+        imported = _import(scene_path, args.define, inline_files=True)
+        scene = imported.scene
+        spp = spp or imported.sample_count
+    else:
+        if args.define:
+            raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
+        scene = load_scene(scene_path)
     with connect(args.server) as client:
-        job_id = client.submit(scene, args.spp, args.seed, name=scene_path.name)
+        job_id = client.submit(
+            scene, spp, args.seed, name=scene_path.name, transport=_transport(args, scene)
+        )
         try:
-            status = _follow(client, job_id, total=args.spp or None, quiet=args.quiet)
+            status = _follow(client, job_id, total=spp or None, quiet=args.quiet)
         except KeyboardInterrupt:
             client.cancel(job_id)
             raise
@@ -108,6 +166,29 @@ def render_command(args: argparse.Namespace) -> int:
         f"wrote {output.resolve()} ({status.samples_done} spp, "
         f"{status.elapsed_seconds:.2f} s, job {job_id})"
     )
+    return 0
+
+
+def convert_command(args: argparse.Namespace) -> int:
+    source, target = Path(args.input), Path(args.output)
+    if target.suffix.lower() not in JSON_SUFFIXES + TEXT_SUFFIXES:
+        expected = ", ".join(JSON_SUFFIXES + TEXT_SUFFIXES)
+        raise CommandError(f"cannot write {target}: the extension must be one of {expected}", 2)
+    # Mesh files stay files when the output sits beside the input (their
+    # names are relative to its folder); elsewhere they are inlined.
+    same_folder = source.resolve().parent == target.resolve().parent
+    if source.suffix.lower() in IMPORTED_SUFFIXES:
+        imported = _import(source, args.define, inline_files=not same_folder)
+        scene, sample_count = imported.scene, imported.sample_count
+    else:
+        if args.define:
+            raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
+        scene, sample_count = load_scene(source, inline_files=False), 0
+        if not same_folder:
+            inline_mesh_files(scene, source.parent)
+    write_scene(scene, target)
+    note = f"; the file asks for {sample_count} spp (--spp {sample_count})" if sample_count else ""
+    print(f"wrote {target}{note}")
     return 0
 
 
@@ -148,16 +229,53 @@ def build_parser() -> argparse.ArgumentParser:
             "else a yarfd started for this command)",
         )
 
+    def add_define_option(command: argparse.ArgumentParser) -> None:
+        command.add_argument(
+            "-D",
+            "--define",
+            action="append",
+            default=[],
+            metavar="NAME=VALUE",
+            help="set a Mitsuba scene parameter ($NAME), overriding its <default>",
+        )
+
     render = commands.add_parser("render", help="render a scene file into an EXR or PNG image")
-    render.add_argument("scene", help="scene file: protobuf JSON (.json) or text (.textproto)")
+    render.add_argument(
+        "scene",
+        help="scene file: protobuf JSON (.json) or text (.textproto), Mitsuba 3 (.xml) or "
+        "pbrt-v4 (.pbrt)",
+    )
     render.add_argument("-o", "--output", required=True, help="image to write (.exr or .png)")
     render.add_argument(
-        "--spp", type=int, default=0, help="samples per pixel (default: the server's, 16)"
+        "--spp",
+        type=int,
+        default=0,
+        help="samples per pixel (default: the Mitsuba or pbrt file's, else the server's, 16)",
     )
+    add_define_option(render)
     render.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    render.add_argument(
+        "--transport",
+        metavar="CLASS",
+        help="light transport: path, light, bdpt, whitted, distribution (default: the scene's)",
+    )
+    render.add_argument(
+        "--max-depth",
+        type=int,
+        metavar="N",
+        help="longest path in segments (1: emitters only, -1: unbounded)",
+    )
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_server_option(render)
     render.set_defaults(handler=render_command)
+
+    convert = commands.add_parser(
+        "convert", help="convert a Mitsuba (.xml) or pbrt (.pbrt) scene into a yarf scene file"
+    )
+    convert.add_argument("input", help="scene file (.xml, .pbrt, .json or .textproto)")
+    convert.add_argument("output", help="yarf scene to write (.json or .textproto)")
+    add_define_option(convert)
+    convert.set_defaults(handler=convert_command)
 
     classes = commands.add_parser("classes", help="list the server's classes and plugin errors")
     add_server_option(classes)

@@ -1,16 +1,21 @@
 """Scene files: load a ``yarf.v1.Scene`` and make it self-contained.
 
 A scene file is the ``Scene`` message in protobuf's JSON format (``.json``)
-or text format (``.textproto``, ``.pbtxt``, ``.txtpb``). Mesh ``file``
-references are resolved relative to the scene file's folder and inlined as
-``data`` + ``format``, so that a remote server never reads a client's paths.
+or text format (``.textproto``, ``.pbtxt``, ``.txtpb``), or a scene of
+another renderer — Mitsuba 3 XML (``.xml``) or pbrt-v4 (``.pbrt``) — which
+the ``yarf-import`` tool of the build converts. Mesh ``file`` references are
+resolved relative to the scene file's folder and inlined as ``data`` +
+``format``, so that a remote server never reads a client's paths.
 """
 
 from __future__ import annotations
 
 import numbers
-from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+import os
+import shutil
+import subprocess
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path, PurePath
 
 from google.protobuf import json_format, text_format
@@ -20,6 +25,12 @@ from yarf.v1 import component_pb2, scene_pb2
 MESH_FORMATS = ("obj", "ply")
 JSON_SUFFIXES = (".json",)
 TEXT_SUFFIXES = (".textproto", ".pbtxt", ".txtpb")
+# Scenes of other renderers, converted by yarf-import.
+IMPORTED_SUFFIXES = (".xml", ".pbrt")
+
+YARF_IMPORT_ENV = "YARF_IMPORT"
+# Where a build of this repository puts the importer: <repo>/build/bin/yarf-import.
+REPO_YARF_IMPORT = Path(__file__).resolve().parents[3] / "build" / "bin" / "yarf-import"
 
 
 class SceneError(ValueError):
@@ -45,9 +56,88 @@ PropertyValue = (
 )
 
 
-def load_scene(path: str | Path, *, inline_files: bool = True) -> scene_pb2.Scene:
-    """Reads a scene file; with ``inline_files`` its mesh files become inline data."""
+@dataclass(frozen=True)
+class ImportedScene:
+    """A scene converted from another renderer's file by yarf-import."""
+
+    scene: scene_pb2.Scene
+    # Samples per pixel the file asks for; 0 when it does not say.
+    sample_count: int = 0
+    # "file:line: message", one per construct ignored or approximated.
+    warnings: list[str] = field(default_factory=list)
+
+
+def find_yarf_import() -> Path:
+    """The yarf-import binary: $YARF_IMPORT, else this repository's build, else PATH."""
+    from_env = os.environ.get(YARF_IMPORT_ENV)
+    if from_env:
+        path = Path(from_env)
+        if not (path.is_file() and os.access(path, os.X_OK)):
+            raise SceneError(f"{YARF_IMPORT_ENV}={from_env} is not an executable file")
+        return path
+    if REPO_YARF_IMPORT.is_file() and os.access(REPO_YARF_IMPORT, os.X_OK):
+        return REPO_YARF_IMPORT
+    on_path = shutil.which("yarf-import")
+    if on_path:
+        return Path(on_path)
+    raise SceneError(
+        f"cannot find yarf-import to read Mitsuba and pbrt scenes: set {YARF_IMPORT_ENV} to "
+        f"its path, build the repository (expected at {REPO_YARF_IMPORT}) or put it on PATH"
+    )
+
+
+def import_scene(
+    path: str | Path,
+    *,
+    parameters: Mapping[str, str] | None = None,
+    inline_files: bool = True,
+) -> ImportedScene:
+    """Converts a Mitsuba 3 (.xml) or pbrt-v4 (.pbrt) file with yarf-import.
+
+    ``parameters`` set Mitsuba's ``$name`` scene parameters (overriding the
+    file's ``<default>``s). Mesh files are named relative to the file's
+    folder; with ``inline_files`` they become inline data.
+    """
     path = Path(path)
+    command = [str(find_yarf_import()), str(path)]
+    for name, value in (parameters or {}).items():
+        command += ["-D", f"{name}={value}"]
+    try:
+        done = subprocess.run(command, capture_output=True, check=False)
+    except OSError as error:
+        raise SceneError(f"cannot run {command[0]}: {error}") from None
+    stderr = done.stderr.decode("utf-8", errors="replace").splitlines()
+    if done.returncode != 0:
+        prefix = "yarf-import: error: "
+        errors = [line.removeprefix(prefix) for line in stderr if line.startswith(prefix)]
+        message = errors[-1] if errors else f"yarf-import failed (exit status {done.returncode})"
+        raise SceneError(message)
+    warnings = [line.removeprefix("warning: ") for line in stderr if line.startswith("warning: ")]
+    sample_count = 0
+    for line in stderr:
+        if line.startswith("info: sample_count "):
+            sample_count = int(line.split()[-1])
+    scene = parse_scene(done.stdout.decode("utf-8"), ".json", source=str(path))
+    if inline_files:
+        inline_mesh_files(scene, path.parent)
+    return ImportedScene(scene, sample_count, warnings)
+
+
+def load_scene(
+    path: str | Path,
+    *,
+    inline_files: bool = True,
+    parameters: Mapping[str, str] | None = None,
+) -> scene_pb2.Scene:
+    """Reads a scene file; with ``inline_files`` its mesh files become inline data.
+
+    Mitsuba (.xml) and pbrt (.pbrt) files go through :func:`import_scene`
+    (``parameters`` are Mitsuba's); use it directly for the warnings and the
+    file's sample count.
+    """
+    path = Path(path)
+    if path.suffix.lower() in IMPORTED_SUFFIXES:
+        return import_scene(path, parameters=parameters, inline_files=inline_files).scene
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -75,6 +165,24 @@ def parse_scene(text: str, suffix: str, *, source: str = "<scene>") -> scene_pb2
     except (json_format.ParseError, text_format.ParseError) as error:
         raise SceneError(f"{source}: {error}") from None
     return scene
+
+
+def write_scene(scene: scene_pb2.Scene, path: str | Path) -> None:
+    """Writes ``scene`` as protobuf JSON (.json) or text (.textproto, .pbtxt, .txtpb)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in JSON_SUFFIXES:
+        text = json_format.MessageToJson(scene, preserving_proto_field_name=True, indent=2) + "\n"
+    elif suffix in TEXT_SUFFIXES:
+        text = text_format.MessageToString(scene)
+    else:
+        expected = ", ".join(JSON_SUFFIXES + TEXT_SUFFIXES)
+        raise SceneError(f"cannot write {path}: the extension must be one of {expected}")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    except OSError as error:
+        raise SceneError(f"cannot write {path}: {error}") from None
 
 
 def inline_mesh_files(scene: scene_pb2.Scene, base_dir: str | Path) -> int:

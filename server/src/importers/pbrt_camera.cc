@@ -1,0 +1,150 @@
+// pbrt's Camera, Film, Sampler, PixelFilter and Integrator.
+#include "importers/pbrt_importer.h"
+#include "importers/properties_util.h"
+
+namespace yarf::importers {
+namespace {
+
+constexpr int64_t kMaxFilmSide = 16384, kMaxPixels = int64_t(1) << 26, kMaxSpp = int64_t(1) << 20;
+constexpr int64_t kMaxDepth = 1 << 16;
+
+}  // namespace
+
+void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  if (has_camera_) Fail(where, "a second Camera");
+  has_camera_ = true;
+  if (type != "perspective")
+    Warn(where, "camera:" + type, "camera '" + type + "' is not supported: a perspective camera used");
+  v1::Camera camera;
+  const double fov = params.Float("fov", 90);
+  if (!(fov > 0 && fov < 180)) Fail(params.WhereIs("fov", where), "fov must lie in (0, 180) degrees");
+  camera.set_fov(fov);
+  camera.set_fov_axis(v1::Camera::SMALLER);  // pbrt's fov spans the shorter image axis
+  const double lens_radius = params.Float("lensradius", 0);
+  const double focal_distance = params.Float("focaldistance", 1e6);
+  if (!(lens_radius >= 0 && lens_radius < 1e30) || !(focal_distance > 0))
+    Fail(where, "need lensradius >= 0 and focaldistance > 0");
+  if (lens_radius > 0) {
+    camera.set_model(v1::Camera::THIN_LENS);
+    camera.set_lens_radius(lens_radius);
+    camera.set_focus_distance(focal_distance);
+  }
+  for (const char* unsupported : {"screenwindow", "frameaspectratio"})
+    if (params.Has(unsupported)) {
+      params.Find(unsupported);
+      Warn(params.WhereIs(unsupported, where), std::string("camera:") + unsupported,
+           std::string("camera: ") + unsupported + " is not supported: ignored");
+    }
+  params.Accept({"shutteropen", "shutterclose"});
+  if (type == "perspective") params.WarnUnused(diagnostics_, "camera 'perspective'");
+
+  // The CTM maps world to camera space; the camera names that frame.
+  const auto camera_to_world = state_.ctm.Inverse();
+  if (!camera_to_world) Fail(where, "the camera transform is singular");
+  coordinate_systems_["camera"] = *camera_to_world;
+  assembly_.SetCamera(std::move(camera), *camera_to_world, {1, 0, 0}, where);
+}
+
+void PbrtImporter::Film(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  if (has_film_) Fail(where, "a second Film");
+  has_film_ = true;
+  if (type != "rgb") Warn(where, "film:" + type, "film '" + type + "' rendered as an RGB film");
+  const int64_t width = params.Integer("xresolution", 1280), height = params.Integer("yresolution", 720);
+  if (width < 1 || height < 1 || width > kMaxFilmSide || height > kMaxFilmSide || width * height > kMaxPixels)
+    Fail(where, "film resolution " + std::to_string(width) + "x" + std::to_string(height) +
+                    " is out of range (1 to 16384 per side, at most 2^26 pixels)");
+  v1::Film& film = *assembly_.scene().mutable_film();
+  film.set_width(uint32_t(width));
+  film.set_height(uint32_t(height));
+  for (const char* crop : {"cropwindow", "pixelbounds"})
+    if (params.Has(crop)) {
+      params.Find(crop);
+      Warn(params.WhereIs(crop, where), "film-crop", "film crop windows are not supported: the full film is rendered");
+    }
+  if (params.Has("iso") && params.Float("iso", 100) != 100)
+    Warn(params.WhereIs("iso", where), "film-iso", "film iso is not supported: ignored");
+  if (params.Has("exposuretime") && params.Float("exposuretime", 1) != 1)
+    Warn(params.WhereIs("exposuretime", where), "film-exposure", "film exposuretime is not supported: ignored");
+  if (params.String("sensor", "cie1931") != "cie1931")
+    Warn(params.WhereIs("sensor", where), "film-sensor", "camera sensor response curves are not supported");
+  params.Accept({"filename", "diagonal", "savefp16", "maxcomponentvalue", "whitebalance", "writefp16"});
+  params.WarnUnused(diagnostics_, "film '" + type + "'");
+}
+
+void PbrtImporter::Sampler(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  if (has_sampler_) Fail(where, "a second Sampler");
+  has_sampler_ = true;
+  int64_t count = params.Integer("pixelsamples", 16);
+  v1::ComponentSpec& sampler = *assembly_.scene().mutable_sampler();
+  if (type == "stratified") {
+    count = params.Integer("xsamples", 4) * params.Integer("ysamples", 4);
+    params.Accept({"jitter", "pixelsamples"});
+  }
+  if (count < 1 || count > kMaxSpp) Fail(where, "pixelsamples must lie in 1 to " + std::to_string(kMaxSpp));
+  sample_count_ = uint32_t(count);
+  if (type == "independent") {
+    sampler = Spec("independent");
+  } else if (type == "stratified") {
+    v1::Properties props;
+    SetInt(props, "sample_count", count);
+    sampler = Spec("stratified", std::move(props));
+  } else if (type == "halton") {
+    sampler = Spec("halton");
+  } else {
+    if (type != "sobol" && type != "zsobol" && type != "paddedsobol")
+      Warn(where, "sampler:" + type, "sampler '" + type + "' replaced by yarf's Sobol sampler");
+    sampler = Spec("sobol");
+  }
+  params.Accept({"randomization", "seed"});
+  params.WarnUnused(diagnostics_, "sampler '" + type + "'");
+}
+
+void PbrtImporter::PixelFilter(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  if (has_filter_) Fail(where, "a second PixelFilter");
+  has_filter_ = true;
+  v1::ReconstructionFilter& filter = *assembly_.scene().mutable_film()->mutable_filter();
+  double radius = 0;
+  if (type == "box") {
+    filter.set_kind(v1::ReconstructionFilter::BOX);
+    radius = 0.5;
+  } else if (type == "triangle") {
+    filter.set_kind(v1::ReconstructionFilter::TENT);
+    radius = 2;
+  } else {
+    filter.set_kind(v1::ReconstructionFilter::GAUSSIAN);
+    radius = 1.5;
+    if (type == "gaussian") {
+      if (params.Float("sigma", 0.5) != 0.5)
+        Warn(params.WhereIs("sigma", where), "gaussian-sigma", "gaussian filter: yarf's has sigma 0.5 pixel");
+    } else {
+      Warn(where, "filter:" + type, "pixel filter '" + type + "' replaced by a gaussian");
+      params.Accept({"B", "C", "tau"});
+    }
+  }
+  const double x = params.Float("xradius", radius), y = params.Float("yradius", radius);
+  if (x != y) Warn(where, "filter-radius", "pixel filter: different x and y radii; the x radius is used for both");
+  if (!(x > 0 && x <= 64)) Fail(where, "pixel filter radius out of range");
+  filter.set_radius(x);
+  params.WarnUnused(diagnostics_, "pixel filter '" + type + "'");
+}
+
+void PbrtImporter::Integrator(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  if (has_integrator_) Fail(where, "a second Integrator");
+  has_integrator_ = true;
+  if (type != "path" && type != "volpath")
+    Warn(where, "integrator:" + type, "integrator '" + type + "' is not available: yarf's path tracer used");
+  const int64_t max_depth = params.Integer("maxdepth", 5);
+  if (max_depth < 0 || max_depth > kMaxDepth)
+    Fail(params.WhereIs("maxdepth", where), "maxdepth must lie in 0 to " + std::to_string(kMaxDepth));
+  if (params.Bool("regularize", false))
+    Warn(params.WhereIs("regularize", where), "regularize", "path regularization is not supported: ignored");
+  params.Accept({"lightsampler"});
+  if (type == "path" || type == "volpath") params.WarnUnused(diagnostics_, "integrator '" + type + "'");
+  // pbrt counts scattering events, yarf (as Mitsuba) path segments: pbrt's
+  // maxdepth 0 shows emitters only, which is yarf's max_depth 1.
+  v1::Properties props;
+  SetInt(props, "max_depth", max_depth + 1);
+  *assembly_.scene().mutable_transport() = Spec("path", std::move(props));
+}
+
+}  // namespace yarf::importers

@@ -1,0 +1,104 @@
+// The pbrt-v4 importer's state, shared by the files that map each kind of
+// directive (pbrt_scene.cc, pbrt_camera.cc, pbrt_materials.cc,
+// pbrt_textures.cc, pbrt_spectra.cc, pbrt_shapes.cc, pbrt_lights.cc).
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "importers/diagnostics.h"
+#include "importers/import.h"
+#include "importers/pbrt_params.h"
+#include "importers/pbrt_tokenizer.h"
+#include "importers/scene_assembly.h"
+#include "importers/scene_folder.h"
+#include "importers/spectrum.h"
+
+namespace yarf::importers {
+
+class PbrtImporter {
+ public:
+  // `origin` names the scene file, for what has no line of its own.
+  PbrtImporter(const SceneFolder& folder, Diagnostics& diagnostics, SourceLocation origin)
+      : folder_(folder), diagnostics_(diagnostics), origin_(std::move(origin)) {}
+
+  // Reads one file's directives (Include and Import recurse).
+  void ParseFile(std::string_view text, const std::filesystem::path& file, int include_depth);
+  ImportResult Finish();
+
+ private:
+  struct AreaLight {
+    Rgb radiance;
+    SourceLocation where;
+  };
+  // What AttributeBegin saves and AttributeEnd restores.
+  struct State {
+    Matrix4 ctm;
+    bool reverse_orientation = false;
+    std::string material;  // yarf material; "" is the default, kInterface none
+    std::optional<AreaLight> area_light;
+  };
+  static constexpr const char* kInterface = "\x01interface";
+
+  // pbrt_scene.cc
+  void Directive(const PbrtToken& word, PbrtTokenizer& tokens, const std::filesystem::path& file, int depth);
+  double Number(PbrtTokenizer& tokens, const SourceLocation& where);
+  std::string Quoted(PbrtTokenizer& tokens, const SourceLocation& where);
+  Matrix4 Matrix(PbrtTokenizer& tokens, const SourceLocation& where);
+  void Warn(const SourceLocation& where, const std::string& key, const std::string& message) {
+    diagnostics_.Warn(where, key, message);
+  }
+
+  // pbrt_camera.cc
+  void Camera(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  void Film(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  void Sampler(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  void PixelFilter(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  void Integrator(const std::string& type, PbrtParams& params, const SourceLocation& where);
+
+  // pbrt_materials.cc
+  std::string MakeMaterial(const std::string& type, PbrtParams& params, const SourceLocation& where,
+                           const std::string& name);
+  // pbrt_textures.cc
+  void Texture(const std::string& name, const std::string& type, const std::string& texture_class,
+               PbrtParams& params, const SourceLocation& where);
+  // pbrt_spectra.cc: a spectrum-valued parameter (rgb, spectrum, blackbody, float or a
+  // texture) as RGB.
+  Rgb Colour(PbrtParams& params, const std::string& name, Rgb fallback, SpectrumUse use, const SourceLocation& where);
+  // A float parameter or float texture.
+  double FloatOrTexture(PbrtParams& params, const std::string& name, double fallback);
+
+  // pbrt_shapes.cc
+  void Shape(const std::string& type, PbrtParams& params, const SourceLocation& where);
+
+  // pbrt_lights.cc
+  void LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  void AreaLightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
+
+  const SceneFolder& folder_;
+  Diagnostics& diagnostics_;
+  SourceLocation origin_;
+  SceneAssembly assembly_;
+  State state_;
+  std::vector<State> attributes_;   // AttributeBegin/ObjectBegin saves
+  std::vector<Matrix4> transforms_;  // TransformBegin saves
+  std::map<std::string, Matrix4> coordinate_systems_;
+  std::map<std::string, std::string> named_materials_;  // pbrt name → yarf material
+  std::map<std::string, std::string> material_cache_;   // content → yarf material
+  std::map<std::string, Rgb> spectrum_textures_;
+  std::map<std::string, double> float_textures_;
+  std::vector<std::filesystem::path> files_;  // the files being read, for include cycles
+  int includes_ = 0;
+  std::string object_;  // the ObjectBegin being defined
+  SourceLocation object_where_;
+  bool world_ = false;
+  bool start_transform_active_ = true;  // ActiveTransform is not EndTime
+  bool has_camera_ = false, has_film_ = false, has_sampler_ = false, has_integrator_ = false, has_filter_ = false;
+  uint32_t sample_count_ = 16;
+  int nesting_ = 0;
+};
+
+}  // namespace yarf::importers

@@ -1,0 +1,190 @@
+// pbrt materials as yarf SurfaceModel classes.
+#include <google/protobuf/text_format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "importers/colour_checks.h"
+#include "importers/named_ior.h"
+#include "importers/pbrt_importer.h"
+#include "importers/properties_util.h"
+#include "importers/recursion_guard.h"
+
+namespace yarf::importers {
+namespace {
+
+// "metal-Cu-eta" and "metal-Cu-k" name copper's spectra: "Cu".
+std::optional<std::string> MetalName(const PbrtParam* p) {
+  if (!p || p->type != "spectrum" || p->strings.size() != 1) return std::nullopt;
+  const std::string& s = p->strings[0];
+  if (s.rfind("metal-", 0) != 0) return std::nullopt;
+  const size_t dash = s.rfind('-');
+  if (dash <= 6) return std::nullopt;
+  const std::string suffix = s.substr(dash + 1);
+  if (suffix != "eta" && suffix != "k") return std::nullopt;
+  return s.substr(6, dash - 6);
+}
+
+// pbrt-v4 maps roughness to the microfacet alpha by a square root.
+double Alpha(double roughness, bool remap) { return remap ? std::sqrt(std::max(roughness, 0.0)) : roughness; }
+
+}  // namespace
+
+std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& params, const SourceLocation& where,
+                                       const std::string& name) {
+  const RecursionGuard guard(nesting_, where);
+  const std::string what = "material '" + type + "'";
+  params.Accept({"type"});
+  for (const char* key : {"displacement", "normalmap"})
+    if (params.Has(key)) {
+      params.Find(key);
+      Warn(params.WhereIs(key, where), std::string("material:") + key, std::string(key) + " is not supported: ignored");
+    }
+  v1::Properties props;
+  auto reflectance = [&](const std::string& key, const std::string& out, double fallback, double scale = 1) {
+    const Rgb c = Colour(params, key, {fallback, fallback, fallback}, SpectrumUse::kReflectance, where) * scale;
+    SetRgb(props, out, ClampColour(c, 0, 1, [&] {
+             Warn(params.WhereIs(key, where), "clamp:" + key, what + ": " + key + " clamped into [0, 1]");
+           }));
+  };
+  // eta as a number, a named glass or (approximately) a spectrum.
+  auto eta = [&](const std::string& key, double fallback) {
+    const PbrtParam* p = params.Find(key);
+    double v = fallback;
+    if (p && p->type == "spectrum" && p->strings.size() == 1) {
+      const auto glass = PbrtNamedGlassIor(p->strings[0]);
+      if (!glass) Fail(p->where, "unknown named spectrum '" + p->strings[0] + "' for " + key);
+      v = *glass;
+      Warn(p->where, "glass-dispersion", "dispersive glass replaced by its index at 587.6 nm");
+    } else if (p && p->type == "spectrum") {
+      const Rgb c = Colour(params, key, {v, v, v}, SpectrumUse::kReflectance, where);
+      v = c.g;
+      Warn(p->where, "eta-spectrum", "a spectrally varying eta replaced by its green value");
+    } else if (p) {
+      v = FloatOrTexture(params, key, fallback);
+    }
+    if (!(v > 0 && v < 100)) Fail(params.WhereIs(key, where), what + ": " + key + " must lie in (0, 100)");
+    return v;
+  };
+  // Isotropic or anisotropic alpha from pbrt's roughness parameters; true
+  // when rough.
+  auto roughness = [&](const std::string& prefix) {
+    const bool remap = params.Bool("remaproughness", true);
+    const double r = FloatOrTexture(params, prefix + "roughness", 0);
+    const double u = Alpha(FloatOrTexture(params, prefix + "uroughness", r), remap);
+    const double v = Alpha(FloatOrTexture(params, prefix + "vroughness", r), remap);
+    if (!(u >= 0 && u <= 10 && v >= 0 && v <= 10)) Fail(where, what + ": roughness out of range");
+    // A microfacet model needs α > 0 along both axes once either is rough.
+    if (u > 0 || v > 0) return std::pair{std::max(u, 1e-4), std::max(v, 1e-4)};
+    return std::pair{u, v};
+  };
+  auto conductor = [&](const std::string& prefix) {
+    const auto [u, v] = roughness(prefix);
+    const PbrtParam* refl = params.Find("reflectance");
+    const PbrtParam* eta_param = params.Find(prefix + "eta");
+    const PbrtParam* k_param = params.Find(prefix + "k");
+    if (refl) {
+      Warn(refl->where, "conductor-reflectance",
+           "conductor given by reflectance: a perfect conductor tinted by it (Fresnel falloff differs)");
+      SetString(props, "material", "none");
+      reflectance("reflectance", "specular_reflectance", 1);
+    } else if (MetalName(eta_param) || MetalName(k_param) || (!eta_param && !k_param)) {
+      std::string metal = MetalName(eta_param).value_or(MetalName(k_param).value_or("Cu"));
+      if ((eta_param && MetalName(eta_param) != metal) || (k_param && MetalName(k_param) != metal))
+        Warn(where, "conductor-mixed", what + ": eta and k of different metals: '" + metal + "' used");
+      // The metals yarf's conductors tabulate (components/cpp/bsdfs/metals.h).
+      if (metal != "Ag" && metal != "Al" && metal != "Au" && metal != "Cu") {
+        Warn(where, "metal:" + metal, "metal '" + metal + "' is not tabulated in yarf (Ag, Al, Au, Cu): a perfect mirror used");
+        metal = "none";
+      }
+      SetString(props, "material", metal);
+    } else {
+      SetRgb(props, "eta", Colour(params, prefix + "eta", {0.2, 0.92, 1.1}, SpectrumUse::kReflectance, where));
+      SetRgb(props, "k", Colour(params, prefix + "k", {3.9, 2.45, 2.14}, SpectrumUse::kReflectance, where));
+    }
+    if (u == 0 && v == 0) return std::string("conductor");
+    if (u == v)
+      SetFloat(props, "alpha", u);
+    else
+      SetFloat(props, "alpha_u", u), SetFloat(props, "alpha_v", v);
+    return std::string("roughconductor");
+  };
+
+  std::string class_name;
+  if (type == "interface" || type == "none" || type == "") {
+    Warn(where, "material:interface", "interface material: shapes using it are left out (yarf has no media)");
+    params.WarnUnused(diagnostics_, what);
+    return kInterface;
+  } else if (type == "diffuse" || type == "matte") {
+    class_name = "lambertian";
+    reflectance(type == "matte" ? "Kd" : "reflectance", "reflectance", 0.5);
+  } else if (type == "coateddiffuse") {
+    reflectance("reflectance", "diffuse_reflectance", 0.5);
+    SetFloat(props, "int_ior", eta("eta", 1.5));
+    SetFloat(props, "ext_ior", 1.0);
+    const auto [u, v] = roughness("");
+    class_name = u == 0 && v == 0 ? "plastic" : "roughplastic";
+    if (class_name == "roughplastic") SetFloat(props, "alpha", (u + v) / 2);
+    if (u != v) Warn(where, "anisotropic-coating", what + ": anisotropic roughness replaced by its mean");
+    for (const char* key : {"thickness", "albedo", "g"})
+      if (params.Has(key)) {
+        params.Find(key);
+        Warn(params.WhereIs(key, where), std::string("coateddiffuse:") + key,
+             what + ": the coating's " + key + " is not modelled (a plastic has a clear, thin coating)");
+      }
+    params.Accept({"maxdepth", "nsamples"});
+  } else if (type == "conductor") {
+    class_name = conductor("");
+  } else if (type == "coatedconductor") {
+    Warn(where, "material:coatedconductor", "coatedconductor rendered as its conductor layer, without the coating");
+    params.Accept({"interface.roughness", "interface.uroughness", "interface.vroughness", "interface.eta", "thickness",
+                   "albedo", "g", "maxdepth", "nsamples"});
+    class_name = conductor("conductor.");
+  } else if (type == "dielectric" || type == "thindielectric") {
+    SetFloat(props, "int_ior", eta("eta", 1.5));
+    SetFloat(props, "ext_ior", 1.0);
+    class_name = type;
+    if (type == "dielectric") {
+      const auto [u, v] = roughness("");
+      if (u != 0 || v != 0) {
+        class_name = "roughdielectric";
+        if (u == v)
+          SetFloat(props, "alpha", u);
+        else
+          SetFloat(props, "alpha_u", u), SetFloat(props, "alpha_v", v);
+      }
+    }
+  } else if (type == "diffusetransmission") {
+    class_name = "diffusetransmission";
+    const double scale = FloatOrTexture(params, "scale", 1);
+    reflectance("reflectance", "reflectance", 0.25, scale);
+    reflectance("transmittance", "transmittance", 0.25, scale);
+  } else if (type == "mix") {
+    const PbrtParam* materials = params.Find("materials");
+    if (!materials || materials->strings.size() != 2) Fail(where, "mix needs \"string materials\" with two names");
+    const double amount = FloatOrTexture(params, "amount", 0.5);
+    const std::string chosen = materials->strings[amount <= 0.5 ? 0 : 1];
+    Warn(where, "material:mix", "mix materials replaced by the one of larger weight");
+    const auto it = named_materials_.find(chosen);
+    if (it == named_materials_.end()) Fail(where, "mix: named material '" + chosen + "' is not defined");
+    params.WarnUnused(diagnostics_, what);
+    return it->second;
+  } else {
+    Warn(where, "material:" + type, "material '" + type + "' is not supported: a grey diffuse used");
+    return assembly_.DefaultMaterial();
+  }
+  params.WarnUnused(diagnostics_, what);
+  // Anonymous materials with equal parameters share one yarf material.
+  std::string key;
+  google::protobuf::TextFormat::PrintToString(props, &key);
+  key = class_name + "\n" + key;
+  if (name.empty()) {
+    const auto it = material_cache_.find(key);
+    if (it != material_cache_.end()) return it->second;
+  }
+  const std::string made = assembly_.AddMaterial(name.empty() ? type : name, class_name, std::move(props));
+  if (name.empty()) material_cache_[key] = made;
+  return made;
+}
+
+}  // namespace yarf::importers

@@ -1,0 +1,53 @@
+// The parameter list of a pbrt directive: "type name" followed by a value
+// or a bracketed list of values, remembering which parameters were read.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "importers/diagnostics.h"
+#include "importers/pbrt_tokenizer.h"
+
+namespace yarf::importers {
+
+struct PbrtParam {
+  std::string type;  // "float", "rgb", "spectrum", "texture"...
+  std::string name;
+  SourceLocation where;
+  std::vector<double> numbers;       // numeric values
+  std::vector<std::string> strings;  // string values
+  std::vector<bool> bools;           // bool values
+  bool used = false;
+};
+
+class PbrtParams {
+ public:
+  // Reads parameters until the next token is not a string.
+  static PbrtParams Parse(PbrtTokenizer& tokens);
+
+  // The parameter (marked as read), or nullptr.
+  const PbrtParam* Find(const std::string& name);
+  bool Has(const std::string& name) const;
+  SourceLocation WhereIs(const std::string& name, const SourceLocation& fallback) const;
+
+  double Float(const std::string& name, double fallback);
+  int64_t Integer(const std::string& name, int64_t fallback);
+  bool Bool(const std::string& name, bool fallback);
+  std::string String(const std::string& name, const std::string& fallback);
+  // Every value of a numeric parameter of one of `types` (empty if absent).
+  std::vector<double> Numbers(const std::string& name, std::initializer_list<const char*> types);
+  // Marks parameters as read without using them (accepted, no effect).
+  void Accept(std::initializer_list<const char*> names);
+
+  // One warning per (what, name) never read.
+  void WarnUnused(Diagnostics& diagnostics, const std::string& what) const;
+
+ private:
+  const PbrtParam& Typed(const std::string& name, std::initializer_list<const char*> types);
+
+  std::vector<PbrtParam> params_;
+};
+
+}  // namespace yarf::importers

@@ -1,0 +1,210 @@
+// The pbrt-v4 importer, one feature at a time, on the scenes of
+// tests/scenes/import/pbrt_*.pbrt and malformed/*.pbrt.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "importers/importer_test_support.h"
+
+namespace yarf::importers {
+namespace {
+
+using namespace testing;
+
+void ExpectNear(const Vec3d& a, const Vec3d& b, double tolerance = 1e-9) {
+  EXPECT_NEAR(a.x, b.x, tolerance);
+  EXPECT_NEAR(a.y, b.y, tolerance);
+  EXPECT_NEAR(a.z, b.z, tolerance);
+}
+
+Vec3d ToVec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+double Luminance(const Vec3d& c) { return 0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z; }
+
+// pbrt_basic.pbrt, imported once for the suite.
+class PbrtBasic : public ::testing::Test {
+ protected:
+  static const ImportResult& result() {
+    static const ImportResult imported = Import("pbrt_basic.pbrt");
+    return imported;
+  }
+  static const v1::Scene& scene() { return result().scene; }
+  static const v1::SceneShape& shape(int i) { return scene().shapes(i); }
+  static const v1::Material& material(int i) { return MaterialOf(scene(), shape(i)); }
+};
+
+TEST_F(PbrtBasic, CameraFilmSamplerAndIntegrator) {
+  ExpectNear(ToVec(scene().camera().origin()), {0, 0, -5});
+  ExpectNear(ToVec(scene().camera().target()), {0, 0, -4});
+  EXPECT_DOUBLE_EQ(scene().camera().fov(), 30);
+  EXPECT_EQ(scene().camera().fov_axis(), v1::Camera::SMALLER);  // pbrt's fov spans the shorter side
+  EXPECT_EQ(scene().film().width(), 32u);
+  EXPECT_EQ(scene().film().height(), 24u);
+  EXPECT_EQ(scene().film().filter().kind(), v1::ReconstructionFilter::BOX);
+  EXPECT_EQ(scene().sampler().class_name(), "halton");
+  EXPECT_EQ(result().sample_count, 8u);
+  // pbrt's maxdepth counts bounces, yarf's path segments.
+  EXPECT_EQ(IntProperty(scene().transport().properties(), "max_depth"), 4);
+}
+
+TEST_F(PbrtBasic, NamedMaterialIsTheOneUsed) {
+  EXPECT_EQ(material(0).name(), "red");
+  ExpectNear(RgbProperty(material(0).properties(), "reflectance"), {0.8, 0.1, 0.1});
+  EXPECT_EQ(shape(0).mesh().indices_size(), 3);
+}
+
+TEST_F(PbrtBasic, TransformsInAttributeBlocksPlaceTheShape) {
+  const Matrix4 to_world = ToMatrix(shape(1).to_world());
+  ExpectNear(to_world.Point({0, 0, 0}), {1, 2, 3});
+  ExpectNear(to_world.Point({0, 0, 1}), {1, 2, 5});  // Scale 2
+  EXPECT_DOUBLE_EQ(shape(1).sphere().radius(), 0.5);
+  // AttributeEnd restored the identity for the next shapes.
+  ExpectNear(ToMatrix(shape(3).to_world()).Point({0, 0, 0}), {0, 0, 0});
+}
+
+TEST_F(PbrtBasic, ConductorWithNamedMetalSpectraAndRemappedRoughness) {
+  EXPECT_EQ(material(1).class_name(), "roughconductor");
+  EXPECT_EQ(StringProperty(material(1).properties(), "material"), "Au");
+  EXPECT_NEAR(FloatProperty(material(1).properties(), "alpha"), 0.3, 1e-12);  // sqrt(0.09)
+}
+
+TEST_F(PbrtBasic, TexturesBecomeTheirMeanColourWithAWarning) {
+  ExpectNear(RgbProperty(material(2).properties(), "reflectance"), {0.4, 0.4, 0.4}, 1e-12);
+  ExpectNear(RgbProperty(material(3).properties(), "reflectance"), {0.5, 0.5, 0.5}, 1e-6);
+  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:33: yarf has no textures yet: checkerboard"));
+  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:35: yarf has no textures yet: imagemap"));
+}
+
+TEST_F(PbrtBasic, DiskIsAScaledFanAtItsHeight) {
+  ExpectNear(ToMatrix(shape(2).to_world()).Point({1, 0, 0}), {2, 0, 1});
+  EXPECT_EQ(shape(2).mesh().indices_size(), 3 * 128);
+}
+
+TEST_F(PbrtBasic, ReverseOrientationFlipsNormalsAndPlymeshStaysAFile) {
+  EXPECT_EQ(shape(3).mesh().file(), "assets/quad.ply");
+  EXPECT_EQ(shape(3).mesh().format(), "ply");
+  EXPECT_TRUE(shape(3).flip_normals());
+  EXPECT_FALSE(shape(0).flip_normals());
+}
+
+TEST_F(PbrtBasic, AreaLightBlackbodyScaledAndOrientedByN) {
+  const v1::SceneShape& light = shape(4);
+  EXPECT_EQ(light.emitter().class_name(), "diffuse_area");
+  // pbrt-v4 normalises the blackbody to unit luminance, then scales it.
+  EXPECT_NEAR(Luminance(RgbProperty(light.emitter().properties(), "radiance")), 3.0, 1e-2);
+  // N points to -z, against the winding of P: the triangle is turned over.
+  EXPECT_EQ(light.mesh().indices(1), 2u);
+  EXPECT_EQ(light.mesh().indices(2), 1u);
+  EXPECT_FALSE(light.flip_normals());
+  EXPECT_TRUE(Warns(result(), "blackbody spectra converted to RGB"));
+  // coateddiffuse becomes a rough plastic.
+  EXPECT_EQ(MaterialOf(scene(), light).class_name(), "roughplastic");
+  EXPECT_NEAR(FloatProperty(MaterialOf(scene(), light).properties(), "alpha"), 0.2, 1e-12);
+}
+
+TEST_F(PbrtBasic, PointAndSpotLights) {
+  ASSERT_EQ(scene().lights_size(), 2);
+  const v1::Light& point = scene().lights(0);
+  EXPECT_EQ(point.emitter().class_name(), "point");
+  ExpectNear(RgbProperty(point.emitter().properties(), "intensity"), {2, 4, 6});  // I × scale
+  ExpectNear(ToMatrix(point.to_world()).Point({0, 0, 0}), {0, 4, 0});
+  const v1::Light& spot = scene().lights(1);
+  EXPECT_EQ(spot.emitter().class_name(), "spot");
+  EXPECT_DOUBLE_EQ(FloatProperty(spot.emitter().properties(), "cutoff_angle"), 40);
+  EXPECT_DOUBLE_EQ(FloatProperty(spot.emitter().properties(), "beam_width"), 30);
+  ExpectNear(ToMatrix(spot.to_world()).Point({0, 0, 0}), {0, 5, 0});
+  ExpectNear(ToMatrix(spot.to_world()).Vector({0, 0, 1}), {0, -1, 0});
+}
+
+TEST_F(PbrtBasic, InfiniteLightsAreReportedAsIgnored) {
+  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:55: yarf has no infinite lights yet: LightSource \"distant\""));
+  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:56: yarf has no infinite lights yet: LightSource \"infinite\""));
+}
+
+TEST(PbrtImport, MaterialsMapToSurfaceModels) {
+  const ImportResult result = Import("pbrt_materials.pbrt");
+  const v1::Scene& scene = result.scene;
+  auto material = [&](int i) -> const v1::Material& { return MaterialOf(scene, scene.shapes(i)); };
+  EXPECT_EQ(material(0).class_name(), "diffusetransmission");
+  ExpectNear(RgbProperty(material(0).properties(), "reflectance"), {0.3, 0.4, 0.5});
+  ExpectNear(RgbProperty(material(0).properties(), "transmittance"), {0.2, 0.2, 0.2});
+  EXPECT_EQ(material(1).class_name(), "conductor");
+  ExpectNear(RgbProperty(material(1).properties(), "eta"), {0.2, 0.9, 1.1});
+  ExpectNear(RgbProperty(material(1).properties(), "k"), {3.9, 2.4, 2.1});
+  // Given by reflectance: a perfect conductor tinted by it, rough.
+  EXPECT_EQ(material(2).class_name(), "roughconductor");
+  EXPECT_EQ(StringProperty(material(2).properties(), "material"), "none");
+  ExpectNear(RgbProperty(material(2).properties(), "specular_reflectance"), {0.9, 0.8, 0.7});
+  EXPECT_NEAR(FloatProperty(material(2).properties(), "alpha"), 0.1, 1e-12);
+  // Brass is not among yarf's tabulated metals.
+  EXPECT_EQ(StringProperty(material(3).properties(), "material"), "none");
+  EXPECT_TRUE(Warns(result, "metal 'CuZn' is not tabulated"));
+  EXPECT_EQ(material(4).class_name(), "roughdielectric");
+  EXPECT_NEAR(FloatProperty(material(4).properties(), "alpha_u"), 0.2, 1e-12);
+  EXPECT_NEAR(FloatProperty(material(4).properties(), "alpha_v"), 0.4, 1e-12);
+  EXPECT_DOUBLE_EQ(FloatProperty(material(4).properties(), "int_ior"), 1.33);
+  EXPECT_EQ(material(5).class_name(), "thindielectric");
+  EXPECT_EQ(material(6).class_name(), "plastic");  // a smooth coateddiffuse
+  ExpectNear(RgbProperty(material(6).properties(), "diffuse_reflectance"), {0.2, 0.3, 0.4});
+  EXPECT_EQ(material(7).name(), "b");  // mix: the material of larger weight
+  EXPECT_EQ(material(8).name(), "default");
+  EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:24: material 'hair' is not supported"));
+  // Shapes of an interface material bound media only: left out.
+  EXPECT_EQ(scene.shapes_size(), 9);
+  EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:26: interface material"));
+}
+
+TEST(PbrtImport, ObjectInstancesMapToGroupsAndInstances) {
+  const ImportResult result = Import("pbrt_instances.pbrt");
+  const v1::Scene& scene = result.scene;
+  ASSERT_EQ(scene.groups_size(), 1);
+  ASSERT_EQ(scene.groups(0).shapes_size(), 1);
+  const v1::SceneShape& ball = scene.groups(0).shapes(0);
+  EXPECT_EQ(MaterialOf(scene, ball).class_name(), "dielectric");
+  EXPECT_DOUBLE_EQ(FloatProperty(MaterialOf(scene, ball).properties(), "int_ior"), 1.5168);  // glass-BK7
+  const Vec3d centre = ToMatrix(ball.to_world()).Point({0, 0, 0});
+  ExpectNear(centre, {0, 1, 0});
+  ASSERT_EQ(scene.instances_size(), 2);
+  ExpectNear(ToMatrix(scene.instances(0).to_world()).Point(centre), {-2, 1, 0});
+  ExpectNear(ToMatrix(scene.instances(1).to_world()).Point(centre), {1, 0, 0});  // rotated 90° about z
+  EXPECT_TRUE(scene.shapes().empty());
+}
+
+TEST(PbrtImport, IncludeAndImportResolveRelativeToTheIncludingFile) {
+  const v1::Scene scene = Import("pbrt_include.pbrt").scene;
+  ASSERT_EQ(scene.shapes_size(), 1);
+  EXPECT_EQ(scene.shapes(0).material(), "green");
+  EXPECT_DOUBLE_EQ(FloatProperty(MaterialNamed(scene, "glass").properties(), "int_ior"), 1.33);
+}
+
+TEST(PbrtImport, ALeftHandedLookAtMirrorsTheWorldAndKeepsTheLitSide) {
+  const v1::Scene scene = Import("pbrt_mirror.pbrt").scene;
+  ASSERT_EQ(scene.shapes_size(), 1);
+  const v1::SceneShape& light = scene.shapes(0);
+  const Matrix4 to_world = ToMatrix(light.to_world());
+  // Reflected about x = 0, the camera's vertical plane.
+  ExpectNear(to_world.Point({1, 2, 3}), {-1, 2, 3});
+  // The triangle faces the camera (-z) in pbrt; after the reflection its
+  // winding faces +z, so yarf flips its normal back.
+  EXPECT_TRUE(light.flip_normals());
+  ExpectNear(ToVec(scene.camera().origin()), {0, 0, -5});
+}
+
+TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"malformed/truncated.pbrt", "truncated.pbrt:1: unclosed '[' of parameter 'fov'"},
+      {"malformed/unterminated.pbrt", "unterminated.pbrt:3: unterminated string"},
+      {"malformed/unknown_directive.pbrt", "unknown_directive.pbrt:2: unknown directive 'Shpae'"},
+      {"malformed/wrong_type.pbrt", "wrong_type.pbrt:1: integer parameter 'xresolution' needs numbers"},
+      {"malformed/undefined_material.pbrt", "undefined_material.pbrt:2: named material 'nowhere' is not defined"},
+      {"malformed/absurd.pbrt", "absurd.pbrt:1: film resolution 1000000000x1000000000 is out of range"},
+      {"malformed/cycle.pbrt", "cycle.pbrt:1: include cycle"},
+      {"malformed/outside.pbrt", "outside.pbrt:2: file '../assets/quad.ply' lies outside the scene folder"},
+      {"malformed/bad_indices.pbrt", "bad_indices.pbrt:2: shape 'trianglemesh': index 7 is not a vertex"},
+      {"malformed/unbalanced.pbrt", "unbalanced.pbrt:2: AttributeEnd without AttributeBegin"},
+  };
+  for (const auto& [file, message] : cases)
+    EXPECT_NE(ImportErrorOf(file).find(message), std::string::npos) << file << ": " << ImportErrorOf(file);
+}
+
+}  // namespace
+}  // namespace yarf::importers

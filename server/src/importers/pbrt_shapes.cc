@@ -1,0 +1,113 @@
+// pbrt shapes (with their area lights), placed in the world or in the
+// object being defined.
+#include <algorithm>
+#include <cmath>
+
+#include "importers/mesh_shapes.h"
+#include "importers/pbrt_importer.h"
+#include "importers/properties_util.h"
+
+namespace yarf::importers {
+namespace {
+
+// Orders each triangle so that its winding agrees with the mean of its
+// vertex normals: pbrt turns the geometric normal toward N when N is given.
+void OrientByNormals(const std::vector<double>& p, const std::vector<double>& n, std::vector<uint32_t>& indices) {
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
+    auto point = [&](uint32_t i) { return Vec3d{p[3 * i], p[3 * i + 1], p[3 * i + 2]}; };
+    auto normal = [&](uint32_t i) { return Vec3d{n[3 * i], n[3 * i + 1], n[3 * i + 2]}; };
+    const Vec3d winding = Cross(point(b) - point(a), point(c) - point(a));
+    if (Dot(winding, normal(a) + normal(b) + normal(c)) < 0) std::swap(indices[t + 1], indices[t + 2]);
+  }
+}
+
+}  // namespace
+
+void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  if (state_.material == kInterface) return;  // invisible boundaries of media: warned at the material
+  v1::SceneShape shape;
+  Matrix4 to_world = state_.ctm;
+  NormalRule rule = NormalRule::kTransformed;
+  bool flip = state_.reverse_orientation;
+  const std::string what = "shape '" + type + "'";
+  if (type == "trianglemesh") {
+    const std::vector<double> p = params.Numbers("P", {"point3"});
+    std::vector<double> raw = params.Numbers("indices", {"integer"});
+    const std::vector<double> n = params.Numbers("N", {"normal3"});
+    if (p.empty() || p.size() % 3 != 0) Fail(params.WhereIs("P", where), what + ": P needs xyz triples");
+    const size_t vertices = p.size() / 3;
+    if (raw.empty() && vertices == 3) raw = {0, 1, 2};
+    if (raw.empty() || raw.size() % 3 != 0) Fail(params.WhereIs("indices", where), what + ": indices needs triples");
+    std::vector<uint32_t> indices;
+    indices.reserve(raw.size());
+    for (double i : raw) {
+      if (!(i >= 0 && i < double(vertices)) || i != std::floor(i))
+        Fail(params.WhereIs("indices", where),
+             what + ": index " + std::to_string(int64_t(std::clamp(i, -9e18, 9e18))) + " is not a vertex of P");
+      indices.push_back(uint32_t(i));
+    }
+    if (!n.empty()) {
+      if (n.size() != p.size()) Fail(params.WhereIs("N", where), what + ": N needs one normal per vertex");
+      OrientByNormals(p, n, indices);
+    }
+    std::vector<float> positions(p.begin(), p.end());
+    *shape.mutable_mesh() = InlineMesh(positions, indices);
+    params.Accept({"uv", "S", "faceIndices", "st"});
+  } else if (type == "plymesh") {
+    const std::string name = params.String("filename", "");
+    const auto file = folder_.Resolve(name, origin_.file, params.WhereIs("filename", where));
+    if (file.extension() != ".ply") {
+      Warn(params.WhereIs("filename", where), "plymesh-compressed",
+           "plymesh: only uncompressed .ply files are supported: '" + name + "' ignored");
+      return;
+    }
+    shape.mutable_mesh()->set_file(folder_.Relative(file));
+    shape.mutable_mesh()->set_format("ply");
+    for (const char* key : {"displacement", "edgelength"})
+      if (params.Has(key)) {
+        params.Find(key);
+        Warn(params.WhereIs(key, where), "plymesh-displacement", "plymesh displacement is not supported: ignored");
+      }
+  } else if (type == "sphere") {
+    rule = NormalRule::kSphere;
+    const double radius = params.Float("radius", 1);
+    if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "sphere radius must be positive");
+    shape.mutable_sphere()->set_radius(radius);
+    shape.mutable_sphere()->mutable_center();
+    if (params.Float("zmin", -radius) > -radius || params.Float("zmax", radius) < radius ||
+        params.Float("phimax", 360) < 360)
+      Warn(where, "partial-sphere", "partial spheres (zmin, zmax, phimax) are rendered whole");
+  } else if (type == "disk") {
+    const double radius = params.Float("radius", 1), height = params.Float("height", 0);
+    if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "disk radius must be positive");
+    if (params.Float("innerradius", 0) > 0 || params.Float("phimax", 360) < 360)
+      Warn(where, "partial-disk", "partial disks (innerradius, phimax) are rendered whole");
+    *shape.mutable_mesh() = DiskMesh();
+    to_world = to_world * Matrix4::Translate({0, 0, height}) * Matrix4::Scale({radius, radius, 1});
+    Warn(where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
+  } else {
+    Warn(where, "shape:" + type, "shape '" + type + "' is not supported: ignored");
+    return;
+  }
+  if (params.Has("alpha")) {
+    params.Find("alpha");
+    Warn(params.WhereIs("alpha", where), "alpha", "alpha cut-outs are not supported: ignored");
+  }
+  params.WarnUnused(diagnostics_, what);
+
+  shape.set_material(state_.material.empty() ? assembly_.DefaultMaterial() : state_.material);
+  if (state_.area_light) {
+    if (!object_.empty()) {
+      Warn(state_.area_light->where, "instanced-area-light",
+           "area lights in object instances are not supported (as in pbrt): emission ignored");
+    } else {
+      v1::Properties props;
+      SetRgb(props, "radiance", state_.area_light->radiance);
+      *shape.mutable_emitter() = Spec("diffuse_area", std::move(props));
+    }
+  }
+  assembly_.AddShape(std::move(shape), to_world, flip, rule, where, object_);
+}
+
+}  // namespace yarf::importers

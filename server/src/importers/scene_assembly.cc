@@ -1,0 +1,153 @@
+#include "importers/scene_assembly.h"
+
+#include <cmath>
+#include <functional>
+
+namespace yarf::importers {
+namespace {
+
+void CheckTransform(const Matrix4& m, const SourceLocation& where, const std::string& what) {
+  if (!m.IsFinite()) Fail(where, what + ": transform has non-finite values");
+  if (!(std::abs(m.Determinant3()) > 1e-30)) Fail(where, what + ": transform is singular");
+}
+
+void SetTransform(const Matrix4& m, v1::Transform* out, std::function<void()> clear) {
+  if (m.IsIdentity())
+    clear();
+  else
+    *out = m.ToProto();
+}
+
+// yarf computes a mesh's normal from its winding after to_world; decide
+// whether to flip it so it matches the source renderer's.
+bool YarfFlip(bool flip, NormalRule rule, const Matrix4& to_world, bool mirrored_world) {
+  switch (rule) {
+    case NormalRule::kWorldWinding:
+      return flip != mirrored_world;
+    case NormalRule::kTransformed:
+      return flip != (to_world.Determinant3() < 0);
+    case NormalRule::kSphere:
+      return flip;
+  }
+  return flip;
+}
+
+}  // namespace
+
+std::string SceneAssembly::UniqueName(std::set<std::string>& taken, const std::string& name) {
+  std::string unique = name.empty() ? "unnamed" : name;
+  for (int k = 2; taken.count(unique); ++k) unique = name + "-" + std::to_string(k);
+  taken.insert(unique);
+  return unique;
+}
+
+std::string SceneAssembly::DefaultMaterial() {
+  if (default_material_.empty()) {
+    v1::Properties p;
+    auto& rgb = *(*p.mutable_values())["reflectance"].mutable_rgb_value();
+    rgb.set_r(0.5), rgb.set_g(0.5), rgb.set_b(0.5);
+    default_material_ = AddMaterial("default", "lambertian", std::move(p));
+  }
+  return default_material_;
+}
+
+std::string SceneAssembly::AddMaterial(const std::string& name, const std::string& class_name,
+                                       v1::Properties properties) {
+  v1::Material& m = *scene_.add_materials();
+  m.set_name(UniqueName(material_names_, name));
+  m.set_class_name(class_name);
+  *m.mutable_properties() = std::move(properties);
+  return m.name();
+}
+
+void SceneAssembly::AddShape(v1::SceneShape shape, const Matrix4& to_world, bool flip, NormalRule rule,
+                             const SourceLocation& where, const std::string& group) {
+  CheckTransform(to_world, where, "shape");
+  if (group.empty()) {
+    world_shapes_.push_back({to_world, flip, rule});
+    *scene_.add_shapes() = std::move(shape);
+    return;
+  }
+  // Groups are placed by instances, whose transforms carry normals as
+  // normals: only the shape's own transform matters here.
+  shape.set_flip_normals(YarfFlip(flip, rule, to_world, false));
+  if (!to_world.IsIdentity()) *shape.mutable_to_world() = to_world.ToProto();
+  *Group(group).add_shapes() = std::move(shape);
+}
+
+v1::Group& SceneAssembly::Group(const std::string& name) {
+  const auto it = group_index_.find(name);
+  if (it != group_index_.end()) return *scene_.mutable_groups(it->second);
+  group_index_[name] = scene_.groups_size();
+  v1::Group& g = *scene_.add_groups();
+  g.set_name(name);
+  return g;
+}
+
+bool SceneAssembly::HasGroup(const std::string& name) const { return group_index_.count(name) > 0; }
+
+void SceneAssembly::AddInstance(const std::string& group, const Matrix4& to_world, const SourceLocation& where) {
+  CheckTransform(to_world, where, "instance");
+  scene_.add_instances()->set_group(group);
+  instance_transforms_.push_back(to_world);
+}
+
+void SceneAssembly::AddLight(v1::Light light, const Matrix4& to_world, const SourceLocation& where) {
+  CheckTransform(to_world, where, "light");
+  *scene_.add_lights() = std::move(light);
+  light_transforms_.push_back(to_world);
+}
+
+void SceneAssembly::SetCamera(v1::Camera camera, const Matrix4& camera_to_world, const Vec3d& source_right,
+                              const SourceLocation& where) {
+  if (!camera_to_world.IsFinite()) Fail(where, "camera: transform has non-finite values");
+  const Vec3d origin = camera_to_world.Point({0, 0, 0});
+  const auto forward = Normalized(camera_to_world.Vector({0, 0, 1}));
+  const Vec3d up = camera_to_world.Vector({0, 1, 0});
+  if (!forward) Fail(where, "camera: transform has no view direction");
+  const auto right = Normalized(Cross(*forward, up));
+  if (!right) Fail(where, "camera: transform's up is parallel to its view direction");
+  const Vec3d target = origin + *forward;
+  auto set = [](v1::Vec3* v, const Vec3d& p) { v->set_x(p.x), v->set_y(p.y), v->set_z(p.z); };
+  set(camera.mutable_origin(), origin);
+  set(camera.mutable_target(), target);
+  set(camera.mutable_up(), up);
+  *scene_.mutable_camera() = std::move(camera);
+
+  // yarf draws cross(forward, up) to the right; where the source draws the
+  // opposite, reflect the world about the plane through the camera that
+  // holds forward and up: p' = p - 2 ((p - o)·r) r.
+  mirrored_ = Dot(camera_to_world.Vector(source_right), *right) < 0;
+  if (mirrored_) {
+    const Vec3d r = *right;
+    const double d = 2 * Dot(origin, r);
+    mirror_ = Matrix4({1 - 2 * r.x * r.x, -2 * r.x * r.y, -2 * r.x * r.z, d * r.x,  //
+                       -2 * r.y * r.x, 1 - 2 * r.y * r.y, -2 * r.y * r.z, d * r.y,  //
+                       -2 * r.z * r.x, -2 * r.z * r.y, 1 - 2 * r.z * r.z, d * r.z,  //
+                       0, 0, 0, 1});
+  } else {
+    mirror_ = Matrix4();
+  }
+}
+
+v1::Scene SceneAssembly::Finish() {
+  for (int i = 0; i < scene_.shapes_size(); ++i) {
+    v1::SceneShape& shape = *scene_.mutable_shapes(i);
+    const WorldShape& w = world_shapes_[i];
+    const Matrix4 to_world = mirror_ * w.to_world;
+    shape.set_flip_normals(YarfFlip(w.flip, w.rule, to_world, mirrored_));
+    SetTransform(to_world, shape.mutable_to_world(), [&] { shape.clear_to_world(); });
+  }
+  for (int i = 0; i < scene_.lights_size(); ++i) {
+    v1::Light& light = *scene_.mutable_lights(i);
+    SetTransform(mirror_ * light_transforms_[i], light.mutable_to_world(), [&] { light.clear_to_world(); });
+  }
+  for (int i = 0; i < scene_.instances_size(); ++i) {
+    v1::Instance& instance = *scene_.mutable_instances(i);
+    SetTransform(mirror_ * instance_transforms_[i], instance.mutable_to_world(),
+                 [&] { instance.clear_to_world(); });
+  }
+  return std::move(scene_);
+}
+
+}  // namespace yarf::importers

@@ -1,0 +1,81 @@
+// Builds a yarf Scene from what an importer finds, and reconciles the
+// conventions that differ between renderers: the camera's handedness and
+// which side of a surface its normal points to.
+#pragma once
+
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "importers/diagnostics.h"
+#include "importers/matrix.h"
+#include "yarf/v1/scene.pb.h"
+
+namespace yarf::importers {
+
+// What decides a shape's normal in the renderer the scene comes from.
+enum class NormalRule {
+  // The winding of its triangles in world space (Mitsuba's meshes, like
+  // yarf's world meshes).
+  kWorldWinding,
+  // Its object-space normal carried by the transform (pbrt's shapes,
+  // Mitsuba's rectangle and disk): a mirroring transform keeps it.
+  kTransformed,
+  // Outward from the centre (spheres, in every renderer and in yarf).
+  kSphere,
+};
+
+class SceneAssembly {
+ public:
+  v1::Scene& scene() { return scene_; }
+
+  // A lambertian of reflectance 0.5, the default of Mitsuba and pbrt.
+  std::string DefaultMaterial();
+  // Adds a material; returns its name: `name`, made unique if taken.
+  std::string AddMaterial(const std::string& name, const std::string& class_name, v1::Properties properties);
+
+  // Adds a shape to the world (empty `group`) or to a group. `flip` is the
+  // source's own "flip normals" / "reverse orientation" state. Fails at
+  // `where` when to_world is singular or not finite.
+  void AddShape(v1::SceneShape shape, const Matrix4& to_world, bool flip, NormalRule rule,
+                const SourceLocation& where, const std::string& group = "");
+  // Creates the group on first use.
+  v1::Group& Group(const std::string& name);
+  bool HasGroup(const std::string& name) const;
+  void AddInstance(const std::string& group, const Matrix4& to_world, const SourceLocation& where);
+  void AddLight(v1::Light light, const Matrix4& to_world, const SourceLocation& where);
+
+  // Places the camera. `camera` carries the projection (fov, lens, clip
+  // planes); camera_to_world maps the camera frame (+z forward, +y up) to
+  // the world, and `source_right` is the camera-space direction the source
+  // renderer draws to the right of the image (+x for pbrt, -x for Mitsuba).
+  // When yarf's look-at frame would draw the image mirrored, the whole
+  // world is mirrored about the camera's vertical plane instead.
+  void SetCamera(v1::Camera camera, const Matrix4& camera_to_world, const Vec3d& source_right,
+                 const SourceLocation& where);
+  bool HasCamera() const { return scene_.has_camera(); }
+
+  // The scene, with the mirror applied to world shapes, lights and instances.
+  v1::Scene Finish();
+
+ private:
+  struct WorldShape {
+    Matrix4 to_world;
+    bool flip;
+    NormalRule rule;
+  };
+  std::string UniqueName(std::set<std::string>& taken, const std::string& name);
+
+  v1::Scene scene_;
+  std::set<std::string> material_names_;
+  std::map<std::string, int> group_index_;
+  std::string default_material_;
+  std::vector<WorldShape> world_shapes_;   // parallel to scene_.shapes()
+  std::vector<Matrix4> light_transforms_;  // parallel to scene_.lights()
+  std::vector<Matrix4> instance_transforms_;
+  Matrix4 mirror_;
+  bool mirrored_ = false;
+};
+
+}  // namespace yarf::importers

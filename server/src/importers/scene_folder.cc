@@ -1,0 +1,80 @@
+#include "importers/scene_folder.h"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+#include <vector>
+
+namespace yarf::importers {
+
+namespace fs = std::filesystem;
+
+SceneFolder::SceneFolder(const fs::path& scene_file) : user_root_(scene_file.parent_path()) {
+  std::error_code error;
+  const fs::path folder = user_root_.empty() ? fs::path(".") : user_root_;
+  root_ = fs::weakly_canonical(fs::absolute(folder, error), error);
+  if (error) root_ = fs::absolute(folder).lexically_normal();
+}
+
+bool SceneFolder::Inside(const fs::path& canonical) const {
+  const auto [end, _] = std::mismatch(root_.begin(), root_.end(), canonical.begin(), canonical.end());
+  return end == root_.end();
+}
+
+fs::path SceneFolder::Resolve(const std::string& name, const fs::path& from_file,
+                              const SourceLocation& where, bool must_exist) const {
+  if (name.empty()) Fail(where, "empty file name");
+  if (name.find('\0') != std::string::npos) Fail(where, "file name contains a NUL character");
+  const fs::path relative(name);
+  std::vector<fs::path> candidates;
+  if (relative.is_absolute()) {
+    candidates.push_back(relative);
+  } else {
+    candidates.push_back(fs::absolute(from_file).parent_path() / relative);
+    candidates.push_back(root_ / relative);
+  }
+  bool outside = false;
+  for (const fs::path& candidate : candidates) {
+    std::error_code error;
+    const fs::path canonical = fs::weakly_canonical(candidate, error);
+    if (error) continue;
+    if (!Inside(canonical)) {
+      outside = true;
+      continue;
+    }
+    if (!must_exist || fs::is_regular_file(canonical, error)) return canonical;
+  }
+  if (outside) Fail(where, "file '" + name + "' lies outside the scene folder " + root_.string());
+  Fail(where, "file '" + name + "' not found (looked in the including file's folder and " +
+                  root_.string() + ")");
+}
+
+std::string SceneFolder::Relative(const fs::path& file) const {
+  return file.lexically_relative(root_).generic_string();
+}
+
+std::string SceneFolder::Display(const fs::path& file) const {
+  std::error_code error;
+  const fs::path canonical = fs::weakly_canonical(fs::absolute(file, error), error);
+  if (error || !Inside(canonical)) return file.string();
+  return (user_root_ / canonical.lexically_relative(root_)).lexically_normal().string();
+}
+
+// Scene text beyond this size is refused (meshes belong in their own files).
+constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(1) << 30;
+
+std::string ReadTextFile(const fs::path& file, const SourceLocation& where) {
+  std::error_code error;
+  if (!fs::is_regular_file(file, error)) Fail(where, "file '" + file.string() + "' not found");
+  if (fs::file_size(file, error) > kMaxSceneBytes) Fail(where, "file '" + file.string() + "' is larger than 1 GiB");
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  if (!in || !(text << in.rdbuf())) {
+    if (in && fs::file_size(file, error) == 0) return {};
+    Fail(where, "cannot read '" + file.string() + "'");
+  }
+  return text.str();
+}
+
+}  // namespace yarf::importers

@@ -1,0 +1,162 @@
+// Mitsuba BSDFs as yarf SurfaceModel classes.
+#include "importers/colour_checks.h"
+#include "importers/properties_util.h"
+#include "importers/xml_importer.h"
+
+namespace yarf::importers {
+namespace {
+
+constexpr double kBk7 = 1.5046, kAir = 1.000277, kPolypropylene = 1.49;
+
+}  // namespace
+
+// The metals yarf's conductors tabulate (components/cpp/bsdfs/metals.h);
+// others become a perfect mirror, with a warning.
+std::string MitsubaImporter::KnownMetal(const std::string& name, const SourceLocation& where) {
+  for (const char* known : {"none", "Ag", "Al", "Au", "Cu"})
+    if (name == known) return name;
+  Warn(where, "metal:" + name, "metal '" + name + "' is not tabulated in yarf (Ag, Al, Au, Cu): a perfect mirror used");
+  return "none";
+}
+
+std::string MitsubaImporter::Material(const XmlElement& element) {
+  const auto it = materials_.find(&element);
+  if (it != materials_.end()) return it->second;
+  const std::string name = MakeMaterial(element, element.Get("id", element.Get("type", "bsdf")));
+  materials_[&element] = name;
+  return name;
+}
+
+// Returns the material's name, or "" for a null BSDF (an invisible surface).
+std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string& name) {
+  const RecursionGuard guard(nesting, e.where);
+  XmlPlugin p(e, *this);
+  const std::string& type = p.type();
+  const std::string what = "bsdf '" + type + "'";
+  v1::Properties props;
+
+  auto reflectance = [&](const std::string& key, const std::string& out, Rgb fallback) {
+    const Rgb c = ClampColour(p.Color(key, fallback), 0, 1, [&] {
+      Warn(p.WhereIs(key), "clamp:" + key, what + ": " + key + " clamped into [0, 1]");
+    });
+    SetRgb(props, out, c);
+  };
+  auto ior = [&](const std::string& key, double fallback) {
+    const double v = p.Ior(key, fallback);
+    if (!(v > 0 && v < 100)) Fail(p.WhereIs(key), what + ": " + key + " must lie in (0, 100)");
+    SetFloat(props, key, v);
+  };
+  // Mitsuba's microfacet models default to Beckmann; yarf's have one
+  // distribution of their own.
+  auto distribution = [&] {
+    const std::string d = p.String("distribution", "beckmann");
+    if (d != "ggx")
+      Warn(p.WhereIs("distribution"), "distribution:" + d,
+           "microfacet distribution '" + d + "' replaced by yarf's (GGX)");
+    p.Accept({"sample_visible"});
+  };
+  auto alpha = [&](const std::string& key) {
+    const double a = p.Float(key, 0.1);
+    if (!(a > 0 && a <= 10)) Fail(p.WhereIs(key), what + ": " + key + " must lie in (0, 10]");
+    SetFloat(props, key, a);
+  };
+  // A nested BSDF stands for a wrapper (twosided, mask, bumpmap...).
+  auto inner = [&]() -> const XmlElement& {
+    const auto nested = p.Objects("bsdf");
+    if (nested.empty()) Fail(e.where, what + " needs a nested <bsdf>");
+    if (nested.size() > 1)
+      Warn(nested[1]->where, "twosided-two", what + ": only the first nested BSDF is used on both sides");
+    p.WarnUnused();
+    return *nested.front();
+  };
+
+  std::string class_name;
+  if (type == "diffuse" || type == "roughdiffuse") {
+    if (type == "roughdiffuse") {
+      Warn(e.where, "bsdf:roughdiffuse", "bsdf 'roughdiffuse' rendered as a Lambertian");
+      p.Accept({"alpha", "use_fast_approx"});
+    }
+    class_name = "lambertian";
+    reflectance("reflectance", "reflectance", {0.5, 0.5, 0.5});
+  } else if (type == "twosided") {
+    const XmlElement& front = inner();
+    // yarf's lambertian reflects alike on both sides already.
+    if (front.Get("type") != "diffuse")
+      Warn(e.where, "twosided", "twosided: the back side follows the inner model's own two-sidedness");
+    return MakeMaterial(front, name);
+  } else if (type == "mask" || type == "bumpmap" || type == "normalmap" || type == "blendbsdf") {
+    Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' is not supported: its (first) nested BSDF is used");
+    p.Accept({"opacity", "weight", "scale", "normalmap", "texture"});
+    return MakeMaterial(inner(), name);
+  } else if (type == "null") {
+    Warn(e.where, "bsdf:null", "null BSDF: shapes using it are left out (yarf has no invisible surfaces)");
+    p.WarnUnused();
+    return "";
+  } else if (type == "conductor" || type == "roughconductor") {
+    class_name = type;
+    if (p.Has("eta") || p.Has("k")) {
+      if (p.Has("material")) Fail(e.where, what + ": give material or eta and k, not both");
+      SetRgb(props, "eta", p.Color("eta", {0, 0, 0}));
+      SetRgb(props, "k", p.Color("k", {1, 1, 1}));
+    } else {
+      SetString(props, "material", KnownMetal(p.String("material", "none"), p.WhereIs("material")));
+    }
+    if (p.Has("specular_reflectance")) reflectance("specular_reflectance", "specular_reflectance", {1, 1, 1});
+    if (type == "roughconductor") {
+      distribution();
+      if (p.Has("alpha_u") || p.Has("alpha_v")) {
+        alpha("alpha_u");
+        alpha("alpha_v");
+      } else {
+        alpha("alpha");
+      }
+    }
+  } else if (type == "dielectric" || type == "thindielectric" || type == "roughdielectric") {
+    class_name = type;
+    ior("int_ior", kBk7);
+    ior("ext_ior", kAir);
+    for (const char* key : {"specular_reflectance", "specular_transmittance"})
+      if (p.Has(key)) {
+        p.Color(key, {1, 1, 1});
+        Warn(p.WhereIs(key), std::string("dielectric:") + key, what + ": " + key + " is not supported: ignored");
+      }
+    if (type == "roughdielectric") {
+      distribution();
+      if (p.Has("alpha_u") || p.Has("alpha_v")) {
+        alpha("alpha_u");
+        alpha("alpha_v");
+      } else {
+        alpha("alpha");
+      }
+    }
+  } else if (type == "plastic" || type == "roughplastic") {
+    class_name = type;
+    reflectance("diffuse_reflectance", "diffuse_reflectance", {0.5, 0.5, 0.5});
+    ior("int_ior", kPolypropylene);
+    ior("ext_ior", kAir);
+    if (type == "roughplastic") {
+      distribution();
+      alpha("alpha");
+    }
+    if (p.Has("specular_reflectance")) reflectance("specular_reflectance", "specular_reflectance", {1, 1, 1});
+    if (p.Has("nonlinear")) SetBool(props, "nonlinear", p.Boolean("nonlinear", false));
+  } else if (type == "phong") {
+    class_name = "phong";
+    reflectance("diffuse_reflectance", "diffuse_reflectance", {0.5, 0.5, 0.5});
+    reflectance("specular_reflectance", "specular_reflectance", {0.2, 0.2, 0.2});
+    SetFloat(props, "exponent", p.Float("exponent", 30));
+  } else if (type == "principled" || type == "principledthin") {
+    Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' approximated by a Lambertian of its base_color");
+    class_name = "lambertian";
+    reflectance("base_color", "reflectance", {0.5, 0.5, 0.5});
+    p.WarnUnused();
+    return assembly_.AddMaterial(name, class_name, std::move(props));
+  } else {
+    Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' is not supported: a grey Lambertian used");
+    return assembly_.DefaultMaterial();
+  }
+  p.WarnUnused();
+  return assembly_.AddMaterial(name, class_name, std::move(props));
+}
+
+}  // namespace yarf::importers

@@ -1,0 +1,233 @@
+// The Mitsuba 3 importer, one feature at a time, on the scenes of
+// tests/scenes/import/mitsuba_*.xml and malformed/*.xml.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "importers/diagnostics.h"
+#include "importers/importer_test_support.h"
+
+namespace yarf::importers {
+namespace {
+
+using namespace testing;
+
+void ExpectNear(const Vec3d& a, const Vec3d& b, double tolerance = 1e-9) {
+  EXPECT_NEAR(a.x, b.x, tolerance);
+  EXPECT_NEAR(a.y, b.y, tolerance);
+  EXPECT_NEAR(a.z, b.z, tolerance);
+}
+
+Vec3d ToVec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+TEST(MitsubaImport, DefaultsSubstituteAndParametersOverrideThem) {
+  const ImportResult result = Import("mitsuba_defaults.xml");
+  EXPECT_EQ(result.scene.film().width(), 32u);
+  EXPECT_EQ(result.scene.film().height(), 32u);
+  EXPECT_EQ(IntProperty(result.scene.transport().properties(), "max_depth"), 4);
+  EXPECT_EQ(result.sample_count, 8u);
+  EXPECT_EQ(result.scene.sampler().class_name(), "stratified");
+  EXPECT_EQ(IntProperty(result.scene.sampler().properties(), "sample_count"), 8);
+
+  const ImportResult small = Import("mitsuba_defaults.xml", {{{"res", "16"}, {"spp", "2"}}});
+  EXPECT_EQ(small.scene.film().width(), 16u);
+  EXPECT_EQ(small.sample_count, 2u);
+}
+
+TEST(MitsubaImport, IncludesResolveRelativeToTheIncludingFile) {
+  const ImportResult result = Import("mitsuba_include.xml");
+  const v1::Material& red = MaterialOf(result.scene, ShapeNamed(result.scene, "ball"));
+  EXPECT_EQ(red.name(), "red");
+  ExpectNear(RgbProperty(red.properties(), "reflectance"), {0.8, 0.1, 0.1});
+  // fragments/materials.xml includes more_materials.xml beside it.
+  EXPECT_EQ(ShapeNamed(result.scene, "card").material(), "blue");
+}
+
+TEST(MitsubaImport, TransformsComposeInOrder) {
+  const ImportResult result = Import("mitsuba_transforms.xml");
+  // scale 2, then rotate 90° about y, then translate (1, 2, 3).
+  const Matrix4 moved = ToMatrix(ShapeNamed(result.scene, "moved").to_world());
+  ExpectNear(moved.Point({1, 0, 0}), {1, 2, 1});
+  ExpectNear(moved.Point({0, 1, 0}), {1, 4, 3});
+  EXPECT_EQ(ShapeNamed(result.scene, "moved").mesh().file(), "assets/triangle.obj");
+  ExpectNear(ToMatrix(ShapeNamed(result.scene, "matrix").to_world()).Point({0, 0, 0}), {5, 6, 7});
+  // lookat: yarf's camera takes the same origin, direction and up.
+  ExpectNear(ToVec(result.scene.camera().origin()), {0, 0, 10});
+  ExpectNear(ToVec(result.scene.camera().target()), {0, 0, 9});
+  ExpectNear(ToVec(result.scene.camera().up()), {0, 1, 0});
+  EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
+}
+
+TEST(MitsubaImport, EveryShapeTypeBecomesAYarfShape) {
+  const ImportResult result = Import("mitsuba_shapes.xml");
+  const v1::Scene& scene = result.scene;
+  EXPECT_EQ(ShapeNamed(scene, "obj").mesh().format(), "obj");
+  EXPECT_EQ(ShapeNamed(scene, "ply").mesh().file(), "assets/quad.ply");
+  EXPECT_TRUE(ShapeNamed(scene, "ply").flip_normals());
+  // shape_index 1 of the serialized file: its square, inlined.
+  const v1::Mesh& serialized = ShapeNamed(scene, "serialized").mesh();
+  EXPECT_EQ(serialized.positions_size(), 12);
+  EXPECT_EQ(serialized.indices_size(), 6);
+  EXPECT_FLOAT_EQ(serialized.positions(3), 2.0f);
+  const v1::Sphere& sphere = ShapeNamed(scene, "sphere").sphere();
+  ExpectNear(ToVec(sphere.center()), {1, 2, 3});
+  EXPECT_DOUBLE_EQ(sphere.radius(), 0.5);
+  EXPECT_TRUE(ShapeNamed(scene, "rectangle").has_rectangle());
+  EXPECT_EQ(ShapeNamed(scene, "cube").mesh().indices_size(), 36);
+  EXPECT_EQ(ShapeNamed(scene, "disk").mesh().indices_size(), 3 * 128);
+  EXPECT_TRUE(Warns(result, "fans of 128 triangles"));
+  // An unsupported shape is reported where it is, and left out.
+  EXPECT_TRUE(Warns(result, "mitsuba_shapes.xml:19: shape type 'cylinder' is not supported"));
+  EXPECT_THROW(ShapeNamed(scene, "cylinder"), std::runtime_error);
+}
+
+TEST(MitsubaImport, ShapeGroupsAndInstancesMapToGroupsAndInstances) {
+  const v1::Scene scene = Import("mitsuba_shapes.xml").scene;
+  ASSERT_EQ(scene.groups_size(), 1);
+  EXPECT_EQ(scene.groups(0).name(), "pair");
+  EXPECT_EQ(scene.groups(0).shapes_size(), 2);
+  ASSERT_EQ(scene.instances_size(), 2);
+  EXPECT_EQ(scene.instances(0).group(), "pair");
+  ExpectNear(ToMatrix(scene.instances(0).to_world()).Point({0, 0, 0}), {-4, 0, 0});
+  ExpectNear(ToMatrix(scene.instances(1).to_world()).Point({0, 0, 0}), {4, 0, 0});
+}
+
+TEST(MitsubaImport, BsdfsMapToSurfaceModels) {
+  const ImportResult result = Import("mitsuba_materials.xml");
+  const v1::Scene& scene = result.scene;
+  auto material = [&](const std::string& shape) -> const v1::Material& {
+    return MaterialOf(scene, ShapeNamed(scene, shape));
+  };
+  // A flat 0.5 spectrum over 400–700 nm, as Mitsuba converts it.
+  EXPECT_EQ(material("s1").class_name(), "lambertian");
+  ExpectNear(RgbProperty(material("s1").properties(), "reflectance"), {0.4977, 0.4999, 0.4975}, 4e-3);
+  EXPECT_EQ(material("s2").class_name(), "lambertian");
+  ExpectNear(RgbProperty(material("s2").properties(), "reflectance"), {0.2, 0.2, 0.2});
+  EXPECT_EQ(material("s3").class_name(), "plastic");
+  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:9: twosided: the back side"));
+  EXPECT_EQ(material("s4").class_name(), "conductor");
+  EXPECT_EQ(StringProperty(material("s4").properties(), "material"), "Au");
+  EXPECT_EQ(material("s5").class_name(), "roughconductor");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s5").properties(), "alpha_u"), 0.05);
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s5").properties(), "alpha_v"), 0.3);
+  EXPECT_EQ(material("s6").class_name(), "dielectric");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s6").properties(), "int_ior"), 1.3330);  // "water"
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s6").properties(), "ext_ior"), 1.000277);  // "air"
+  EXPECT_EQ(material("s7").class_name(), "thindielectric");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s7").properties(), "int_ior"), 1.5046);  // bk7
+  EXPECT_EQ(material("s8").class_name(), "roughdielectric");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s8").properties(), "alpha"), 0.2);
+  EXPECT_TRUE(Warns(result, "distribution 'beckmann' replaced"));
+  EXPECT_EQ(material("s9").class_name(), "roughplastic");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s9").properties(), "int_ior"), 1.6);
+  EXPECT_EQ(material("s14").class_name(), "conductor");  // brass: not a tabulated metal
+  EXPECT_EQ(StringProperty(material("s14").properties(), "material"), "none");
+  EXPECT_TRUE(Warns(result, "metal 'CuZn' is not tabulated"));
+  ExpectNear(RgbProperty(material("s15").properties(), "specular_reflectance"), {0.5, 0.5, 0.5});
+  EXPECT_TRUE(material("s15").properties().values().at("nonlinear").bool_value());
+  EXPECT_EQ(material("s13").name(), "default");
+  ExpectNear(RgbProperty(material("s13").properties(), "reflectance"), {0.5, 0.5, 0.5});
+}
+
+TEST(MitsubaImport, TexturesBecomeTheirMeanColourWithAWarning) {
+  const ImportResult result = Import("mitsuba_materials.xml");
+  const v1::Scene& scene = result.scene;
+  // checker.png: black and white sRGB pixels, linear mean 0.5.
+  ExpectNear(RgbProperty(MaterialNamed(scene, "textured").properties(), "reflectance"), {0.5, 0.5, 0.5}, 1e-6);
+  ExpectNear(RgbProperty(MaterialNamed(scene, "checks").properties(), "reflectance"), {0.4, 0.4, 0.4});
+  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:30: yarf has no textures yet: bitmap"));
+  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:35: yarf has no textures yet: checkerboard"));
+  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:46: bsdf 'diffuse': parameter 'reflectanse' ignored"));
+}
+
+TEST(MitsubaImport, EmittersBecomeAreaPointAndSpotLights) {
+  const ImportResult result = Import("mitsuba_emitters.xml");
+  const v1::Scene& scene = result.scene;
+  const v1::ComponentSpec& area = ShapeNamed(scene, "panel").emitter();
+  EXPECT_EQ(area.class_name(), "diffuse_area");
+  ExpectNear(RgbProperty(area.properties(), "radiance"), {5, 4, 3});
+  ASSERT_EQ(scene.lights_size(), 2);
+  EXPECT_EQ(scene.lights(0).emitter().class_name(), "point");
+  ExpectNear(RgbProperty(scene.lights(0).emitter().properties(), "intensity"), {10, 10, 10});
+  ExpectNear(ToMatrix(scene.lights(0).to_world()).Point({0, 0, 0}), {1, 2, 3});
+  const v1::Light& spot = scene.lights(1);
+  EXPECT_EQ(spot.emitter().class_name(), "spot");
+  EXPECT_DOUBLE_EQ(FloatProperty(spot.emitter().properties(), "cutoff_angle"), 30);
+  EXPECT_DOUBLE_EQ(FloatProperty(spot.emitter().properties(), "beam_width"), 22.5);
+  ExpectNear(ToMatrix(spot.to_world()).Vector({0, 0, 1}), {0, -1, 0});
+  ExpectNear(ToMatrix(spot.to_world()).Point({0, 0, 0}), {0, 5, 0});
+  // Each kind of infinite light is reported once, where it is written.
+  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:20: yarf has no infinite lights yet: emitter 'constant'"));
+  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:21: yarf has no infinite lights yet: emitter 'envmap'"));
+  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:22: yarf has no infinite lights yet: emitter 'directional'"));
+}
+
+TEST(MitsubaImport, WithoutASensorMitsubasDefaultCameraIsUsed) {
+  const ImportResult result = Import("mitsuba_emitters.xml");
+  // A 50 mm lens on a 768×576 film: 38.1848° across x, as Mitsuba reports.
+  EXPECT_EQ(result.scene.film().width(), 768u);
+  EXPECT_EQ(result.scene.film().height(), 576u);
+  EXPECT_EQ(result.scene.film().filter().kind(), v1::ReconstructionFilter::GAUSSIAN);
+  EXPECT_NEAR(result.scene.camera().fov(), 38.1848, 1e-4);
+  EXPECT_EQ(result.scene.camera().fov_axis(), v1::Camera::X);
+  EXPECT_EQ(result.sample_count, 4u);
+  EXPECT_TRUE(Warns(result, "the scene has no sensor"));
+}
+
+TEST(MitsubaImport, ThinLensAndDiagonalFieldOfView) {
+  const v1::Scene scene = Import("mitsuba_camera.xml").scene;
+  const v1::Camera& camera = scene.camera();
+  EXPECT_EQ(camera.model(), v1::Camera::THIN_LENS);
+  EXPECT_DOUBLE_EQ(camera.lens_radius(), 0.1);
+  EXPECT_DOUBLE_EQ(camera.focus_distance(), 5);
+  // 60° across the 50-pixel diagonal of a 40×30 film is this much across x.
+  EXPECT_EQ(camera.fov_axis(), v1::Camera::X);
+  EXPECT_NEAR(camera.fov(), 2 * std::atan(std::tan(M_PI / 6) * 40 / 50) * 180 / M_PI, 1e-9);
+  EXPECT_EQ(scene.film().filter().kind(), v1::ReconstructionFilter::TENT);
+}
+
+TEST(MitsubaImport, AMirroringSensorMirrorsTheWorldAndKeepsLitSides) {
+  const v1::Scene scene = Import("mitsuba_camera.xml").scene;
+  // Mitsuba draws +x on the left here (the sensor transform scales x by
+  // -1): yarf reflects the world about the camera's vertical plane, x = 0.
+  ExpectNear(ToVec(scene.camera().origin()), {0, 0, 5});
+  ExpectNear(ToVec(scene.camera().target()), {0, 0, 4});
+  const v1::SceneShape& right = ShapeNamed(scene, "right");
+  ExpectNear(ToMatrix(right.to_world()).Point(ToVec(right.sphere().center())), {-2, 0, 0});
+  // The reflection reverses the triangle's winding: flipping its normal
+  // keeps the emitting side toward the camera.
+  const v1::SceneShape& lit = ShapeNamed(scene, "lit");
+  EXPECT_LT(ToMatrix(lit.to_world()).Determinant3(), 0);
+  EXPECT_TRUE(lit.flip_normals());
+  EXPECT_FALSE(right.flip_normals());
+}
+
+TEST(MitsubaImport, MalformedFilesFailWithFileAndLine) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"malformed/truncated.xml", "truncated.xml:3: malformed XML"},
+      {"malformed/wrong_type.xml", "wrong_type.xml:3: <shape type=\"sphere\">: property 'radius' must be"},
+      {"malformed/bad_number.xml", "bad_number.xml:3: radius: '1e999' is not a finite number"},
+      {"malformed/missing_ref.xml", "missing_ref.xml:3: reference to an unknown id 'nowhere'"},
+      {"malformed/outside.xml", "outside.xml:3: file '../assets/triangle.obj' lies outside the scene folder"},
+      {"malformed/absurd.xml", "absurd.xml:3: film resolution 100000x100000 is out of range"},
+      {"malformed/cycle_a.xml", "cycle_b.xml:2: include cycle"},
+      {"malformed/undefined_parameter.xml", "undefined_parameter.xml:3: undefined parameter $size"},
+      {"malformed/no_version.xml", "no_version.xml:1: <scene> needs a version"},
+      {"malformed/self_reference.xml", "self_reference.xml:2: references nested too deeply"},
+      {"malformed/bad_serialized.xml", "bad_serialized.xml:2: not a Mitsuba serialized mesh"},
+  };
+  for (const auto& [file, message] : cases)
+    EXPECT_NE(ImportErrorOf(file).find(message), std::string::npos) << file << ": " << ImportErrorOf(file);
+}
+
+TEST(Diagnostics, ReportsEachKindOfWarningOnceWithItsFirstPlace) {
+  Diagnostics d;
+  d.Warn({"a.xml", 3}, "key", "something ignored");
+  d.Warn({"a.xml", 9}, "key", "something ignored");
+  d.Warn({"b.xml", 1}, "other", "something else");
+  EXPECT_EQ(d.Lines(), (std::vector<std::string>{"a.xml:3: something ignored (and 1 more place)",
+                                                 "b.xml:1: something else"}));
+}
+
+}  // namespace
+}  // namespace yarf::importers

@@ -1,0 +1,217 @@
+// Mitsuba's integrator, sensor, film, reconstruction filter and sampler.
+#include <cmath>
+
+#include "importers/numbers.h"
+#include "importers/properties_util.h"
+#include "importers/xml_importer.h"
+
+namespace yarf::importers {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Limits shared with yarf's film and render options.
+constexpr int64_t kMaxFilmSide = 16384, kMaxPixels = int64_t(1) << 26, kMaxSpp = int64_t(1) << 20;
+constexpr int64_t kMaxDepth = 1 << 16;
+
+double Degrees(double radians) { return radians * 180 / kPi; }
+double Radians(double degrees) { return degrees * kPi / 180; }
+
+}  // namespace
+
+void MitsubaImporter::Integrator(const XmlElement& e) {
+  XmlPlugin p(e, *this);
+  const std::string& type = p.type();
+  if (has_integrator_) {
+    Warn(e.where, "second-integrator", "a second <integrator> ignored");
+    return;
+  }
+  has_integrator_ = true;
+  int64_t max_depth = -1;
+  v1::Properties props;
+  if (type == "direct") {
+    max_depth = 2;
+    Warn(e.where, "integrator:direct", "integrator 'direct' rendered by the path tracer with max_depth 2");
+    p.Accept({"emitter_samples", "bsdf_samples", "shading_samples", "hide_emitters"});
+  } else {
+    if (type != "path")
+      Warn(e.where, "integrator:" + type,
+           "integrator '" + type + "' is not available: yarf's path tracer used (no media, no AOVs)");
+    max_depth = p.Integer("max_depth", -1);
+    if (max_depth < -1 || max_depth > kMaxDepth)
+      Fail(p.WhereIs("max_depth"), "max_depth must be -1 (unbounded) or 0 to " + std::to_string(kMaxDepth));
+    if (p.Has("rr_depth")) {
+      const int64_t rr = p.Integer("rr_depth", 5);
+      if (rr < 1 || rr > kMaxDepth) Fail(p.WhereIs("rr_depth"), "rr_depth must be at least 1");
+      SetInt(props, "rr_depth", rr);
+    }
+    if (p.Boolean("hide_emitters", false))
+      Warn(p.WhereIs("hide_emitters"), "hide_emitters", "hide_emitters is not supported: emitters stay visible");
+  }
+  SetInt(props, "max_depth", max_depth);
+  *assembly_.scene().mutable_transport() = Spec("path", std::move(props));
+  if (type == "path" || type == "direct") p.WarnUnused();
+}
+
+void MitsubaImporter::Sensor(const XmlElement& e) {
+  XmlPlugin p(e, *this);
+  const std::string& type = p.type();
+  v1::Camera camera;
+  if (type == "thinlens") {
+    camera.set_model(v1::Camera::THIN_LENS);
+    const double radius = p.Float("aperture_radius", 0);
+    if (!(radius >= 0 && radius < 1e30)) Fail(p.WhereIs("aperture_radius"), "aperture_radius must be >= 0");
+    camera.set_lens_radius(radius);
+  } else if (type != "perspective") {
+    Warn(e.where, "sensor:" + type,
+         "sensor '" + type + "' is not supported: a perspective camera with its placement used");
+  }
+
+  const auto films = p.Objects("film");
+  int64_t width = 768, height = 576;
+  if (films.empty()) {
+    auto& film = *assembly_.scene().mutable_film();
+    film.set_width(width), film.set_height(height);
+    film.mutable_filter()->set_kind(v1::ReconstructionFilter::GAUSSIAN);
+  } else {
+    Film(*films.front());
+    width = assembly_.scene().film().width(), height = assembly_.scene().film().height();
+  }
+  const auto samplers = p.Objects("sampler");
+  if (samplers.empty()) {
+    sample_count_ = 4;  // Mitsuba's independent sampler's default
+    *assembly_.scene().mutable_sampler() = Spec("independent");
+  } else {
+    Sampler(*samplers.front());
+  }
+
+  // Field of view: fov along fov_axis, or a 35 mm focal length (which
+  // spans the diagonal).
+  const bool has_fov = p.Has("fov");
+  if (has_fov && p.Has("focal_length")) Fail(e.where, "give fov or focal_length, not both");
+  std::string axis = p.String("fov_axis", "x");
+  double fov = 0;
+  if (has_fov) {
+    fov = p.Float("fov", 0);
+  } else {
+    std::string focal = p.String("focal_length", "50mm");
+    if (focal.size() > 2 && focal.substr(focal.size() - 2) == "mm") focal.resize(focal.size() - 2);
+    const auto f = ParseDouble(focal);
+    if (!f || !(*f > 0)) Fail(p.WhereIs("focal_length"), "focal_length must be a positive length like \"50mm\"");
+    fov = Degrees(2 * std::atan(std::hypot(36.0, 24.0) / (2 * *f)));
+    axis = "diagonal";
+  }
+  if (!(fov > 0 && fov < 180)) Fail(p.WhereIs("fov"), "fov must lie in (0, 180) degrees");
+  if (axis == "x") {
+    camera.set_fov_axis(v1::Camera::X);
+  } else if (axis == "y") {
+    camera.set_fov_axis(v1::Camera::Y);
+  } else if (axis == "smaller") {
+    camera.set_fov_axis(v1::Camera::SMALLER);
+  } else if (axis == "larger") {
+    camera.set_fov_axis(v1::Camera::LARGER);
+  } else if (axis == "diagonal") {
+    // The same frustum, its angle measured along x.
+    const double w = double(width), h = double(height);
+    fov = Degrees(2 * std::atan(std::tan(Radians(fov) / 2) * w / std::hypot(w, h)));
+    camera.set_fov_axis(v1::Camera::X);
+  } else {
+    Fail(p.WhereIs("fov_axis"), "fov_axis must be x, y, smaller, larger or diagonal, not '" + axis + "'");
+  }
+  camera.set_fov(fov);
+
+  const double near_clip = p.Float("near_clip", 0.01), far_clip = p.Float("far_clip", 10000);
+  if (!(near_clip >= 0 && far_clip > near_clip)) Fail(e.where, "need 0 <= near_clip < far_clip");
+  camera.set_near_clip(near_clip);
+  camera.set_far_clip(far_clip);
+  const double focus = p.Float("focus_distance", far_clip);
+  if (type == "thinlens") {
+    if (!(focus > 0)) Fail(p.WhereIs("focus_distance"), "focus_distance must be positive");
+    camera.set_focus_distance(focus);
+  }
+  for (const char* offset : {"principal_point_offset_x", "principal_point_offset_y"})
+    if (p.Float(offset, 0) != 0)
+      Warn(p.WhereIs(offset), "principal-point", "principal point offsets are not supported: ignored");
+  p.Accept({"shutter_open", "shutter_close"});
+  const Matrix4 to_world = p.Transform("to_world");
+  assembly_.SetCamera(std::move(camera), to_world, {-1, 0, 0}, e.where);
+  if (type == "perspective" || type == "thinlens") p.WarnUnused();
+}
+
+void MitsubaImporter::Film(const XmlElement& e) {
+  XmlPlugin p(e, *this);
+  if (p.type() != "hdrfilm")
+    Warn(e.where, "film:" + p.type(), "film '" + p.type() + "' rendered as an RGB film");
+  const int64_t width = p.Integer("width", 768), height = p.Integer("height", 576);
+  if (width < 1 || height < 1 || width > kMaxFilmSide || height > kMaxFilmSide || width * height > kMaxPixels)
+    Fail(e.where, "film resolution " + std::to_string(width) + "x" + std::to_string(height) +
+                      " is out of range (1 to 16384 per side, at most 2^26 pixels)");
+  v1::Film& film = *assembly_.scene().mutable_film();
+  film.set_width(uint32_t(width));
+  film.set_height(uint32_t(height));
+  for (const char* crop : {"crop_offset_x", "crop_offset_y", "crop_width", "crop_height"})
+    if (p.Has(crop)) Warn(p.WhereIs(crop), "film-crop", "film crop windows are not supported: the full film is rendered");
+  p.Accept({"crop_offset_x", "crop_offset_y", "crop_width", "crop_height", "pixel_format", "component_format",
+            "file_format", "banner", "sample_border", "compensate", "rfilter"});
+
+  v1::ReconstructionFilter& filter = *film.mutable_filter();
+  const auto filters = p.Objects("rfilter");
+  if (filters.empty()) {
+    filter.set_kind(v1::ReconstructionFilter::GAUSSIAN);  // Mitsuba's default
+  } else {
+    XmlPlugin f(*filters.front(), *this);
+    const std::string& type = f.type();
+    if (type == "box") {
+      filter.set_kind(v1::ReconstructionFilter::BOX);
+      filter.set_radius(f.Float("radius", 0.5));
+    } else if (type == "tent") {
+      filter.set_kind(v1::ReconstructionFilter::TENT);
+      filter.set_radius(f.Float("radius", 1.0));
+    } else {
+      filter.set_kind(v1::ReconstructionFilter::GAUSSIAN);
+      if (type == "gaussian") {
+        const double stddev = f.Float("stddev", 0.5);
+        if (std::abs(stddev - 0.5) > 1e-9)
+          Warn(f.where(), "gaussian-stddev", "gaussian filter: yarf's has a standard deviation of 0.5 pixel");
+        filter.set_radius(4 * stddev);
+      } else {
+        Warn(f.where(), "rfilter:" + type, "reconstruction filter '" + type + "' replaced by a gaussian");
+      }
+    }
+    if (!(filter.radius() >= 0 && filter.radius() <= 64)) Fail(f.where(), "filter radius out of range");
+    if (type == "box" || type == "tent" || type == "gaussian") f.WarnUnused();
+  }
+  p.WarnUnused();
+}
+
+void MitsubaImporter::Sampler(const XmlElement& e) {
+  XmlPlugin p(e, *this);
+  const std::string& type = p.type();
+  const int64_t count = p.Integer("sample_count", 4);
+  if (count < 1 || count > kMaxSpp)
+    Fail(p.WhereIs("sample_count"), "sample_count must lie in 1 to " + std::to_string(kMaxSpp));
+  sample_count_ = uint32_t(count);
+  v1::ComponentSpec& sampler = *assembly_.scene().mutable_sampler();
+  if (type == "independent") {
+    sampler = Spec("independent");
+  } else if (type == "stratified" || type == "multijitter" || type == "orthogonal") {
+    if (type == "orthogonal")
+      Warn(e.where, "sampler:orthogonal", "sampler 'orthogonal' replaced by yarf's stratified sampler");
+    v1::Properties props;
+    SetInt(props, "sample_count", count);
+    sampler = Spec("stratified", std::move(props));
+    if (!p.Boolean("jitter", true)) Warn(p.WhereIs("jitter"), "jitter", "unjittered sampling is not supported");
+  } else if (type == "ldsampler") {
+    sampler = Spec("sobol");
+  } else {
+    Warn(e.where, "sampler:" + type, "sampler '" + type + "' replaced by the independent sampler");
+    sampler = Spec("independent");
+  }
+  if (p.Has("seed")) {
+    p.Integer("seed", 0);
+    Warn(p.WhereIs("seed"), "sampler-seed", "the sampler's seed is a render option in yarf (--seed): ignored");
+  }
+  p.Accept({"scramble_seed"});
+  p.WarnUnused();
+}
+
+}  // namespace yarf::importers

@@ -1,0 +1,112 @@
+// Mitsuba shapes, shape groups and instances.
+#include <algorithm>
+#include <cctype>
+
+#include "importers/mesh_shapes.h"
+#include "importers/serialized_mesh.h"
+#include "importers/xml_importer.h"
+
+namespace yarf::importers {
+
+void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
+  const RecursionGuard guard(nesting, e.where);
+  XmlPlugin p(e, *this);
+  const std::string& type = p.type();
+  if (type == "instance") {
+    if (!group.empty()) Fail(e.where, "instances inside a shapegroup are not supported");
+    Instance(p);
+    return;
+  }
+  if (type == "shapegroup") Fail(e.where, "a shapegroup must be defined at the top level of the scene");
+
+  v1::SceneShape shape;
+  shape.set_name(e.Get("id"));
+  NormalRule rule = NormalRule::kWorldWinding;
+  if (type == "obj" || type == "ply") {
+    const std::string name = p.String("filename", "");
+    const auto file = folder_.Resolve(name, e.file, p.WhereIs("filename"));
+    shape.mutable_mesh()->set_file(folder_.Relative(file));
+    shape.mutable_mesh()->set_format(type);
+    p.Accept({"face_normals", "flip_tex_coords"});
+  } else if (type == "serialized") {
+    const std::string name = p.String("filename", "");
+    const auto file = folder_.Resolve(name, e.file, p.WhereIs("filename"));
+    const int64_t index = p.Integer("shape_index", 0);
+    if (index < 0) Fail(p.WhereIs("shape_index"), "shape_index must be >= 0");
+    const SerializedMesh mesh = DecodeSerializedMesh(ReadTextFile(file, e.where), uint64_t(index), e.where);
+    *shape.mutable_mesh() = InlineMesh(mesh.positions, mesh.indices);
+    if (shape.name().empty()) shape.set_name(mesh.name);
+    p.Accept({"face_normals", "max_smooth_angle"});
+  } else if (type == "sphere") {
+    rule = NormalRule::kSphere;
+    const Vec3d c = p.Point("center", {0, 0, 0});
+    const double radius = p.Float("radius", 1);
+    if (!(radius > 0 && radius < 1e30)) Fail(p.WhereIs("radius"), "sphere radius must be positive");
+    v1::Sphere& sphere = *shape.mutable_sphere();
+    sphere.mutable_center()->set_x(c.x), sphere.mutable_center()->set_y(c.y), sphere.mutable_center()->set_z(c.z);
+    sphere.set_radius(radius);
+  } else if (type == "rectangle") {
+    rule = NormalRule::kTransformed;
+    shape.mutable_rectangle();
+  } else if (type == "cube") {
+    *shape.mutable_mesh() = CubeMesh();
+  } else if (type == "disk") {
+    rule = NormalRule::kTransformed;
+    *shape.mutable_mesh() = DiskMesh();
+    Warn(e.where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
+  } else {
+    Warn(e.where, "shape:" + type, "shape type '" + type + "' is not supported: ignored");
+    return;
+  }
+  const Matrix4 to_world = p.Transform("to_world");
+  const bool flip = p.Boolean("flip_normals", false);
+
+  const auto bsdfs = p.Objects("bsdf");
+  if (bsdfs.size() > 1) Fail(bsdfs[1]->where, "a shape takes one BSDF");
+  const std::string material = bsdfs.empty() ? assembly_.DefaultMaterial() : Material(*bsdfs.front());
+  if (material.empty()) {
+    p.Objects("emitter");
+    p.WarnUnused();
+    return;  // a null BSDF: invisible in Mitsuba, left out here
+  }
+  shape.set_material(material);
+  for (const XmlElement* emitter : p.Objects("emitter")) {
+    if (emitter->Get("type") != "area") {
+      Warn(emitter->where, "shape-emitter:" + emitter->Get("type"),
+           "emitter '" + emitter->Get("type") + "' attached to a shape ignored (only area emitters can be)");
+      continue;
+    }
+    if (shape.has_emitter()) Fail(emitter->where, "a shape takes one area emitter");
+    attached_emitters_.insert(emitter);
+    *shape.mutable_emitter() = AreaEmitter(*emitter);
+  }
+  p.WarnUnused();
+  assembly_.AddShape(std::move(shape), to_world, flip, rule, e.where, group);
+}
+
+void MitsubaImporter::ShapeGroup(const XmlElement& e) {
+  const std::string& id = e.Required("id");
+  if (!groups_made_.insert(id).second) return;
+  assembly_.Group(id);
+  for (const XmlElement& child : e.children) {
+    if (child.tag == "shape" || child.tag == "ref") {
+      const XmlElement& shape = child.tag == "ref" ? Lookup(child.Required("id"), child.where) : child;
+      if (shape.tag != "shape") Fail(child.where, "a shapegroup holds shapes only");
+      Shape(shape, id);
+    } else {
+      Warn(child.where, "shapegroup:" + child.tag, "<" + child.tag + "> inside a shapegroup ignored");
+    }
+  }
+}
+
+void MitsubaImporter::Instance(XmlPlugin& p) {
+  const auto groups = p.Objects("shape");
+  if (groups.size() != 1 || groups.front()->Get("type") != "shapegroup")
+    Fail(p.where(), "an instance needs exactly one shapegroup (a <ref> to it)");
+  ShapeGroup(*groups.front());
+  const Matrix4 to_world = p.Transform("to_world");
+  p.WarnUnused();
+  assembly_.AddInstance(groups.front()->Get("id"), to_world, p.where());
+}
+
+}  // namespace yarf::importers

@@ -1,0 +1,201 @@
+"""Scenes of Mitsuba 3 and pbrt-v4 render in yarf through the importers.
+
+The Mitsuba Cornell box (../shared/scenes/mitsuba-cbox/cbox-rgb.xml), read
+by yarf-import, renders as Mitsuba 3 renders the same file: reference mean
+and variance images come from independent Mitsuba renders (scalar_rgb),
+and every pixel, and every 8×8 block, must pass a z-test with a
+Šidák-corrected threshold. The pbrt Cornell box renders the right way
+round. The CLI renders and converts both formats, shows the importers'
+warnings and reports malformed files in one line with file and line.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import REPO, SHARED
+from imagestats import block_z_test, mean_and_variance
+
+from yarf import Client, LocalServer, RenderResult
+from yarf.cli import main
+from yarf.scene import ImportedScene, import_scene, load_scene
+from yarf.v1 import render_pb2
+
+MITSUBA_CBOX = SHARED / "scenes" / "mitsuba-cbox" / "cbox-rgb.xml"
+PBRT_CBOX = SHARED / "scenes" / "pbrt-cornell-box" / "scene-v4.pbrt"
+TEST_SCENES = REPO / "tests" / "scenes" / "import"
+SIZE = 64
+MITSUBA_SEEDS = range(16)
+MITSUBA_SPP = 64
+YARF_SPP = 1024
+# Family-wise rate of false alarms over all pixels (or blocks) and channels.
+FAMILY_ALPHA = 1e-3
+
+
+@pytest.fixture(scope="module")
+def mitsuba_reference() -> tuple[np.ndarray, np.ndarray]:
+    """Mitsuba's mean image of independent renders, and the variance of that mean."""
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    assert MITSUBA_CBOX.exists(), f"{MITSUBA_CBOX} is missing (shared/ beside the repository)"
+    start = time.monotonic()
+    scene = mi.load_file(str(MITSUBA_CBOX), res=SIZE)
+    renders = [
+        np.array(mi.render(scene, spp=MITSUBA_SPP, seed=seed), dtype=np.float64)[..., :3]
+        for seed in MITSUBA_SEEDS
+    ]
+    print(f"Mitsuba: {len(renders)} × {MITSUBA_SPP} spp in {time.monotonic() - start:.1f} s")
+    return mean_and_variance(renders)
+
+
+@pytest.fixture(scope="module")
+def imported_cbox() -> ImportedScene:
+    return import_scene(MITSUBA_CBOX, parameters={"res": str(SIZE)})
+
+
+@pytest.fixture(scope="module")
+def yarf_cbox(client: Client, imported_cbox: ImportedScene) -> RenderResult:
+    return client.render(imported_cbox.scene, spp=YARF_SPP, seed=11, timeout=120)
+
+
+def test_mitsuba_cornell_box_imports_without_warnings(imported_cbox: ImportedScene) -> None:
+    assert imported_cbox.warnings == []
+    assert imported_cbox.sample_count == 256  # the file's $spp default
+    assert (imported_cbox.scene.film.width, imported_cbox.scene.film.height) == (SIZE, SIZE)
+    assert len(imported_cbox.scene.shapes) == 8
+
+
+def test_mitsuba_cornell_box_pixels_match_mitsuba_within_noise(
+    yarf_cbox: RenderResult, mitsuba_reference: tuple[np.ndarray, np.ndarray]
+) -> None:
+    reference, reference_variance = mitsuba_reference
+    pixels = yarf_cbox.pixels.astype(np.float64)
+    assert pixels.shape == reference.shape == (SIZE, SIZE, 3)
+    for block in (1, 8):
+        test = block_z_test(
+            pixels,
+            yarf_cbox.variance.astype(np.float64),
+            reference,
+            reference_variance,
+            block=block,
+            family_alpha=FAMILY_ALPHA,
+        )
+        assert len(test.failing) == 0, (
+            f"{len(test.failing)} of {test.z.size} {block}×{block} blocks differ from Mitsuba's "
+            f"beyond |z| < {test.threshold:.2f} (Šidák, family α = {FAMILY_ALPHA}); "
+            f"worst:\n{test.report()}"
+        )
+
+
+def test_mitsuba_cornell_box_renders_with_yarf_render(
+    server: LocalServer, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    output = tmp_path / "cbox.exr"
+    arguments = [str(MITSUBA_CBOX), "-D", "res=32", "-D", "spp=4", "-o", str(output)]
+    code = main(["render", *arguments, "--server", server.address, "-q"])
+    assert code == 0
+    assert output.stat().st_size > 0
+    # Without --spp, the file's sample count (here its $spp) is the job's.
+    assert "(4 spp" in capsys.readouterr().out
+
+
+def test_pbrt_cornell_box_renders_with_yarf_render(server: LocalServer, tmp_path: Path) -> None:
+    output = tmp_path / "cornell.exr"
+    arguments = [str(PBRT_CBOX), "--spp", "1", "-o", str(output)]
+    assert main(["render", *arguments, "--server", server.address, "-q"]) == 0
+    assert output.stat().st_size > 0
+
+
+def test_pbrt_cornell_box_is_the_right_way_round(client: Client) -> None:
+    imported = import_scene(PBRT_CBOX)
+    assert imported.sample_count == 64
+    scene = imported.scene
+    scene.film.width = scene.film.height = 32
+    pixels = client.render(scene, spp=16, seed=5, timeout=60).pixels.astype(np.float64)
+    left, right = pixels[8:24, :4].mean(axis=(0, 1)), pixels[8:24, -4:].mean(axis=(0, 1))
+    # The red wall (pbrt's x = -1) on the left, the green one on the right.
+    assert left[0] > 2 * left[1], f"left wall {left} is not red"
+    assert right[1] > 2 * right[0], f"right wall {right} is not green"
+    # The light (seen from below) near the top, the floor darker below it.
+    assert pixels[:3, 12:20].mean() > pixels[-3:, 12:20].mean()
+
+
+@pytest.mark.parametrize(
+    "scene",
+    sorted(TEST_SCENES.glob("mitsuba_*.xml")) + sorted(TEST_SCENES.glob("pbrt_*.pbrt")),
+    ids=lambda path: path.name,
+)
+def test_every_imported_test_scene_is_accepted_by_the_server(client: Client, scene: Path) -> None:
+    """The classes and parameters the importers write are those yarf's components read."""
+    imported = import_scene(scene)
+    imported.scene.film.width = imported.scene.film.height = 8
+    job_id = client.submit(imported.scene, spp=1, name=scene.name)
+    status = client.wait(job_id, timeout=60)
+    assert status.state == render_pb2.SUCCEEDED, status.error
+
+
+def test_convert_writes_a_scene_that_loads(tmp_path: Path) -> None:
+    # Beside the input, mesh files stay files; elsewhere they are inlined.
+    for output in (tmp_path / "cbox.json", tmp_path / "cbox.textproto"):
+        assert main(["convert", str(MITSUBA_CBOX), str(output)]) == 0
+        scene = load_scene(output, inline_files=False)
+        assert len(scene.shapes) == 8
+        assert all(shape.mesh.WhichOneof("source") == "data" for shape in scene.shapes)
+    folder = tmp_path / "copy"
+    (folder / "assets").mkdir(parents=True)
+    (folder / "assets" / "triangle.obj").write_bytes(
+        (TEST_SCENES / "assets/triangle.obj").read_bytes()
+    )
+    (folder / "scene.xml").write_text((TEST_SCENES / "mitsuba_transforms.xml").read_text())
+    assert main(["convert", str(folder / "scene.xml"), str(folder / "scene.json")]) == 0
+    beside = load_scene(folder / "scene.json", inline_files=False)
+    assert beside.shapes[0].mesh.file == "assets/triangle.obj"
+    assert load_scene(folder / "scene.json").shapes[0].mesh.data
+
+
+def test_convert_shows_the_importers_warnings(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert (
+        main(["convert", str(TEST_SCENES / "mitsuba_emitters.xml"), str(tmp_path / "e.json")]) == 0
+    )
+    errors = capsys.readouterr().err
+    assert "yarf: warning: " in errors
+    assert "mitsuba_emitters.xml:20: yarf has no infinite lights yet: emitter 'constant'" in errors
+
+
+@pytest.mark.parametrize(
+    ("command", "scene", "where"),
+    [
+        ("convert", "malformed/wrong_type.xml", "wrong_type.xml:3: "),
+        ("convert", "malformed/cycle_a.xml", "cycle_b.xml:2: include cycle"),
+        ("render", "malformed/unterminated.pbrt", "unterminated.pbrt:3: unterminated string"),
+        ("render", "malformed/outside.pbrt", "outside.pbrt:2: file '../assets/quad.ply' lies"),
+    ],
+)
+def test_a_malformed_scene_fails_in_one_line_with_file_and_line(
+    tmp_path: Path, command: str, scene: str, where: str
+) -> None:
+    source = str(TEST_SCENES / scene)
+    if command == "convert":
+        output = tmp_path / "out.json"
+        arguments = ["convert", source, str(output)]
+    else:
+        # The scene fails before any server is asked for.
+        output = tmp_path / "out.exr"
+        arguments = ["render", source, "-o", str(output), "--server", "127.0.0.1:1"]
+    done = subprocess.run(
+        [sys.executable, "-m", "yarf.cli", *arguments], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert lines[0].startswith("yarf: error: ") and where in lines[0], lines[0]
+    assert not output.exists()
