@@ -85,7 +85,8 @@ def test_lambertian_over_grpc_is_reflectance_over_pi(
     weight = array_to_numpy(sample.weight)
     # Cosine-weighted sampling of a Lambertian: every weight is the albedo.
     np.testing.assert_allclose(weight, np.tile([0.6, 0.3, 0.1], (n, 1)), rtol=1e-4)
-    assert (array_to_numpy(sample.flags) == surface_pb2.SCATTER_REFLECT).all()
+    diffuse_reflection = surface_pb2.SCATTER_REFLECT | surface_pb2.SCATTER_DIFFUSE
+    assert (array_to_numpy(sample.flags) == diffuse_reflection).all()
 
 
 def test_diffuse_area_emits_from_its_front_only_over_grpc(
@@ -101,6 +102,23 @@ def test_diffuse_area_emits_from_its_front_only_over_grpc(
     )
     radiance = array_to_numpy(reply.radiance)
     np.testing.assert_allclose(radiance, [[2, 3, 4], [2, 3, 4], [0, 0, 0]])
+
+
+def test_spot_light_samples_directions_inside_its_cone_over_grpc(
+    client: Client, instance: MakeInstance
+) -> None:
+    emitter = surface_pb2_grpc.EmitterStub(client.channel)
+    handle = instance("spot", intensity=rgb(1.0), cutoff_angle=30.0)
+    uniform = np.random.default_rng(5).random((1000, 2), dtype=np.float32)
+    sampled = emitter.SampleDirection(
+        surface_pb2.SampleDirectionRequest(handle=handle, uniform=numpy_to_array(uniform))
+    )
+    w, pdf = array_to_numpy(sampled.w), array_to_numpy(sampled.pdf)
+    assert (w[:, 2] >= np.cos(np.radians(30)) - 1e-6).all()
+    # Uniform in the cone: 1/(2π(1 − cos 30°)) everywhere, as PdfDirection says.
+    np.testing.assert_allclose(pdf, 1 / (2 * np.pi * (1 - np.cos(np.radians(30)))), rtol=1e-5)
+    check = emitter.PdfDirection(surface_pb2.PdfDirectionRequest(handle=handle, w=sampled.w))
+    np.testing.assert_allclose(array_to_numpy(check.pdf), pdf, rtol=1e-5)
 
 
 def test_bad_batches_wrong_interfaces_and_released_handles_are_refused(
