@@ -370,3 +370,72 @@ def test_point_and_spot_lights_agree_across_unbiased_methods(client: Client) -> 
             family_alpha=1e-3,
         )
         assert not test.failing.size, f"{name}:\n" + test.report()
+
+
+# --- Lights from infinitely far -----------------------------------------------
+
+
+@pytest.mark.parametrize("transport", ["path", "bdpt", "distribution"])
+def test_constant_environment_lights_a_grey_sphere_to_its_albedo(
+    client: Client, transport: str
+) -> None:
+    # The white furnace: a convex Lambertian ball of albedo 0.5 under unit
+    # radiance from everywhere reflects 0.5; the background is 1.
+    scene = look_at_scene((0, 0, 4), (0, 0, 0), (0, 1, 0), 40)
+    scene.materials.add(
+        name="grey", class_name="lambertian", properties=properties(reflectance=rgb(0.5))
+    )
+    ball = scene.shapes.add(name="ball", material="grey")
+    ball.sphere.radius = 1.0
+    sky = scene.lights.add(name="sky", kind=scene_pb2.Light.ENVIRONMENT)
+    sky.emitter.CopyFrom(component("constant", radiance=rgb(1)))
+    result = client.render(scene, spp=64, transport=component(transport, max_depth=3))
+    d = camera_rays(scene, PROBES)
+    # The ball covers a pixel when all five rays pass within its radius.
+    origin = np.array([0.0, 0, 4])
+    along = -(d @ origin)
+    miss = np.linalg.norm(origin + d * along[..., None], axis=-1)
+    on_ball, off_ball = np.all(miss < 1, axis=0), np.all(miss > 1, axis=0)
+    assert on_ball.sum() > 100 and off_ball.sum() > 100
+    pixels, sigma = result.pixels, np.sqrt(result.variance)
+    for region, value in ((off_ball, 1.0), (on_ball, 0.5)):
+        assert abs(pixels[region].mean() - value) < 0.01 * value
+        assert (np.abs(pixels[region] - value) <= 6 * sigma[region] + 0.01 * value).all()
+
+
+def test_directional_light_lights_a_floor_by_its_cosine_and_casts_a_parallel_shadow(
+    client: Client,
+) -> None:
+    scene = look_at_scene((0, 0, 10), (0, 0, 0), (0, 1, 0), 60)
+    scene.materials.add(
+        name="floor", class_name="lambertian", properties=properties(reflectance=rgb(0.6))
+    )
+    rectangle(scene, "floor", placed((0, 0, 0), 8, 8))
+    rectangle(scene, "black", placed((0, 0, 2), 1, 1))
+    sun = scene.lights.add(name="sun", kind=scene_pb2.Light.DIRECTIONAL)
+    sun.emitter.CopyFrom(component("directional", irradiance=rgb(3)))
+    # Light travelling along (sin 30°, 0, −cos 30°): +z of a rotation about y.
+    t = math.radians(30)
+    rotation = np.array(
+        [
+            [math.cos(t), 0, math.sin(t), 0],
+            [0, 1, 0, 0],
+            [-math.sin(t), 0, -math.cos(t), 0],
+            [0, 0, 0, 1],
+        ]
+    )
+    sun.to_world.CopyFrom(transform(rotation))
+    image = client.render(scene, spp=16, transport=component("whitted", max_depth=2)).pixels[..., 0]
+
+    d = camera_rays(scene, PROBES)
+    origin = np.array([0.0, 0, 10])
+    _, on_floor = hit_plane(origin, d, 2, 0.0)
+    _, on_square = hit_plane(origin, d, 2, 2.0)
+    sees_square = np.all(np.abs(on_square[..., :2]) <= 1, axis=-1)
+    # Back along the light from the floor point to z = 2: x shifts by 2·tan 30°.
+    shadowed = (np.abs(on_floor[..., 0] - 2 * math.tan(t)) <= 1) & (np.abs(on_floor[..., 1]) <= 1)
+    lit = ~(sees_square | shadowed)
+    dark, bright = np.all(~lit, axis=0), np.all(lit, axis=0)
+    assert dark.sum() > 40 and bright.sum() > 400
+    assert (image[dark] == 0).all()
+    np.testing.assert_allclose(image[bright], 0.6 / math.pi * 3 * math.cos(t), rtol=0.005)

@@ -1,11 +1,16 @@
-// point — an isotropic point light
+// point — an isotropic point light; directional — a light from infinitely far
 //
-// A light with no extent placed by the scene's Light.to_world. It has no
-// radiance, only intensity: Radiance returns I in W·sr⁻¹ toward every
-// direction, and total power is 4π·I.
+// point: a light with no extent placed by the scene's Light.to_world. It
+// has no radiance, only intensity: Radiance returns I in W·sr⁻¹ toward
+// every direction, and total power is 4π·I.
+//
+// directional (a Light of kind DIRECTIONAL): Radiance returns the
+// irradiance E in W·m⁻² that a surface facing the light receives; the
+// kernel places it far away, scaled to give that irradiance.
 //
 // Parameters
-//   intensity   rgb (or float)   required   W·sr⁻¹, per channel ≥ 0
+//   intensity    rgb (or float)   required (point)         W·sr⁻¹, per channel ≥ 0
+//   irradiance   rgb (or float)   required (directional)   W·m⁻², per channel ≥ 0
 #include <cstdint>
 #include <span>
 
@@ -17,10 +22,12 @@ namespace {
 
 using yarf::Vec3;
 
-class PointLight final : public yarf::Emitter {
+// The same in every direction; `power` names the property.
+template <const char* power>
+class IsotropicLight final : public yarf::Emitter {
  public:
-  explicit PointLight(const yarf::Properties& props)
-      : intensity_(yarf::RequiredIntensity(props, "intensity")) {}
+  explicit IsotropicLight(const yarf::Properties& props)
+      : intensity_(yarf::RequiredIntensity(props, power)) {}
 
   void Radiance(std::span<const float> w, std::span<const float> uv,
                 std::span<float> radiance) const override {
@@ -45,8 +52,14 @@ class PointLight final : public yarf::Emitter {
   Vec3 intensity_;
 };
 
+constexpr char kIntensity[] = "intensity";
+constexpr char kIrradiance[] = "irradiance";
+
 }  // namespace
 
 YARF_PLUGIN(registrar) {
-  yarf::Register<PointLight>(registrar, "point", "1.0.0", "Isotropic point light of given intensity");
+  yarf::Register<IsotropicLight<kIntensity>>(registrar, "point", "1.0.0",
+                                             "Isotropic point light of given intensity");
+  yarf::Register<IsotropicLight<kIrradiance>>(registrar, "directional", "1.0.0",
+                                              "Light from infinitely far, of given irradiance");
 }

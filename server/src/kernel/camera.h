@@ -25,6 +25,7 @@ class Camera {
   float Time(float u) const { return u * shutter_; }
   bool HasLens() const { return lens_radius_ > 0; }
   Vec3 axis() const { return forward_; }
+  Vec3 origin() const { return origin_; }
 
  private:
   // The point of the lens for (u, v), camera space.

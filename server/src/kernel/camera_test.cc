@@ -67,7 +67,9 @@ TEST(Camera, ConnectFindsTheFilmPositionWhoseRayPassesThroughThePoint) {
     const float tan_x = std::tan(25 * kPi / 180), tan_y = tan_x * 60 / 80;
     const float cos_theta = ray.direction.z;
     EXPECT_NEAR(importance, 1 / (4 * tan_x * tan_y * cos_theta * cos_theta * cos_theta), 1e-4f);
-    if (!lens) EXPECT_NEAR(camera.DirectionPdf(ray.direction), importance, 1e-4f);
+    if (!lens) {
+      EXPECT_NEAR(camera.DirectionPdf(ray.direction), importance, 1e-4f);
+    }
     // Behind the camera, or off the film: not seen.
     EXPECT_FALSE(camera.Connect(Vec3(1, 0, -3), 0.2f, 0.7f, &lens_point, &x, &y, &importance));
     EXPECT_FALSE(camera.Connect(Vec3(40, 0, 3), 0.2f, 0.7f, &lens_point, &x, &y, &importance));

@@ -7,6 +7,63 @@
 #include "yarf/warps.h"
 
 namespace yarf {
+namespace {
+
+// What the environment's sphere is made of: it absorbs everything.
+class Absorber final : public SurfaceModel {
+ public:
+  void Evaluate(TransportMode, std::span<const float> wi, std::span<const float>, std::span<const float>,
+                std::span<float> value) const override {
+    std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
+  }
+  void Sample(TransportMode, std::span<const float> wi, std::span<const float>, std::span<const float>, uint32_t,
+              std::span<float> wo, std::span<float> weight, std::span<float> pdf,
+              std::span<uint32_t> flags) const override {
+    const size_t n = wi.size() / 3;
+    std::fill(wo.begin(), wo.begin() + 3 * n, 0.0f);
+    std::fill(weight.begin(), weight.begin() + 3 * n, 0.0f);
+    std::fill(pdf.begin(), pdf.begin() + n, 0.0f);
+    std::fill(flags.begin(), flags.begin() + n, kScatterNone);
+  }
+  void Pdf(std::span<const float> wi, std::span<const float>, std::span<const float>,
+           std::span<float> pdf) const override {
+    std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
+  }
+  uint32_t Lobes() const override { return kScatterReflect | kScatterDiffuse; }
+};
+
+// A directional light as a spot light at `distance`, aimed at the scene:
+// intensity E·distance² inside the cone that holds the scene, nothing out.
+class FarSpotLight final : public Emitter {
+ public:
+  FarSpotLight(const Emitter& irradiance, float distance, float cos_cone)
+      : irradiance_(irradiance), scale_(distance * distance), cos_cone_(cos_cone) {}
+
+  void Radiance(std::span<const float> w, std::span<const float> uv, std::span<float> radiance) const override {
+    irradiance_.Radiance(w, uv, radiance);
+    for (size_t k = 0; k < w.size() / 3; ++k)
+      for (int c = 0; c < 3; ++c) radiance[3 * k + c] *= w[3 * k + 2] >= cos_cone_ ? scale_ : 0.0f;
+  }
+  void SampleDirection(std::span<const float> uniform, std::span<float> w, std::span<float> pdf) const override {
+    for (size_t k = 0; k < uniform.size() / 2; ++k) {
+      SampleUniformCone(uniform[2 * k], uniform[2 * k + 1], cos_cone_).Store(&w[3 * k]);
+      pdf[k] = UniformConePdf(1.0f, cos_cone_);
+    }
+  }
+  void PdfDirection(std::span<const float> w, std::span<float> pdf) const override {
+    for (size_t k = 0; k < w.size() / 3; ++k) pdf[k] = UniformConePdf(w[3 * k + 2], cos_cone_);
+  }
+
+ private:
+  const Emitter& irradiance_;
+  float scale_, cos_cone_;
+};
+
+// How far a directional light stands, in scene radii.
+constexpr float kDirectionalDistance = 1000;
+
+}  // namespace
+
 KernelScene::KernelScene(const EmbreeDevice& device, const Camera& camera, uint32_t width,
                          uint32_t height)
     : device_(device), camera_(camera), width_(width), height_(height) {
@@ -92,6 +149,60 @@ void KernelScene::AddPlacement(uint32_t group, const Transform& to_world,
   placements_.push_back({group, to_world, to_world_end});
 }
 
+void KernelScene::AddDirectionalLight(const Emitter* emitter, Vec3 direction) {
+  directional_.emplace_back(emitter, Normalize(direction));
+}
+
+void KernelScene::AddEnvironment(const Emitter* emitter) { environments_.push_back(emitter); }
+
+void KernelScene::AddInfiniteLights() {
+  if (directional_.empty() && environments_.empty()) return;
+  RTCBounds box;
+  rtcGetSceneBounds(groups_[kWorld].scene, &box);
+  Vec3 lower(box.lower_x, box.lower_y, box.lower_z), upper(box.upper_x, box.upper_y, box.upper_z);
+  const Vec3 eye = camera_.origin();
+  if (!(lower.x <= upper.x)) lower = upper = eye;  // an empty scene
+  const Vec3 center = (lower + upper) * 0.5f;
+  const float radius = std::max({Length(upper - center), Length(eye - center), 1e-3f});
+  for (const auto& [emitter, direction] : directional_) {
+    const float distance = kDirectionalDistance * radius;
+    emitters_.push_back(std::make_unique<FarSpotLight>(
+        *emitter, distance, std::sqrt(1 - 1 / (kDirectionalDistance * kDirectionalDistance))));
+    Light light;
+    light.first = light.end = uint32_t(emitting_.size());
+    light.emitter = emitters_.back().get();
+    light.position = center - direction * distance;
+    light.axis = direction;
+    lights_.push_back(light);
+  }
+  for (const Emitter* emitter : environments_) {
+    // Twice the radius: rays leaving the scene's surfaces never start
+    // outside it.
+    const float sphere_radius = 2 * radius;
+    RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    auto* point = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                                              4 * sizeof(float), 1));
+    center.Store(point);
+    point[3] = sphere_radius;
+    rtcCommitGeometry(geom);
+    const uint32_t id = rtcAttachGeometry(groups_[kWorld].scene, geom);
+    rtcReleaseGeometry(geom);
+    if (id != geometry_base_.size()) throw Error("environment light: unexpected Embree geometry id");
+    ShapeRecord record;
+    record.kind = Kind::kSphere;
+    record.center = center;
+    record.radius = sphere_radius;
+    record.look.name = "environment";
+    record.look.material = AddMaterial(std::make_unique<Absorber>());
+    record.look.emitter = emitter;
+    record.look.flip_normals = true;  // emitting inward
+    geometry_base_.push_back(uint32_t(shapes_.size()));
+    shapes_.push_back(record);
+  }
+  rtcCommitScene(groups_[kWorld].scene);
+  device_.Check("scene build");
+}
+
 void KernelScene::AddLight(const Emitter* emitter, const Transform& to_world) {
   Light light;
   light.first = light.end = uint32_t(emitting_.size());
@@ -141,6 +252,7 @@ void KernelScene::Commit() {
   rtcSetSceneBuildQuality(groups_[kWorld].scene, RTC_BUILD_QUALITY_HIGH);
   rtcCommitScene(groups_[kWorld].scene);
   device_.Check("scene build");
+  AddInfiniteLights();
 
   // Surface lights follow the point lights already added, one per
   // emitting shape placement.

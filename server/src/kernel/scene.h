@@ -49,6 +49,13 @@ class KernelScene final : public SceneView {
                     const std::optional<Transform>& to_world_end = std::nullopt);
   // A light without a surface (point, spot), placed by to_world.
   void AddLight(const Emitter* emitter, const Transform& to_world);
+  // A light from infinitely far, travelling along `direction`; its
+  // Radiance is irradiance. Placed at Commit, when the scene's extent is
+  // known, as a spot light far away aimed at the scene.
+  void AddDirectionalLight(const Emitter* emitter, Vec3 direction);
+  // The same radiance from every direction: at Commit, the inside of a
+  // sphere around the scene and the camera.
+  void AddEnvironment(const Emitter* emitter);
   void Commit();
 
   // SceneView
@@ -104,6 +111,8 @@ class KernelScene final : public SceneView {
   };
 
   Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position, float time) const;
+  // Lights that need the scene's extent, added to the committed world.
+  void AddInfiniteLights();
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
   float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
 
@@ -143,6 +152,8 @@ class KernelScene final : public SceneView {
     Vec3 position, axis;
   };
   std::vector<Light> lights_;
+  std::vector<std::pair<const Emitter*, Vec3>> directional_;
+  std::vector<const Emitter*> environments_;
   // SampleLight's area density on each shape (0 when it does not emit).
   std::vector<float> shape_light_pdf_;
   mutable std::atomic<uint64_t> closest_hit_rays_{0}, shadow_rays_{0};

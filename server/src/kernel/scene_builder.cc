@@ -93,8 +93,18 @@ class Builder {
       const std::string what = LightName(light, i);
       const Emitter* emitter =
           kernel_->AddEmitter(Create<Emitter>(light.emitter().class_name(), light.emitter().properties(), what));
-      kernel_->AddLight(emitter, light.has_to_world() ? FromProto(light.to_world(), what + " to_world")
-                                                      : Transform{});
+      const Transform to_world =
+          light.has_to_world() ? FromProto(light.to_world(), what + " to_world") : Transform{};
+      switch (light.kind()) {
+        case v1::Light::DIRECTIONAL:
+          kernel_->AddDirectionalLight(emitter, to_world.Vector(Vec3(0, 0, 1)));
+          break;
+        case v1::Light::ENVIRONMENT:
+          kernel_->AddEnvironment(emitter);
+          break;
+        default:
+          kernel_->AddLight(emitter, to_world);
+      }
     }
     AddShapes(KernelScene::kWorld, scene_.shapes(), "");
     for (const v1::Group& g : scene_.groups()) {
