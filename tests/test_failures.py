@@ -91,6 +91,31 @@ def test_an_integrator_without_an_image_mode_fails_the_job_saying_so(
     assert_still_renders()
 
 
+def test_bad_lights_are_rejected_naming_them(
+    client: Client, scene: scene_pb2.Scene, assert_still_renders: StillRenders
+) -> None:
+    # A light without an emitter class; two skies; a moving lamp.
+    nameless = scene_pb2.Scene()
+    nameless.CopyFrom(scene)
+    nameless.lights.add(name="bulb")
+    assert "bulb" in str(submit_rejection(client, nameless).details())
+    skies = scene_pb2.Scene()
+    skies.CopyFrom(scene)
+    for name in ("sky", "second_sky"):
+        sky = skies.lights.add(name=name, kind=scene_pb2.Light.ENVIRONMENT)
+        sky.emitter.class_name = "constant"
+        sky.emitter.properties.values["radiance"].float_value = 1
+    details = str(submit_rejection(client, skies).details())
+    assert "second_sky" in details and "ENVIRONMENT" in details, details
+    moving = scene_pb2.Scene()
+    moving.CopyFrom(scene)
+    light = next(s for s in moving.shapes if s.name == "light")
+    light.to_world_end.CopyFrom(light.to_world)
+    details = str(submit_rejection(client, moving).details())
+    assert "light" in details and "moving lights" in details, details
+    assert_still_renders()
+
+
 def test_absurd_resolution_is_rejected_naming_it(
     client: Client, scene: scene_pb2.Scene, assert_still_renders: StillRenders
 ) -> None:

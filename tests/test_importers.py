@@ -5,7 +5,9 @@ by yarf-import, renders as Mitsuba 3 renders the same file: reference mean
 and variance images come from independent Mitsuba renders (scalar_rgb),
 and every pixel, and every 8×8 block, must pass a z-test with a
 Šidák-corrected threshold. The pbrt Cornell box renders the right way
-round. The CLI renders and converts both formats, shows the importers'
+round. A Mitsuba constant emitter lights a diffuse ball as the white
+furnace does, and an envmap becomes the constant of Mitsuba's own mean
+radiance. The CLI renders and converts both formats, shows the importers'
 warnings and reports malformed files in one line with file and line.
 """
 
@@ -24,7 +26,7 @@ from imagestats import block_z_test, mean_and_variance
 from yarf import Client, LocalServer, RenderResult
 from yarf.cli import main
 from yarf.scene import ImportedScene, import_scene, load_scene
-from yarf.v1 import render_pb2
+from yarf.v1 import render_pb2, scene_pb2
 
 MITSUBA_CBOX = SHARED / "scenes" / "mitsuba-cbox" / "cbox-rgb.xml"
 PBRT_CBOX = SHARED / "scenes" / "pbrt-cornell-box" / "scene-v4.pbrt"
@@ -126,6 +128,54 @@ def test_pbrt_cornell_box_is_the_right_way_round(client: Client) -> None:
     assert pixels[:3, 12:20].mean() > pixels[-3:, 12:20].mean()
 
 
+def test_a_mitsuba_constant_emitter_lights_a_diffuse_ball_to_half_its_radiance(
+    client: Client,
+) -> None:
+    # The white furnace: a convex ball of reflectance 0.5 under the same
+    # radiance from everywhere reflects half of it; the background is all.
+    imported = import_scene(TEST_SCENES / "mitsuba_furnace.xml")
+    assert imported.warnings == []
+    (sky,) = imported.scene.lights
+    assert sky.kind == scene_pb2.Light.ENVIRONMENT
+    assert sky.emitter.class_name == "constant"
+    result = client.render(imported.scene, spp=imported.sample_count, seed=3, timeout=60)
+    assert result.pixels.shape == (32, 32, 3)
+    radiance = np.array([1.0, 2.0, 0.5])
+    # The ball is 11.3 pixels in radius around the centre of the 32×32 image.
+    ball = (slice(12, 20), slice(12, 20))
+    corners = (np.array([0, 0, 1, 1, 30, 30, 31, 31]), np.array([0, 1, 0, 1, 30, 31, 30, 31]))
+    for region, value in ((ball, 0.5 * radiance), (corners, radiance)):
+        pixels, sigma = result.pixels[region], np.sqrt(result.variance[region])
+        np.testing.assert_allclose(pixels.reshape(-1, 3).mean(axis=0), value, rtol=0.01)
+        assert (np.abs(pixels - value) <= 6 * sigma + 0.01 * value).all()
+
+
+def test_an_envmap_becomes_the_constant_of_mitsubas_mean_radiance() -> None:
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    scene_file = TEST_SCENES / "mitsuba_envmap.xml"
+    (sky,) = import_scene(scene_file).scene.lights
+    assert sky.kind == scene_pb2.Light.ENVIRONMENT
+    assert sky.emitter.class_name == "constant"
+    value = sky.emitter.properties.values["radiance"].rgb_value
+    # Mitsuba's mean radiance over the sphere (its to_world included): the
+    # midpoint rule in θ (from +y, the map's pole) and φ, each point
+    # weighted by its solid angle.
+    envmap = mi.load_file(str(scene_file)).environment()
+    count_theta, count_phi = 256, 64
+    total, weights = np.zeros(3), 0.0
+    for theta in (np.arange(count_theta) + 0.5) / count_theta * np.pi:
+        for phi in (np.arange(count_phi) + 0.5) / count_phi * 2 * np.pi:
+            si = mi.SurfaceInteraction3f()
+            si.wi = mi.Vector3f(
+                np.sin(theta) * np.cos(phi), np.cos(theta), np.sin(theta) * np.sin(phi)
+            )
+            total += np.sin(theta) * np.array(envmap.eval(si))
+            weights += np.sin(theta)
+    np.testing.assert_allclose([value.r, value.g, value.b], total / weights, rtol=1e-3)
+
+
 @pytest.mark.parametrize(
     "scene",
     sorted(TEST_SCENES.glob("mitsuba_*.xml")) + sorted(TEST_SCENES.glob("pbrt_*.pbrt")),
@@ -167,7 +217,10 @@ def test_convert_shows_the_importers_warnings(
     )
     errors = capsys.readouterr().err
     assert "yarf: warning: " in errors
-    assert "mitsuba_emitters.xml:20: yarf has no infinite lights yet: emitter 'constant'" in errors
+    assert (
+        "mitsuba_emitters.xml:34: environment maps are not supported yet: emitter 'sunsky'"
+        in errors
+    )
 
 
 @pytest.mark.parametrize(

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace yarf::importers::testing {
@@ -39,11 +40,24 @@ const v1::Material& MaterialOf(const v1::Scene& scene, const v1::SceneShape& sha
   return MaterialNamed(scene, shape.material());
 }
 
+const v1::Light& LightNamed(const v1::Scene& scene, const std::string& name) {
+  for (const v1::Light& light : scene.lights())
+    if (light.name() == name) return light;
+  throw std::runtime_error("no light named " + name);
+}
+
 Matrix4 ToMatrix(const v1::Transform& transform) {
   if (transform.m_size() != 16) return Matrix4();
   std::array<double, 16> m;
   for (int i = 0; i < 16; ++i) m[i] = transform.m(i);
   return Matrix4(m);
+}
+
+bool IsRotation(const Matrix4& m) {
+  const Vec3d x = m.Vector({1, 0, 0}), y = m.Vector({0, 1, 0}), z = m.Vector({0, 0, 1});
+  const auto near = [](double a, double b) { return std::abs(a - b) < 1e-9; };
+  return near(Dot(x, x), 1) && near(Dot(y, y), 1) && near(Dot(z, z), 1) && near(Dot(x, y), 0) &&
+         near(Dot(y, z), 0) && near(Dot(z, x), 0) && near(m.Determinant3(), 1);
 }
 
 bool Warns(const ImportResult& result, const std::string& fragment) {

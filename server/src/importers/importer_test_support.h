@@ -19,8 +19,11 @@ std::string ImportErrorOf(const std::string& name);
 const v1::SceneShape& ShapeNamed(const v1::Scene& scene, const std::string& name);
 const v1::Material& MaterialNamed(const v1::Scene& scene, const std::string& name);
 const v1::Material& MaterialOf(const v1::Scene& scene, const v1::SceneShape& shape);
+const v1::Light& LightNamed(const v1::Scene& scene, const std::string& name);
 // Identity when the transform is absent.
 Matrix4 ToMatrix(const v1::Transform& transform);
+// Orthonormal columns and determinant +1, to 1e-9.
+bool IsRotation(const Matrix4& m);
 // True when a warning contains `fragment`.
 bool Warns(const ImportResult& result, const std::string& fragment);
 

@@ -77,6 +77,8 @@ class PbrtImporter {
   // pbrt_lights.cc
   void LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void AreaLightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  void DistantLight(PbrtParams& params, const SourceLocation& where);
+  void InfiniteLight(PbrtParams& params, const SourceLocation& where);
 
   const SceneFolder& folder_;
   Diagnostics& diagnostics_;

@@ -1,10 +1,12 @@
-// pbrt lights: point and spot lights, area lights on shapes; infinite and
-// distant lights yarf has not yet.
+// pbrt lights: point and spot lights, area lights on shapes, distant
+// lights and uniform infinite lights; an image infinite light becomes the
+// uniform one of its mean radiance.
 #include <cmath>
 
 #include "importers/colour_checks.h"
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
+#include "importers/texture_mean.h"
 
 namespace yarf::importers {
 namespace {
@@ -12,6 +14,14 @@ namespace {
 // pbrt-v4 divides a light's spectrum by its luminance before "scale":
 // RGB values stay as they are, other spectra become unit luminance.
 constexpr SpectrumUse kLight = SpectrumUse::kUnitLuminance;
+
+// A point3 parameter, or `fallback` when absent.
+Vec3d Point(PbrtParams& params, const std::string& key, Vec3d fallback, const SourceLocation& where) {
+  const std::vector<double> v = params.Numbers(key, {"point3"});
+  if (v.empty()) return fallback;
+  if (v.size() != 3) Fail(params.WhereIs(key, where), "'" + key + "' needs one point");
+  return {v[0], v[1], v[2]};
+}
 
 }  // namespace
 
@@ -40,14 +50,11 @@ void PbrtImporter::AreaLightSource(const std::string& type, PbrtParams& params, 
 }
 
 void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where) {
-  if (type == "distant" || type == "infinite" || type == "goniometric" || type == "projection") {
-    Warn(where, "light:" + type,
-         std::string(type == "distant" || type == "infinite" ? "yarf has no infinite lights yet: "
-                                                             : "unsupported light: ") +
-             "LightSource \"" + type + "\" ignored");
+  if (type == "goniometric" || type == "projection") {
+    Warn(where, "light:" + type, "unsupported light: LightSource \"" + type + "\" ignored");
     return;
   }
-  if (type != "point" && type != "spot") {
+  if (type != "point" && type != "spot" && type != "distant" && type != "infinite") {
     Warn(where, "light:" + type, "LightSource \"" + type + "\" is not supported: ignored");
     return;
   }
@@ -55,24 +62,20 @@ void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, cons
     Warn(where, "instanced-light", "lights inside object definitions are not supported (as in pbrt): ignored");
     return;
   }
+  if (type == "distant") return DistantLight(params, where);
+  if (type == "infinite") return InfiniteLight(params, where);
   const Rgb intensity = ClampColour(Colour(params, "I", {1, 1, 1}, kLight, where) * params.Float("scale", 1), 0,
                                     1e30, [&] { Warn(where, "negative-intensity", "negative intensity clamped to 0"); });
   if (params.Has("power")) {
     params.Find("power");
     Warn(params.WhereIs("power", where), "light-power", "light power is not supported: I and scale used");
   }
-  const auto read = [&](const std::string& key, Vec3d fallback) {
-    const std::vector<double> v = params.Numbers(key, {"point3"});
-    if (v.empty()) return fallback;
-    if (v.size() != 3) Fail(params.WhereIs(key, where), "'" + key + "' needs one point");
-    return Vec3d{v[0], v[1], v[2]};
-  };
-  const Vec3d from = read("from", {0, 0, 0});
+  const Vec3d from = Point(params, "from", {0, 0, 0}, where);
   v1::Properties props;
   SetRgb(props, "intensity", intensity);
   Matrix4 to_world = state_.ctm * Matrix4::Translate(from);
   if (type == "spot") {
-    const Vec3d to = read("to", {0, 0, 1});
+    const Vec3d to = Point(params, "to", {0, 0, 1}, where);
     const auto dir = Normalized(to - from);
     if (!dir) Fail(where, "spot light: 'from' equals 'to'");
     // Any frame whose z axis points from `from` to `to`.
@@ -92,6 +95,48 @@ void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, cons
   v1::Light light;
   *light.mutable_emitter() = Spec(type, std::move(props));
   assembly_.AddLight(std::move(light), to_world, where);
+}
+
+void PbrtImporter::DistantLight(PbrtParams& params, const SourceLocation& where) {
+  Rgb irradiance = Colour(params, "L", {1, 1, 1}, kLight, where) * params.Float("scale", 1);
+  // pbrt-v4: the unit-luminance spectrum times the illuminance asked for.
+  if (const double illuminance = params.Float("illuminance", -1); illuminance > 0)
+    irradiance = irradiance * illuminance;
+  irradiance = ClampColour(irradiance, 0, 1e30, [&] {
+    Warn(where, "negative-irradiance", "negative irradiance clamped to 0");
+  });
+  // The light arrives travelling from `from` toward `to`; the transform
+  // turns that direction as it turns vectors.
+  const Vec3d from = Point(params, "from", {0, 0, 0}, where), to = Point(params, "to", {0, 0, 1}, where);
+  if (!Normalized(to - from)) Fail(where, "distant light: 'from' equals 'to'");
+  params.WarnUnused(diagnostics_, "light 'distant'");
+  assembly_.AddDirectionalLight("", irradiance, state_.ctm.Vector(to - from), where);
+}
+
+void PbrtImporter::InfiniteLight(PbrtParams& params, const SourceLocation& where) {
+  const double scale = params.Float("scale", 1), illuminance = params.Float("illuminance", -1);
+  Rgb radiance;
+  if (params.Has("filename")) {
+    if (params.Has("L")) Fail(params.WhereIs("L", where), "infinite light: give \"L\" or \"filename\", not both");
+    // pbrt-v4's maps are equal-area: the plain mean of the pixels is the
+    // mean over directions.
+    const std::string filename = params.String("filename", "");
+    const auto file = folder_.Resolve(filename, origin_.file, params.WhereIs("filename", where));
+    radiance = ImageMeanColour(file, ImageEncoding::kAuto, 1.0, where) * scale;
+    Warn(where, "infinite-image",
+         "environment maps are not supported yet: an image infinite light is replaced by a uniform one of its "
+         "mean radiance");
+    if (illuminance > 0)
+      Warn(params.WhereIs("illuminance", where), "infinite-illuminance",
+           "infinite light: illuminance of an image is not supported: scale used");
+  } else {
+    radiance = Colour(params, "L", {1, 1, 1}, kLight, where) * scale;
+    // pbrt-v4: a uniform unit-luminance sky gives illuminance π.
+    if (illuminance > 0) radiance = radiance * (illuminance / M_PI);
+  }
+  radiance = ClampColour(radiance, 0, 1e30, [&] { Warn(where, "negative-radiance", "negative radiance clamped to 0"); });
+  params.WarnUnused(diagnostics_, "light 'infinite'");
+  assembly_.AddEnvironment("", radiance);
 }
 
 }  // namespace yarf::importers

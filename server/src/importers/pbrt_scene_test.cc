@@ -102,8 +102,9 @@ TEST_F(PbrtBasic, AreaLightBlackbodyScaledAndOrientedByN) {
 }
 
 TEST_F(PbrtBasic, PointAndSpotLights) {
-  ASSERT_EQ(scene().lights_size(), 2);
+  ASSERT_EQ(scene().lights_size(), 4);  // then the distant and the infinite light
   const v1::Light& point = scene().lights(0);
+  EXPECT_EQ(point.kind(), v1::Light::POSITIONED);
   EXPECT_EQ(point.emitter().class_name(), "point");
   ExpectNear(RgbProperty(point.emitter().properties(), "intensity"), {2, 4, 6});  // I × scale
   ExpectNear(ToMatrix(point.to_world()).Point({0, 0, 0}), {0, 4, 0});
@@ -115,9 +116,53 @@ TEST_F(PbrtBasic, PointAndSpotLights) {
   ExpectNear(ToMatrix(spot.to_world()).Vector({0, 0, 1}), {0, -1, 0});
 }
 
-TEST_F(PbrtBasic, InfiniteLightsAreReportedAsIgnored) {
-  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:55: yarf has no infinite lights yet: LightSource \"distant\""));
-  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:56: yarf has no infinite lights yet: LightSource \"infinite\""));
+TEST_F(PbrtBasic, DistantAndInfiniteLightsBecomeDirectionalAndEnvironment) {
+  ASSERT_EQ(scene().lights_size(), 4);
+  const v1::Light& distant = scene().lights(2);
+  EXPECT_EQ(distant.kind(), v1::Light::DIRECTIONAL);
+  EXPECT_EQ(distant.emitter().class_name(), "directional");
+  ExpectNear(RgbProperty(distant.emitter().properties(), "irradiance"), {1, 1, 1});
+  // From (0, 0, 0) to (0, -1, 0): the light travels down.
+  EXPECT_TRUE(IsRotation(ToMatrix(distant.to_world())));
+  ExpectNear(ToMatrix(distant.to_world()).Vector({0, 0, 1}), {0, -1, 0});
+  const v1::Light& infinite = scene().lights(3);
+  EXPECT_EQ(infinite.kind(), v1::Light::ENVIRONMENT);
+  EXPECT_EQ(infinite.emitter().class_name(), "constant");
+  ExpectNear(RgbProperty(infinite.emitter().properties(), "radiance"), {0.1, 0.1, 0.1});
+  EXPECT_FALSE(infinite.has_to_world());
+  EXPECT_FALSE(Warns(result(), "pbrt_basic.pbrt:55"));
+  EXPECT_FALSE(Warns(result(), "pbrt_basic.pbrt:56"));
+}
+
+TEST(PbrtImport, DistantLightsTurnWithTheTransformAndScaleByIlluminance) {
+  const v1::Scene scene = Import("pbrt_lights.pbrt").scene;
+  ASSERT_EQ(scene.lights_size(), 3);
+  const v1::Light& plain = scene.lights(0);
+  EXPECT_EQ(plain.kind(), v1::Light::DIRECTIONAL);
+  EXPECT_EQ(plain.emitter().class_name(), "directional");
+  ExpectNear(RgbProperty(plain.emitter().properties(), "irradiance"), {2, 4, 6});  // L × scale
+  ExpectNear(ToMatrix(plain.to_world()).Vector({0, 0, 1}), {0, 0, 1});  // pbrt's default from and to
+  const v1::Light& turned = scene.lights(1);
+  EXPECT_EQ(turned.kind(), v1::Light::DIRECTIONAL);
+  // pbrt-v4: the unit-luminance spectrum (here the default white) times
+  // the illuminance.
+  ExpectNear(RgbProperty(turned.emitter().properties(), "irradiance"), {4, 4, 4});
+  // (0, 1, 1) turned 90° about x.
+  EXPECT_TRUE(IsRotation(ToMatrix(turned.to_world())));
+  ExpectNear(ToMatrix(turned.to_world()).Vector({0, 0, 1}), Vec3d{0, -1, 1} * (1 / std::sqrt(2)));
+}
+
+TEST(PbrtImport, InfiniteLightsAddUpToOneEnvironment) {
+  const ImportResult result = Import("pbrt_lights.pbrt");
+  const v1::Light& sky = result.scene.lights(2);
+  EXPECT_EQ(sky.kind(), v1::Light::ENVIRONMENT);
+  EXPECT_EQ(sky.emitter().class_name(), "constant");
+  EXPECT_FALSE(sky.has_to_world());
+  // L × scale, (0.2, 0.4, 0.6); checker.png's mean × scale, 0.5 × 3; the
+  // default white times illuminance / π, 2π / π.
+  ExpectNear(RgbProperty(sky.emitter().properties(), "radiance"), {3.7, 3.9, 4.1}, 1e-6);
+  EXPECT_TRUE(Warns(result, "pbrt_lights.pbrt:19: environment maps are not supported yet: an image infinite light"));
+  EXPECT_FALSE(Warns(result, "parameter"));
 }
 
 TEST(PbrtImport, MaterialsMapToSurfaceModels) {
@@ -187,6 +232,11 @@ TEST(PbrtImport, ALeftHandedLookAtMirrorsTheWorldAndKeepsTheLitSide) {
   // winding faces +z, so yarf flips its normal back.
   EXPECT_TRUE(light.flip_normals());
   ExpectNear(ToVec(scene.camera().origin()), {0, 0, -5});
+  // The distant light travels along (1, 0, 1), mirrored: still by a rotation.
+  ASSERT_EQ(scene.lights_size(), 1);
+  const Matrix4 distant = ToMatrix(scene.lights(0).to_world());
+  EXPECT_TRUE(IsRotation(distant));
+  ExpectNear(distant.Vector({0, 0, 1}), Vec3d{-1, 0, 1} * (1 / std::sqrt(2)));
 }
 
 TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {

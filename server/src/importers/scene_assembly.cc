@@ -3,6 +3,8 @@
 #include <cmath>
 #include <functional>
 
+#include "importers/properties_util.h"
+
 namespace yarf::importers {
 namespace {
 
@@ -30,6 +32,12 @@ bool YarfFlip(bool flip, NormalRule rule, const Matrix4& to_world, bool mirrored
       return flip;
   }
   return flip;
+}
+
+// A rotation taking +z to the unit vector `z`.
+Matrix4 FrameAlong(const Vec3d& z) {
+  const Vec3d up = std::abs(z.y) < 0.9 ? Vec3d{0, 1, 0} : Vec3d{1, 0, 0};
+  return *Matrix4::LookAt({0, 0, 0}, z, up);
 }
 
 }  // namespace
@@ -98,6 +106,37 @@ void SceneAssembly::AddLight(v1::Light light, const Matrix4& to_world, const Sou
   light_transforms_.push_back(to_world);
 }
 
+void SceneAssembly::AddDirectionalLight(const std::string& name, const Rgb& irradiance, const Vec3d& direction,
+                                        const SourceLocation& where) {
+  const auto travel = Normalized(direction);
+  if (!travel) Fail(where, "directional light: its direction is zero or not finite");
+  v1::Light light;
+  light.set_name(name);
+  light.set_kind(v1::Light::DIRECTIONAL);
+  v1::Properties props;
+  SetRgb(props, "irradiance", irradiance);
+  *light.mutable_emitter() = Spec("directional", std::move(props));
+  *scene_.add_lights() = std::move(light);
+  light_transforms_.push_back(FrameAlong(*travel));
+}
+
+void SceneAssembly::AddEnvironment(const std::string& name, const Rgb& radiance) {
+  // Two emitting spheres around the scene would hide each other: one
+  // carries the sum.
+  if (environment_ < 0) {
+    environment_ = scene_.lights_size();
+    v1::Light& light = *scene_.add_lights();
+    light.set_name(name);
+    light.set_kind(v1::Light::ENVIRONMENT);
+    light_transforms_.push_back(Matrix4());
+  }
+  Rgb& sum = environment_radiance_;
+  sum = {sum.r + radiance.r, sum.g + radiance.g, sum.b + radiance.b};
+  v1::Properties props;
+  SetRgb(props, "radiance", sum);
+  *scene_.mutable_lights(environment_)->mutable_emitter() = Spec("constant", std::move(props));
+}
+
 void SceneAssembly::SetCamera(v1::Camera camera, const Matrix4& camera_to_world, const Vec3d& source_right,
                               const SourceLocation& where) {
   if (!camera_to_world.IsFinite()) Fail(where, "camera: transform has non-finite values");
@@ -140,7 +179,12 @@ v1::Scene SceneAssembly::Finish() {
   }
   for (int i = 0; i < scene_.lights_size(); ++i) {
     v1::Light& light = *scene_.mutable_lights(i);
-    SetTransform(mirror_ * light_transforms_[i], light.mutable_to_world(), [&] { light.clear_to_world(); });
+    if (light.kind() == v1::Light::ENVIRONMENT) continue;  // the same from everywhere: not placed
+    Matrix4 to_world = mirror_ * light_transforms_[i];
+    // The mirror turns a light's direction with the world; a directional
+    // light's frame is made a rotation again.
+    if (light.kind() == v1::Light::DIRECTIONAL) to_world = FrameAlong(*Normalized(to_world.Vector({0, 0, 1})));
+    SetTransform(to_world, light.mutable_to_world(), [&] { light.clear_to_world(); });
   }
   for (int i = 0; i < scene_.instances_size(); ++i) {
     v1::Instance& instance = *scene_.mutable_instances(i);

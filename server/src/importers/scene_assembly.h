@@ -10,6 +10,7 @@
 
 #include "importers/diagnostics.h"
 #include "importers/matrix.h"
+#include "importers/spectrum.h"
 #include "yarf/v1/scene.pb.h"
 
 namespace yarf::importers {
@@ -44,7 +45,17 @@ class SceneAssembly {
   v1::Group& Group(const std::string& name);
   bool HasGroup(const std::string& name) const;
   void AddInstance(const std::string& group, const Matrix4& to_world, const SourceLocation& where);
+  // A light of kind POSITIONED, placed by to_world.
   void AddLight(v1::Light light, const Matrix4& to_world, const SourceLocation& where);
+  // A "directional" light (kind DIRECTIONAL) of this irradiance, travelling
+  // along `direction` (any length): its to_world is a rotation taking +z
+  // there. Fails at `where` when the direction is zero or not finite.
+  void AddDirectionalLight(const std::string& name, const Rgb& irradiance, const Vec3d& direction,
+                           const SourceLocation& where);
+  // A uniform environment of this radiance ("constant", kind ENVIRONMENT).
+  // Environments add up: a second one adds its radiance to the first.
+  void AddEnvironment(const std::string& name, const Rgb& radiance);
+  bool HasEnvironment() const { return environment_ >= 0; }
 
   // Places the camera. `camera` carries the projection (fov, lens, clip
   // planes); camera_to_world maps the camera frame (+z forward, +y up) to
@@ -73,6 +84,8 @@ class SceneAssembly {
   std::string default_material_;
   std::vector<WorldShape> world_shapes_;   // parallel to scene_.shapes()
   std::vector<Matrix4> light_transforms_;  // parallel to scene_.lights()
+  int environment_ = -1;                   // its index in scene_.lights()
+  Rgb environment_radiance_;
   std::vector<Matrix4> instance_transforms_;
   Matrix4 mirror_;
   bool mirrored_ = false;

@@ -1,7 +1,9 @@
-// Mitsuba emitters: area lights on shapes, point and spot lights; the
-// infinite ones yarf has not yet.
+// Mitsuba emitters: area lights on shapes, point and spot lights,
+// directional lights and uniform environments; an environment map becomes
+// the uniform environment of its mean radiance.
 #include "importers/colour_checks.h"
 #include "importers/properties_util.h"
+#include "importers/texture_mean.h"
 #include "importers/xml_importer.h"
 
 namespace yarf::importers {
@@ -56,9 +58,46 @@ void MitsubaImporter::Emitter(const XmlElement& e) {
     assembly_.AddLight(std::move(light), to_world, e.where);
     return;
   }
-  if (type == "constant" || type == "envmap" || type == "directional" || type == "sunsky" || type == "sky" ||
-      type == "sun" || type == "skysphere") {
-    Warn(e.where, "infinite:" + type, "yarf has no infinite lights yet: emitter '" + type + "' ignored");
+  if (type == "directional") {
+    const Rgb irradiance = ClampColour(p.Color("irradiance", {1, 1, 1}), 0, 1e30, [&] {
+      Warn(p.WhereIs("irradiance"), "negative-irradiance", "directional light: negative irradiance clamped to 0");
+    });
+    // The light travels along its frame's +z, or along `direction`.
+    Vec3d direction = p.Transform("to_world").Vector({0, 0, 1});
+    if (p.Has("direction")) {
+      if (p.Has("to_world")) Fail(e.where, "give a directional light direction or to_world, not both");
+      direction = p.Point("direction", {0, 0, 1});
+    }
+    p.Accept({"sampling_weight"});
+    p.WarnUnused();
+    assembly_.AddDirectionalLight(e.Get("id"), irradiance, direction, e.where);
+    return;
+  }
+  if (type == "constant" || type == "envmap") {
+    if (assembly_.HasEnvironment()) Fail(e.where, "only one environment emitter can be specified per scene");
+    Rgb radiance;
+    if (type == "constant") {
+      radiance = p.Color("radiance", {1, 1, 1});
+    } else {
+      if (!p.Has("filename")) Fail(e.where, "envmap needs a filename");
+      const auto file = folder_.Resolve(p.String("filename", ""), e.file, p.WhereIs("filename"));
+      radiance = ImageMeanColour(file, ImageEncoding::kAuto, 1.0, e.where, PixelWeight::kLatLong) *
+                 p.Float("scale", 1);
+      // A rotation leaves the mean as it is.
+      p.Accept({"to_world", "filter_type", "mis_compensation"});
+      Warn(e.where, "envmap-mean",
+           "environment maps are not supported yet: envmap replaced by a constant of its mean radiance");
+    }
+    radiance = ClampColour(radiance, 0, 1e30, [&] {
+      Warn(p.WhereIs("radiance"), "negative-radiance", type + " emitter: negative radiance clamped to 0");
+    });
+    p.Accept({"sampling_weight"});
+    p.WarnUnused();
+    assembly_.AddEnvironment(e.Get("id"), radiance);
+    return;
+  }
+  if (type == "sunsky" || type == "sky" || type == "sun" || type == "skysphere") {
+    Warn(e.where, "environment:" + type, "environment maps are not supported yet: emitter '" + type + "' ignored");
     return;
   }
   Warn(e.where, "emitter:" + type, "emitter '" + type + "' is not supported: ignored");

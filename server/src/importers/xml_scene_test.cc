@@ -146,7 +146,9 @@ TEST(MitsubaImport, EmittersBecomeAreaPointAndSpotLights) {
   const v1::ComponentSpec& area = ShapeNamed(scene, "panel").emitter();
   EXPECT_EQ(area.class_name(), "diffuse_area");
   ExpectNear(RgbProperty(area.properties(), "radiance"), {5, 4, 3});
-  ASSERT_EQ(scene.lights_size(), 2);
+  // Then the environment and three directional lights.
+  ASSERT_EQ(scene.lights_size(), 6);
+  EXPECT_EQ(scene.lights(0).kind(), v1::Light::POSITIONED);
   EXPECT_EQ(scene.lights(0).emitter().class_name(), "point");
   ExpectNear(RgbProperty(scene.lights(0).emitter().properties(), "intensity"), {10, 10, 10});
   ExpectNear(ToMatrix(scene.lights(0).to_world()).Point({0, 0, 0}), {1, 2, 3});
@@ -156,10 +158,55 @@ TEST(MitsubaImport, EmittersBecomeAreaPointAndSpotLights) {
   EXPECT_DOUBLE_EQ(FloatProperty(spot.emitter().properties(), "beam_width"), 22.5);
   ExpectNear(ToMatrix(spot.to_world()).Vector({0, 0, 1}), {0, -1, 0});
   ExpectNear(ToMatrix(spot.to_world()).Point({0, 0, 0}), {0, 5, 0});
-  // Each kind of infinite light is reported once, where it is written.
-  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:20: yarf has no infinite lights yet: emitter 'constant'"));
-  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:21: yarf has no infinite lights yet: emitter 'envmap'"));
-  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:22: yarf has no infinite lights yet: emitter 'directional'"));
+}
+
+TEST(MitsubaImport, ConstantEmitterBecomesTheEnvironment) {
+  const v1::Scene scene = Import("mitsuba_emitters.xml").scene;
+  const v1::Light& sky = LightNamed(scene, "sky");
+  EXPECT_EQ(sky.kind(), v1::Light::ENVIRONMENT);
+  EXPECT_EQ(sky.emitter().class_name(), "constant");
+  ExpectNear(RgbProperty(sky.emitter().properties(), "radiance"), {0.5, 1, 2});
+  EXPECT_FALSE(sky.has_to_world());
+}
+
+TEST(MitsubaImport, DirectionalEmittersTravelAlongDirectionOrTheZOfToWorld) {
+  const ImportResult result = Import("mitsuba_emitters.xml");
+  const v1::Scene& scene = result.scene;
+  const auto expect_directional = [&](const std::string& name, const Vec3d& irradiance, const Vec3d& travel) {
+    SCOPED_TRACE(name);
+    const v1::Light& light = LightNamed(scene, name);
+    EXPECT_EQ(light.kind(), v1::Light::DIRECTIONAL);
+    EXPECT_EQ(light.emitter().class_name(), "directional");
+    ExpectNear(RgbProperty(light.emitter().properties(), "irradiance"), irradiance);
+    const Matrix4 to_world = ToMatrix(light.to_world());
+    EXPECT_TRUE(IsRotation(to_world));
+    ExpectNear(to_world.Vector({0, 0, 1}), travel);
+  };
+  expect_directional("sun", {3, 2, 1}, Vec3d{1, -1, 0} * (1 / std::sqrt(2)));
+  // to_world scales by 2, then turns +z about x by 90° to -y: a rotation
+  // remains.
+  expect_directional("tilted", {1, 1, 1}, {0, -1, 0});
+  // Mitsuba's defaults: irradiance 1, travelling along +z.
+  expect_directional("plain", {1, 1, 1}, {0, 0, 1});
+  EXPECT_FALSE(LightNamed(scene, "plain").has_to_world());
+  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:34: environment maps are not supported yet: emitter 'sunsky'"));
+  EXPECT_FALSE(Warns(result, "emitter 'directional'"));  // no parameter ignored
+}
+
+TEST(MitsubaImport, EnvmapBecomesTheConstantOfItsMeanRadianceWithAWarning) {
+  const ImportResult result = Import("mitsuba_envmap.xml");
+  ASSERT_EQ(result.scene.lights_size(), 1);
+  const v1::Light& sky = result.scene.lights(0);
+  EXPECT_EQ(sky.name(), "sky");
+  EXPECT_EQ(sky.kind(), v1::Light::ENVIRONMENT);
+  EXPECT_EQ(sky.emitter().class_name(), "constant");
+  // The mean over directions of the map as Mitsuba interpolates it, times
+  // scale 2; its rotation changes nothing.
+  ExpectNear(RgbProperty(sky.emitter().properties(), "radiance"), Vec3d{4, 2, 1} * (1 - 2 / M_PI), 1e-6);
+  EXPECT_FALSE(sky.has_to_world());
+  EXPECT_TRUE(Warns(result, "mitsuba_envmap.xml:8: environment maps are not supported yet: envmap replaced by a "
+                            "constant of its mean radiance"));
+  EXPECT_FALSE(Warns(result, "parameter"));  // to_world is read, and needs nothing more
 }
 
 TEST(MitsubaImport, WithoutASensorMitsubasDefaultCameraIsUsed) {
@@ -215,6 +262,7 @@ TEST(MitsubaImport, MalformedFilesFailWithFileAndLine) {
       {"malformed/no_version.xml", "no_version.xml:1: <scene> needs a version"},
       {"malformed/self_reference.xml", "self_reference.xml:2: references nested too deeply"},
       {"malformed/bad_serialized.xml", "bad_serialized.xml:2: not a Mitsuba serialized mesh"},
+      {"malformed/two_environments.xml", "two_environments.xml:3: only one environment emitter"},
   };
   for (const auto& [file, message] : cases)
     EXPECT_NE(ImportErrorOf(file).find(message), std::string::npos) << file << ": " << ImportErrorOf(file);

@@ -264,9 +264,13 @@ void ValidateScene(const v1::Scene& scene) {
     if (!materials.insert(m.name()).second) throw Error("material '" + m.name() + "' defined twice");
   }
   ValidateShapes(scene.shapes(), materials, "");
+  int environments = 0;
   for (int i = 0; i < scene.lights_size(); ++i) {
     const v1::Light& light = scene.lights(i);
     if (light.emitter().class_name().empty()) throw Error(LightName(light, i) + " has no emitter class");
+    // Each environment is a sphere around the scene: two would hide each other.
+    if (light.kind() == v1::Light::ENVIRONMENT && ++environments > 1)
+      throw Error(LightName(light, i) + ": a scene has at most one ENVIRONMENT light");
     if (light.has_to_world() &&
         std::abs(FromProto(light.to_world(), LightName(light, i) + " to_world").Determinant3()) < 1e-30)
       throw Error(LightName(light, i) + ": degenerate to_world");
