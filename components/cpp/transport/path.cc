@@ -43,7 +43,6 @@ constexpr uint32_t kLightPosition = 0, kBsdfDirection = 2, kLightChoice = 4, kBs
                    kRoulette = 6;
 
 struct Path {
-  float film_x = 0, film_y = 0;
   Ray ray;
   Vec3 throughput{1, 1, 1};
   Vec3 radiance{0, 0, 0};
@@ -84,17 +83,12 @@ class PathTracer final : public Transport {
     std::vector<uint32_t> active;
     active.reserve(n);
     for (uint32_t i = 0; i < n; ++i) {
-      Path& p = paths[i];
-      p.film_x = points.Get(i, kFilmDimension);
-      p.film_y = points.Get(i, kFilmDimension + 1);
-      p.ray = scene.CameraRay(p.film_x, p.film_y, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
-                              scene.ShutterTime(points.Get(i, kTimeDimension)));
+      paths[i].ray = CameraRayOf(scene, points, i);
       active.push_back(i);
     }
     for (int depth = 1; !active.empty() && max_depth_ != 0; ++depth)
       active = Bounce(scene, points, paths, active, depth);
-    const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
-    for (uint32_t i = 0; i < n; ++i) out.Add(i, paths[i].film_x * w, paths[i].film_y * h, paths[i].radiance);
+    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, paths[i].radiance, out);
   }
 
  private:

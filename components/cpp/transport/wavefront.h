@@ -22,6 +22,20 @@ inline bool SamplesLights(uint32_t lobes) {
   return (lobes & (kScatterDiffuse | kScatterGlossy)) || !(lobes & kScatterDelta);
 }
 
+// The camera ray of point i: its film, lens and time coordinates.
+inline Ray CameraRayOf(const SceneView& scene, const PrimarySamples& points, size_t i) {
+  return scene.CameraRay(points.Get(i, kFilmDimension), points.Get(i, kFilmDimension + 1),
+                         points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
+                         scene.ShutterTime(points.Get(i, kTimeDimension)));
+}
+
+// Adds a camera sample of `radiance` where point i lies on the film.
+inline void AddCameraSample(const SceneView& scene, const PrimarySamples& points, uint32_t i, Vec3 radiance,
+                            FilmSamples& out) {
+  out.Add(i, points.Get(i, kFilmDimension) * float(scene.FilmWidth()),
+          points.Get(i, kFilmDimension + 1) * float(scene.FilmHeight()), radiance);
+}
+
 // Veach's power heuristic with β = 2 for two strategies.
 inline float PowerHeuristic(float a, float b) {
   a *= a;

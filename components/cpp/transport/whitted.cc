@@ -44,18 +44,10 @@ class Whitted final : public Transport {
     const size_t n = points.Count();
     std::vector<Vec3> radiance(n);
     std::vector<Branch> level(n);
-    for (uint32_t i = 0; i < n; ++i) {
-      const float time = scene.ShutterTime(points.Get(i, kTimeDimension));
-      level[i] = {i,
-                  scene.CameraRay(points.Get(i, kFilmDimension), points.Get(i, kFilmDimension + 1),
-                                  points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), time),
-                  Vec3(1, 1, 1)};
-    }
+    for (uint32_t i = 0; i < n; ++i) level[i] = {i, CameraRayOf(scene, points, i), Vec3(1, 1, 1)};
     for (int depth = 1; !level.empty() && depth <= max_depth_; ++depth)
       level = Trace(scene, level, depth, radiance);
-    const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
-    for (uint32_t i = 0; i < n; ++i)
-      out.Add(i, points.Get(i, kFilmDimension) * w, points.Get(i, kFilmDimension + 1) * h, radiance[i]);
+    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, radiance[i], out);
   }
 
  private:
