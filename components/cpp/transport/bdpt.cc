@@ -208,10 +208,7 @@ class Bdpt final : public Transport {
           walker.pdf_dir = pdf_rev = 0;
         }
         prev.pdf_rev = v.ToArea(pdf_rev, prev);
-        walker.ray.origin = OffsetRayOrigin(v.p, v.n, dir);
-        walker.ray.direction = dir;
-        walker.ray.tnear = 0;
-        walker.ray.tfar = kInfinity;
+        Redirect(walker.ray, v.p, v.n, dir);
         next.push_back(i);
       }
       active = std::move(next);

@@ -151,15 +151,8 @@ class DistributionRayTracer final : public Transport {
       p.throughput *= a.weight;
       p.sees_emitters = (a.flags & kScatterDelta) != 0;
       const Vec3 dir = Normalize(v.frame.ToWorld(a.wo));
-      p.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
-      p.ray.direction = dir;
-      p.ray.tnear = 0;
-      p.ray.tfar = kInfinity;
-      if (depth >= rr_depth_) {
-        const float survive = std::min(MaxComponent(p.throughput), 0.95f);
-        if (points.Get(v.path, base + kRoulette) >= survive) continue;
-        p.throughput *= 1.0f / survive;
-      }
+      Redirect(p.ray, v.position, v.frame.n, dir);
+      if (depth >= rr_depth_ && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
       next.push_back(v.path);
     }
     return next;

@@ -187,15 +187,8 @@ class LightTracer final : public Transport {
       if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
       p.throughput *= sampled[q].weight;
       const Vec3 dir = Normalize(v.frame.ToWorld(sampled[q].wo));
-      p.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
-      p.ray.direction = dir;
-      p.ray.tnear = 0;
-      p.ray.tfar = kInfinity;
-      if (bounce >= rr_depth_) {
-        const float survive = std::min(MaxComponent(p.throughput), 0.95f);
-        if (points.Get(v.path, base + 3) >= survive) continue;
-        p.throughput *= 1.0f / survive;
-      }
+      Redirect(p.ray, v.position, v.frame.n, dir);
+      if (bounce >= rr_depth_ && !Survives(p.throughput, points.Get(v.path, base + 3))) continue;
       next.push_back(v.path);
     }
     return next;

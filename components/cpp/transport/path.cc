@@ -259,15 +259,8 @@ class PathTracer final : public Transport {
       p.full_weight = !sampled_lights || (flags[j] & kScatterDelta);
       p.last = !diffuse_indirect_ && (flags[j] & kScatterDiffuse);
       const Vec3 dir = Normalize(v.frame.ToWorld(Vec3::Load(&wo[3 * j])));
-      p.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
-      p.ray.direction = dir;
-      p.ray.tnear = 0;
-      p.ray.tfar = kInfinity;  // p.ray.time stays: a path lives at one instant
-      if (depth >= rr_depth_) {
-        const float q = std::min(MaxComponent(p.throughput), 0.95f);
-        if (points.Get(v.path, base + kRoulette) >= q) continue;
-        p.throughput *= 1.0f / q;
-      }
+      Redirect(p.ray, v.position, v.frame.n, dir);
+      if (depth >= rr_depth_ && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
       next.push_back(v.path);
     }
   }

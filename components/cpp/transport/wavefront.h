@@ -36,6 +36,24 @@ inline void AddCameraSample(const SceneView& scene, const PrimarySamples& points
           points.Get(i, kFilmDimension + 1) * float(scene.FilmHeight()), radiance);
 }
 
+// The ray that carries a path on from surface point p (geometric normal n)
+// toward `direction`: moved off the surface, at the same instant.
+inline void Redirect(Ray& ray, Vec3 p, Vec3 n, Vec3 direction) {
+  ray.origin = OffsetRayOrigin(p, n, direction);
+  ray.direction = direction;
+  ray.tnear = 0;
+  ray.tfar = kInfinity;
+}
+
+// Russian roulette: the path goes on with probability min(max throughput,
+// 0.95), its throughput scaled up to stay unbiased.
+inline bool Survives(Vec3& throughput, float u) {
+  const float survive = std::min(MaxComponent(throughput), 0.95f);
+  if (u >= survive) return false;
+  throughput *= 1.0f / survive;
+  return true;
+}
+
 // Veach's power heuristic with β = 2 for two strategies.
 inline float PowerHeuristic(float a, float b) {
   a *= a;

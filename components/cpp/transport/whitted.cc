@@ -134,10 +134,7 @@ class Whitted final : public Transport {
         const Branch& parent = level[v.branch];
         Branch b{parent.point, parent.ray, parent.weight * sampled[q].weight};
         const Vec3 dir = Normalize(v.frame.ToWorld(sampled[q].wo));
-        b.ray.origin = OffsetRayOrigin(v.position, v.frame.n, dir);
-        b.ray.direction = dir;
-        b.ray.tnear = 0;
-        b.ray.tfar = kInfinity;
+        Redirect(b.ray, v.position, v.frame.n, dir);
         next.push_back(b);
       }
     }
