@@ -46,13 +46,10 @@ struct Path {
 class DistributionRayTracer final : public Transport {
  public:
   explicit DistributionRayTracer(const Properties& props)
-      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))) {
-    if (max_depth_ < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
-    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
-  }
+      : length_(props) {}
 
   uint32_t Dimensions() const override {
-    return kTransportDimension + kPerBounce * uint32_t(max_depth_ < 0 ? 64 : max_depth_);
+    return kTransportDimension + kPerBounce * length_.Bounces();
   }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
@@ -63,7 +60,7 @@ class DistributionRayTracer final : public Transport {
       paths[i].ray = CameraRayOf(scene, points, i);
       active.push_back(i);
     }
-    for (int depth = 1; !active.empty() && max_depth_ != 0; ++depth)
+    for (int depth = 1; !active.empty() && length_.max_depth != 0; ++depth)
       active = Bounce(scene, points, paths, active, depth);
     for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, paths[i].radiance, out);
   }
@@ -102,7 +99,7 @@ class DistributionRayTracer final : public Transport {
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
     for (size_t q = 0; q < seen.size(); ++q)
       paths[seen_by[q]].radiance += paths[seen_by[q]].throughput * emitted[q].radiance;
-    if (max_depth_ >= 0 && depth >= max_depth_) return {};
+    if (length_.max_depth >= 0 && depth >= length_.max_depth) return {};
     const uint32_t base = kTransportDimension + kPerBounce * uint32_t(depth - 1);
     SampleLights(scene, points, paths, vertices, base);
     return Continue(scene, points, paths, vertices, base, depth);
@@ -152,14 +149,13 @@ class DistributionRayTracer final : public Transport {
       p.sees_emitters = (a.flags & kScatterDelta) != 0;
       const Vec3 dir = Normalize(v.frame.ToWorld(a.wo));
       Redirect(p.ray, v.position, v.frame.n, dir);
-      if (depth >= rr_depth_ && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
+      if (depth >= length_.rr_depth && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
       next.push_back(v.path);
     }
     return next;
   }
 
-  int max_depth_;
-  int rr_depth_;
+  PathLength length_;
 };
 
 }  // namespace

@@ -39,19 +39,16 @@ struct LightPath {
 class LightTracer final : public Transport {
  public:
   explicit LightTracer(const Properties& props)
-      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))) {
-    if (max_depth_ < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
-    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
-  }
+      : length_(props) {}
 
   uint32_t Dimensions() const override {
-    return kFirstBounce + kPerBounce * uint32_t(max_depth_ < 0 ? 64 : max_depth_);
+    return kFirstBounce + kPerBounce * length_.Bounces();
   }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     out.splats = true;
     const size_t n = points.Count();
-    if (max_depth_ == 0 || !scene.HasLights()) return;
+    if (length_.max_depth == 0 || !scene.HasLights()) return;
     const std::vector<LightStart> starts = StartLightPaths(scene, points, kLightChoice, kLightPosition, kEmission);
     std::vector<float> time(n);
     for (uint32_t i = 0; i < n; ++i) time[i] = scene.ShutterTime(points.Get(i, kTimeDimension));
@@ -65,7 +62,7 @@ class LightTracer final : public Transport {
       if (MaxComponent(paths[i].throughput) > 0) active.push_back(i);
     }
     // A vertex after `bounce` segments reaches the camera in bounce + 1.
-    for (int bounce = 1; !active.empty() && (max_depth_ < 0 || bounce + 1 <= max_depth_); ++bounce)
+    for (int bounce = 1; !active.empty() && (length_.max_depth < 0 || bounce + 1 <= length_.max_depth); ++bounce)
       active = Bounce(scene, points, paths, active, bounce, out);
   }
 
@@ -165,7 +162,7 @@ class LightTracer final : public Transport {
                  [&](size_t k) { return vertices[connected[kept[k]]].path; }, scene, out);
 
     // Scatter importance onward.
-    if (max_depth_ >= 0 && bounce + 2 > max_depth_) return {};
+    if (length_.max_depth >= 0 && bounce + 2 > length_.max_depth) return {};
     const uint32_t base = kFirstBounce + kPerBounce * uint32_t(bounce - 1);
     std::vector<ScatterQuery> queries;
     std::vector<uint32_t> scattering;  // into vertices
@@ -188,7 +185,7 @@ class LightTracer final : public Transport {
       p.throughput *= sampled[q].weight;
       const Vec3 dir = Normalize(v.frame.ToWorld(sampled[q].wo));
       Redirect(p.ray, v.position, v.frame.n, dir);
-      if (bounce >= rr_depth_ && !Survives(p.throughput, points.Get(v.path, base + 3))) continue;
+      if (bounce >= length_.rr_depth && !Survives(p.throughput, points.Get(v.path, base + 3))) continue;
       next.push_back(v.path);
     }
     return next;
@@ -207,8 +204,7 @@ class LightTracer final : public Transport {
       }
   }
 
-  int max_depth_;
-  int rr_depth_;
+  PathLength length_;
 };
 
 }  // namespace

@@ -67,14 +67,10 @@ struct Vertex {
 class PathTracer final : public Transport {
  public:
   explicit PathTracer(const Properties& props)
-      : max_depth_(int(props.Int("max_depth", -1))), rr_depth_(int(props.Int("rr_depth", 5))),
-        diffuse_indirect_(props.Bool("diffuse_indirect", true)) {
-    if (max_depth_ < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
-    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
-  }
+      : length_(props), diffuse_indirect_(props.Bool("diffuse_indirect", true)) {}
 
   uint32_t Dimensions() const override {
-    return kFirstBounceDimension + kDimensionsPerBounce * uint32_t(max_depth_ < 0 ? 64 : max_depth_);
+    return kFirstBounceDimension + kDimensionsPerBounce * length_.Bounces();
   }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
@@ -86,7 +82,7 @@ class PathTracer final : public Transport {
       paths[i].ray = CameraRayOf(scene, points, i);
       active.push_back(i);
     }
-    for (int depth = 1; !active.empty() && max_depth_ != 0; ++depth)
+    for (int depth = 1; !active.empty() && length_.max_depth != 0; ++depth)
       active = Bounce(scene, points, paths, active, depth);
     for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, paths[i].radiance, out);
   }
@@ -101,7 +97,7 @@ class PathTracer final : public Transport {
     for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
     scene.Intersect(rays, hits);
 
-    const bool may_scatter = max_depth_ < 0 || depth < max_depth_;
+    const bool may_scatter = length_.max_depth < 0 || depth < length_.max_depth;
     std::vector<Vertex> vertices;
     std::vector<uint32_t> vertex_material;
     std::vector<uint32_t> emitted;  // indices into active/hits
@@ -260,13 +256,12 @@ class PathTracer final : public Transport {
       p.last = !diffuse_indirect_ && (flags[j] & kScatterDiffuse);
       const Vec3 dir = Normalize(v.frame.ToWorld(Vec3::Load(&wo[3 * j])));
       Redirect(p.ray, v.position, v.frame.n, dir);
-      if (depth >= rr_depth_ && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
+      if (depth >= length_.rr_depth && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
       next.push_back(v.path);
     }
   }
 
-  int max_depth_;
-  int rr_depth_;
+  PathLength length_;
   bool diffuse_indirect_;
 };
 

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "yarf/error.h"
+#include "yarf/properties.h"
 #include "yarf/transport.h"
 
 namespace yarf {
@@ -21,6 +23,22 @@ namespace yarf {
 inline bool SamplesLights(uint32_t lobes) {
   return (lobes & (kScatterDiffuse | kScatterGlossy)) || !(lobes & kScatterDelta);
 }
+
+// The length properties of methods that end paths by Russian roulette:
+// max_depth in segments (Mitsuba's convention, -1 unbounded) and the depth
+// from which roulette may end a path.
+struct PathLength {
+  explicit PathLength(const Properties& props)
+      : max_depth(int(props.Int("max_depth", -1))), rr_depth(int(props.Int("rr_depth", 5))) {
+    if (max_depth < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
+    if (rr_depth < 1) throw Error("property 'rr_depth' must be >= 1");
+  }
+  // Bounces to reserve primary-sample dimensions for: 64 when unbounded.
+  uint32_t Bounces() const { return uint32_t(max_depth < 0 ? 64 : max_depth); }
+
+  int max_depth;
+  int rr_depth;
+};
 
 // The camera ray of point i: its film, lens and time coordinates.
 inline Ray CameraRayOf(const SceneView& scene, const PrimarySamples& points, size_t i) {
