@@ -37,11 +37,12 @@ endef
 deps:
 	$(call apt_install,$(APT_PACKAGES))
 
-$(STAMPS)/venv: requirements-dev.txt clients/python/pyproject.toml | deps
+$(STAMPS)/venv: requirements-dev.txt clients/python/pyproject.toml components/python/pyproject.toml | deps
 	@mkdir -p $(STAMPS)
 	test -x $(PY) || python3 -m venv $(VENV)
 	$(PY) -m pip install -q --disable-pip-version-check -r requirements-dev.txt
 	$(PY) -m pip install -q --disable-pip-version-check -e clients/python
+	$(PY) -m pip install -q --disable-pip-version-check -e components/python
 	@touch $@
 
 venv: $(STAMPS)/venv
@@ -61,8 +62,8 @@ render: build
 
 # Python style: formatted and lint-clean (ruff).
 lint: venv
-	$(VENV)/bin/ruff format --check bench tests clients/python
-	$(VENV)/bin/ruff check bench tests clients/python
+	$(VENV)/bin/ruff format --check bench tests clients/python components/python
+	$(VENV)/bin/ruff check bench tests clients/python components/python
 
 test: build lint
 	cd $(BUILD) && ctest --output-on-failure -j2

@@ -108,7 +108,7 @@ int Main(int argc, char** argv) {
   Registry registry;
   registry.LoadDirectory(YARF_PLUGIN_DIR);
   EmbreeDevice device;
-  auto scene = BuildScene(proto, SceneSources{registry, device, path.parent_path()});
+  auto scene = BuildScene(proto, SceneSources{{registry}, device, path.parent_path()});
   const RaySets rays = MakeRays(*scene, count);
   const RTCScene world = scene->embree_scene();
 

@@ -71,7 +71,7 @@ def test_a_failing_function_fails_the_call_with_its_own_message(client: Client) 
     with pytest.raises(grpc.RpcError) as failure:
         integrate(broken, [0], [1], method="mean_sample", evaluations=1000, server=client)
     assert "the integrand divided by zero" in failure.value.details()
-    assert "remote function" in failure.value.details()
+    assert "remote Function 0 at" in failure.value.details()
 
     def wrong_length(x: np.ndarray) -> np.ndarray:
         return np.zeros(max(1, len(x) // 2)) if len(x) > 1 else np.zeros(1)

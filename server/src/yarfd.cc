@@ -12,6 +12,7 @@
 
 #include "service/component_service.h"
 #include "service/instance_services.h"
+#include "service/job_scene_service.h"
 #include "service/render_service.h"
 #include "service/server_options.h"
 
@@ -27,12 +28,24 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   for (const auto& failure : registry.Failures())
     std::cerr << "yarfd: plugin " << failure.path << ": " << failure.message << "\n";
 
-  yarf::JobManager jobs(registry, device, options.asset_root);
+  yarf::RemoteClasses remote_classes(registry);
+  for (const auto& address : options.components) {
+    try {
+      remote_classes.Register(address, std::chrono::seconds(0));
+    } catch (const std::exception& e) {
+      std::cerr << "yarfd: component " << address << ": " << e.what() << "\n";
+    }
+  }
+
   yarf::InstanceTable instances;
+  yarf::JobScenes job_scenes(instances);
+  yarf::JobManager jobs({registry, remote_classes, device, options.asset_root, job_scenes});
   yarf::RenderServiceImpl render(jobs);
-  yarf::RegistryServiceImpl registry_service(registry);
-  yarf::ComponentServiceImpl component(registry, instances);
-  yarf::FactoryServiceImpl factory(registry, instances);
+  yarf::RegistryServiceImpl registry_service(registry, remote_classes);
+  yarf::ComponentServiceImpl component(registry, remote_classes, instances);
+  yarf::FactoryServiceImpl factory(registry, remote_classes, instances);
+  yarf::IntersectServiceImpl intersect(job_scenes);
+  yarf::JobSceneServiceImpl job_scene(job_scenes);
   yarf::IntegratorServiceImpl integrator(registry, instances);
   yarf::RootFinderServiceImpl root_finder(instances);
   yarf::SamplerServiceImpl sampler(instances);
@@ -51,7 +64,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   builder.SetMaxSendMessageSize(256 << 20);
   for (grpc::Service* service : std::initializer_list<grpc::Service*>{
            &render, &registry_service, &component, &factory, &integrator, &root_finder, &sampler, &generator, &warp,
-           &surface_model, &emitter})
+           &surface_model, &emitter, &intersect, &job_scene})
     builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server) {

@@ -111,13 +111,46 @@ def _import(path: Path, definitions: Sequence[str], *, inline_files: bool) -> Im
     return imported
 
 
+def _class_at(text: str) -> tuple[str, str]:
+    """CLASS or CLASS@ADDRESS: a class, and the component process serving it (or "")."""
+    class_name, _, address = text.partition("@")
+    if not class_name:
+        raise CommandError(f"expected CLASS or CLASS@ADDRESS, got {text!r}", exit_code=2)
+    return class_name, address
+
+
+def _replace_materials(scene: scene_pb2.Scene, replacements: Sequence[str]) -> None:
+    """--material NAME=CLASS[@ADDRESS]: the material NAME, or every material
+    of class NAME, becomes CLASS (served at ADDRESS), keeping its properties."""
+    for replacement in replacements:
+        old, equals, new = replacement.partition("=")
+        if not equals or not old:
+            raise CommandError(
+                f"--material needs NAME=CLASS[@ADDRESS], got {replacement!r}", exit_code=2
+            )
+        class_name, address = _class_at(new)
+        matched = [m for m in scene.materials if old in (m.name, m.class_name)]
+        if not matched:
+            names = ", ".join(sorted({m.name for m in scene.materials}))
+            raise CommandError(
+                f"--material {old}: no material or material class of that name (materials: "
+                f"{names})",
+                exit_code=2,
+            )
+        for material in matched:
+            material.class_name = class_name
+            material.address = address
+
+
 def _transport(args: argparse.Namespace, scene: scene_pb2.Scene) -> scene_pb2.ComponentSpec | None:
     """The job's transport: --transport and --max-depth over the scene's choice."""
     if not args.transport and args.max_depth is None:
         return None
     spec = scene_pb2.ComponentSpec()
-    if args.transport and args.transport != scene.transport.class_name:
-        spec.class_name = args.transport
+    class_name, address = _class_at(args.transport) if args.transport else ("", "")
+    if class_name and class_name != scene.transport.class_name:
+        spec.class_name = class_name
+        spec.address = address
     else:
         spec.CopyFrom(scene.transport)
         spec.class_name = spec.class_name or "path"
@@ -145,9 +178,15 @@ def render_command(args: argparse.Namespace) -> int:
         if args.define:
             raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
         scene = load_scene(scene_path)
+    _replace_materials(scene, args.material)
     with connect(args.server) as client:
         job_id = client.submit(
-            scene, spp, args.seed, name=scene_path.name, transport=_transport(args, scene)
+            scene,
+            spp,
+            args.seed,
+            name=scene_path.name,
+            transport=_transport(args, scene),
+            component_retries=args.component_retries,
         )
         try:
             status = _follow(client, job_id, total=spp or None, quiet=args.quiet)
@@ -256,8 +295,24 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     render.add_argument(
         "--transport",
-        metavar="CLASS",
-        help="light transport: path, light, bdpt, whitted, distribution (default: the scene's)",
+        metavar="CLASS[@ADDRESS]",
+        help="light transport: path, light, bdpt, whitted, distribution, or a class of the "
+        "component process at ADDRESS (default: the scene's)",
+    )
+    render.add_argument(
+        "--material",
+        action="append",
+        default=[],
+        metavar="NAME=CLASS[@ADDRESS]",
+        help="make the material NAME (or every material of class NAME) a CLASS, served by the "
+        "component process at ADDRESS (host:port or unix:/path) when given; its properties stay",
+    )
+    render.add_argument(
+        "--component-retries",
+        type=int,
+        default=0,
+        metavar="N",
+        help="retry a call N times on a restarted component process before failing (default 0)",
     )
     render.add_argument(
         "--max-depth",

@@ -186,9 +186,20 @@ class Client:
         transport: scene_pb2.ComponentSpec | None = None,
         integrator: scene_pb2.ComponentSpec | None = None,
         sampler: scene_pb2.ComponentSpec | None = None,
+        component_retries: int = 0,
+        component_timeout: float = 0.0,
     ) -> str:
-        """Queues a render of ``scene``; returns the job id."""
-        options = render_pb2.RenderOptions(spp=spp, seed=seed)
+        """Queues a render of ``scene``; returns the job id.
+
+        ``component_retries`` and ``component_timeout`` (seconds, 0: the
+        server's 60) govern calls to components in other processes.
+        """
+        options = render_pb2.RenderOptions(
+            spp=spp,
+            seed=seed,
+            component_retries=component_retries,
+            component_timeout_seconds=component_timeout,
+        )
         if transport is not None:
             options.transport.CopyFrom(transport)
         if integrator is not None:

@@ -130,12 +130,15 @@ class SceneView : public Intersector {
   virtual float CameraDirectionPdf(Vec3 direction) const = 0;
   virtual uint32_t FilmWidth() const = 0;
   virtual uint32_t FilmHeight() const = 0;
+  // The handle under which the server's JobScene and Intersect services
+  // serve this scene to out-of-process transports; 0 when not served.
+  virtual uint64_t ServiceHandle() const { return 0; }
 };
 
 class Transport : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Transport";
-  static constexpr const char* kMethods[] = {"Prepare", "Evaluate"};
+  static constexpr const char* kMethods[] = {"Prepare", "Dimensions", "Evaluate"};
 
   // Once per job before any Evaluate (photon shooting, cache building...).
   virtual void Prepare(const SceneView&) {}

@@ -79,6 +79,8 @@ class KernelScene final : public SceneView {
   float CameraDirectionPdf(Vec3 direction) const override { return camera_.DirectionPdf(direction); }
   uint32_t FilmWidth() const override { return width_; }
   uint32_t FilmHeight() const override { return height_; }
+  uint64_t ServiceHandle() const override { return service_handle_; }
+  void SetServiceHandle(uint64_t handle) { service_handle_ = handle; }
 
   uint32_t ShapeCount() const { return uint32_t(shapes_.size()); }
   // The committed Embree scene (for measuring Embree itself).
@@ -118,6 +120,7 @@ class KernelScene final : public SceneView {
 
   const EmbreeDevice& device_;
   Camera camera_;
+  uint64_t service_handle_ = 0;
   uint32_t width_, height_;
   std::vector<std::unique_ptr<SurfaceModel>> materials_;
   std::vector<std::unique_ptr<Emitter>> emitters_;

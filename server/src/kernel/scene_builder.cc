@@ -86,13 +86,13 @@ class Builder {
     for (const v1::Material& m : scene_.materials()) {
       const std::string what = "material '" + m.name() + "' (" + m.class_name() + ")";
       materials_[m.name()] = kernel_->AddMaterial(
-          Create<SurfaceModel>(m.class_name(), m.properties(), what));
+          Create<SurfaceModel>(m.class_name(), m.properties(), m.address(), what));
     }
     for (int i = 0; i < scene_.lights_size(); ++i) {
       const v1::Light& light = scene_.lights(i);
       const std::string what = LightName(light, i);
       const Emitter* emitter =
-          kernel_->AddEmitter(Create<Emitter>(light.emitter().class_name(), light.emitter().properties(), what));
+          kernel_->AddEmitter(Create<Emitter>(light.emitter().class_name(), light.emitter().properties(), light.emitter().address(), what));
       const Transform to_world =
           light.has_to_world() ? FromProto(light.to_world(), what + " to_world") : Transform{};
       switch (light.kind()) {
@@ -118,10 +118,10 @@ class Builder {
 
  private:
   template <typename I>
-  std::unique_ptr<I> Create(const std::string& class_name, const v1::Properties& props,
+  std::unique_ptr<I> Create(const std::string& class_name, const v1::Properties& props, const std::string& address,
                             const std::string& what) {
     try {
-      return sources_.registry.CreateAs<I>(class_name, FromProto(props));
+      return MakeComponent<I>(sources_.components, class_name, props, address);
     } catch (const Error& e) {
       throw Error(what + ": " + e.what());
     }
@@ -138,7 +138,8 @@ class Builder {
       look.flip_normals = s.flip_normals();
       if (s.has_emitter())
         look.emitter = kernel_->AddEmitter(
-            Create<Emitter>(s.emitter().class_name(), s.emitter().properties(), what + " emitter"));
+            Create<Emitter>(s.emitter().class_name(), s.emitter().properties(), s.emitter().address(),
+                           what + " emitter"));
       const Transform to_world = ShapeTransform(s, what);
       if (s.has_to_world_end()) {
         // Embree moves instances: a moving shape is one in a group of its own.

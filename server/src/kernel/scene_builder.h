@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "components/registry.h"
+#include "components/make_component.h"
 #include "kernel/scene.h"
 #include "yarf/v1/scene.pb.h"
 
@@ -22,7 +22,7 @@ struct SceneLimits {
 void ValidateScene(const v1::Scene& scene);
 
 struct SceneSources {
-  const Registry& registry;
+  ComponentSources components;
   const EmbreeDevice& device;
   // Folder that mesh `file` references resolve in; empty: none allowed.
   std::filesystem::path asset_root;

@@ -46,7 +46,7 @@ class SceneTest : public ::testing::Test {
  protected:
   void SetUp() override { registry_.LoadDirectory(YARF_PLUGIN_DIR); }
   std::unique_ptr<KernelScene> Build(const v1::Scene& scene) {
-    return BuildScene(scene, SceneSources{registry_, device_, {}});
+    return BuildScene(scene, SceneSources{{registry_}, device_, {}});
   }
   Hit Trace(const KernelScene& scene, Vec3 origin, Vec3 direction) {
     Ray ray{origin, 0, Normalize(direction), kInfinity};
@@ -134,7 +134,7 @@ TEST_F(SceneTest, RejectsBadScenesWithClearErrors) {
   v1::Scene outside = BaseScene();
   AddTriangle(outside.mutable_shapes())->mutable_mesh()->set_file("../../etc/passwd");
   try {
-    BuildScene(outside, SceneSources{registry_, device_, std::filesystem::temp_directory_path()});
+    BuildScene(outside, SceneSources{{registry_}, device_, std::filesystem::temp_directory_path()});
     FAIL() << "a path outside the scene folder was read";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("outside"), std::string::npos) << e.what();

@@ -1,8 +1,17 @@
 #include "service/component_service.h"
 
+#include <random>
+
 #include "components/properties_proto.h"
 
 namespace yarf {
+
+uint64_t FirstHandle() {
+  std::random_device entropy;
+  return ((uint64_t(entropy()) << 32 | entropy()) >> 2) + 1;
+}
+
+InstanceTable::InstanceTable() : next_(FirstHandle()) {}
 
 uint64_t InstanceTable::Add(std::unique_ptr<Component> instance) {
   std::lock_guard lock(mutex_);
@@ -25,6 +34,7 @@ std::shared_ptr<Component> InstanceTable::Find(uint64_t handle) const {
 grpc::Status RegistryServiceImpl::ListClasses(grpc::ServerContext*, const v1::ListClassesRequest*,
                                               v1::ListClassesReply* reply) {
   for (const ComponentInfo& info : registry_.Classes()) *reply->add_classes() = ToProto(info);
+  for (const ComponentInfo& info : remote_.Classes()) *reply->add_classes() = ToProto(info);
   for (const PluginFailure& failure : registry_.Failures()) {
     v1::PluginError* e = reply->add_plugin_errors();
     e->set_path(failure.path);
@@ -44,6 +54,28 @@ grpc::Status RegistryServiceImpl::LoadPlugin(grpc::ServerContext*, const v1::Loa
   }
 }
 
+grpc::Status RegistryServiceImpl::Register(grpc::ServerContext*, const v1::RegisterRequest* request,
+                                           v1::RegisterReply* reply) {
+  const std::chrono::seconds lease =
+      request->lease_seconds() > 0 ? std::chrono::seconds(request->lease_seconds()) : RemoteClasses::kDefaultLease;
+  try {
+    for (const ComponentInfo& info : remote_.Register(request->address(), lease)) *reply->add_classes() = ToProto(info);
+    reply->set_lease_seconds(uint32_t(std::min(lease, RemoteClasses::kMaxLease).count()));
+    return grpc::Status::OK;
+  } catch (const ClassConflict& e) {
+    return {grpc::StatusCode::ALREADY_EXISTS, e.what()};
+  } catch (const Error& e) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
+  }
+}
+
+grpc::Status RegistryServiceImpl::Unregister(grpc::ServerContext*, const v1::UnregisterRequest* request,
+                                             v1::UnregisterReply*) {
+  if (!remote_.Unregister(request->address()))
+    return {grpc::StatusCode::NOT_FOUND, "no component is registered at '" + request->address() + "'"};
+  return grpc::Status::OK;
+}
+
 grpc::Status ComponentServiceImpl::Describe(grpc::ServerContext*, const v1::DescribeRequest* request,
                                             v1::ComponentInfo* reply) {
   if (request->handle() != 0) {
@@ -52,16 +84,21 @@ grpc::Status ComponentServiceImpl::Describe(grpc::ServerContext*, const v1::Desc
     *reply = ToProto(instance->Describe());
     return grpc::Status::OK;
   }
-  for (const ComponentInfo& info : registry_.Classes())
-    if (info.class_name == request->class_name()) {
-      *reply = ToProto(info);
-      return grpc::Status::OK;
-    }
+  for (const auto& classes : {registry_.Classes(), remote_.Classes()})
+    for (const ComponentInfo& info : classes)
+      if (info.class_name == request->class_name()) {
+        *reply = ToProto(info);
+        return grpc::Status::OK;
+      }
   return {grpc::StatusCode::NOT_FOUND, "unknown component class '" + request->class_name() + "'"};
 }
 
 grpc::Status FactoryServiceImpl::Create(grpc::ServerContext*, const v1::CreateRequest* request,
                                         v1::CreateReply* reply) {
+  if (!registry_.Has(request->class_name()))
+    if (const auto address = remote_.AddressOf(request->class_name()))
+      return {grpc::StatusCode::FAILED_PRECONDITION, "class '" + request->class_name() + "' lives in the component at " +
+                                                         *address + ": create its instances there"};
   try {
     auto instance = registry_.Create(request->class_name(), FromProto(request->properties()));
     *reply->mutable_info() = ToProto(instance->Describe());

@@ -1,7 +1,7 @@
 #include "service/instance_services.h"
 
-#include "components/remote.h"
-#include "service/array_codec.h"
+#include "components/remote_function.h"
+#include "components/array_codec.h"
 #include "yarf/math.h"
 #include "yarf/surface.h"
 
@@ -61,7 +61,8 @@ struct FunctionArgument {
 FunctionArgument ResolveFunction(const InstanceTable& instances, uint64_t handle, const std::string& address) {
   FunctionArgument argument;
   if (!address.empty()) {
-    argument.remote = std::make_unique<Remote<Function>>(address, handle);
+    argument.remote = std::make_unique<Remote<Function>>(
+        std::make_unique<RemoteInstance>(address, handle, Function::kInterface, RemoteOptions{}));
     argument.function = argument.remote.get();
     return argument;
   }

@@ -4,7 +4,6 @@
 
 #include "kernel/film_target.h"
 #include "kernel/scene_builder.h"
-#include "components/properties_proto.h"
 #include "yarf/error.h"
 #include "yarf/math.h"
 
@@ -13,6 +12,8 @@ namespace {
 
 constexpr uint32_t kDefaultSpp = 16;
 constexpr uint32_t kMaxSpp = 1u << 20;
+constexpr uint32_t kMaxComponentRetries = 100;
+constexpr double kMaxComponentTimeout = 24 * 3600;
 
 bool Terminal(v1::JobState state) {
   return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
@@ -28,10 +29,18 @@ v1::ComponentSpec Choose(const v1::ComponentSpec& job, const v1::ComponentSpec& 
   return spec;
 }
 
+RemoteOptions RemoteOptionsOf(const v1::RenderOptions& options) {
+  RemoteOptions remote;
+  if (options.component_timeout_seconds() > 0)
+    remote.deadline = std::chrono::milliseconds(int64_t(options.component_timeout_seconds() * 1000));
+  remote.retries = options.component_retries();
+  return remote;
+}
+
 template <typename I>
-std::unique_ptr<I> Make(const Registry& registry, const v1::ComponentSpec& spec, const char* role) {
+std::unique_ptr<I> Make(const ComponentSources& sources, const v1::ComponentSpec& spec, const char* role) {
   try {
-    return registry.CreateAs<I>(spec.class_name(), FromProto(spec.properties()));
+    return MakeComponent<I>(sources, spec.class_name(), spec.properties(), spec.address());
   } catch (const Error& e) {
     throw Error(std::string(role) + " '" + spec.class_name() + "': " + e.what());
   }
@@ -115,7 +124,7 @@ void Job::KeepFinalImage() {
   film_.reset();
 }
 
-void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::filesystem::path& asset_root) {
+void Job::Run(const JobResources& resources) {
   {
     std::lock_guard lock(mutex_);
     if (status_.state() != v1::QUEUED) return;  // cancelled while queued
@@ -125,11 +134,13 @@ void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::f
   try {
     const v1::Scene& scene = request_.scene();
     const v1::RenderOptions& options = request_.options();
-    std::unique_ptr<KernelScene> kernel = BuildScene(scene, SceneSources{registry, device, asset_root});
-    auto transport = Make<Transport>(registry, Choose(options.transport(), scene.transport(), "path"), "transport");
+    const ComponentSources components{resources.registry, &resources.remote_classes, RemoteOptionsOf(options)};
+    std::shared_ptr<KernelScene> kernel =
+        BuildScene(scene, SceneSources{components, resources.device, resources.asset_root});
+    auto transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
     auto integrator =
-        Make<Integrator>(registry, Choose(options.integrator(), scene.integrator(), "mean_sample"), "integrator");
-    auto sampler = Make<Sampler>(registry, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
+        Make<Integrator>(components, Choose(options.integrator(), scene.integrator(), "mean_sample"), "integrator");
+    auto sampler = Make<Sampler>(components, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
     {
       std::lock_guard lock(film_mutex_);
       film_ = std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
@@ -144,6 +155,8 @@ void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::f
         s.set_shadow_rays(counters->ShadowRays());
       });
     });
+    // Served while it renders, for transports in other processes.
+    const auto served = resources.scenes.Serve(kernel, target);
     transport->Prepare(*kernel);
     integrator->Render(*transport, *kernel, *sampler, target);
     KeepFinalImage();
@@ -161,9 +174,6 @@ void Job::Run(const Registry& registry, const EmbreeDevice& device, const std::f
   }
 }
 
-JobManager::JobManager(const Registry& registry, const EmbreeDevice& device, std::filesystem::path asset_root)
-    : registry_(registry), device_(device), asset_root_(std::move(asset_root)) {}
-
 JobManager::~JobManager() {
   for (const auto& job : List()) job->RequestCancel();
   threads_.clear();  // joins
@@ -176,6 +186,13 @@ std::string JobManager::Submit(const v1::SubmitRequest& request) {
   if (spp > kMaxSpp)
     throw Error("spp " + std::to_string(spp) + " is out of range (1 to " + std::to_string(kMaxSpp) + ")");
   accepted.mutable_options()->set_spp(spp);
+  const double timeout = request.options().component_timeout_seconds();
+  if (!(timeout >= 0 && timeout <= kMaxComponentTimeout))
+    throw Error("component_timeout_seconds " + std::to_string(timeout) + " is out of range (0 to " +
+                std::to_string(kMaxComponentTimeout) + ")");
+  if (request.options().component_retries() > kMaxComponentRetries)
+    throw Error("component_retries " + std::to_string(request.options().component_retries()) +
+                " is out of range (0 to " + std::to_string(kMaxComponentRetries) + ")");
   ValidateScene(accepted.scene());
 
   std::lock_guard lock(mutex_);
@@ -183,7 +200,7 @@ std::string JobManager::Submit(const v1::SubmitRequest& request) {
   std::snprintf(id, sizeof id, "job-%06llu", static_cast<unsigned long long>(next_id_++));
   auto job = std::make_shared<Job>(id, std::move(accepted));
   jobs_[id] = job;
-  threads_.emplace_back([this, job] { job->Run(registry_, device_, asset_root_); });
+  threads_.emplace_back([this, job] { job->Run(resources_); });
   return id;
 }
 

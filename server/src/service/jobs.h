@@ -14,12 +14,24 @@
 #include <thread>
 #include <vector>
 
-#include "components/registry.h"
+#include "components/remote_classes.h"
 #include "kernel/embree_device.h"
 #include "kernel/film.h"
+#include "service/job_scenes.h"
 #include "yarf/v1/render.pb.h"
 
 namespace yarf {
+
+// What jobs are made from: the classes (in process and in component
+// processes), the device, the folder assets resolve in, and the table
+// that serves running jobs' scenes to remote transports.
+struct JobResources {
+  const Registry& registry;
+  const RemoteClasses& remote_classes;
+  const EmbreeDevice& device;
+  std::filesystem::path asset_root;
+  JobScenes& scenes;
+};
 
 class Job {
  public:
@@ -39,7 +51,7 @@ class Job {
                 uint32_t& height) const;
 
   // Runs the job to its end (called on the job's own thread).
-  void Run(const Registry& registry, const EmbreeDevice& device, const std::filesystem::path& asset_root);
+  void Run(const JobResources& resources);
 
  private:
   void Update(const std::function<void(v1::JobStatus&)>& change);
@@ -63,7 +75,7 @@ class Job {
 
 class JobManager {
  public:
-  JobManager(const Registry& registry, const EmbreeDevice& device, std::filesystem::path asset_root);
+  explicit JobManager(JobResources resources) : resources_(std::move(resources)) {}
   // Cancels running jobs and waits for their threads.
   ~JobManager();
 
@@ -73,9 +85,7 @@ class JobManager {
   std::vector<std::shared_ptr<Job>> List() const;
 
  private:
-  const Registry& registry_;
-  const EmbreeDevice& device_;
-  const std::filesystem::path asset_root_;
+  const JobResources resources_;
   mutable std::mutex mutex_;
   uint64_t next_id_ = 1;
   std::map<std::string, std::shared_ptr<Job>> jobs_;

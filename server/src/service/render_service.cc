@@ -3,7 +3,7 @@
 #include <chrono>
 
 #include "kernel/image_io.h"
-#include "service/array_codec.h"
+#include "components/array_codec.h"
 #include "yarf/error.h"
 
 namespace yarf {

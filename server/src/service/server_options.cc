@@ -10,7 +10,7 @@ namespace yarf {
 ServerOptions ParseServerOptions(int argc, char** argv) {
   static const char* kUsage =
       "usage: yarfd [--listen HOST:PORT|unix:PATH] [--port-file FILE] [--plugin-path DIR]...\n"
-      "             [--asset-root DIR] [--threads N]";
+      "             [--asset-root DIR] [--threads N] [--component ADDRESS]...";
   ServerOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
@@ -22,6 +22,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--plugin-path") options.plugin_paths.emplace_back(value);
     else if (flag == "--asset-root") options.asset_root = value;
     else if (flag == "--threads") options.threads = std::atoi(value.c_str());
+    else if (flag == "--component") options.components.push_back(value);
     else throw Error("unknown option " + flag + "\n" + kUsage);
   }
   if (const char* env = std::getenv("YARF_PLUGIN_PATH")) {

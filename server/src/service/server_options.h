@@ -13,6 +13,8 @@ struct ServerOptions {
   std::vector<std::filesystem::path> plugin_paths;
   std::filesystem::path asset_root;
   int threads = 0;  // 0: all cores
+  // Component processes whose classes are made for good (no lease).
+  std::vector<std::string> components;
 };
 
 // Throws Error with usage for an unknown or incomplete flag.

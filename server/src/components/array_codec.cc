@@ -1,4 +1,4 @@
-#include "service/array_codec.h"
+#include "components/array_codec.h"
 
 #include <cstring>
 

@@ -1,0 +1,65 @@
+"""Write yarf components in Python.
+
+Subclass an interface, give the class a ``class_name``, take its properties
+as keyword arguments of ``__init__``, implement the batch methods on numpy
+arrays, and serve it::
+
+    yarf-component serve my_bsdf.py:MyBsdf --listen 127.0.0.1:0 --register 127.0.0.1:50051
+
+or, from Python, ``serve([MyBsdf], "127.0.0.1:0")``.
+"""
+
+from __future__ import annotations
+
+from yarf_component.component import Component
+from yarf_component.frames import Frame, normalize, reflect
+from yarf_component.job_calls import JobSceneError, Pending
+from yarf_component.job_scene import MISS, Hits, JobScene, LightSamples, Rays, SceneLayout
+from yarf_component.job_surface import SurfaceClient
+from yarf_component.numerical import Function, Integrand, Integrator, PointSource, Sampler, Warp
+from yarf_component.properties import PropertyError, Rgb, Transform, Vec3
+from yarf_component.server import Running, serve
+from yarf_component.surface import (
+    Emitter,
+    ScatterFlags,
+    SurfaceModel,
+    TransportMode,
+    lobe_allowed,
+)
+from yarf_component.transport import Transport
+
+__all__ = [
+    "MISS",
+    "Component",
+    "Emitter",
+    "Frame",
+    "Function",
+    "Hits",
+    "Integrand",
+    "Integrator",
+    "JobScene",
+    "JobSceneError",
+    "LightSamples",
+    "Pending",
+    "PointSource",
+    "PropertyError",
+    "Rays",
+    "Rgb",
+    "Running",
+    "Sampler",
+    "ScatterFlags",
+    "SceneLayout",
+    "SurfaceClient",
+    "SurfaceModel",
+    "Transform",
+    "Transport",
+    "TransportMode",
+    "Vec3",
+    "Warp",
+    "lobe_allowed",
+    "normalize",
+    "reflect",
+    "serve",
+]
+
+__version__ = "0.1.0"

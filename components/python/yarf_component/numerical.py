@@ -1,0 +1,95 @@
+"""Numerical interfaces (math.proto): Function, Sampler, Warp and Integrator.
+
+Points travel as float32 arrays [N, d], one row per point.
+"""
+
+from __future__ import annotations
+
+import abc
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from yarf_component.component import Component
+
+# f: points [N, d] -> values [N, k], as an Integrator receives its integrand.
+Integrand = Callable[[np.ndarray], np.ndarray]
+# (first_index, count, dimensions) -> points [count, dimensions] in [0,1).
+PointSource = Callable[[int, int, int], np.ndarray]
+
+
+class Function(Component):
+    """A vector-valued function R^d -> R^k evaluated on batches of points.
+
+    Set ``input_dimensions`` (d) and ``output_dimensions`` (k), as class
+    attributes or in ``__init__``.
+    """
+
+    interface_name = "yarf.v1.Function"
+    input_dimensions: int
+    output_dimensions: int
+
+    @abc.abstractmethod
+    def evaluate(self, points: np.ndarray) -> np.ndarray:
+        """[N, k]: f at each row of points [N, d]."""
+
+
+class Sampler(Component):
+    """Point sets in [0,1)^d addressed by index: the same request gives the same points."""
+
+    interface_name = "yarf.v1.Sampler"
+
+    @abc.abstractmethod
+    def generate(self, first_index: int, count: int, dimensions: int, seed: int) -> np.ndarray:
+        """[count, dimensions]: points first_index .. first_index+count-1 of seed's sequence."""
+
+
+class Warp(Component):
+    """A map from uniform points of [0,1)^m to an image in R^n, with its density.
+
+    Set ``domain_dimensions`` (m) and ``image_dimensions`` (n).
+    """
+
+    interface_name = "yarf.v1.Warp"
+    domain_dimensions: int
+    image_dimensions: int
+
+    @abc.abstractmethod
+    def forward(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Uniform points [N, m] -> warped points [N, n] and their densities [N]."""
+
+    def inverse(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Points of the image [N, n] -> preimages [N, m] and densities [N].
+
+        A warp without an inverse leaves this out: callers get UNIMPLEMENTED.
+        """
+        raise NotImplementedError
+
+    @abc.abstractmethod
+    def pdf(self, points: np.ndarray) -> np.ndarray:
+        """[N]: the density at points of the image [N, n]; 0 outside the image."""
+
+
+class Integrator(Component):
+    """Numerical integration of a Function over a box."""
+
+    interface_name = "yarf.v1.Integrator"
+
+    @abc.abstractmethod
+    def integrate(
+        self,
+        f: Integrand,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        evaluations: int,
+        seed: int,
+        sampler: PointSource | None,
+    ) -> tuple[Sequence[float] | np.ndarray, Sequence[float] | np.ndarray, int]:
+        """∫ f over [lower, upper] (float64 [d] each) with about ``evaluations`` points.
+
+        ``f`` maps points [N, d] to float64 values [N, k], each call one batch
+        to the function's host; ``sampler`` gives the points of the
+        caller's Sampler for ``seed`` (None: draw independent points from
+        ``seed``). Returns the estimate [k], its standard error [k] and the
+        evaluations spent.
+        """

@@ -1,0 +1,53 @@
+// Making the component a scene or a job names: an in-process class of the
+// registry, or one made in a component process (the spec's address, or a
+// registered remote class) behind Remote<I>. Callers cannot tell them apart.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <type_traits>
+
+#include "components/properties_proto.h"
+#include "components/registry.h"
+#include "components/remote_classes.h"
+#include "components/remote_function.h"
+#include "components/remote_sampler.h"
+#include "components/remote_surface_model.h"
+#include "components/remote_transport.h"
+
+namespace yarf {
+
+struct ComponentSources {
+  ComponentSources(const Registry& registry, const RemoteClasses* remote_classes = nullptr,
+                   RemoteOptions remote_options = {})
+      : registry(registry), remote_classes(remote_classes), remote_options(remote_options) {}
+
+  const Registry& registry;
+  // Classes of component processes; nullptr: none.
+  const RemoteClasses* remote_classes;
+  RemoteOptions remote_options;
+};
+
+// The interfaces with a Remote<I>.
+template <typename I>
+constexpr bool kHasRemote = std::is_same_v<I, SurfaceModel> || std::is_same_v<I, Sampler> ||
+                            std::is_same_v<I, Transport> || std::is_same_v<I, Function>;
+
+// `address` empty: the registry's class, or a registered remote class.
+template <typename I>
+std::unique_ptr<I> MakeComponent(const ComponentSources& sources, const std::string& class_name,
+                                 const v1::Properties& properties, const std::string& address = "") {
+  std::string where = address;
+  if (where.empty() && sources.remote_classes && !sources.registry.Has(class_name))
+    where = sources.remote_classes->AddressOf(class_name).value_or("");
+  if (where.empty()) return sources.registry.CreateAs<I>(class_name, FromProto(properties));
+  if constexpr (kHasRemote<I>) {
+    return std::make_unique<Remote<I>>(
+        std::make_unique<RemoteInstance>(where, class_name, properties, I::kInterface, sources.remote_options));
+  } else {
+    throw Error("class '" + class_name + "' at " + where + ": this server cannot use a remote " +
+                std::string(I::kInterface) + " yet");
+  }
+}
+
+}  // namespace yarf
