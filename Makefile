@@ -14,7 +14,8 @@ SPP ?= 256
 APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
   libembree-dev libtbb-dev libopenimageio-dev openimageio-tools \
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc \
-  libgtest-dev libtinyobjloader-dev libpugixml-dev zlib1g-dev clang-14 libclang-rt-14-dev
+  libgtest-dev libtinyobjloader-dev libpugixml-dev zlib1g-dev clang-14 libclang-rt-14-dev \
+  curl ca-certificates
 # Mitsuba's LLVM variant, for the benchmark only.
 BENCH_APT_PACKAGES := libllvm19
 
@@ -55,6 +56,7 @@ stubs: venv
 build: deps stubs
 	@test -f $(BUILD)/build.ninja || cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
 	cmake --build $(BUILD) -j2
+	components/go/build.sh
 
 render: build
 	@mkdir -p out
@@ -67,6 +69,7 @@ lint: venv
 
 test: build lint
 	cd $(BUILD) && ctest --output-on-failure -j2
+	components/go/test.sh
 	$(PY) -m pytest -q
 	$(MAKE) --no-print-directory fuzz
 
@@ -86,6 +89,7 @@ bench: build
 	$(PY) bench/integrators.py
 	$(PY) bench/render_integrators.py
 	$(PY) bench/light_transport.py
+	$(PY) bench/remote_components.py
 
 clean:
 	rm -rf $(BUILD) $(STAMPS) out
