@@ -22,8 +22,10 @@ from component_process import ComponentProcess  # noqa: E402
 
 SIZE = 128
 SPP = 32
-# Tiles of 128² points: a remote call carries a whole tile's paths.
-TILE = 128
+# Batches of 64² pixels × 8 samples: a remote call carries a whole batch's
+# paths (the same settings in process, for a fair baseline).
+TILE = 64
+SAMPLES_PER_PASS = 8
 PYTHON_LAMBERTIAN = ROOT / "components" / "python" / "examples" / "lambertian.py"
 GO_LAMBERTIAN = ROOT / "build" / "go" / "bin" / "yarf-go-lambertian"
 
@@ -42,7 +44,11 @@ def samples_per_second(client: Client, scene: scene_pb2.Scene) -> float:
     best = 0.0
     for seed in (1, 2):
         job_id = client.submit(
-            scene, SPP, seed, integrator=component("mean_sample", tile_size=TILE), name="bench"
+            scene,
+            SPP,
+            seed,
+            integrator=component("mean_sample", tile_size=TILE, samples_per_pass=SAMPLES_PER_PASS),
+            name="bench",
         )
         status = client.wait(job_id, timeout=1200)
         if status.state != render_pb2.SUCCEEDED:
@@ -75,7 +81,10 @@ def main() -> None:
                     client, scene_with("go_lambertian", go.address)
                 )
     baseline = results["in-process C++"]
-    print(f"remote BSDF in the path tracer: Cornell box {SIZE}², {SPP} spp, tiles {TILE}²")
+    print(
+        f"remote BSDF in the path tracer: Cornell box {SIZE}², {SPP} spp, batches of {TILE}² "
+        f"pixels × {SAMPLES_PER_PASS} samples"
+    )
     for name, rate in results.items():
         print(f"  {name:22s} {rate / 1e6:6.3f} M samples/s   ratio {rate / baseline:5.2f}")
     out = ROOT / "out" / "bench"

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from yarf import Client, RenderResult
+from yarf import Client, RenderResult, component
 from yarf.v1 import scene_pb2
 
 
@@ -45,3 +45,27 @@ def test_vegas_renders_the_same_image_for_the_same_seed(
     first = client.render(cornell_box, spp=8, seed=3, integrator=vegas)
     second = client.render(cornell_box, spp=8, seed=3, integrator=vegas)
     assert first.pixels.tobytes() == second.pixels.tobytes()
+
+
+@pytest.mark.parametrize("transport", ["path", "light"])
+def test_several_samples_per_pass_render_the_same_samples(
+    client: Client, cornell_box: scene_pb2.Scene, transport: str
+) -> None:
+    # Batches of 4 samples per pixel draw the same sample indices of the same
+    # per-pixel sequences as 4 passes of one: the same image up to the order
+    # of summation, camera samples and splats alike.
+    scene = scene_pb2.Scene()
+    scene.CopyFrom(cornell_box)
+    scene.film.width = scene.film.height = 32
+    images = [
+        client.render(
+            scene,
+            spp=8,
+            seed=3,
+            transport=scene_pb2.ComponentSpec(class_name=transport),
+            integrator=component("mean_sample", samples_per_pass=per_pass),
+        ).pixels
+        for per_pass in (1, 4)
+    ]
+    assert images[0].mean() > 0
+    np.testing.assert_allclose(images[1], images[0], rtol=1e-4, atol=1e-6)

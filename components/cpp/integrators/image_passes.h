@@ -5,6 +5,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -14,14 +15,15 @@
 
 namespace yarf {
 
-// The points of one tile's pixels for one sample index, produced lazily:
-// the sampler's point number `index` of each pixel's own sequence, with
-// coordinates 0 and 1 placed inside the pixel. Warp() lets an integrator
-// remap the other coordinates.
+// The points of one tile's pixels for `samples` consecutive sample
+// indices from `first_index`, produced lazily: the sampler's points of
+// each pixel's own sequence, with coordinates 0 and 1 placed inside the
+// pixel. Point i is sample first_index + i % samples of pixel i / samples.
+// Warp() lets an integrator remap the other coordinates.
 class TilePoints : public PrimarySamples {
  public:
-  TilePoints(const Sampler& sampler, uint64_t index, uint32_t width, uint32_t height)
-      : sampler_(sampler), index_(index), width_(width), inv_width_(1.0f / width),
+  TilePoints(const Sampler& sampler, uint64_t first_index, uint32_t width, uint32_t height, uint32_t samples = 1)
+      : sampler_(sampler), first_index_(first_index), samples_(samples), width_(width), inv_width_(1.0f / width),
         inv_height_(1.0f / height) {}
   virtual ~TilePoints() = default;
 
@@ -35,11 +37,12 @@ class TilePoints : public PrimarySamples {
       }
   }
 
-  size_t Count() const override { return pixels_.size(); }
+  size_t Count() const override { return pixels_.size() * samples_; }
   float Get(size_t i, uint32_t dimension) const override {
-    const float u = sampler_.Sample(index_, dimension, seeds_[i]);
-    if (dimension == 0) return (pixels_[i].x + u) * inv_width_;
-    if (dimension == 1) return (pixels_[i].y + u) * inv_height_;
+    const size_t pixel = i / samples_;
+    const float u = sampler_.Sample(first_index_ + i % samples_, dimension, seeds_[pixel]);
+    if (dimension == 0) return (pixels_[pixel].x + u) * inv_width_;
+    if (dimension == 1) return (pixels_[pixel].y + u) * inv_height_;
     return Warp(i, dimension, u);
   }
 
@@ -51,36 +54,43 @@ class TilePoints : public PrimarySamples {
     uint32_t x, y;
   };
   const Sampler& sampler_;
-  uint64_t index_;
+  uint64_t first_index_;
+  uint32_t samples_;
   uint32_t width_;
   float inv_width_, inv_height_;
   std::vector<Pixel> pixels_;
   std::vector<uint64_t> seeds_;
 };
 
-// Runs target.SamplesPerPixel() passes; in each, every tile (in parallel)
-// calls render_tile(pass, x0, y0, x1, y1, out) with an emptied FilmSamples
-// to fill and accumulate, then end_pass(pass) runs on this thread. Stops
-// early, between tiles, when the target is cancelled.
+// Runs passes until target.SamplesPerPixel() samples per pixel, each of
+// (at most) `samples_per_pass`: in each, every tile (in parallel) calls
+// render_tile(first_sample, samples, x0, y0, x1, y1, out) with an emptied
+// FilmSamples to fill and accumulate, then end_pass(pass) runs on this
+// thread. Larger passes make larger batches (fewer calls to components in
+// other processes). Stops early, between tiles, when the target is
+// cancelled.
 template <typename RenderTile, typename EndPass>
-void RenderPasses(const SceneView& scene, RenderTarget& target, uint32_t tile_size, RenderTile&& render_tile,
-                  EndPass&& end_pass) {
+void RenderPasses(const SceneView& scene, RenderTarget& target, uint32_t tile_size, uint32_t samples_per_pass,
+                  RenderTile&& render_tile, EndPass&& end_pass) {
   const uint32_t width = scene.FilmWidth(), height = scene.FilmHeight();
   const uint32_t tiles_x = (width + tile_size - 1) / tile_size;
   const uint32_t tiles_y = (height + tile_size - 1) / tile_size;
   tbb::enumerable_thread_specific<FilmSamples> outputs;
-  for (uint32_t pass = 0; pass < target.SamplesPerPixel(); ++pass) {
+  const uint32_t spp = target.SamplesPerPixel();
+  for (uint32_t pass = 0, done = 0; done < spp; ++pass) {
     if (target.Cancelled()) return;
+    const uint32_t samples = std::min(samples_per_pass, spp - done);
     tbb::parallel_for(uint32_t(0), tiles_x * tiles_y, [&](uint32_t tile) {
       if (target.Cancelled()) return;
       const uint32_t x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
       FilmSamples& out = outputs.local();
       out.Clear();
-      render_tile(pass, x0, y0, std::min(width, x0 + tile_size), std::min(height, y0 + tile_size), out);
+      render_tile(done, samples, x0, y0, std::min(width, x0 + tile_size), std::min(height, y0 + tile_size), out);
     });
     if (target.Cancelled()) return;
     end_pass(pass);
-    target.PassDone(pass + 1);
+    done += samples;
+    target.PassDone(done);
   }
 }
 

@@ -10,7 +10,10 @@
 // 32×32 tiles, one sample pass over all tiles at a time, tiles in
 // parallel; progress is reported and cancellation checked per tile.
 //
-// Properties: int "tile_size" (default 32).
+// Properties: int "tile_size" (default 32); int "samples_per_pass"
+// (default 1): samples per pixel each tile's batch carries. More makes
+// larger batches and fewer calls, which matters when the transport or its
+// surface models live in other processes; progress is reported per pass.
 
 #include <cmath>
 #include <vector>
@@ -25,8 +28,11 @@ namespace {
 class MeanSampleIntegrator final : public Integrator {
  public:
   explicit MeanSampleIntegrator(const Properties& props)
-      : tile_size_(uint32_t(props.Int("tile_size", 32))) {
+      : tile_size_(uint32_t(props.Int("tile_size", 32))),
+        samples_per_pass_(uint32_t(props.Int("samples_per_pass", 1))) {
     if (tile_size_ < 1 || tile_size_ > 1024) throw Error("property 'tile_size' must be in [1, 1024]");
+    if (samples_per_pass_ < 1 || samples_per_pass_ > 1024)
+      throw Error("property 'samples_per_pass' must be in [1, 1024]");
   }
 
   IntegrationResult Integrate(Function& f, std::span<const double> lower,
@@ -68,9 +74,10 @@ class MeanSampleIntegrator final : public Integrator {
   void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
               RenderTarget& target) override {
     RenderPasses(
-        scene, target, tile_size_,
-        [&](uint32_t pass, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, FilmSamples& out) {
-          TilePoints points(sampler, pass, scene.FilmWidth(), scene.FilmHeight());
+        scene, target, tile_size_, samples_per_pass_,
+        [&](uint32_t first, uint32_t samples, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1,
+            FilmSamples& out) {
+          TilePoints points(sampler, first, scene.FilmWidth(), scene.FilmHeight(), samples);
           points.Reset(x0, y0, x1, y1, target.Seed());
           transport.Evaluate(scene, points, out);
           target.Accumulate(out);
@@ -80,6 +87,7 @@ class MeanSampleIntegrator final : public Integrator {
 
  private:
   uint32_t tile_size_;
+  uint32_t samples_per_pass_;
 };
 
 }  // namespace

@@ -86,8 +86,8 @@ inline void RenderWithVegasMap(Transport& transport, const SceneView& scene, con
     statistics.assign(size_t(tiles_x) * tiles_y, map);
   }
   RenderPasses(
-      scene, target, kTileSize,
-      [&](uint32_t pass, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, FilmSamples& out) {
+      scene, target, kTileSize, 1,
+      [&](uint32_t pass, uint32_t, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, FilmSamples& out) {
         MappedTilePoints points(sampler, map, pass, scene.FilmWidth(), scene.FilmHeight());
         points.Reset(x0, y0, x1, y1, target.Seed());
         transport.Evaluate(scene, points, out);

@@ -1,5 +1,7 @@
 #include "kernel/film.h"
 
+#include <algorithm>
+
 #include <cmath>
 
 namespace yarf {
@@ -80,12 +82,14 @@ void Film::Splat(float x, float y, Vec3 value) {
   });
 }
 
-void Film::EndPass() {
+void Film::EndPass(uint32_t samples) {
   ++passes_;
   if (splats_.pass.empty()) return;
+  const double scale = 1.0 / std::max(samples, 1u);
   for (size_t i = 0; i < splats_.pass.size(); ++i) {
-    splats_.sum[i] += splats_.pass[i];
-    splats_.sum_sq[i] += splats_.pass[i] * splats_.pass[i];
+    const double estimate = splats_.pass[i] * scale;
+    splats_.sum[i] += estimate;
+    splats_.sum_sq[i] += estimate * estimate;
     splats_.pass[i] = 0;
   }
   splats_.passes = passes_;

@@ -38,9 +38,10 @@ class Film {
   void Add(float x, float y, Vec3 value);
   // A contribution to the current pass's splat image.
   void Splat(float x, float y, Vec3 value);
-  // Closes a sample pass: its splat image becomes one more independent
-  // estimate of the pixels' splat values.
-  void EndPass();
+  // Closes a sample pass of `samples` samples per pixel (passes of W×H
+  // points each): its splat image over `samples` becomes one more
+  // independent estimate of the pixels' splat values.
+  void EndPass(uint32_t samples = 1);
   // Pixel estimates and their variances, row-major [height, width, 3].
   std::vector<float> Pixels() const;
   std::vector<float> Variances() const;

@@ -15,7 +15,8 @@ void FilmTarget::Accumulate(const FilmSamples& samples) {
 void FilmTarget::PassDone(uint32_t samples_done) {
   {
     std::lock_guard lock(mutex_);
-    film_.EndPass();
+    film_.EndPass(samples_done - samples_done_);
+    samples_done_ = samples_done;
   }
   on_pass_(samples_done);
 }

@@ -34,6 +34,7 @@ class FilmTarget final : public RenderTarget {
   uint64_t seed_;
   const std::atomic<bool>& cancel_;
   PassCallback on_pass_;
+  uint32_t samples_done_ = 0;
 };
 
 }  // namespace yarf
