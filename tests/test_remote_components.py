@@ -328,3 +328,28 @@ def test_a_job_that_asks_for_retries_survives_a_restarted_component(
         family_alpha=FAMILY_ALPHA,
     )
     assert not test.failing.size, f"the retried job's image:\n{test.report()}"
+
+
+def test_a_python_sampler_drives_a_render_through_yarfd(client: Client, unix_address: str) -> None:
+    # Remote<Sampler>: the integrator asks the Python process for every
+    # point it renders with; the image agrees with the in-process sampler's.
+    scene = cornell_box()
+    scene.film.width = scene.film.height = 8
+    with ComponentProcess.python([f"{EXAMPLES / 'halton.py'}:Halton"], unix_address) as process:
+        sampler = scene_pb2.ComponentSpec(class_name="py_halton", address=process.address)
+        job_id = client.submit(scene, 16, 1, sampler=sampler, name="python sampler")
+        status = client.wait(job_id, timeout=300)
+        assert status.state == render_pb2.SUCCEEDED, status.error
+        remote = client.raw(job_id)
+    job_id = client.submit(scene, 64, 2, name="in-process sampler")
+    assert client.wait(job_id, timeout=120).state == render_pb2.SUCCEEDED
+    reference = client.raw(job_id)
+    test = block_z_test(
+        remote.pixels,
+        remote.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=FAMILY_ALPHA,
+    )
+    assert not test.failing.size, f"py_halton vs sobol:\n{test.report()}"

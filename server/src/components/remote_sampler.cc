@@ -1,5 +1,6 @@
 #include "components/remote_sampler.h"
 
+#include <unordered_map>
 #include <vector>
 
 namespace yarf {
@@ -7,12 +8,19 @@ namespace {
 
 // Coordinates fetched per point by the lazy Sample: a path's usual needs.
 constexpr uint32_t kBlockDimensions = 64;
+// Points kept per thread: a tile's worth, since transports read one
+// coordinate of every path of a batch before the next.
+constexpr size_t kCachedPoints = 1 << 14;
 
-struct CachedPoint {
-  const void* sampler = nullptr;
-  uint64_t index = 0, seed = 0;
-  uint32_t dimensions = 0;
-  std::vector<float> values;
+struct PointKey {
+  const void* sampler;
+  uint64_t index, seed;
+  bool operator==(const PointKey&) const = default;
+};
+struct PointKeyHash {
+  size_t operator()(const PointKey& k) const {
+    return std::hash<uint64_t>()(k.index * 0x9E3779B97F4A7C15ull ^ k.seed) ^ std::hash<const void*>()(k.sampler);
+  }
 };
 
 }  // namespace
@@ -42,14 +50,16 @@ void Remote<Sampler>::Generate(uint64_t first, uint32_t count, uint32_t dimensio
 }
 
 float Remote<Sampler>::Sample(uint64_t index, uint32_t dimension, uint64_t seed) const {
-  thread_local CachedPoint cached;
-  if (cached.sampler != this || cached.index != index || cached.seed != seed || dimension >= cached.dimensions) {
-    const uint32_t dimensions = std::max(kBlockDimensions, dimension + 1);
-    cached.values.resize(dimensions);
-    Generate(index, 1, dimensions, seed, cached.values);
-    cached = {this, index, seed, dimensions, std::move(cached.values)};
+  thread_local std::unordered_map<PointKey, std::vector<float>, PointKeyHash> cache;
+  const PointKey key{this, index, seed};
+  auto it = cache.find(key);
+  if (it == cache.end() || dimension >= it->second.size()) {
+    if (cache.size() >= kCachedPoints) cache.clear();
+    std::vector<float> values(std::max(kBlockDimensions, dimension + 1));
+    Generate(index, 1, uint32_t(values.size()), seed, values);
+    it = cache.insert_or_assign(key, std::move(values)).first;
   }
-  return cached.values[dimension];
+  return it->second[dimension];
 }
 
 }  // namespace yarf
