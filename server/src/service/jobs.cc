@@ -29,6 +29,35 @@ v1::ComponentSpec Choose(const v1::ComponentSpec& job, const v1::ComponentSpec& 
   return spec;
 }
 
+// Whether the job calls a component in another process: a class named
+// with an address, or registered by a component process.
+bool CallsOtherProcesses(const v1::Scene& scene, const v1::RenderOptions& options, const JobResources& resources) {
+  auto remote = [&](const std::string& class_name, const std::string& address) {
+    return !address.empty() ||
+           (!resources.registry.Has(class_name) && resources.remote_classes.AddressOf(class_name).has_value());
+  };
+  for (const v1::Material& m : scene.materials())
+    if (remote(m.class_name(), m.address())) return true;
+  for (const v1::ComponentSpec* spec : {&options.transport(), &scene.transport(), &options.sampler(), &scene.sampler()})
+    if (!spec->class_name().empty() && remote(spec->class_name(), spec->address())) return true;
+  return false;
+}
+
+// The integrator a job runs: its own, else the scene's, else mean_sample.
+// For jobs that call other processes, mean_sample works in large batches
+// (128² pixels × 4 samples per call) unless told otherwise, since every
+// call costs a round trip whatever its size.
+v1::ComponentSpec IntegratorSpec(const v1::ComponentSpec& job, const v1::ComponentSpec& scene,
+                                 bool calls_other_processes) {
+  v1::ComponentSpec spec = Choose(job, scene, "mean_sample");
+  if (calls_other_processes && spec.class_name() == "mean_sample" && spec.address().empty()) {
+    auto& values = *spec.mutable_properties()->mutable_values();
+    if (!values.contains("tile_size")) values["tile_size"].set_int_value(128);
+    if (!values.contains("samples_per_pass")) values["samples_per_pass"].set_int_value(4);
+  }
+  return spec;
+}
+
 RemoteOptions RemoteOptionsOf(const v1::RenderOptions& options) {
   RemoteOptions remote;
   if (options.component_timeout_seconds() > 0)
@@ -138,8 +167,10 @@ void Job::Run(const JobResources& resources) {
     std::shared_ptr<KernelScene> kernel =
         BuildScene(scene, SceneSources{components, resources.device, resources.asset_root});
     auto transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
-    auto integrator =
-        Make<Integrator>(components, Choose(options.integrator(), scene.integrator(), "mean_sample"), "integrator");
+    auto integrator = Make<Integrator>(
+        components,
+        IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources)),
+        "integrator");
     auto sampler = Make<Sampler>(components, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
     {
       std::lock_guard lock(film_mutex_);
