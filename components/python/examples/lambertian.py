@@ -50,17 +50,21 @@ class Lambertian(SurfaceModel):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         wo = cosine_hemisphere(uniform[:, 1], uniform[:, 2])
         # Mirror onto wi's side: the back face reflects like the front.
-        wo[:, 2] = np.where(wi[:, 2] < 0, -wo[:, 2], wo[:, 2])
-        density = cosine_hemisphere_pdf(np.abs(wo[:, 2]))
-        drawn = lobe_allowed(LOBE, allowed) & (wi[:, 2] != 0) & (density > 0)
-        column = drawn[:, None]
-        return (
-            np.where(column, wo, np.float32(0)),
-            # f·|cos θo| / pdf = (ρ/π)·cos θo / (cos θo/π).
-            np.where(column, self.reflectance, np.float32(0)),
-            np.where(drawn, density, np.float32(0)),
-            np.where(drawn, np.uint32(LOBE), np.uint32(0)),
-        )
+        np.copysign(wo[:, 2], wi[:, 2], out=wo[:, 2])
+        density = np.abs(wo[:, 2]) * INV_PI
+        # f·|cos θo| / pdf = (ρ/π)·cos θo / (cos θo/π): the weight is ρ.
+        weight = np.broadcast_to(self.reflectance, wo.shape)
+        flags = np.full(len(wo), LOBE, np.uint32)
+        drawn = (wi[:, 2] != 0) & (density > 0)
+        if not lobe_allowed(LOBE, allowed):
+            drawn[:] = False
+        if not drawn.all():
+            missed = ~drawn
+            wo[missed] = 0
+            density[missed] = 0
+            flags[missed] = 0
+            weight = np.where(drawn[:, None], weight, np.float32(0))
+        return wo, weight, density, flags
 
     def pdf(self, wi: np.ndarray, wo: np.ndarray, uv: np.ndarray) -> np.ndarray:
         same_side = wi[:, 2] * wo[:, 2] > 0

@@ -15,27 +15,27 @@ TWO_PI = np.float32(2 * np.pi)
 
 def concentric_disk(u0: np.ndarray, u1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Shirley and Chiu's map of the square onto the unit disk: (x [N], y [N])."""
-    a = 2 * np.asarray(u0, np.float32) - 1
-    b = 2 * np.asarray(u1, np.float32) - 1
+    a = np.asarray(u0, np.float32) * np.float32(2) - np.float32(1)
+    b = np.asarray(u1, np.float32) * np.float32(2) - np.float32(1)
     wide = np.abs(a) > np.abs(b)
     r = np.where(wide, a, b)
     with np.errstate(divide="ignore", invalid="ignore"):
-        phi = np.where(
-            wide,
-            np.float32(np.pi / 4) * (b / a),
-            np.float32(np.pi / 2) - np.float32(np.pi / 4) * (a / b),
-        )
-    centre = (a == 0) & (b == 0)
-    r = np.where(centre, 0, r).astype(np.float32)
-    phi = np.where(centre, 0, phi).astype(np.float32)
+        ratio = np.where(wide, b, a) / r
+    # The centre (r = 0) maps to itself: any angle will do.
+    ratio[r == 0] = 0
+    quarter = np.float32(np.pi / 4)
+    phi = np.where(wide, quarter * ratio, np.float32(np.pi / 2) - quarter * ratio)
     return r * np.cos(phi), r * np.sin(phi)
 
 
 def cosine_hemisphere(u0: np.ndarray, u1: np.ndarray) -> np.ndarray:
     """Directions [N,3] about +z with density cos θ / π (Malley's method)."""
     x, y = concentric_disk(u0, u1)
-    z = np.sqrt(np.maximum(np.float32(0), 1 - x * x - y * y))
-    return np.stack([x, y, z], axis=1).astype(np.float32)
+    out = np.empty((len(x), 3), np.float32)
+    out[:, 0] = x
+    out[:, 1] = y
+    out[:, 2] = np.sqrt(np.maximum(np.float32(0), 1 - x * x - y * y))
+    return out
 
 
 def cosine_hemisphere_pdf(cos_theta: np.ndarray) -> np.ndarray:
