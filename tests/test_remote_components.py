@@ -353,3 +353,18 @@ def test_a_python_sampler_drives_a_render_through_yarfd(client: Client, unix_add
         family_alpha=FAMILY_ALPHA,
     )
     assert not test.failing.size, f"py_halton vs sobol:\n{test.report()}"
+
+
+def test_cancelling_a_job_ends_its_calls_to_a_hanging_component_at_once(
+    client: Client, unix_address: str
+) -> None:
+    with ComponentProcess.python([f"{FAULTY}:Hanging"], unix_address) as process:
+        job_id = client.submit(cornell_box("hanging_lambertian", process.address), SPP, 1)
+        time.sleep(1.0)  # the job is now waiting on the component (deadline: 60 s)
+        assert client.status(job_id).state == render_pb2.RUNNING
+        cancelled = time.monotonic()
+        client.cancel(job_id)
+        status = client.wait(job_id, timeout=30)
+        assert status.state == render_pb2.CANCELLED, status.error
+        assert time.monotonic() - cancelled < 2
+        process.kill()

@@ -56,6 +56,28 @@ std::shared_ptr<grpc::Channel> ComponentChannel(const std::string& address) {
   return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
 }
 
+void RemoteCalls::Cancel() {
+  std::lock_guard lock(mutex_);
+  cancelled_ = true;
+  for (grpc::ClientContext* context : in_flight_) context->TryCancel();
+}
+
+bool RemoteCalls::cancelled() const {
+  std::lock_guard lock(mutex_);
+  return cancelled_;
+}
+
+void RemoteCalls::Begin(grpc::ClientContext* context) {
+  std::lock_guard lock(mutex_);
+  in_flight_.push_back(context);
+  if (cancelled_) context->TryCancel();
+}
+
+void RemoteCalls::End(grpc::ClientContext* context) {
+  std::lock_guard lock(mutex_);
+  std::erase(in_flight_, context);
+}
+
 bool SpeaksOurIdl(const std::string& interface_id) { return interface_id.rfind(kIdlPrefix, 0) == 0; }
 
 RemoteInstance::RemoteInstance(std::string address, std::string class_name, v1::Properties properties,
@@ -119,8 +141,12 @@ void RemoteInstance::Call(const char* method,
       std::lock_guard lock(mutex_);
       handle = handle_;
     }
-    const grpc::Status status = call(*ContextWithin(options_.deadline), handle);
+    const std::unique_ptr<grpc::ClientContext> context = ContextWithin(options_.deadline);
+    if (options_.calls) options_.calls->Begin(context.get());
+    const grpc::Status status = call(*context, handle);
+    if (options_.calls) options_.calls->End(context.get());
     if (status.ok()) return;
+    if (options_.calls && options_.calls->cancelled()) throw Error(Name() + ": " + what + " cancelled with the job");
     if (!owned_ || attempt >= options_.retries || !ComponentLost(status))
       throw Error(Name() + ": " + what + " failed: " + StatusText(status));
     // Make the instance anew once the component answers again; another

@@ -15,6 +15,7 @@
 #include <mutex>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "yarf/error.h"
 #include "yarf/v1/component.pb.h"
@@ -24,12 +25,32 @@ namespace yarf {
 template <typename I>
 class Remote;
 
+// The calls in flight of one job's remote components, so that cancelling
+// the job ends them at once instead of at their deadlines.
+class RemoteCalls {
+ public:
+  // Cancels every call in flight and every later one.
+  void Cancel();
+  bool cancelled() const;
+
+ private:
+  friend class RemoteInstance;
+  void Begin(grpc::ClientContext* context);
+  void End(grpc::ClientContext* context);
+
+  mutable std::mutex mutex_;
+  std::vector<grpc::ClientContext*> in_flight_;
+  bool cancelled_ = false;
+};
+
 struct RemoteOptions {
   // Deadline of each call.
   std::chrono::milliseconds deadline{std::chrono::seconds(60)};
   // Times a call is retried, after making the instance anew, when the
   // component went away (UNAVAILABLE) or forgot the instance (NOT_FOUND).
   uint32_t retries = 0;
+  // Where calls are tracked for cancellation; none when null.
+  std::shared_ptr<RemoteCalls> calls;
 };
 
 // A channel to a component process: "host:port" or "unix:/path".

@@ -58,8 +58,9 @@ v1::ComponentSpec IntegratorSpec(const v1::ComponentSpec& job, const v1::Compone
   return spec;
 }
 
-RemoteOptions RemoteOptionsOf(const v1::RenderOptions& options) {
+RemoteOptions RemoteOptionsOf(const v1::RenderOptions& options, std::shared_ptr<RemoteCalls> calls) {
   RemoteOptions remote;
+  remote.calls = std::move(calls);
   if (options.component_timeout_seconds() > 0)
     remote.deadline = std::chrono::milliseconds(int64_t(options.component_timeout_seconds() * 1000));
   remote.retries = options.component_retries();
@@ -123,6 +124,7 @@ void Job::Update(const std::function<void(v1::JobStatus&)>& change) {
 
 void Job::RequestCancel() {
   cancel_ = true;
+  remote_calls_->Cancel();
   Update([](v1::JobStatus& s) {
     if (s.state() == v1::QUEUED) s.set_state(v1::CANCELLED);
   });
@@ -163,7 +165,7 @@ void Job::Run(const JobResources& resources) {
   try {
     const v1::Scene& scene = request_.scene();
     const v1::RenderOptions& options = request_.options();
-    const ComponentSources components{resources.registry, &resources.remote_classes, RemoteOptionsOf(options)};
+    const ComponentSources components{resources.registry, &resources.remote_classes, RemoteOptionsOf(options, remote_calls_)};
     std::shared_ptr<KernelScene> kernel =
         BuildScene(scene, SceneSources{components, resources.device, resources.asset_root});
     auto transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
@@ -199,8 +201,9 @@ void Job::Run(const JobResources& resources) {
   } catch (const std::exception& e) {
     KeepFinalImage();
     Update([&](v1::JobStatus& s) {
-      s.set_state(v1::FAILED);
-      s.set_error(e.what());
+      // A cancel that cut a remote call short is a cancel, not a failure.
+      s.set_state(cancel_ ? v1::CANCELLED : v1::FAILED);
+      if (!cancel_) s.set_error(e.what());
     });
   }
 }

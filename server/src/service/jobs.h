@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "components/remote_classes.h"
+#include "components/remote_instance.h"
 #include "kernel/embree_device.h"
 #include "kernel/film.h"
 #include "service/job_scenes.h"
@@ -60,6 +61,8 @@ class Job {
   const std::string id_;
   const v1::SubmitRequest request_;
   std::atomic<bool> cancel_{false};
+  // Calls to components in other processes, ended at once by a cancel.
+  const std::shared_ptr<RemoteCalls> remote_calls_ = std::make_shared<RemoteCalls>();
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
   v1::JobStatus status_;
