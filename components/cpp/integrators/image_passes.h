@@ -38,6 +38,7 @@ class TilePoints : public PrimarySamples {
   }
 
   size_t Count() const override { return pixels_.size() * samples_; }
+  uint64_t SampleIndex(size_t i) const override { return first_index_ + i % samples_; }
   float Get(size_t i, uint32_t dimension) const override {
     const size_t pixel = i / samples_;
     const float u = sampler_.Sample(first_index_ + i % samples_, dimension, seeds_[pixel]);

@@ -28,6 +28,10 @@ class PrimarySamples {
   virtual ~PrimarySamples() = default;
   virtual size_t Count() const = 0;
   virtual float Get(size_t i, uint32_t dimension) const = 0;
+  // Which sample of its pixel point i is (0, 1, 2... in the order of the
+  // sample passes), for progressive methods whose estimate changes from
+  // pass to pass; 0 when the points are not in passes.
+  virtual uint64_t SampleIndex(size_t i) const { return 0; }
 };
 
 // Film contributions of a batch: raster positions in pixels, RGB
@@ -130,6 +134,13 @@ class SceneView : public Intersector {
   virtual float CameraDirectionPdf(Vec3 direction) const = 0;
   virtual uint32_t FilmWidth() const = 0;
   virtual uint32_t FilmHeight() const = 0;
+  // The scene's surfaces as triangles, for methods that mesh them
+  // (radiosity): shapes 0..ShapeCount()-1 (Hit::shape numbers them), each
+  // of PrimitiveCount(shape) primitives; Triangle gives a primitive's
+  // corners in world space (at shutter open), false for a sphere.
+  virtual uint32_t ShapeCount() const = 0;
+  virtual uint32_t PrimitiveCount(uint32_t shape) const = 0;
+  virtual bool Triangle(uint32_t shape, uint32_t primitive, Vec3 corners[3]) const = 0;
   // The handle under which the server's JobScene and Intersect services
   // serve this scene to out-of-process transports; 0 when not served.
   virtual uint64_t ServiceHandle() const { return 0; }

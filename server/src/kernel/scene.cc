@@ -302,6 +302,18 @@ void KernelScene::Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[
   }
 }
 
+uint32_t KernelScene::PrimitiveCount(uint32_t shape) const {
+  const ShapeRecord& record = shapes_[shape];
+  return record.kind == Kind::kSphere ? 1 : uint32_t(meshes_[record.mesh].TriangleCount());
+}
+
+bool KernelScene::Triangle(uint32_t shape, uint32_t primitive, Vec3 corners[3]) const {
+  const ShapeRecord& record = shapes_[shape];
+  if (record.kind == Kind::kSphere) return false;
+  Triangle(record, primitive, corners);
+  return true;
+}
+
 float KernelScene::PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const {
   if (shape.kind == Kind::kSphere) {
     // Spheres are placed by similarity transforms: scale by the cube root

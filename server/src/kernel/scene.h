@@ -82,7 +82,9 @@ class KernelScene final : public SceneView {
   uint64_t ServiceHandle() const override { return service_handle_; }
   void SetServiceHandle(uint64_t handle) { service_handle_ = handle; }
 
-  uint32_t ShapeCount() const { return uint32_t(shapes_.size()); }
+  uint32_t ShapeCount() const override { return uint32_t(shapes_.size()); }
+  uint32_t PrimitiveCount(uint32_t shape) const override;
+  bool Triangle(uint32_t shape, uint32_t primitive, Vec3 corners[3]) const override;
   // The committed Embree scene (for measuring Embree itself).
   RTCScene embree_scene() const { return groups_[kWorld].scene; }
   uint64_t ClosestHitRays() const { return closest_hit_rays_.load(std::memory_order_relaxed); }
