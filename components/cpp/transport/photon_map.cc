@@ -1,0 +1,152 @@
+// photon_map — Jensen's two-pass photon mapping (Jensen 1996, 2001).
+//
+// Prepare shoots photons from the lights (light chosen and placed by the
+// scene's light sampling, direction by its emitter, scattered in
+// importance mode with Russian roulette) and stores them on surfaces with
+// a diffuse lobe, in two kd-trees: the global map, from its own photons,
+// and the caustic map, holding only photons that reached a diffuse
+// surface through surfaces without a diffuse lobe alone (glass, mirrors).
+//
+// Camera rays follow surfaces without a diffuse lobe by sampling them
+// (seeing emitters on the way) to the first surface x with one. There the
+// radiance toward the camera is the sum of:
+//   direct light, by next-event estimation (one light sample);
+//   caustics, from the caustic map at x;
+//   the rest (light that met a diffuse surface before x): with
+//   final_gather, one BSDF-sampled ray from x, followed through
+//   non-diffuse surfaces, and the global map's estimate (all its photons)
+//   where it lands; without, the global map's photons that met a diffuse
+//   surface before, estimated at x itself.
+// Each estimate is Jensen's: the k nearest photons, a cone filter of
+// k = 1 (weight 1 − d/r, normalised by πr²/3, r the k-th distance), the
+// BSDF evaluated toward each photon. Every light path is counted by
+// exactly one of the terms, so the result converges to the path integral
+// as photons grow (the estimates' bias falls with photon density).
+//
+// Properties:
+//   int photons          photon paths shot for the global map (200000).
+//   int caustic_photons  photon paths shot for the caustic map (200000).
+//   int nearest          photons per estimate, k (64).
+//   bool final_gather    gather indirect light with one ray (true).
+//   int max_depth        longest path in segments, Mitsuba's convention,
+//                        for photon paths (-1, default: unbounded); it also
+//                        bounds the non-diffuse bounces of camera and
+//                        gather rays (16 when unbounded).
+//   int rr_depth         bounces after which roulette may end photons (5).
+//   int seed             the photons' random stream (0): photons are a
+//                        pure function of the scene and the seed.
+//
+// Primary sample space: 0–1 film, 2–3 lens, 4 time; from 6, 4 per camera
+// bounce B through non-diffuse surfaces (direction pair, lobe, unused);
+// then at x (light position pair, light choice, unused), the gather
+// ray's sample (direction pair, lobe, unused), and 4 per gather bounce.
+
+#include <memory>
+#include <vector>
+
+#include "photon_tracing.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr int kUnboundedSpecularBounces = 16;
+
+class PhotonMapper final : public Transport {
+ public:
+  explicit PhotonMapper(const Properties& props)
+      : length_(props),
+        photons_(props.Int("photons", 200000)),
+        caustic_photons_(props.Int("caustic_photons", 200000)),
+        nearest_(props.Int("nearest", 64)),
+        final_gather_(props.Bool("final_gather", true)),
+        seed_(props.Int("seed", 0)) {
+    if (photons_ < 0) throw Error("property 'photons' must be >= 0");
+    if (caustic_photons_ < 0) throw Error("property 'caustic_photons' must be >= 0");
+    if (nearest_ < 1) throw Error("property 'nearest' must be >= 1");
+  }
+
+  uint32_t Dimensions() const override { return GatherWalk() + 4 * uint32_t(Bounces()); }
+
+  void Prepare(const SceneView& scene) override {
+    PhotonShooting shooting{uint64_t(photons_), uint64_t(seed_), 0, length_.max_depth, length_.rr_depth};
+    // Final gathering estimates everything leaving the gather point; at x
+    // itself only the light that met a diffuse surface before is wanted.
+    const bool all = final_gather_;
+    global_ = std::make_unique<PhotonTree>(ShootPhotons(
+        scene, shooting, [all](PhotonHistory h) { return all || h == PhotonHistory::kIndirect; }));
+    shooting.paths = uint64_t(caustic_photons_);
+    shooting.stream = 1;
+    caustic_ = std::make_unique<PhotonTree>(
+        ShootPhotons(scene, shooting, [](PhotonHistory h) { return h == PhotonHistory::kCaustic; }));
+  }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    if (!global_ || !caustic_) throw Error("photon_map: Evaluate before Prepare");
+    const size_t n = points.Count();
+    std::vector<Walk> walks(n);
+    for (uint32_t i = 0; i < n; ++i) walks[i] = {i, CameraRayOf(scene, points, i)};
+    std::vector<Vec3> radiance(n);
+    const std::vector<SurfacePoint> visible =
+        WalkToDiffuse(scene, points, std::move(walks), kTransportDimension, Bounces(), &radiance);
+
+    const std::vector<Vec3> direct = DirectLightAt(scene, points, visible, LightSampling());
+    const std::vector<Vec3> caustic = ConeEstimate(scene, *caustic_, visible, size_t(nearest_));
+    for (size_t k = 0; k < visible.size(); ++k) radiance[visible[k].owner] += direct[k] + caustic[k];
+    if (final_gather_) {
+      const std::vector<SurfacePoint> gathered = Gather(scene, points, visible);
+      const std::vector<Vec3> indirect = ConeEstimate(scene, *global_, gathered, size_t(nearest_));
+      for (size_t k = 0; k < gathered.size(); ++k) radiance[gathered[k].owner] += indirect[k];
+    } else {
+      const std::vector<Vec3> indirect = ConeEstimate(scene, *global_, visible, size_t(nearest_));
+      for (size_t k = 0; k < visible.size(); ++k) radiance[visible[k].owner] += indirect[k];
+    }
+    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, radiance[i], out);
+  }
+
+ private:
+  int Bounces() const { return length_.max_depth < 0 ? kUnboundedSpecularBounces : length_.max_depth; }
+  uint32_t LightSampling() const { return kTransportDimension + 4 * uint32_t(Bounces()); }
+  uint32_t GatherSample() const { return LightSampling() + 4; }
+  uint32_t GatherWalk() const { return GatherSample() + 4; }
+
+  // One BSDF-sampled ray from each visible point, followed to the
+  // diffuse surface it lands on (emitters on the way are direct light or
+  // caustics, counted already).
+  std::vector<SurfacePoint> Gather(const SceneView& scene, const PrimarySamples& points,
+                                   const std::vector<SurfacePoint>& visible) const {
+    std::vector<ScatterQuery> queries(visible.size());
+    for (size_t k = 0; k < visible.size(); ++k) {
+      const SurfacePoint& s = visible[k];
+      queries[k] = {s.material, s.wi, s.u, s.v};
+      queries[k].uniform[0] = points.Get(s.owner, GatherSample() + 2);
+      queries[k].uniform[1] = points.Get(s.owner, GatherSample());
+      queries[k].uniform[2] = points.Get(s.owner, GatherSample() + 1);
+    }
+    const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
+    std::vector<Walk> walks;
+    for (size_t k = 0; k < visible.size(); ++k) {
+      if (!(sampled[k].pdf > 0) || !(MaxComponent(sampled[k].weight) > 0)) continue;
+      const SurfacePoint& s = visible[k];
+      Walk w{s.owner, Ray{}, s.throughput * sampled[k].weight};
+      w.ray.time = s.time;
+      Redirect(w.ray, s.position, s.frame.n, Normalize(s.frame.ToWorld(sampled[k].wo)));
+      walks.push_back(w);
+    }
+    return WalkToDiffuse(scene, points, std::move(walks), GatherWalk(), Bounces(), nullptr);
+  }
+
+  PathLength length_;
+  int64_t photons_, caustic_photons_, nearest_;
+  bool final_gather_;
+  int64_t seed_;
+  std::unique_ptr<PhotonTree> global_, caustic_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::PhotonMapper>(registrar, "photon_map", "1.0.0",
+                                     "Jensen's photon mapping: global and caustic maps, final gathering");
+}

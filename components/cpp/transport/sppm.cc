@@ -1,0 +1,175 @@
+// sppm — stochastic progressive photon mapping, in the probabilistic
+// formulation of Knaus & Zwicker (2011).
+//
+// Pass i (the sample index of a point in its pixel) is an ordinary photon
+// mapping estimate with its own, freshly shot photon map and its own
+// radius r_i = r_1·(i+1)^((α−1)/2). Each pass's estimate has bias O(r_i²)
+// and variance O(1/r_i²); averaging the passes, as the film does, makes
+// both vanish as passes grow (for 0 < α < 1), with nothing but the pass
+// index shared between passes.
+//
+// Camera rays follow surfaces without a diffuse lobe by sampling them
+// (seeing emitters on the way) to the first surface x with one; there,
+// direct light by next-event estimation (one light sample) plus the
+// density estimate of every photon after at least one bounce within r_i
+// of x, uniform kernel 1/(πr_i²), the BSDF evaluated toward each photon.
+//
+// Photon maps are built on demand, once per pass (threads that need the
+// same pass wait for one build), and the maps of passes before the last
+// few are dropped.
+//
+// Properties:
+//   int photons_per_pass  photon paths shot per pass (50000).
+//   float initial_radius  r_1 in scene units; 0 or absent (default):
+//                         1.5% of the diagonal of the bounding box of the
+//                         first pass's photons.
+//   float alpha           how fast the radius shrinks, in (0, 1) (2/3).
+//   int max_depth         longest path in segments, Mitsuba's convention,
+//                         for photon paths (-1, default: unbounded); it
+//                         also bounds the non-diffuse bounces of camera
+//                         rays (16 when unbounded).
+//   int rr_depth          bounces after which roulette may end photons (5).
+//   int seed              the photons' random stream (0).
+//
+// Primary sample space: 0–1 film, 2–3 lens, 4 time; from 6, 4 per camera
+// bounce through non-diffuse surfaces (direction pair, lobe, unused); then
+// at x (light position pair, light choice, unused).
+
+#include <cmath>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "photon_tracing.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr int kUnboundedSpecularBounces = 16;
+// Passes whose maps are kept behind the newest one asked for.
+constexpr uint64_t kKeptPasses = 2;
+constexpr float kRadiusOfDiagonal = 0.015f;
+
+using PhotonMapOfPass = std::shared_future<std::shared_ptr<const PhotonTree>>;
+
+class StochasticProgressivePhotonMapper final : public Transport {
+ public:
+  explicit StochasticProgressivePhotonMapper(const Properties& props)
+      : length_(props),
+        photons_per_pass_(props.Int("photons_per_pass", 50000)),
+        initial_radius_(float(props.Float("initial_radius", 0))),
+        alpha_(float(props.Float("alpha", 2.0 / 3.0))),
+        seed_(props.Int("seed", 0)) {
+    if (photons_per_pass_ < 1) throw Error("property 'photons_per_pass' must be >= 1");
+    if (!(initial_radius_ >= 0) || !std::isfinite(initial_radius_))
+      throw Error("property 'initial_radius' must be > 0 (or 0 for the default)");
+    if (!(alpha_ > 0 && alpha_ < 1)) throw Error("property 'alpha' must be in (0, 1)");
+  }
+
+  uint32_t Dimensions() const override { return LightSampling() + 4; }
+
+  void Prepare(const SceneView& scene) override {
+    std::shared_ptr<const PhotonTree> first = Shoot(scene, 0);
+    if (initial_radius_ == 0) initial_radius_ = DefaultRadius(*first);
+    std::promise<std::shared_ptr<const PhotonTree>> ready;
+    ready.set_value(std::move(first));
+    std::lock_guard lock(mutex_);
+    maps_.clear();
+    maps_[0] = ready.get_future().share();
+  }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    const size_t n = points.Count();
+    std::vector<Walk> walks(n);
+    for (uint32_t i = 0; i < n; ++i) walks[i] = {i, CameraRayOf(scene, points, i)};
+    std::vector<Vec3> radiance(n);
+    const std::vector<SurfacePoint> visible =
+        WalkToDiffuse(scene, points, std::move(walks), kTransportDimension, Bounces(), &radiance);
+    const std::vector<Vec3> direct = DirectLightAt(scene, points, visible, LightSampling());
+    for (size_t k = 0; k < visible.size(); ++k) radiance[visible[k].owner] += direct[k];
+
+    // Points of different passes use different maps and radii.
+    std::vector<uint64_t> pass(visible.size());
+    for (size_t k = 0; k < visible.size(); ++k) pass[k] = points.SampleIndex(visible[k].owner);
+    for (const auto& [index, members] : GroupBy(pass)) {
+      std::vector<SurfacePoint> at;
+      at.reserve(members.size());
+      for (uint32_t k : members) at.push_back(visible[k]);
+      const std::shared_ptr<const PhotonTree> map = MapOfPass(scene, index);
+      const std::vector<Vec3> indirect = DiscEstimate(scene, *map, at, Radius(index));
+      for (size_t j = 0; j < at.size(); ++j) radiance[at[j].owner] += indirect[j];
+    }
+    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, radiance[i], out);
+  }
+
+ private:
+  int Bounces() const { return length_.max_depth < 0 ? kUnboundedSpecularBounces : length_.max_depth; }
+  uint32_t LightSampling() const { return kTransportDimension + 4 * uint32_t(Bounces()); }
+
+  float Radius(uint64_t pass) const {
+    return initial_radius_ * std::pow(float(pass + 1), (alpha_ - 1.0f) / 2.0f);
+  }
+
+  // The photons of a pass that met a surface before: light at x that
+  // next-event estimation does not count.
+  std::shared_ptr<const PhotonTree> Shoot(const SceneView& scene, uint64_t pass) const {
+    const PhotonShooting shooting{uint64_t(photons_per_pass_), uint64_t(seed_), pass, length_.max_depth,
+                                  length_.rr_depth};
+    return std::make_shared<const PhotonTree>(
+        ShootPhotons(scene, shooting, [](PhotonHistory h) { return h != PhotonHistory::kDirect; }));
+  }
+
+  static float DefaultRadius(const PhotonTree& photons) {
+    if (photons.size() == 0) return 1;
+    Vec3 lower = photons[0].position, upper = lower;
+    for (size_t i = 1; i < photons.size(); ++i) {
+      const Vec3 p = photons[i].position;
+      lower = {std::min(lower.x, p.x), std::min(lower.y, p.y), std::min(lower.z, p.z)};
+      upper = {std::max(upper.x, p.x), std::max(upper.y, p.y), std::max(upper.z, p.z)};
+    }
+    const float diagonal = Length(upper - lower);
+    return diagonal > 0 ? kRadiusOfDiagonal * diagonal : 1;
+  }
+
+  // The map of `pass`, built by the first thread to ask for it; maps of
+  // passes far behind are dropped (and rebuilt, identical, if asked again).
+  std::shared_ptr<const PhotonTree> MapOfPass(const SceneView& scene, uint64_t pass) {
+    std::promise<std::shared_ptr<const PhotonTree>> build;
+    PhotonMapOfPass map;
+    {
+      std::lock_guard lock(mutex_);
+      if (auto it = maps_.find(pass); it != maps_.end()) return it->second.get();
+      map = build.get_future().share();
+      maps_[pass] = map;
+      if (pass > kKeptPasses) maps_.erase(maps_.begin(), maps_.lower_bound(pass - kKeptPasses));
+    }
+    try {
+      build.set_value(Shoot(scene, pass));
+    } catch (...) {
+      build.set_exception(std::current_exception());
+      std::lock_guard lock(mutex_);
+      maps_.erase(pass);
+      throw;
+    }
+    return map.get();
+  }
+
+  PathLength length_;
+  int64_t photons_per_pass_;
+  float initial_radius_;
+  float alpha_;
+  int64_t seed_;
+  std::mutex mutex_;
+  std::map<uint64_t, PhotonMapOfPass> maps_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::StochasticProgressivePhotonMapper>(
+      registrar, "sppm", "1.0.0", "stochastic progressive photon mapping (Knaus & Zwicker 2011)");
+}
