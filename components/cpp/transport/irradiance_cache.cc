@@ -1,0 +1,384 @@
+// irradiance_cache — irradiance caching for indirect diffuse light (Ward,
+// Rubinstein & Clear 1988), records extrapolated by their rotational and
+// translational gradients (Ward & Heckbert 1992).
+//
+// A record holds the irradiance E = ∫ L_i cos dω at a surface point,
+// gathered over M×N cosine-stratified cells of the hemisphere (M ≈
+// √(rays/π) in θ, N in φ; sin²θ stratified, so each cell is equally
+// likely under cos/π), the harmonic mean distance R to the surfaces the
+// gather rays hit, clamped to [min, max] spacing (Tabellion & Lamorlette
+// 2004), and its gradients from the same cells. A point p with normal n
+// interpolates the records whose weight 1/(|p − p_i|/R_i + √(1 − n·n_i))
+// exceeds 1/a. Records are made in irradiance_gather.h, stored, looked
+// up and kept in files by irradiance_records.h.
+//
+// The gathered radiance L_i is one bounce: the direct light (one light
+// sample) the gathered hit reflects toward the record. Emission seen by
+// the gather rays is left out, as the direct light at the shaded point
+// counts it already. The image is therefore emission + direct light +
+// one indirect diffuse bounce: the paths of at most three segments, what
+// the path tracer with max_depth 3 computes.
+//
+// The cache is built in Prepare, single-threaded and in a fixed order, so
+// that rendering is deterministic and Evaluate only reads it: camera rays
+// through a grid of prepare_grid² points per pixel (lens centre, mid
+// shutter) are followed through specular surfaces to their first hit on a
+// surface with a diffuse lobe, and a record is made wherever no record
+// weighs more than 1/a there. Evaluate makes no records: a point no record
+// covers (between those points, or outside the view prepared) takes the
+// relaxed lookup of IrradianceRecords::Estimate.
+//
+// Evaluate: the camera ray follows specular (delta-only) surfaces up to
+// max_depth segments, gathering emission; at the first other surface it
+// adds emission, the direct light of one light sample (no MIS) and
+// f(wi, n)·E from the cache for materials with a diffuse lobe (exact for
+// Lambertian surfaces, where f = ρ/π; only the direct light for
+// materials without a diffuse lobe).
+//
+// With cache_file set, Prepare reads the records stored there when they
+// were made for the same scene (geometry, materials, emitters; not the
+// camera) and settings, makes any records the current view still lacks,
+// and writes the file back only when it made some.
+//
+// Primary sample space: 0–1 film, 2–3 lens, 4 time, then 8 per segment
+// from 6: light position pair, specular direction pair, (light choice,
+// lobe choice), two unused.
+//
+// Properties:
+//   float accuracy     Ward's a (0.2): smaller makes more records.
+//   int gather_rays    rays per record (512); M×N is the nearest product
+//                      not above it (13×39 = 507 for 512).
+//   float min_spacing  least R, as a fraction of the scene's extent, the
+//                      diagonal of its triangles' bounds (0.01).
+//   float max_spacing  largest R, likewise (0.25).
+//   int prepare_grid   camera rays per pixel and axis visited by Prepare (2).
+//   int max_depth      longest specular chain from the camera, in
+//                      segments (8).
+//   string cache_file  where records are kept between jobs ("": none).
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "irradiance_gather.h"
+#include "irradiance_records.h"
+#include "wavefront.h"
+#include "yarf/hash.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr uint32_t kPerSegment = 8;
+constexpr uint32_t kLightPosition = 0, kDirection = 2, kLightChoice = 4, kLobe = 5;
+// Salt of the lobe choices Prepare makes at specular surfaces.
+constexpr uint64_t kVisitSalt = 0x6972632d76697369ull;
+
+uint32_t Bits(float f) { return std::bit_cast<uint32_t>(f); }
+
+// Whether the cache lights a surface of these lobes (a model without kind
+// flags counts as diffuse).
+bool HasDiffuseLobe(uint32_t lobes) { return (lobes & kScatterDiffuse) || lobes == 0; }
+// Surfaces the camera path goes through rather than shades.
+bool OnlySpecular(uint32_t lobes) { return !SamplesLights(lobes); }
+
+struct Settings {
+  float accuracy;
+  uint32_t gather_rays;
+  float min_spacing, max_spacing;
+  uint32_t prepare_grid;
+  int max_depth;
+  std::string cache_file;
+
+  explicit Settings(const Properties& props)
+      : accuracy(float(props.Float("accuracy", 0.2))),
+        gather_rays(uint32_t(Within(props, "gather_rays", 512, 16, 1 << 20))),
+        min_spacing(float(props.Float("min_spacing", 0.01))),
+        max_spacing(float(props.Float("max_spacing", 0.25))),
+        prepare_grid(uint32_t(Within(props, "prepare_grid", 2, 1, 64))),
+        max_depth(int(Within(props, "max_depth", 8, 1, 64))),
+        cache_file(props.String("cache_file", "")) {
+    if (!(accuracy > 0 && accuracy <= 2)) throw Error("property 'accuracy' must lie in (0, 2]");
+    if (!(min_spacing > 0)) throw Error("property 'min_spacing' must be > 0");
+    if (!(max_spacing >= min_spacing))
+      throw Error("property 'max_spacing' must be >= min_spacing");
+  }
+
+ private:
+  static int64_t Within(const Properties& props, const std::string& key, int64_t fallback, int64_t lo, int64_t hi) {
+    const int64_t value = props.Int(key, fallback);
+    if (value < lo || value > hi)
+      throw Error("property '" + key + "' must lie in [" + std::to_string(lo) + ", " +
+                  std::to_string(hi) + "]");
+    return value;
+  }
+};
+
+// The diagonal of the bounds of the scene's triangles; of `fallback`'s
+// points when it has none (spheres only).
+float SceneExtent(const SceneView& scene, const std::vector<SurfacePoint>& fallback) {
+  Vec3 lo(kInfinity, kInfinity, kInfinity), hi = -lo;
+  auto grow = [&](Vec3 p) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  };
+  for (uint32_t s = 0; s < scene.ShapeCount(); ++s)
+    for (uint32_t k = 0; k < scene.PrimitiveCount(s); ++k) {
+      Vec3 corners[3];
+      if (scene.Triangle(s, k, corners))
+        for (Vec3 c : corners) grow(c);
+    }
+  if (!(lo.x <= hi.x))
+    for (const SurfacePoint& p : fallback) grow(p.position);
+  const float extent = lo.x <= hi.x ? Length(hi - lo) : 0.0f;
+  return extent > 0 ? extent : 1.0f;
+}
+
+// The key of what the records depend on: the scene's shapes, their
+// materials' and emitters' responses in fixed directions, the point
+// lights, and the settings that shape a record. Not the camera.
+uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
+  uint64_t key = Hash(uint64_t(irradiance_file::kVersion), uint64_t(Bits(settings.accuracy)),
+                      uint64_t(settings.gather_rays), uint64_t(Bits(settings.min_spacing)),
+                      uint64_t(Bits(settings.max_spacing)));
+  auto mix = [&](uint64_t v) { key = Hash(key, v); };
+  auto mix3 = [&](Vec3 v) { mix(Bits(v.x)), mix(Bits(v.y)), mix(Bits(v.z)); };
+  const std::vector<float> wi{0.3f, 0.2f, 0.932738f}, wo{0, 0, 1}, uv{0.5f, 0.5f};
+  mix(scene.MaterialCount());
+  for (uint32_t m = 0; m < scene.MaterialCount(); ++m) {
+    std::vector<float> f(3);
+    scene.Material(m).Evaluate(TransportMode::kRadiance, wi, wo, uv, f);
+    mix(scene.Material(m).Lobes());
+    mix3(Vec3::Load(f.data()));
+  }
+  mix(scene.ShapeCount());
+  for (uint32_t s = 0; s < scene.ShapeCount(); ++s) {
+    mix(scene.MaterialOf(s));
+    mix(scene.PrimitiveCount(s));
+    for (uint32_t k = 0; k < scene.PrimitiveCount(s); ++k) {
+      Vec3 corners[3];
+      if (scene.Triangle(s, k, corners))
+        for (Vec3 c : corners) mix3(c);
+    }
+    if (const Emitter* emitter = scene.EmitterOf(s)) {
+      std::vector<float> radiance(3);
+      emitter->Radiance(wo, uv, radiance);
+      mix3(Vec3::Load(radiance.data()));
+    }
+  }
+  mix(scene.LightCount());
+  for (uint32_t l = 0; l < scene.LightCount(); ++l) {
+    const LightSample s = scene.LightPoint(l, Vec3());
+    mix3(s.position), mix3(s.normal), mix(Bits(s.pdf));
+    if (s.emitter) {
+      std::vector<float> radiance(3);
+      s.emitter->Radiance(wo, uv, radiance);
+      mix3(Vec3::Load(radiance.data()));
+    }
+  }
+  return key;
+}
+
+class IrradianceCache final : public Transport {
+ public:
+  explicit IrradianceCache(const Properties& props) : settings_(props), records_(settings_.accuracy, 1) {}
+
+  uint32_t Dimensions() const override { return kTransportDimension + kPerSegment * uint32_t(settings_.max_depth); }
+
+  void Prepare(const SceneView& scene) override {
+    const std::vector<SurfacePoint> visits = VisitPoints(scene);
+    const float extent = SceneExtent(scene, visits);
+    gather_ = {settings_.gather_rays, settings_.min_spacing * extent, settings_.max_spacing * extent};
+    records_ = IrradianceRecords(settings_.accuracy, gather_.max_radius);
+    const uint64_t key = SceneKey(scene, settings_);
+    std::vector<IrradianceRecord> stored;
+    if (!settings_.cache_file.empty() && irradiance_file::Read(settings_.cache_file, key, stored))
+      for (const IrradianceRecord& r : stored) records_.Add(r);
+    const size_t loaded = records_.Size();
+    for (const SurfacePoint& p : visits)
+      if (!records_.Covered(p.position, p.normal)) records_.Add(GatherRecord(scene, p, records_.Size(), gather_));
+    if (!settings_.cache_file.empty() && records_.Size() != loaded)
+      irradiance_file::Write(settings_.cache_file, key, records_.All());
+  }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    const size_t n = points.Count();
+    std::vector<Path> paths(n);
+    std::vector<uint32_t> active;
+    for (uint32_t i = 0; i < n; ++i) {
+      paths[i].ray = CameraRayOf(scene, points, i);
+      active.push_back(i);
+    }
+    for (int depth = 1; !active.empty() && depth <= settings_.max_depth; ++depth)
+      active = Segment(scene, points, paths, active, depth);
+    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, paths[i].radiance, out);
+  }
+
+ private:
+  struct Path {
+    Ray ray;
+    Vec3 throughput{1, 1, 1};
+    Vec3 radiance;
+  };
+  struct Vertex {
+    uint32_t path;
+    Vec3 position;
+    Frame frame;  // frame.n is the geometric normal
+    Vec3 wi;
+    uint32_t material;
+    float u, v;
+  };
+
+  // Intersects the active paths, adds what they see, shades the first
+  // non-specular hits and carries the others on; returns those that go on.
+  std::vector<uint32_t> Segment(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
+                                const std::vector<uint32_t>& active, int depth) const {
+    std::vector<Ray> rays(active.size());
+    std::vector<Hit> hits(active.size());
+    for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
+    scene.Intersect(rays, hits);
+    std::vector<Vertex> shaded, specular;
+    std::vector<EmitterQuery> seen;
+    std::vector<uint32_t> seen_by;
+    for (size_t k = 0; k < active.size(); ++k) {
+      if (!hits[k].Found()) continue;
+      const Frame frame(hits[k].normal);
+      const Vertex v{active[k], rays[k].origin + rays[k].direction * hits[k].t, frame,
+                     frame.ToLocal(-rays[k].direction), scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v};
+      // Paths reach here from the camera or through delta lobes only, so
+      // every emitter they hit counts.
+      if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
+        seen.push_back({emitter, v.wi, v.u, v.v});
+        seen_by.push_back(v.path);
+      }
+      (OnlySpecular(scene.Material(v.material).Lobes()) ? specular : shaded).push_back(v);
+    }
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
+    for (size_t q = 0; q < seen.size(); ++q)
+      paths[seen_by[q]].radiance += paths[seen_by[q]].throughput * emitted[q].radiance;
+    const uint32_t base = kTransportDimension + kPerSegment * uint32_t(depth - 1);
+    Shade(scene, points, paths, shaded, base);
+    if (depth >= settings_.max_depth) return {};
+    return Reflect(scene, points, paths, specular, base);
+  }
+
+  // Direct light by one light sample, and f(wi, n)·E from the cache.
+  void Shade(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
+             const std::vector<Vertex>& vertices, uint32_t base) const {
+    std::vector<LightConnection> connections;
+    std::vector<uint32_t> lit;
+    std::vector<SurfaceQuery> diffuse;
+    std::vector<Vec3> irradiance;
+    std::vector<uint32_t> cached;
+    for (const Vertex& v : vertices) {
+      const uint32_t lobes = scene.Material(v.material).Lobes();
+      if (scene.HasLights() && SamplesLights(lobes)) {
+        const LightSample s =
+            scene.SampleLight(points.Get(v.path, base + kLightChoice), points.Get(v.path, base + kLightPosition),
+                              points.Get(v.path, base + kLightPosition + 1));
+        if (s.emitter) {
+          connections.push_back({v.material, v.position, v.frame, v.wi, v.u, v.v, paths[v.path].ray.time, s});
+          lit.push_back(v.path);
+        }
+      }
+      if (HasDiffuseLobe(lobes) && v.wi.z != 0) {
+        const float side = v.wi.z > 0 ? 1.0f : -1.0f;
+        diffuse.push_back({v.material, v.wi, Vec3(0, 0, side), v.u, v.v});
+        irradiance.push_back(records_.Estimate(v.position, v.frame.n * side));
+        cached.push_back(v.path);
+      }
+    }
+    const std::vector<Vec3> direct = DirectLight(scene, connections);
+    for (size_t k = 0; k < lit.size(); ++k) paths[lit[k]].radiance += paths[lit[k]].throughput * direct[k];
+    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, diffuse);
+    for (size_t k = 0; k < cached.size(); ++k)
+      paths[cached[k]].radiance += paths[cached[k]].throughput * f[k].f * irradiance[k];
+  }
+
+  // Carries paths on through delta lobes.
+  std::vector<uint32_t> Reflect(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
+                                const std::vector<Vertex>& vertices, uint32_t base) const {
+    std::vector<ScatterQuery> queries;
+    for (const Vertex& v : vertices) {
+      ScatterQuery q{v.material, v.wi, v.u, v.v};
+      q.uniform[0] = points.Get(v.path, base + kLobe);
+      q.uniform[1] = points.Get(v.path, base + kDirection);
+      q.uniform[2] = points.Get(v.path, base + kDirection + 1);
+      queries.push_back(q);
+    }
+    const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
+    std::vector<uint32_t> next;
+    for (size_t q = 0; q < queries.size(); ++q) {
+      const ScatterAnswer& a = sampled[q];
+      if (!(MaxComponent(a.weight) > 0)) continue;
+      const Vertex& v = vertices[q];
+      paths[v.path].throughput *= a.weight;
+      Redirect(paths[v.path].ray, v.position, v.frame.n, Normalize(v.frame.ToWorld(a.wo)));
+      next.push_back(v.path);
+    }
+    return next;
+  }
+
+  // The first hits on surfaces with a diffuse lobe of the camera rays
+  // Prepare visits, in raster order, through specular chains.
+  std::vector<SurfacePoint> VisitPoints(const SceneView& scene) const {
+    const uint32_t g = settings_.prepare_grid, w = scene.FilmWidth() * g, h = scene.FilmHeight() * g;
+    const float time = scene.ShutterTime(0.5f);
+    std::vector<Ray> rays;
+    std::vector<uint32_t> owner;
+    for (uint32_t y = 0; y < h; ++y)
+      for (uint32_t x = 0; x < w; ++x) {
+        rays.push_back(scene.CameraRay((float(x) + 0.5f) / float(w), (float(y) + 0.5f) / float(h), 0.5f, 0.5f, time));
+        owner.push_back(y * w + x);
+      }
+    std::vector<std::vector<SurfacePoint>> found(size_t(w) * h);
+    for (int depth = 1; !rays.empty() && depth <= settings_.max_depth; ++depth) {
+      std::vector<Hit> hits(rays.size());
+      scene.Intersect(rays, hits);
+      std::vector<ScatterQuery> queries;
+      std::vector<Vertex> specular;
+      for (size_t k = 0; k < rays.size(); ++k) {
+        if (!hits[k].Found()) continue;
+        const Frame frame(hits[k].normal);
+        const Vertex v{owner[k], rays[k].origin + rays[k].direction * hits[k].t, frame,
+                       frame.ToLocal(-rays[k].direction), scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v};
+        const uint32_t lobes = scene.Material(v.material).Lobes();
+        if (HasDiffuseLobe(lobes) && v.wi.z != 0)
+          found[v.path].push_back({v.position, v.frame.n * (v.wi.z > 0 ? 1.0f : -1.0f)});
+        if (!OnlySpecular(lobes) || depth == settings_.max_depth) continue;
+        ScatterQuery q{v.material, v.wi, v.u, v.v};
+        for (int d = 0; d < 3; ++d) q.uniform[d] = Uniform(kVisitSalt, v.path, uint64_t(depth), uint64_t(d));
+        queries.push_back(q);
+        specular.push_back(v);
+      }
+      const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
+      rays.clear();
+      owner.clear();
+      for (size_t q = 0; q < queries.size(); ++q) {
+        if (!(MaxComponent(sampled[q].weight) > 0)) continue;
+        Ray ray;
+        ray.time = time;
+        Redirect(ray, specular[q].position, specular[q].frame.n, Normalize(specular[q].frame.ToWorld(sampled[q].wo)));
+        rays.push_back(ray);
+        owner.push_back(specular[q].path);
+      }
+    }
+    std::vector<SurfacePoint> visits;
+    for (const auto& points : found) visits.insert(visits.end(), points.begin(), points.end());
+    return visits;
+  }
+
+  Settings settings_;
+  IrradianceRecords records_;
+  GatherSettings gather_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::IrradianceCache>(registrar, "irradiance_cache", "1.0.0",
+                                        "irradiance caching with gradients for indirect diffuse light");
+}
