@@ -132,6 +132,13 @@ def classes_of(client: Client) -> dict[str, component_pb2.ComponentInfo]:
     return {c.class_name: c for c in client.list_classes().classes}
 
 
+def wait_for_class(client: Client, class_name: str, timeout: float = 10) -> None:
+    """Until a starting component's registration has reached the server."""
+    deadline = time.monotonic() + timeout
+    while class_name not in classes_of(client) and time.monotonic() < deadline:
+        time.sleep(0.1)
+
+
 def test_a_registered_component_is_made_by_class_name_until_its_lease_runs_out(
     client: Client, server: LocalServer, unix_address: str
 ) -> None:
@@ -139,9 +146,7 @@ def test_a_registered_component_is_made_by_class_name_until_its_lease_runs_out(
     with ComponentProcess.python(
         [target], unix_address, "--register", server.address, "--lease", "2"
     ) as process:
-        deadline = time.monotonic() + 10
-        while "py_lambertian" not in classes_of(client) and time.monotonic() < deadline:
-            time.sleep(0.1)
+        wait_for_class(client, "py_lambertian")
         info = classes_of(client)["py_lambertian"]
         assert info.origin == f"remote {process.address}"
         assert list(info.interfaces) == ["yarf.v1.SurfaceModel"]
@@ -165,9 +170,7 @@ def test_a_component_stopped_cleanly_unregisters_at_once(
     with ComponentProcess.python(
         [target], unix_address, "--register", server.address, "--lease", "600"
     ) as process:
-        deadline = time.monotonic() + 10
-        while "py_lambertian" not in classes_of(client) and time.monotonic() < deadline:
-            time.sleep(0.1)
+        wait_for_class(client, "py_lambertian")
         assert "py_lambertian" in classes_of(client)
         process.stop()
         assert "py_lambertian" not in classes_of(client)
