@@ -19,7 +19,7 @@ from component_process import ComponentProcess
 from conftest import CORNELL_BOX, REPO
 from imagestats import block_z_test
 
-from yarf import Client, LocalServer, load_scene
+from yarf import Client, LocalServer, RenderResult, load_scene
 from yarf.v1 import component_pb2, component_pb2_grpc, render_pb2, scene_pb2
 
 EXAMPLES = REPO / "components" / "python" / "examples"
@@ -48,22 +48,26 @@ def render(
     return client.wait(job_id, timeout=300)
 
 
-def assert_matches_in_process(client: Client, scene: scene_pb2.Scene, label: str) -> None:
-    """Renders ``scene`` and the C++ Cornell box; every 4×4 block agrees within noise."""
-    status = render(client, scene, seed=1)
-    assert status.state == render_pb2.SUCCEEDED, status.error
-    remote = client.raw(status.job_id)
-    reference_status = render(client, cornell_box(), seed=2)
-    reference = client.raw(reference_status.job_id)
+def assert_agrees(result: RenderResult, reference: RenderResult, label: str) -> None:
+    """Every 4×4 block of ``result`` agrees with ``reference`` within noise."""
     test = block_z_test(
-        remote.pixels,
-        remote.variance,
+        result.pixels,
+        result.variance,
         reference.pixels,
         reference.variance,
         block=4,
         family_alpha=FAMILY_ALPHA,
     )
-    assert not test.failing.size, f"{label} vs C++ lambertian:\n{test.report()}"
+    assert not test.failing.size, f"{label}:\n{test.report()}"
+
+
+def assert_matches_in_process(client: Client, scene: scene_pb2.Scene, label: str) -> None:
+    """Renders ``scene`` and the C++ Cornell box; they agree within noise."""
+    status = render(client, scene, seed=1)
+    assert status.state == render_pb2.SUCCEEDED, status.error
+    remote = client.raw(status.job_id)
+    reference = client.raw(render(client, cornell_box(), seed=2).job_id)
+    assert_agrees(remote, reference, f"{label} vs C++ lambertian")
     assert np.allclose(remote.pixels.mean(), reference.pixels.mean(), rtol=0.03)
 
 
@@ -322,15 +326,7 @@ def test_a_job_that_asks_for_retries_survives_a_restarted_component(
         assert status.state == render_pb2.SUCCEEDED, status.error
         retried = client.raw(job_id)
     reference = client.raw(render(client, cornell_box(), seed=2).job_id)
-    test = block_z_test(
-        retried.pixels,
-        retried.variance,
-        reference.pixels,
-        reference.variance,
-        block=4,
-        family_alpha=FAMILY_ALPHA,
-    )
-    assert not test.failing.size, f"the retried job's image:\n{test.report()}"
+    assert_agrees(retried, reference, "the retried job's image")
 
 
 def test_a_python_sampler_drives_a_render_through_yarfd(client: Client, unix_address: str) -> None:
@@ -347,15 +343,7 @@ def test_a_python_sampler_drives_a_render_through_yarfd(client: Client, unix_add
     job_id = client.submit(scene, 64, 2, name="in-process sampler")
     assert client.wait(job_id, timeout=120).state == render_pb2.SUCCEEDED
     reference = client.raw(job_id)
-    test = block_z_test(
-        remote.pixels,
-        remote.variance,
-        reference.pixels,
-        reference.variance,
-        block=4,
-        family_alpha=FAMILY_ALPHA,
-    )
-    assert not test.failing.size, f"py_halton vs sobol:\n{test.report()}"
+    assert_agrees(remote, reference, "py_halton vs sobol")
 
 
 def test_cancelling_a_job_ends_its_calls_to_a_hanging_component_at_once(

@@ -6,6 +6,16 @@ namespace {
 constexpr uint32_t kKnownFlags =
     kScatterReflect | kScatterRefract | kScatterDelta | kScatterDiffuse | kScatterGlossy;
 
+// Evaluate and Pdf ask about the same N direction pairs.
+v1::SurfaceQuery QueryOf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+                         uint32_t n) {
+  v1::SurfaceQuery query;
+  SetFloats(query.mutable_wi(), wi.first(3 * n), {n, 3});
+  SetFloats(query.mutable_wo(), wo.first(3 * n), {n, 3});
+  SetFloats(query.mutable_uv(), uv.first(2 * n), {n, 2});
+  return query;
+}
+
 v1::TransportMode ToProto(TransportMode mode) {
   return mode == TransportMode::kImportance ? v1::IMPORTANCE : v1::RADIANCE;
 }
@@ -36,10 +46,7 @@ void Remote<SurfaceModel>::Evaluate(TransportMode mode, std::span<const float> w
                                     std::span<const float> uv, std::span<float> value) const {
   const uint32_t n = uint32_t(wi.size() / 3);
   if (n == 0) return;
-  v1::SurfaceQuery request;
-  SetFloats(request.mutable_wi(), wi, {n, 3});
-  SetFloats(request.mutable_wo(), wo.first(3 * n), {n, 3});
-  SetFloats(request.mutable_uv(), uv.first(2 * n), {n, 2});
+  v1::SurfaceQuery request = QueryOf(wi, wo, uv, n);
   request.set_mode(ToProto(mode));
   v1::EvaluateSurfaceReply reply;
   instance_->Call("Evaluate", [&](grpc::ClientContext& context, uint64_t handle) {
@@ -82,10 +89,7 @@ void Remote<SurfaceModel>::Pdf(std::span<const float> wi, std::span<const float>
                                std::span<float> pdf) const {
   const uint32_t n = uint32_t(wi.size() / 3);
   if (n == 0) return;
-  v1::SurfaceQuery request;
-  SetFloats(request.mutable_wi(), wi, {n, 3});
-  SetFloats(request.mutable_wo(), wo.first(3 * n), {n, 3});
-  SetFloats(request.mutable_uv(), uv.first(2 * n), {n, 2});
+  v1::SurfaceQuery request = QueryOf(wi, wo, uv, n);
   v1::PdfSurfaceReply reply;
   instance_->Call("Pdf", [&](grpc::ClientContext& context, uint64_t handle) {
     request.set_handle(handle);
