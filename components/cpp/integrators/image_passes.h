@@ -63,8 +63,9 @@ class TilePoints : public PrimarySamples {
   std::vector<uint64_t> seeds_;
 };
 
-// Runs passes until target.SamplesPerPixel() samples per pixel, each of
-// (at most) `samples_per_pass`: in each, every tile (in parallel) calls
+// Runs passes from target.FirstSample() until target.SamplesPerPixel()
+// samples per pixel, each of (at most) `samples_per_pass`, over the
+// target's crop window: in each, every tile (in parallel) calls
 // render_tile(first_sample, samples, x0, y0, x1, y1, out) with an emptied
 // FilmSamples to fill and accumulate, then end_pass(pass) runs on this
 // thread. Larger passes make larger batches (fewer calls to components in
@@ -73,20 +74,21 @@ class TilePoints : public PrimarySamples {
 template <typename RenderTile, typename EndPass>
 void RenderPasses(const SceneView& scene, RenderTarget& target, uint32_t tile_size, uint32_t samples_per_pass,
                   RenderTile&& render_tile, EndPass&& end_pass) {
-  const uint32_t width = scene.FilmWidth(), height = scene.FilmHeight();
-  const uint32_t tiles_x = (width + tile_size - 1) / tile_size;
-  const uint32_t tiles_y = (height + tile_size - 1) / tile_size;
+  const PixelWindow window = target.Crop().value_or(PixelWindow{0, 0, scene.FilmWidth(), scene.FilmHeight()});
+  const uint32_t tiles_x = (window.x1 - window.x0 + tile_size - 1) / tile_size;
+  const uint32_t tiles_y = (window.y1 - window.y0 + tile_size - 1) / tile_size;
   tbb::enumerable_thread_specific<FilmSamples> outputs;
   const uint32_t spp = target.SamplesPerPixel();
-  for (uint32_t pass = 0, done = 0; done < spp; ++pass) {
+  for (uint32_t pass = 0, done = target.FirstSample(); done < spp; ++pass) {
     if (target.Cancelled()) return;
     const uint32_t samples = std::min(samples_per_pass, spp - done);
     tbb::parallel_for(uint32_t(0), tiles_x * tiles_y, [&](uint32_t tile) {
       if (target.Cancelled()) return;
-      const uint32_t x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
+      const uint32_t x0 = window.x0 + (tile % tiles_x) * tile_size, y0 = window.y0 + (tile / tiles_x) * tile_size;
       FilmSamples& out = outputs.local();
       out.Clear();
-      render_tile(done, samples, x0, y0, std::min(width, x0 + tile_size), std::min(height, y0 + tile_size), out);
+      render_tile(done, samples, x0, y0, std::min(window.x1, x0 + tile_size), std::min(window.y1, y0 + tile_size),
+                  out);
     });
     if (target.Cancelled()) return;
     end_pass(pass);

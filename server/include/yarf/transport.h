@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -160,10 +161,20 @@ class Transport : public virtual Component {
 };
 
 // The job side of rendering: the film, progress and cancellation.
+// Pixels [x0, x1) × [y0, y1) of the film.
+struct PixelWindow {
+  uint32_t x0, y0, x1, y1;
+};
+
 class RenderTarget {
  public:
   virtual ~RenderTarget() = default;
   virtual uint32_t SamplesPerPixel() const = 0;
+  // The first sample index to render (a share of a job on a render node,
+  // or the pass after a checkpoint): samples FirstSample()..SamplesPerPixel()-1.
+  virtual uint32_t FirstSample() const { return 0; }
+  // The pixels to render; the whole film when empty.
+  virtual std::optional<PixelWindow> Crop() const { return std::nullopt; }
   virtual uint64_t Seed() const = 0;
   virtual bool Cancelled() const = 0;
   // Adds a batch of film contributions; safe to call from many threads.
