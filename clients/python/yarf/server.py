@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
 import tempfile
 import time
@@ -53,6 +54,16 @@ class LocalServer:
     server writes the port it bound into a file in a private temporary
     folder; the context waits until it answers the health check with
     SERVING and stops it at exit. Its output is kept in ``log``.
+
+    Jobs live in ``state_dir`` (yarfd's --state-dir). Without one, a
+    ``state`` folder inside the private folder: every server starts with an
+    empty queue and its state goes when it stops. To take a server's jobs
+    over after ``stop()`` or ``kill()``, give a new server the same
+    ``state_dir``, or ``start()`` this one again when it was given one.
+
+    A server given TLS and tokens in ``extra_args`` needs ``tls_ca`` (its
+    certificate) for the health check, and ``token`` for ``client()``;
+    these clients never read $YARF_TOKEN or $YARF_TLS_CA.
     """
 
     def __init__(
@@ -65,6 +76,9 @@ class LocalServer:
         extra_args: Sequence[str] = (),
         env: Mapping[str, str] | None = None,
         startup_timeout: float = 30.0,
+        state_dir: str | Path | None = None,
+        token: str = "",
+        tls_ca: str | Path = "",
     ) -> None:
         self.binary = Path(binary) if binary is not None else find_yarfd()
         self.plugin_paths = [Path(p) for p in plugin_paths]
@@ -73,6 +87,9 @@ class LocalServer:
         self.extra_args = list(extra_args)
         self.env = dict(env) if env is not None else None
         self.startup_timeout = startup_timeout
+        self.state_dir = Path(state_dir) if state_dir is not None else None
+        self.token = token
+        self.tls_ca = str(tls_ca)
         self._process: subprocess.Popen[bytes] | None = None
         self._folder: Path | None = None
         self._address: str | None = None
@@ -82,6 +99,7 @@ class LocalServer:
     def command(self) -> list[str]:
         port_file = (self._folder or Path("<folder>")) / "port"
         command = [str(self.binary), "--listen", "127.0.0.1:0", "--port-file", str(port_file)]
+        command += ["--state-dir", str(self.state_path)]
         for path in self.plugin_paths:
             command += ["--plugin-path", str(path)]
         if self.asset_root is not None:
@@ -89,6 +107,13 @@ class LocalServer:
         if self.threads is not None:
             command += ["--threads", str(self.threads)]
         return command + self.extra_args
+
+    @property
+    def state_path(self) -> Path:
+        """The server's --state-dir: ``state_dir``, else ``state`` in the private folder."""
+        if self.state_dir is not None:
+            return self.state_dir
+        return (self._folder or Path("<folder>")) / "state"
 
     @property
     def address(self) -> str:
@@ -118,7 +143,7 @@ class LocalServer:
 
     def client(self, *, timeout: float = DEFAULT_TIMEOUT) -> Client:
         """A new Client of this server (close it, or use it in a ``with``)."""
-        return Client(self.address, timeout=timeout)
+        return Client(self.address, timeout=timeout, token=self.token, tls_ca=self.tls_ca)
 
     def start(self) -> None:
         if self._process is not None:
@@ -155,7 +180,7 @@ class LocalServer:
                     port = _read_port(port_file)
                     if port is not None:
                         address = f"127.0.0.1:{port}"
-                        client = Client(address)
+                        client = Client(address, token=self.token, tls_ca=self.tls_ca)
                 if client is not None and client.is_serving(timeout=1.0):
                     return address  # type: ignore[return-value]
                 time.sleep(0.05)
@@ -172,10 +197,20 @@ class LocalServer:
 
     def stop(self, timeout: float = 10.0) -> int | None:
         """Stops the server (SIGTERM, then SIGKILL after ``timeout``); returns its exit code."""
+        return self._end(signal.SIGTERM, timeout)
+
+    def kill(self) -> int | None:
+        """Kills the server at once (SIGKILL, as a crash would); returns its exit code.
+
+        Its jobs stay in ``state_dir`` for the next server on that folder.
+        """
+        return self._end(signal.SIGKILL, 10.0)
+
+    def _end(self, how: signal.Signals, timeout: float) -> int | None:
         code: int | None = None
         if self._process is not None:
             if self._process.poll() is None:
-                self._process.terminate()
+                self._process.send_signal(how)
                 try:
                     self._process.wait(timeout)
                 except subprocess.TimeoutExpired:

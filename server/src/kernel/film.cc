@@ -1,8 +1,11 @@
 #include "kernel/film.h"
 
 #include <algorithm>
-
+#include <bit>
 #include <cmath>
+#include <cstring>
+
+#include "yarf/error.h"
 
 namespace yarf {
 
@@ -33,7 +36,7 @@ float ReconstructionFilter::Weight1(float d) const {
 }
 
 Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
-    : width_(width), height_(height), filter_(filter), pixels_(size_t(width) * height) {}
+    : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {}
 
 template <typename Visit>
 void Film::ForEachPixelInFilter(float x, float y, Visit&& visit) const {
@@ -128,6 +131,94 @@ std::vector<float> Film::Variances() const {
       out[i] += float(std::max(0.0, splats_.sum_sq[i] / n - m * m) / (n - 1));
     }
   return out;
+}
+
+// Saved film: "YARFFILM", format version, then little-endian u32 width,
+// height, passes, splat passes, whether there are splat images, the
+// filter's proto size and bytes, then the doubles of every pixel's
+// accumulators and, if any, of the three splat images.
+namespace {
+
+constexpr char kFilmMagic[8] = {'Y', 'A', 'R', 'F', 'F', 'I', 'L', 'M'};
+constexpr uint32_t kFilmVersion = 1;
+static_assert(std::endian::native == std::endian::little, "saved films are little-endian");
+
+void Put(std::string& out, const void* data, size_t size) { out.append(static_cast<const char*>(data), size); }
+void PutU32(std::string& out, uint32_t value) { Put(out, &value, sizeof value); }
+
+class Reader {
+ public:
+  explicit Reader(std::string_view bytes) : bytes_(bytes) {}
+  void Get(void* data, size_t size) {
+    if (size > bytes_.size() - offset_) throw Error("saved film is truncated");
+    std::memcpy(data, bytes_.data() + offset_, size);
+    offset_ += size;
+  }
+  uint32_t U32() {
+    uint32_t value;
+    Get(&value, sizeof value);
+    return value;
+  }
+  std::string_view Take(size_t size) {
+    if (size > bytes_.size() - offset_) throw Error("saved film is truncated");
+    offset_ += size;
+    return bytes_.substr(offset_ - size, size);
+  }
+  size_t Left() const { return bytes_.size() - offset_; }
+
+ private:
+  std::string_view bytes_;
+  size_t offset_ = 0;
+};
+
+}  // namespace
+
+std::string Film::Save() const {
+  std::string out;
+  const std::string filter = filter_spec_.SerializeAsString();
+  const bool splats = !splats_.pass.empty();
+  out.reserve(64 + filter.size() + pixels_.size() * sizeof(Pixel) + (splats ? 9 * pixels_.size() * sizeof(double) : 0));
+  Put(out, kFilmMagic, sizeof kFilmMagic);
+  for (uint32_t value :
+       {kFilmVersion, width_, height_, passes_, splats_.passes, uint32_t(splats), uint32_t(filter.size())})
+    PutU32(out, value);
+  out += filter;
+  static_assert(sizeof(Pixel) == 11 * sizeof(double));
+  Put(out, pixels_.data(), pixels_.size() * sizeof(Pixel));
+  if (splats)
+    for (const std::vector<double>* image : {&splats_.pass, &splats_.sum, &splats_.sum_sq})
+      Put(out, image->data(), image->size() * sizeof(double));
+  return out;
+}
+
+Film Film::Load(std::string_view bytes) {
+  Reader in(bytes);
+  char magic[sizeof kFilmMagic];
+  in.Get(magic, sizeof magic);
+  if (std::memcmp(magic, kFilmMagic, sizeof magic) != 0) throw Error("not a saved film");
+  if (const uint32_t version = in.U32(); version != kFilmVersion)
+    throw Error("saved film has format version " + std::to_string(version) + ", not " + std::to_string(kFilmVersion));
+  const uint32_t width = in.U32(), height = in.U32(), passes = in.U32(), splat_passes = in.U32();
+  const uint32_t splats = in.U32(), filter_size = in.U32();
+  v1::ReconstructionFilter filter;
+  if (!filter.ParseFromArray(in.Take(filter_size).data(), int(filter_size)))
+    throw Error("saved film has an unreadable filter");
+  if (height != 0 && width > in.Left() / sizeof(Pixel) / height) throw Error("saved film is truncated");
+  const size_t pixels = size_t(width) * height;
+  const size_t expected = pixels * sizeof(Pixel) + (splats ? 3 * pixels * 3 * sizeof(double) : 0);
+  if (splats > 1 || in.Left() != expected)
+    throw Error("saved film of " + std::to_string(width) + "x" + std::to_string(height) + " pixels has " +
+                std::to_string(in.Left()) + " bytes of data, not " + std::to_string(expected));
+  Film film(width, height, filter);
+  in.Get(film.pixels_.data(), pixels * sizeof(Pixel));
+  if (splats)
+    for (std::vector<double>* image : {&film.splats_.pass, &film.splats_.sum, &film.splats_.sum_sq}) {
+      image->resize(pixels * 3);
+      in.Get(image->data(), image->size() * sizeof(double));
+    }
+  film.passes_ = passes;
+  film.splats_.passes = splat_passes;
+  return film;
 }
 
 }  // namespace yarf

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "yarf/vecmath.h"
@@ -46,6 +48,12 @@ class Film {
   std::vector<float> Pixels() const;
   std::vector<float> Variances() const;
 
+  // The film's whole state (accumulators, splat images, pass count and
+  // filter) as bytes, for a checkpoint a render can resume from...
+  std::string Save() const;
+  // ...and back; throws Error for bytes that are not a saved film.
+  static Film Load(std::string_view bytes);
+
  private:
   struct Pixel {
     double weight = 0, weight_sq = 0;
@@ -64,6 +72,7 @@ class Film {
   void ForEachPixelInFilter(float x, float y, Visit&& visit) const;
 
   uint32_t width_, height_;
+  v1::ReconstructionFilter filter_spec_;  // kept for Save
   ReconstructionFilter filter_;
   std::vector<Pixel> pixels_;
   Splats splats_;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <functional>
 #include <mutex>
+#include <optional>
 
 #include "kernel/film.h"
 #include "yarf/transport.h"
@@ -15,13 +16,21 @@ class FilmTarget final : public RenderTarget {
  public:
   using PassCallback = std::function<void(uint32_t samples_done)>;
 
+  // Which samples of which pixels to render.
+  struct Share {
+    uint32_t first_sample = 0;
+    std::optional<PixelWindow> crop;
+  };
+
   // `mutex` guards `film` for everyone who reads it while it renders.
-  FilmTarget(Film& film, std::mutex& mutex, uint32_t spp, uint64_t seed,
+  FilmTarget(Film& film, std::mutex& mutex, uint32_t spp, uint64_t seed, Share share,
              const std::atomic<bool>& cancel, PassCallback on_pass)
-      : film_(film), mutex_(mutex), spp_(spp), seed_(seed), cancel_(cancel),
-        on_pass_(std::move(on_pass)) {}
+      : film_(film), mutex_(mutex), spp_(spp), seed_(seed), share_(share), cancel_(cancel),
+        on_pass_(std::move(on_pass)), samples_done_(share.first_sample) {}
 
   uint32_t SamplesPerPixel() const override { return spp_; }
+  uint32_t FirstSample() const override { return share_.first_sample; }
+  std::optional<PixelWindow> Crop() const override { return share_.crop; }
   uint64_t Seed() const override { return seed_; }
   bool Cancelled() const override { return cancel_.load(std::memory_order_relaxed); }
   void Accumulate(const FilmSamples& samples) override;
@@ -32,9 +41,10 @@ class FilmTarget final : public RenderTarget {
   std::mutex& mutex_;
   uint32_t spp_;
   uint64_t seed_;
+  Share share_;
   const std::atomic<bool>& cancel_;
   PassCallback on_pass_;
-  uint32_t samples_done_ = 0;
+  uint32_t samples_done_;
 };
 
 }  // namespace yarf

@@ -1,11 +1,12 @@
 #include "service/jobs.h"
 
+#include <chrono>
 #include <cstdio>
+#include <iostream>
+#include <set>
 
-#include "kernel/film_target.h"
 #include "kernel/scene_builder.h"
 #include "yarf/error.h"
-#include "yarf/math.h"
 
 namespace yarf {
 namespace {
@@ -14,206 +15,59 @@ constexpr uint32_t kDefaultSpp = 16;
 constexpr uint32_t kMaxSpp = 1u << 20;
 constexpr uint32_t kMaxComponentRetries = 100;
 constexpr double kMaxComponentTimeout = 24 * 3600;
+constexpr uint32_t kDefaultPriority = 50;
+constexpr uint32_t kMaxPriority = 100;
+constexpr uint32_t kMaxRetries = 10;
+// A job the server died under this many times in a row is not run again:
+// it may be what kills the server.
+constexpr uint32_t kMaxCrashes = 3;
 
-bool Terminal(v1::JobState state) {
-  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+double Now() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
-// The job's choice, else the scene's, else the default class.
-v1::ComponentSpec Choose(const v1::ComponentSpec& job, const v1::ComponentSpec& scene,
-                         const char* fallback) {
-  if (!job.class_name().empty()) return job;
-  if (!scene.class_name().empty()) return scene;
-  v1::ComponentSpec spec;
-  spec.set_class_name(fallback);
-  return spec;
+std::string IdOf(uint64_t number) {
+  char id[32];
+  std::snprintf(id, sizeof id, "job-%06llu", static_cast<unsigned long long>(number));
+  return id;
 }
 
-// Whether the job calls a component in another process: a class named
-// with an address, or registered by a component process.
-bool CallsOtherProcesses(const v1::Scene& scene, const v1::RenderOptions& options, const JobResources& resources) {
-  auto remote = [&](const std::string& class_name, const std::string& address) {
-    return !address.empty() ||
-           (!resources.registry.Has(class_name) && resources.remote_classes.AddressOf(class_name).has_value());
-  };
-  for (const v1::Material& m : scene.materials())
-    if (remote(m.class_name(), m.address())) return true;
-  for (const v1::ComponentSpec* spec : {&options.transport(), &scene.transport(), &options.sampler(), &scene.sampler()})
-    if (!spec->class_name().empty() && remote(spec->class_name(), spec->address())) return true;
-  return false;
-}
-
-// The integrator a job runs: its own, else the scene's, else mean_sample.
-// For jobs that call other processes, mean_sample works in large batches
-// (128² pixels × 4 samples per call) unless told otherwise, since every
-// call costs a round trip whatever its size.
-v1::ComponentSpec IntegratorSpec(const v1::ComponentSpec& job, const v1::ComponentSpec& scene,
-                                 bool calls_other_processes) {
-  v1::ComponentSpec spec = Choose(job, scene, "mean_sample");
-  if (calls_other_processes && spec.class_name() == "mean_sample" && spec.address().empty()) {
-    auto& values = *spec.mutable_properties()->mutable_values();
-    if (!values.contains("tile_size")) values["tile_size"].set_int_value(128);
-    if (!values.contains("samples_per_pass")) values["samples_per_pass"].set_int_value(4);
+// The number of a well-formed id, else 0 (never a job's number).
+uint64_t NumberOf(const std::string& id) {
+  if (id.size() < 5 || id.size() > 24 || id.compare(0, 4, "job-") != 0) return 0;
+  uint64_t number = 0;
+  for (size_t i = 4; i < id.size(); ++i) {
+    if (id[i] < '0' || id[i] > '9') return 0;
+    number = number * 10 + uint64_t(id[i] - '0');
   }
-  return spec;
+  return IdOf(number) == id ? number : 0;
 }
 
-RemoteOptions RemoteOptionsOf(const v1::RenderOptions& options, std::shared_ptr<RemoteCalls> calls) {
-  RemoteOptions remote;
-  remote.calls = std::move(calls);
-  if (options.component_timeout_seconds() > 0)
-    remote.deadline = std::chrono::milliseconds(int64_t(options.component_timeout_seconds() * 1000));
-  remote.retries = options.component_retries();
-  return remote;
-}
-
-template <typename I>
-std::unique_ptr<I> Make(const ComponentSources& sources, const v1::ComponentSpec& spec, const char* role) {
-  try {
-    return MakeComponent<I>(sources, spec.class_name(), spec.properties(), spec.address());
-  } catch (const Error& e) {
-    throw Error(std::string(role) + " '" + spec.class_name() + "': " + e.what());
+// A share of a job (first_sample, crop) needs an integrator that renders
+// sample passes of its own: mean_sample.
+void ValidateShare(const v1::SubmitRequest& request) {
+  const v1::RenderOptions& options = request.options();
+  if (options.first_sample() == 0 && !options.has_crop()) return;
+  if (options.first_sample() >= options.spp())
+    throw Error("first_sample " + std::to_string(options.first_sample()) + " must be below spp " +
+                std::to_string(options.spp()));
+  if (options.has_crop()) {
+    const v1::PixelWindow& c = options.crop();
+    const v1::Film& film = request.scene().film();
+    if (!(c.x0() < c.x1() && c.y0() < c.y1() && c.x1() <= film.width() && c.y1() <= film.height()))
+      throw Error("crop [" + std::to_string(c.x0()) + ", " + std::to_string(c.x1()) + ") x [" +
+                  std::to_string(c.y0()) + ", " + std::to_string(c.y1()) + ") is not a window of the " +
+                  std::to_string(film.width()) + "x" + std::to_string(film.height()) + " film");
   }
+  std::string integrator = options.integrator().class_name();
+  if (integrator.empty()) integrator = request.scene().integrator().class_name();
+  if (!integrator.empty() && integrator != "mean_sample")
+    throw Error("first_sample and crop need the mean_sample integrator, not '" + integrator + "'");
 }
 
-}  // namespace
-
-Job::Job(std::string id, v1::SubmitRequest request) : id_(std::move(id)), request_(std::move(request)) {
-  status_.set_job_id(id_);
-  status_.set_name(request_.name());
-  status_.set_state(v1::QUEUED);
-  status_.set_samples_total(request_.options().spp());
-}
-
-v1::JobStatus Job::Status() const {
-  std::lock_guard lock(mutex_);
-  return status_;
-}
-
-uint64_t Job::Version() const {
-  std::lock_guard lock(mutex_);
-  return version_;
-}
-
-bool Job::Finished() const {
-  std::lock_guard lock(mutex_);
-  return Terminal(status_.state());
-}
-
-void Job::WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const {
-  std::unique_lock lock(mutex_);
-  changed_.wait_for(lock, timeout, [&] { return version_ != seen; });
-}
-
-void Job::Update(const std::function<void(v1::JobStatus&)>& change) {
-  {
-    std::lock_guard lock(mutex_);
-    change(status_);
-    if (status_.state() == v1::RUNNING || Terminal(status_.state())) {
-      const double elapsed =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
-      status_.set_elapsed_seconds(elapsed);
-      const double fraction = status_.samples_total() ? double(status_.samples_done()) / status_.samples_total() : 0;
-      status_.set_percent(100 * fraction);
-      status_.set_eta_seconds(fraction > 0 && !Terminal(status_.state()) ? elapsed * (1 - fraction) / fraction : 0);
-    }
-    ++version_;
-  }
-  changed_.notify_all();
-}
-
-void Job::RequestCancel() {
-  cancel_ = true;
-  remote_calls_->Cancel();
-  Update([](v1::JobStatus& s) {
-    if (s.state() == v1::QUEUED) s.set_state(v1::CANCELLED);
-  });
-}
-
-bool Job::Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
-                   uint32_t& height) const {
-  std::lock_guard lock(film_mutex_);
-  if (film_) {
-    pixels = film_->Pixels();
-    variances = film_->Variances();
-  } else if (!final_pixels_.empty()) {
-    pixels = final_pixels_;
-    variances = final_variances_;
-  } else {
-    return false;
-  }
-  width = width_;
-  height = height_;
-  return true;
-}
-
-void Job::KeepFinalImage() {
-  std::lock_guard lock(film_mutex_);
-  if (!film_) return;
-  final_pixels_ = film_->Pixels();
-  final_variances_ = film_->Variances();
-  film_.reset();
-}
-
-void Job::Run(const JobResources& resources) {
-  {
-    std::lock_guard lock(mutex_);
-    if (status_.state() != v1::QUEUED) return;  // cancelled while queued
-    started_ = std::chrono::steady_clock::now();
-  }
-  Update([](v1::JobStatus& s) { s.set_state(v1::RUNNING); });
-  try {
-    const v1::Scene& scene = request_.scene();
-    const v1::RenderOptions& options = request_.options();
-    const ComponentSources components{resources.registry, &resources.remote_classes, RemoteOptionsOf(options, remote_calls_)};
-    std::shared_ptr<KernelScene> kernel =
-        BuildScene(scene, SceneSources{components, resources.device, resources.asset_root});
-    auto transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
-    auto integrator = Make<Integrator>(
-        components,
-        IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources)),
-        "integrator");
-    auto sampler = Make<Sampler>(components, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
-    {
-      std::lock_guard lock(film_mutex_);
-      film_ = std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
-      width_ = film_->width();
-      height_ = film_->height();
-    }
-    const KernelScene* counters = kernel.get();
-    FilmTarget target(*film_, film_mutex_, options.spp(), options.seed(), cancel_, [&](uint32_t done) {
-      Update([&](v1::JobStatus& s) {
-        s.set_samples_done(done);
-        s.set_closest_hit_rays(counters->ClosestHitRays());
-        s.set_shadow_rays(counters->ShadowRays());
-      });
-    });
-    // Served while it renders, for transports in other processes.
-    const auto served = resources.scenes.Serve(kernel, target);
-    transport->Prepare(*kernel);
-    integrator->Render(*transport, *kernel, *sampler, target);
-    KeepFinalImage();
-    Update([&](v1::JobStatus& s) {
-      s.set_state(cancel_ ? v1::CANCELLED : v1::SUCCEEDED);
-      s.set_closest_hit_rays(counters->ClosestHitRays());
-      s.set_shadow_rays(counters->ShadowRays());
-    });
-  } catch (const std::exception& e) {
-    KeepFinalImage();
-    Update([&](v1::JobStatus& s) {
-      // A cancel that cut a remote call short is a cancel, not a failure.
-      s.set_state(cancel_ ? v1::CANCELLED : v1::FAILED);
-      if (!cancel_) s.set_error(e.what());
-    });
-  }
-}
-
-JobManager::~JobManager() {
-  for (const auto& job : List()) job->RequestCancel();
-  threads_.clear();  // joins
-}
-
-std::string JobManager::Submit(const v1::SubmitRequest& request) {
+// The request as the job will run it, its defaults filled in; throws Error
+// for what is refused.
+v1::SubmitRequest Accept(const v1::SubmitRequest& request, const AssetSource* assets) {
   v1::SubmitRequest accepted = request;
   uint32_t spp = request.options().spp();
   if (spp == 0) spp = kDefaultSpp;
@@ -227,20 +81,111 @@ std::string JobManager::Submit(const v1::SubmitRequest& request) {
   if (request.options().component_retries() > kMaxComponentRetries)
     throw Error("component_retries " + std::to_string(request.options().component_retries()) +
                 " is out of range (0 to " + std::to_string(kMaxComponentRetries) + ")");
-  ValidateScene(accepted.scene());
+  if (request.priority() > kMaxPriority)
+    throw Error("priority " + std::to_string(request.priority()) + " is out of range (1 to " +
+                std::to_string(kMaxPriority) + "; 0 means " + std::to_string(kDefaultPriority) + ")");
+  if (request.priority() == 0) accepted.set_priority(kDefaultPriority);
+  if (request.max_retries() > kMaxRetries)
+    throw Error("max_retries " + std::to_string(request.max_retries()) + " is out of range (0 to " +
+                std::to_string(kMaxRetries) + ")");
+  ValidateScene(accepted.scene(), assets);
+  ValidateShare(accepted);
+  return accepted;
+}
 
-  std::lock_guard lock(mutex_);
-  char id[32];
-  std::snprintf(id, sizeof id, "job-%06llu", static_cast<unsigned long long>(next_id_++));
-  auto job = std::make_shared<Job>(id, std::move(accepted));
-  jobs_[id] = job;
-  threads_.emplace_back([this, job] { job->Run(resources_); });
-  return id;
+void RemoveFile(const std::filesystem::path& path) {
+  std::error_code ignored;
+  std::filesystem::remove(path, ignored);
+}
+
+}  // namespace
+
+JobManager::JobManager(JobResources resources, JobQueueOptions options)
+    : resources_(std::move(resources)),
+      options_(std::move(options)),
+      folder_(options_.state_dir),
+      store_(folder_.Database()),
+      scheduler_([this](const std::shared_ptr<Job>& job) { RunJob(job); }) {
+  Restore();
+  ApplyRetention();
+  RemoveStrayFiles();
+}
+
+JobManager::~JobManager() {
+  scheduler_.Stop();
+  for (const auto& job : List()) job->RequestStop();
+  // The scheduler, destroyed first, waits for the stopped runs.
+}
+
+void JobManager::Start() { scheduler_.Start(options_.max_running_jobs); }
+
+std::shared_ptr<Job> JobManager::MakeJob(JobRecord record, std::shared_ptr<const v1::SubmitRequest> request) {
+  const std::string id = IdOf(record.number);
+  Job::Files files{folder_.Checkpoint(id), folder_.Result(id)};
+  return std::make_shared<Job>(id, std::move(record), std::move(request), std::move(files),
+                               [this](const JobRecord& row) { store_.Update(row); });
+}
+
+void JobManager::Restore() {
+  for (JobRecord& row : store_.LoadAll()) {
+    std::shared_ptr<v1::SubmitRequest> request;
+    bool changed = false;
+    if (!Ended(row.state)) {
+      request = std::make_shared<v1::SubmitRequest>();
+      if (!request->ParseFromString(row.request)) {
+        request.reset();
+        row.state = v1::FAILED;
+        row.error = "the stored request of this job cannot be read";
+        row.finished_at = Now();
+        changed = true;
+      }
+    }
+    if (row.state == v1::RUNNING) {
+      // The server died under it: it runs again from its checkpoint, unless
+      // that happened too often in a row.
+      if (++row.crashes >= kMaxCrashes) {
+        row.state = v1::FAILED;
+        row.error = "the server stopped " + std::to_string(row.crashes) +
+                    " times in a row while this job ran; it is not run again";
+        row.finished_at = Now();
+        request.reset();
+      } else {
+        row.state = v1::QUEUED;
+      }
+      changed = true;
+    }
+    if (changed) store_.Update(row);
+    auto job = MakeJob(std::move(row), std::move(request));
+    jobs_[job->number()] = job;
+    if (!job->Finished()) scheduler_.Enqueue(job);
+  }
+}
+
+std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
+  auto accepted = std::make_shared<const v1::SubmitRequest>(Accept(request, resources_.assets));
+  JobRecord row;
+  row.request = accepted->SerializeAsString();
+  row.name = accepted->name();
+  row.owner = owner;
+  row.state = v1::QUEUED;
+  row.priority = accepted->priority();
+  row.max_retries = accepted->max_retries();
+  row.samples_total = accepted->options().spp();
+  row.submitted_at = Now();
+  // Stored (and synced) before the caller hears of it.
+  row.number = store_.Insert(row);
+  auto job = MakeJob(std::move(row), std::move(accepted));
+  {
+    std::lock_guard lock(mutex_);
+    jobs_[job->number()] = job;
+  }
+  scheduler_.Enqueue(job);
+  return job->id();
 }
 
 std::shared_ptr<Job> JobManager::Find(const std::string& id) const {
   std::lock_guard lock(mutex_);
-  auto it = jobs_.find(id);
+  auto it = jobs_.find(NumberOf(id));
   return it == jobs_.end() ? nullptr : it->second;
 }
 
@@ -249,6 +194,72 @@ std::vector<std::shared_ptr<Job>> JobManager::List() const {
   std::vector<std::shared_ptr<Job>> out;
   for (auto it = jobs_.rbegin(); it != jobs_.rend(); ++it) out.push_back(it->second);
   return out;
+}
+
+void JobManager::Cancel(Job& job) {
+  if (!job.RequestCancel()) return;  // a running job ends through its run
+  scheduler_.Remove(job);
+  ApplyRetention();
+}
+
+bool JobManager::SetPriority(Job& job, uint32_t priority) {
+  if (priority < 1 || priority > kMaxPriority)
+    throw Error("priority " + std::to_string(priority) + " is out of range (1 to " + std::to_string(kMaxPriority) +
+                ")");
+  if (job.Finished()) return false;
+  scheduler_.SetPriority(job, priority);
+  return true;
+}
+
+void JobManager::RunJob(const std::shared_ptr<Job>& job) {
+  try {
+    if (!job->Begin()) return;  // cancelled while queued, or the server is stopping
+    const Job::RunResult result = job->Render(resources_, {options_.checkpoint_seconds});
+    if (job->EndRun(result)) {
+      scheduler_.Enqueue(job);
+      return;
+    }
+    if (job->Finished()) ApplyRetention();
+  } catch (const std::exception& e) {
+    std::cerr << "yarfd: job " << job->id() << ": " << e.what() << std::endl;
+  }
+}
+
+void JobManager::ApplyRetention() {
+  const double cutoff = Now() - options_.keep_finished_hours * 3600;
+  const std::vector<uint64_t> numbers = store_.DeleteEnded(cutoff, options_.max_finished_jobs);
+  std::vector<std::shared_ptr<Job>> deleted;
+  {
+    std::lock_guard lock(mutex_);
+    for (uint64_t number : numbers) {
+      if (auto it = jobs_.find(number); it != jobs_.end()) {
+        deleted.push_back(std::move(it->second));
+        jobs_.erase(it);
+      }
+    }
+  }
+  for (uint64_t number : numbers) {
+    RemoveFile(folder_.Result(IdOf(number)));
+    RemoveFile(folder_.Checkpoint(IdOf(number)));
+  }
+}
+
+// Files a crash left behind: half-written temporaries, and the files of
+// jobs that were deleted or have ended.
+void JobManager::RemoveStrayFiles() const {
+  std::set<std::string> live, kept;
+  for (const auto& job : List()) {
+    (job->Finished() ? kept : live).insert(job->id());
+  }
+  auto sweep = [](const std::filesystem::path& folder, const std::set<std::string>& wanted) {
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+      const std::filesystem::path& path = entry.path();
+      if (path.extension() == ".tmp" || !wanted.contains(path.stem().string())) RemoveFile(path);
+    }
+  };
+  sweep(folder_.Checkpoints(), live);
+  sweep(folder_.Results(), kept);
 }
 
 }  // namespace yarf

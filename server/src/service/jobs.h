@@ -1,98 +1,77 @@
-// The job table: accepted render jobs, each rendering on its own thread
-// while the server stays responsive.
+// The job table: accepted render jobs, kept in the state folder's job
+// store so that they survive a restart, and run by the scheduler a few at
+// a time while the server stays responsive.
 #pragma once
 
-#include <atomic>
-#include <chrono>
-#include <condition_variable>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
-#include "components/remote_classes.h"
-#include "components/remote_instance.h"
-#include "kernel/embree_device.h"
-#include "kernel/film.h"
-#include "service/job_scenes.h"
+#include "service/job.h"
+#include "service/job_store.h"
+#include "service/scheduler.h"
+#include "service/state_folder.h"
 #include "yarf/v1/render.pb.h"
 
 namespace yarf {
 
-// What jobs are made from: the classes (in process and in component
-// processes), the device, the folder assets resolve in, and the table
-// that serves running jobs' scenes to remote transports.
-struct JobResources {
-  const Registry& registry;
-  const RemoteClasses& remote_classes;
-  const EmbreeDevice& device;
-  std::filesystem::path asset_root;
-  JobScenes& scenes;
-};
-
-class Job {
- public:
-  Job(std::string id, v1::SubmitRequest request);
-
-  const std::string& id() const { return id_; }
-  const v1::SubmitRequest& request() const { return request_; }
-  v1::JobStatus Status() const;
-  // Bumped on every change, for watchers.
-  uint64_t Version() const;
-  // Waits until the version differs from `seen` or `timeout` passes.
-  void WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const;
-  void RequestCancel();
-  bool Finished() const;
-  // Pixels and variances of the film so far (empty before the film exists).
-  bool Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
-                uint32_t& height) const;
-
-  // Runs the job to its end (called on the job's own thread).
-  void Run(const JobResources& resources);
-
- private:
-  void Update(const std::function<void(v1::JobStatus&)>& change);
-  void KeepFinalImage();
-
-  const std::string id_;
-  const v1::SubmitRequest request_;
-  std::atomic<bool> cancel_{false};
-  // Calls to components in other processes, ended at once by a cancel.
-  const std::shared_ptr<RemoteCalls> remote_calls_ = std::make_shared<RemoteCalls>();
-  mutable std::mutex mutex_;
-  mutable std::condition_variable changed_;
-  v1::JobStatus status_;
-  uint64_t version_ = 0;
-  std::chrono::steady_clock::time_point started_;
-  // The film while rendering; once the job ends only its estimates are
-  // kept (a film holds several times their size).
-  std::unique_ptr<Film> film_;
-  std::vector<float> final_pixels_, final_variances_;
-  uint32_t width_ = 0, height_ = 0;
-  mutable std::mutex film_mutex_;
+struct JobQueueOptions {
+  std::filesystem::path state_dir;
+  // Jobs that render at once.
+  uint32_t max_running_jobs = 2;
+  // Least time between two checkpoints of a rendering film.
+  double checkpoint_seconds = 5;
+  // Ended jobs (and their images) are deleted after this many hours...
+  double keep_finished_hours = 168;
+  // ...and beyond this many, the oldest first.
+  uint64_t max_finished_jobs = 1000;
 };
 
 class JobManager {
  public:
-  explicit JobManager(JobResources resources) : resources_(std::move(resources)) {}
-  // Cancels running jobs and waits for their threads.
+  // Locks the state folder, opens its job store and takes back the jobs a
+  // previous server left: queued ones wait again, those it was running
+  // resume (or fail, if the server died under them too often). Throws
+  // Error or StorageError when the folder or the store is unusable.
+  JobManager(JobResources resources, JobQueueOptions options);
+  // Stops the running jobs (they resume at the next start) and waits.
   ~JobManager();
+  JobManager(const JobManager&) = delete;
+  JobManager& operator=(const JobManager&) = delete;
 
-  // Validates and starts a job; throws Error for a scene or options it refuses.
-  std::string Submit(const v1::SubmitRequest& request);
+  // Starts running jobs: call once the server listens, since a job's
+  // components in other processes may call it back.
+  void Start();
+  // Validates and stores a job of `owner`, then queues it; throws Error
+  // for a scene or options it refuses, StorageError when it cannot store it.
+  std::string Submit(const v1::SubmitRequest& request, const std::string& owner);
   std::shared_ptr<Job> Find(const std::string& id) const;
+  // Newest first.
   std::vector<std::shared_ptr<Job>> List() const;
+  void Cancel(Job& job);
+  // False for a job that has ended; throws Error for a priority outside 1..100.
+  bool SetPriority(Job& job, uint32_t priority);
 
  private:
+  void Restore();
+  void RunJob(const std::shared_ptr<Job>& job);
+  // Deletes ended jobs past the retention limits, with their files.
+  void ApplyRetention();
+  void RemoveStrayFiles() const;
+  std::shared_ptr<Job> MakeJob(JobRecord record, std::shared_ptr<const v1::SubmitRequest> request);
+
   const JobResources resources_;
+  const JobQueueOptions options_;
+  StateFolder folder_;
+  JobStore store_;
   mutable std::mutex mutex_;
-  uint64_t next_id_ = 1;
-  std::map<std::string, std::shared_ptr<Job>> jobs_;
-  std::vector<std::jthread> threads_;
+  std::map<uint64_t, std::shared_ptr<Job>> jobs_;
+  // Last: its workers use the members above.
+  Scheduler scheduler_;
 };
 
 }  // namespace yarf

@@ -2,35 +2,39 @@
 
 #include <chrono>
 
-#include "kernel/image_io.h"
 #include "components/array_codec.h"
+#include "kernel/image_io.h"
+#include "service/access.h"
 #include "yarf/error.h"
 
 namespace yarf {
-namespace {
 
-grpc::Status NotFound(const std::string& id) {
-  return {grpc::StatusCode::NOT_FOUND, "no job '" + id + "'"};
+grpc::Status RenderServiceImpl::Reach(const grpc::ServerContext& context, const std::string& id,
+                                      std::shared_ptr<Job>& job) const {
+  job = jobs_.Find(id);
+  if (!job) return {grpc::StatusCode::NOT_FOUND, "no job '" + id + "'"};
+  const Caller caller = CallerOf(context);
+  if (!MayActOn(caller, job->owner()))
+    return {grpc::StatusCode::PERMISSION_DENIED, "job '" + id + "' is not " + caller.user + "'s"};
+  return grpc::Status::OK;
 }
 
-bool Ended(v1::JobState s) { return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED; }
-
-}  // namespace
-
-grpc::Status RenderServiceImpl::Submit(grpc::ServerContext*, const v1::SubmitRequest* request,
+grpc::Status RenderServiceImpl::Submit(grpc::ServerContext* context, const v1::SubmitRequest* request,
                                        v1::SubmitReply* reply) {
   try {
-    reply->set_job_id(jobs_.Submit(*request));
+    reply->set_job_id(jobs_.Submit(*request, CallerOf(*context).user));
     return grpc::Status::OK;
   } catch (const Error& e) {
     return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};
+  } catch (const StorageError& e) {
+    return {grpc::StatusCode::INTERNAL, std::string("the job could not be stored: ") + e.what()};
   }
 }
 
 grpc::Status RenderServiceImpl::Watch(grpc::ServerContext* context, const v1::WatchRequest* request,
                                       grpc::ServerWriter<v1::JobStatus>* writer) {
-  auto job = jobs_.Find(request->job_id());
-  if (!job) return NotFound(request->job_id());
+  std::shared_ptr<Job> job;
+  if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok()) return reached;
   uint64_t seen = job->Version();
   for (;;) {
     const v1::JobStatus status = job->Status();
@@ -45,10 +49,10 @@ grpc::Status RenderServiceImpl::Watch(grpc::ServerContext* context, const v1::Wa
   }
 }
 
-grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext*, const v1::GetResultRequest* request,
+grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1::GetResultRequest* request,
                                           v1::GetResultReply* reply) {
-  auto job = jobs_.Find(request->job_id());
-  if (!job) return NotFound(request->job_id());
+  std::shared_ptr<Job> job;
+  if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok()) return reached;
   *reply->mutable_status() = job->Status();
   std::vector<float> pixels, variances;
   uint32_t width = 0, height = 0;
@@ -74,18 +78,40 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext*, const v1::GetRes
   return grpc::Status::OK;
 }
 
-grpc::Status RenderServiceImpl::Cancel(grpc::ServerContext*, const v1::CancelRequest* request,
+grpc::Status RenderServiceImpl::Cancel(grpc::ServerContext* context, const v1::CancelRequest* request,
                                        v1::CancelReply* reply) {
-  auto job = jobs_.Find(request->job_id());
-  if (!job) return NotFound(request->job_id());
-  job->RequestCancel();
+  std::shared_ptr<Job> job;
+  if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok()) return reached;
+  try {
+    jobs_.Cancel(*job);
+  } catch (const StorageError& e) {
+    return {grpc::StatusCode::INTERNAL, e.what()};
+  }
   *reply->mutable_status() = job->Status();
   return grpc::Status::OK;
 }
 
-grpc::Status RenderServiceImpl::List(grpc::ServerContext*, const v1::ListJobsRequest*,
+grpc::Status RenderServiceImpl::List(grpc::ServerContext* context, const v1::ListJobsRequest*,
                                      v1::ListJobsReply* reply) {
-  for (const auto& job : jobs_.List()) *reply->add_jobs() = job->Status();
+  const Caller caller = CallerOf(*context);
+  for (const auto& job : jobs_.List())
+    if (MayActOn(caller, job->owner())) *reply->add_jobs() = job->Status();
+  return grpc::Status::OK;
+}
+
+grpc::Status RenderServiceImpl::SetPriority(grpc::ServerContext* context, const v1::SetPriorityRequest* request,
+                                            v1::JobStatus* reply) {
+  std::shared_ptr<Job> job;
+  if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok()) return reached;
+  try {
+    if (!jobs_.SetPriority(*job, request->priority()))
+      return {grpc::StatusCode::FAILED_PRECONDITION, "job '" + request->job_id() + "' has ended"};
+  } catch (const Error& e) {
+    return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};
+  } catch (const StorageError& e) {
+    return {grpc::StatusCode::INTERNAL, e.what()};
+  }
+  *reply = job->Status();
   return grpc::Status::OK;
 }
 

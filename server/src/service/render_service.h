@@ -1,4 +1,5 @@
-// yarf.v1.RenderService over the job table.
+// yarf.v1.RenderService over the job table. Callers see and act on the
+// jobs access.h lets them: their own, or everyone's for the admin role.
 #pragma once
 
 #include "service/jobs.h"
@@ -16,8 +17,12 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   grpc::Status GetResult(grpc::ServerContext*, const v1::GetResultRequest*, v1::GetResultReply*) override;
   grpc::Status Cancel(grpc::ServerContext*, const v1::CancelRequest*, v1::CancelReply*) override;
   grpc::Status List(grpc::ServerContext*, const v1::ListJobsRequest*, v1::ListJobsReply*) override;
+  grpc::Status SetPriority(grpc::ServerContext*, const v1::SetPriorityRequest*, v1::JobStatus*) override;
 
  private:
+  // The job, if the caller may act on it; else why not.
+  grpc::Status Reach(const grpc::ServerContext& context, const std::string& id, std::shared_ptr<Job>& job) const;
+
   JobManager& jobs_;
 };
 

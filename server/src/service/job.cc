@@ -1,0 +1,344 @@
+#include "service/job.h"
+
+#include <algorithm>
+#include <iostream>
+#include <optional>
+
+#include "kernel/film_target.h"
+#include "service/job_files.h"
+#include "yarf/error.h"
+
+namespace yarf {
+namespace {
+
+double Now() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+void RemoveFile(const std::filesystem::path& path) {
+  std::error_code ignored;
+  std::filesystem::remove(path, ignored);
+}
+
+}  // namespace
+
+bool Ended(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+
+Job::Job(std::string id, JobRecord record, std::shared_ptr<const v1::SubmitRequest> request, Files files,
+         Persist persist)
+    : id_(std::move(id)),
+      number_(record.number),
+      owner_(record.owner),
+      files_(std::move(files)),
+      persist_(std::move(persist)),
+      request_(std::move(request)),
+      row_(std::move(record)),
+      samples_done_(row_.samples_done),
+      closest_hit_rays_(row_.closest_hit_rays),
+      shadow_rays_(row_.shadow_rays) {
+  row_.request.clear();  // held parsed in request_
+}
+
+v1::JobStatus Job::Status() const {
+  std::lock_guard lock(mutex_);
+  v1::JobStatus s;
+  s.set_job_id(id_);
+  s.set_name(row_.name);
+  s.set_state(row_.state);
+  s.set_samples_done(samples_done_);
+  s.set_samples_total(row_.samples_total);
+  s.set_percent(row_.samples_total ? 100.0 * samples_done_ / row_.samples_total : 0);
+  if (row_.state == v1::RUNNING) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+    s.set_elapsed_seconds(elapsed);
+    // The rate of this run: a resumed run started at run_first_sample_.
+    if (samples_done_ > run_first_sample_)
+      s.set_eta_seconds(elapsed * (row_.samples_total - samples_done_) / (samples_done_ - run_first_sample_));
+  } else if (Ended(row_.state)) {
+    s.set_elapsed_seconds(row_.elapsed_seconds);
+  }
+  s.set_error(row_.error);
+  s.set_closest_hit_rays(closest_hit_rays_);
+  s.set_shadow_rays(shadow_rays_);
+  s.set_priority(row_.priority);
+  s.set_owner(owner_);
+  s.set_attempts(row_.attempts);
+  s.set_submitted_at(row_.submitted_at);
+  return s;
+}
+
+uint64_t Job::Version() const {
+  std::lock_guard lock(mutex_);
+  return version_;
+}
+
+bool Job::Finished() const {
+  std::lock_guard lock(mutex_);
+  return Ended(row_.state);
+}
+
+uint32_t Job::Priority() const {
+  std::lock_guard lock(mutex_);
+  return row_.priority;
+}
+
+void Job::WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(mutex_);
+  changed_.wait_for(lock, timeout, [&] { return version_ != seen; });
+}
+
+bool Job::Commit(const std::function<bool(JobRecord&)>& change) {
+  {
+    std::lock_guard lock(mutex_);
+    JobRecord next = row_;
+    if (!change(next)) return false;
+    persist_(next);
+    row_ = std::move(next);
+    ++version_;
+  }
+  changed_.notify_all();
+  return true;
+}
+
+void Job::Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays) {
+  {
+    std::lock_guard lock(mutex_);
+    samples_done_ = samples_done;
+    closest_hit_rays_ = closest_hit_rays;
+    shadow_rays_ = shadow_rays;
+    ++version_;
+  }
+  changed_.notify_all();
+}
+
+void Job::SetPriority(uint32_t priority) {
+  Commit([&](JobRecord& row) {
+    row.priority = priority;
+    return true;
+  });
+}
+
+bool Job::RequestCancel() {
+  cancel_ = true;
+  halt_ = true;
+  remote_calls_->Cancel();
+  const bool was_queued = Commit([](JobRecord& row) {
+    if (row.state != v1::QUEUED) return false;
+    row.state = v1::CANCELLED;
+    row.finished_at = Now();
+    return true;
+  });
+  if (was_queued) {
+    // Begin refuses a cancelled job, so no worker reads the request any more.
+    std::lock_guard lock(mutex_);
+    request_.reset();
+    RemoveFile(files_.checkpoint);
+  }
+  return was_queued;
+}
+
+void Job::RequestStop() {
+  stop_ = true;
+  halt_ = true;
+  remote_calls_->Cancel();
+}
+
+bool Job::Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
+                   uint32_t& height) const {
+  {
+    std::lock_guard lock(film_mutex_);
+    if (film_) {
+      pixels = film_->Pixels();
+      variances = film_->Variances();
+      width = film_->width();
+      height = film_->height();
+      return true;
+    }
+  }
+  if (!Finished()) return false;
+  std::optional<JobImage> image;
+  try {
+    image = ReadJobImage(files_.result);
+  } catch (const Error& e) {
+    std::cerr << "yarfd: job " << id_ << ": " << e.what() << "\n";
+  }
+  if (!image) return false;
+  pixels = std::move(image->pixels);
+  variances = std::move(image->variances);
+  width = image->width;
+  height = image->height;
+  return true;
+}
+
+bool Job::Begin() {
+  return Commit([&](JobRecord& row) {
+    if (row.state != v1::QUEUED || stop_ || !request_) return false;
+    row.state = v1::RUNNING;
+    ++row.attempts;
+    row.error.clear();
+    started_ = std::chrono::steady_clock::now();
+    return true;
+  });
+}
+
+Job::RunResult Job::Render(const JobResources& resources, const RunSettings& settings) {
+  const auto outcome = [&](Outcome otherwise) {
+    return cancel_ ? Outcome::kCancelled : stop_ ? Outcome::kStopped : otherwise;
+  };
+  try {
+    const v1::Scene& scene = request_->scene();
+    const v1::RenderOptions& options = request_->options();
+    JobComponents parts = MakeJobComponents(*request_, resources, remote_calls_);
+    const std::shared_ptr<KernelScene> kernel = parts.scene;
+    const bool resumable = parts.resumable;
+    std::optional<FilmCheckpoint> checkpoint = resumable ? UsableCheckpoint(scene.film()) : std::nullopt;
+    // A checkpoint in use stays until the next one replaces it, so that a
+    // crash before then still resumes from it.
+    if (!checkpoint) RemoveFile(files_.checkpoint);
+    FilmTarget::Share share = ShareOf(options);
+    {
+      std::lock_guard lock(film_mutex_);
+      film_ = checkpoint ? std::make_unique<Film>(std::move(checkpoint->film))
+                         : std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
+    }
+    if (checkpoint) share.first_sample = std::max(share.first_sample, checkpoint->samples_done);
+    {
+      std::lock_guard lock(mutex_);
+      run_first_sample_ = share.first_sample;
+    }
+    Progress(share.first_sample, 0, 0);
+
+    const KernelScene* counters = kernel.get();
+    // Checkpoints of a large film take a while to write: at least ten
+    // times that long apart, so that they cost at most a tenth of the time.
+    const std::chrono::duration<double> every(settings.checkpoint_seconds);
+    auto next_checkpoint = std::chrono::steady_clock::now() + every;
+    FilmTarget target(*film_, film_mutex_, options.spp(), options.seed(), share, halt_, [&](uint32_t done) {
+      Progress(done, counters->ClosestHitRays(), counters->ShadowRays());
+      if (!resumable || done >= options.spp() || halt_) return;
+      const auto start = std::chrono::steady_clock::now();
+      if (start < next_checkpoint) return;
+      WriteCheckpoint(done);
+      const auto end = std::chrono::steady_clock::now();
+      next_checkpoint = end + std::max(every, std::chrono::duration<double>(10 * (end - start)));
+    });
+    // Served while it renders, for transports in other processes.
+    const auto served = resources.scenes.Serve(kernel, target);
+    parts.transport->Prepare(*kernel);
+    parts.integrator->Render(*parts.transport, *kernel, *parts.sampler, target);
+    Progress(samples_done_, counters->ClosestHitRays(), counters->ShadowRays());
+    return {outcome(Outcome::kSucceeded), ""};
+  } catch (const std::exception& e) {
+    // A halt that cut a remote call short is a cancel or a stop, not a failure.
+    return {outcome(Outcome::kFailed), e.what()};
+  }
+}
+
+std::optional<FilmCheckpoint> Job::UsableCheckpoint(const v1::Film& film) const {
+  try {
+    std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(files_.checkpoint);
+    if (checkpoint && (checkpoint->film.width() != film.width() || checkpoint->film.height() != film.height()))
+      throw Error("the checkpoint is not of this job's film size");
+    return checkpoint;
+  } catch (const Error& e) {
+    std::cerr << "yarfd: job " << id_ << ": starting anew: " << e.what() << "\n";
+    return std::nullopt;
+  }
+}
+
+void Job::WriteCheckpoint(uint32_t samples_done) {
+  try {
+    std::string film;
+    {
+      std::lock_guard lock(film_mutex_);
+      film = film_->Save();
+    }
+    ::yarf::WriteCheckpoint(files_.checkpoint, samples_done, film);
+    Commit([&](JobRecord& row) {
+      row.samples_done = samples_done;
+      return true;
+    });
+  } catch (const std::exception& e) {
+    // The render goes on; only its resumability suffers.
+    if (!std::exchange(checkpoint_failed_, true))
+      std::cerr << "yarfd: job " << id_ << ": no checkpoint: " << e.what() << "\n";
+  }
+}
+
+bool Job::EndRun(const RunResult& result) {
+  switch (result.outcome) {
+    case Outcome::kStopped:
+      // Back in the queue for the next start, which goes on from the last
+      // checkpoint (row_.samples_done says where).
+      Commit([](JobRecord& row) {
+        row.state = v1::QUEUED;
+        return true;
+      });
+      return false;
+    case Outcome::kFailed:
+      if (Commit([&](JobRecord& row) {
+            if (row.failures + 1 > row.max_retries) return false;
+            ++row.failures;
+            row.crashes = 0;
+            row.state = v1::QUEUED;
+            row.samples_done = 0;
+            row.error = result.error;  // why it runs again
+            return true;
+          })) {
+        std::cerr << "yarfd: job " << id_ << " failed, queued again: " << result.error << "\n";
+        {
+          std::lock_guard lock(film_mutex_);
+          film_.reset();
+        }
+        RemoveFile(files_.checkpoint);
+        std::lock_guard lock(mutex_);
+        samples_done_ = 0;
+        return true;
+      }
+      Finish(v1::FAILED, result.error);
+      return false;
+    case Outcome::kCancelled:
+      Finish(v1::CANCELLED, "");
+      return false;
+    case Outcome::kSucceeded:
+      Finish(v1::SUCCEEDED, "");
+      return false;
+  }
+  return false;
+}
+
+void Job::Finish(v1::JobState state, const std::string& error) {
+  // The image first, so that a job that reads SUCCEEDED after a restart has it.
+  JobImage image;
+  {
+    std::lock_guard lock(film_mutex_);
+    if (film_) image = {film_->width(), film_->height(), film_->Pixels(), film_->Variances()};
+  }
+  if (!image.pixels.empty()) {
+    try {
+      WriteJobImage(files_.result, image);
+    } catch (const Error& e) {
+      std::cerr << "yarfd: job " << id_ << ": image not kept: " << e.what() << "\n";
+    }
+  }
+  RemoveFile(files_.checkpoint);
+  Commit([&](JobRecord& row) {
+    if (state == v1::FAILED) ++row.failures;
+    row.state = state;
+    row.error = error;
+    row.crashes = 0;
+    row.finished_at = Now();
+    row.elapsed_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+    row.samples_done = samples_done_;
+    row.closest_hit_rays = closest_hit_rays_;
+    row.shadow_rays = shadow_rays_;
+    return true;
+  });
+  {
+    std::lock_guard lock(film_mutex_);
+    film_.reset();
+  }
+  request_.reset();
+}
+
+}  // namespace yarf

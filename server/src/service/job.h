@@ -1,0 +1,118 @@
+// One accepted render job: its durable row, its progress and, while it
+// renders, its film. Every change of the row is written to the job store
+// (through `persist`) before watchers see it.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "components/remote_instance.h"
+#include "kernel/film.h"
+#include "service/job_components.h"
+#include "service/job_files.h"
+#include "service/job_store.h"
+#include "yarf/v1/render.pb.h"
+
+namespace yarf {
+
+bool Ended(v1::JobState state);
+
+class Job {
+ public:
+  using Persist = std::function<void(const JobRecord&)>;
+  // The job's files in the state folder.
+  struct Files {
+    std::filesystem::path checkpoint, result;
+  };
+  struct RunSettings {
+    // Least time between two checkpoints of the film.
+    double checkpoint_seconds = 5;
+  };
+  enum class Outcome { kSucceeded, kFailed, kCancelled, kStopped };
+  struct RunResult {
+    Outcome outcome;
+    std::string error;
+  };
+
+  // `request` is null for a job that has ended.
+  Job(std::string id, JobRecord record, std::shared_ptr<const v1::SubmitRequest> request, Files files,
+      Persist persist);
+
+  const std::string& id() const { return id_; }
+  uint64_t number() const { return number_; }
+  const std::string& owner() const { return owner_; }
+  v1::JobStatus Status() const;
+  // Bumped on every change, for watchers.
+  uint64_t Version() const;
+  // Waits until the version differs from `seen` or `timeout` passes.
+  void WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const;
+  bool Finished() const;
+  uint32_t Priority() const;
+  // Only the scheduler calls this, under its lock: the priority places
+  // the job in its queue.
+  void SetPriority(uint32_t priority);
+  // A queued job ends CANCELLED at once (returns true); a running one
+  // stops within a second.
+  bool RequestCancel();
+  // The server is going down: a running job stops and waits, with its
+  // checkpoint, for the next start.
+  void RequestStop();
+  // Pixels and variances so far: of the film while it renders, of the
+  // stored image once the job has ended; false when there are none.
+  bool Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
+                uint32_t& height) const;
+
+  // A run, on a worker thread: Begin marks the job RUNNING for one more
+  // attempt (false if it no longer waits), Render renders it, EndRun
+  // records how the run ended and returns true when the job is to be
+  // queued again (it failed and has retries left).
+  bool Begin();
+  RunResult Render(const JobResources& resources, const RunSettings& settings);
+  bool EndRun(const RunResult& result);
+
+ private:
+  // Applies `change` to a copy of the row, stores it and publishes it;
+  // nothing changes when `change` returns false or the store fails.
+  bool Commit(const std::function<bool(JobRecord&)>& change);
+  // Progress of the render, shown to watchers but not stored.
+  void Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays);
+  void Finish(v1::JobState state, const std::string& error);
+  // The checkpoint a resumable render goes on from, if there is a sound one.
+  std::optional<FilmCheckpoint> UsableCheckpoint(const v1::Film& film) const;
+  void WriteCheckpoint(uint32_t samples_done);
+
+  const std::string id_;
+  const uint64_t number_;
+  const std::string owner_;
+  const Files files_;
+  const Persist persist_;
+  // Read and dropped by the worker thread only (dropped once the job ends).
+  std::shared_ptr<const v1::SubmitRequest> request_;
+  // halt_ stops the render; cancel_ and stop_ say why.
+  std::atomic<bool> halt_{false}, cancel_{false}, stop_{false};
+  // Calls to components in other processes, ended at once by a halt.
+  const std::shared_ptr<RemoteCalls> remote_calls_ = std::make_shared<RemoteCalls>();
+
+  mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
+  JobRecord row_;
+  uint32_t samples_done_ = 0, run_first_sample_ = 0;
+  uint64_t closest_hit_rays_ = 0, shadow_rays_ = 0;
+  std::chrono::steady_clock::time_point started_;
+  uint64_t version_ = 0;
+
+  // The film while rendering; once the job ends its image is on disk.
+  std::unique_ptr<Film> film_;
+  mutable std::mutex film_mutex_;
+  bool checkpoint_failed_ = false;
+};
+
+}  // namespace yarf

@@ -1,0 +1,95 @@
+#include "service/job_components.h"
+
+#include <string>
+
+#include "components/make_component.h"
+#include "yarf/error.h"
+
+namespace yarf {
+namespace {
+
+// The job's choice, else the scene's, else the default class.
+v1::ComponentSpec Choose(const v1::ComponentSpec& job, const v1::ComponentSpec& scene, const char* fallback) {
+  if (!job.class_name().empty()) return job;
+  if (!scene.class_name().empty()) return scene;
+  v1::ComponentSpec spec;
+  spec.set_class_name(fallback);
+  return spec;
+}
+
+// Whether the job calls a component in another process: a class named
+// with an address, or registered by a component process.
+bool CallsOtherProcesses(const v1::Scene& scene, const v1::RenderOptions& options, const JobResources& resources) {
+  auto remote = [&](const std::string& class_name, const std::string& address) {
+    return !address.empty() ||
+           (!resources.registry.Has(class_name) && resources.remote_classes.AddressOf(class_name).has_value());
+  };
+  for (const v1::Material& m : scene.materials())
+    if (remote(m.class_name(), m.address())) return true;
+  for (const v1::ComponentSpec* spec : {&options.transport(), &scene.transport(), &options.sampler(), &scene.sampler()})
+    if (!spec->class_name().empty() && remote(spec->class_name(), spec->address())) return true;
+  return false;
+}
+
+// The integrator a job runs: its own, else the scene's, else mean_sample.
+// For jobs that call other processes, mean_sample works in large batches
+// (128² pixels × 4 samples per call) unless told otherwise, since every
+// call costs a round trip whatever its size.
+v1::ComponentSpec IntegratorSpec(const v1::ComponentSpec& job, const v1::ComponentSpec& scene,
+                                 bool calls_other_processes) {
+  v1::ComponentSpec spec = Choose(job, scene, "mean_sample");
+  if (calls_other_processes && spec.class_name() == "mean_sample" && spec.address().empty()) {
+    auto& values = *spec.mutable_properties()->mutable_values();
+    if (!values.contains("tile_size")) values["tile_size"].set_int_value(128);
+    if (!values.contains("samples_per_pass")) values["samples_per_pass"].set_int_value(4);
+  }
+  return spec;
+}
+
+RemoteOptions RemoteOptionsOf(const v1::RenderOptions& options, std::shared_ptr<RemoteCalls> calls) {
+  RemoteOptions remote;
+  remote.calls = std::move(calls);
+  if (options.component_timeout_seconds() > 0)
+    remote.deadline = std::chrono::milliseconds(int64_t(options.component_timeout_seconds() * 1000));
+  remote.retries = options.component_retries();
+  return remote;
+}
+
+template <typename I>
+std::unique_ptr<I> Make(const ComponentSources& sources, const v1::ComponentSpec& spec, const char* role) {
+  try {
+    return MakeComponent<I>(sources, spec.class_name(), spec.properties(), spec.address());
+  } catch (const Error& e) {
+    throw Error(std::string(role) + " '" + spec.class_name() + "': " + e.what());
+  }
+}
+
+}  // namespace
+
+JobComponents MakeJobComponents(const v1::SubmitRequest& request, const JobResources& resources,
+                                std::shared_ptr<RemoteCalls> calls) {
+  const v1::Scene& scene = request.scene();
+  const v1::RenderOptions& options = request.options();
+  const ComponentSources components{resources.registry, &resources.remote_classes,
+                                    RemoteOptionsOf(options, std::move(calls))};
+  JobComponents parts;
+  parts.scene = BuildScene(scene, SceneSources{components, resources.device, resources.asset_root, resources.assets});
+  parts.transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
+  const v1::ComponentSpec integrator =
+      IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources));
+  parts.integrator = Make<Integrator>(components, integrator, "integrator");
+  parts.sampler = Make<Sampler>(components, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
+  parts.resumable = integrator.class_name() == "mean_sample" && integrator.address().empty();
+  return parts;
+}
+
+FilmTarget::Share ShareOf(const v1::RenderOptions& options) {
+  FilmTarget::Share share{options.first_sample(), std::nullopt};
+  if (options.has_crop()) {
+    const v1::PixelWindow& c = options.crop();
+    share.crop = PixelWindow{c.x0(), c.y0(), c.x1(), c.y1()};
+  }
+  return share;
+}
+
+}  // namespace yarf

@@ -1,0 +1,52 @@
+// What a job's render is made of: its kernel scene and the transport,
+// integrator and sampler its request and scene choose.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+
+#include "components/remote_classes.h"
+#include "components/remote_instance.h"
+#include "kernel/embree_device.h"
+#include "kernel/film_target.h"
+#include "kernel/scene_builder.h"
+#include "service/job_scenes.h"
+#include "yarf/transport.h"
+#include "yarf/v1/render.pb.h"
+
+namespace yarf {
+
+// What jobs are made from: the classes (in process and in component
+// processes), the device, the folder mesh files resolve in, the table
+// that serves running jobs' scenes to remote transports, and the uploaded
+// assets (null: none).
+struct JobResources {
+  const Registry& registry;
+  const RemoteClasses& remote_classes;
+  const EmbreeDevice& device;
+  std::filesystem::path asset_root;
+  JobScenes& scenes;
+  const AssetSource* assets = nullptr;
+};
+
+struct JobComponents {
+  std::shared_ptr<KernelScene> scene;
+  std::unique_ptr<Transport> transport;
+  std::unique_ptr<Integrator> integrator;
+  std::unique_ptr<Sampler> sampler;
+  // Whether the render can go on from a checkpoint of its film: the
+  // in-process mean_sample integrator renders sample passes from any first
+  // sample with the same per-sample seeds, so a resumed render gives the
+  // image an uninterrupted one gives. Other integrators start anew.
+  bool resumable = false;
+};
+
+// Builds the scene and makes the components; throws Error naming the
+// part that failed. Calls to other processes are tracked in `calls`.
+JobComponents MakeJobComponents(const v1::SubmitRequest& request, const JobResources& resources,
+                                std::shared_ptr<RemoteCalls> calls);
+
+// The samples and pixels the request asks for (RenderOptions.first_sample, crop).
+FilmTarget::Share ShareOf(const v1::RenderOptions& options);
+
+}  // namespace yarf

@@ -1,0 +1,69 @@
+#include "service/scheduler.h"
+
+#include <algorithm>
+
+namespace yarf {
+
+void Scheduler::Start(uint32_t workers) {
+  for (uint32_t i = 0; i < std::max(workers, 1u); ++i)
+    workers_.emplace_back([this](std::stop_token stop) { Work(stop); });
+}
+
+Scheduler::~Scheduler() {
+  Stop();
+  for (auto& worker : workers_) worker.request_stop();
+  workers_.clear();  // joins
+}
+
+void Scheduler::Enqueue(std::shared_ptr<Job> job) {
+  {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    const Place place = PlaceOf(job->Priority(), job->number());
+    queue_[place] = std::move(job);
+  }
+  queued_.notify_one();
+}
+
+void Scheduler::SetPriority(Job& job, uint32_t priority) {
+  std::lock_guard lock(mutex_);
+  // The place is taken under this lock, so it matches the priority the
+  // job had when it was queued.
+  auto it = queue_.find(PlaceOf(job.Priority(), job.number()));
+  job.SetPriority(priority);
+  if (it == queue_.end()) return;
+  std::shared_ptr<Job> queued = std::move(it->second);
+  queue_.erase(it);
+  queue_[PlaceOf(priority, job.number())] = std::move(queued);
+}
+
+void Scheduler::Remove(const Job& job) {
+  std::lock_guard lock(mutex_);
+  queue_.erase(PlaceOf(job.Priority(), job.number()));
+}
+
+void Scheduler::Stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopped_ = true;
+    queue_.clear();
+  }
+  queued_.notify_all();
+}
+
+void Scheduler::Work(std::stop_token stop) {
+  for (;;) {
+    std::shared_ptr<Job> job;
+    {
+      std::unique_lock lock(mutex_);
+      queued_.wait(lock, stop, [&] { return stopped_ || !queue_.empty(); });
+      if (stopped_ || stop.stop_requested()) return;
+      auto next = queue_.begin();
+      job = std::move(next->second);
+      queue_.erase(next);
+    }
+    run_(job);
+  }
+}
+
+}  // namespace yarf
