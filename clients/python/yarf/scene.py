@@ -231,7 +231,8 @@ def _mesh_format(where: str, name: str, declared: str) -> str:
     return mesh_format
 
 
-def _read_mesh_file(where: str, base: Path, name: str) -> bytes:
+def mesh_file_path(where: str, base: Path, name: str) -> Path:
+    """The file a mesh ``file`` names: relative to ``base`` (resolved), never outside it."""
     relative = PurePath(name)
     if not name or relative.is_absolute():
         raise SceneError(
@@ -240,6 +241,11 @@ def _read_mesh_file(where: str, base: Path, name: str) -> bytes:
     target = (base / relative).resolve()
     if not target.is_relative_to(base):
         raise SceneError(f"{where}: mesh file {name!r} is outside the scene's folder {base}")
+    return target
+
+
+def _read_mesh_file(where: str, base: Path, name: str) -> bytes:
+    target = mesh_file_path(where, base, name)
     try:
         return target.read_bytes()
     except FileNotFoundError:

@@ -1,5 +1,6 @@
 #include "kernel/scene_builder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -25,6 +26,27 @@ Transform ShapeTransform(const v1::SceneShape& shape, const std::string& what) {
   return shape.has_to_world() ? FromProto(shape.to_world(), what + " to_world") : Transform{};
 }
 
+// An asset reference must name a hash and say how to parse the bytes:
+// there is no file name to guess the format from.
+void ValidateMeshAsset(const v1::Mesh& mesh, const std::string& what) {
+  const std::string& hash = mesh.asset();
+  if (!IsSha256(hash))
+    throw Error(what + ": mesh asset '" + hash.substr(0, 80) + "' is not a SHA-256 (64 lowercase hex digits)");
+  if (mesh.format() != "obj" && mesh.format() != "ply")
+    throw Error(what + ": mesh asset " + hash + " needs `format` obj or ply, not '" + mesh.format().substr(0, 20) +
+                "'");
+}
+
+void RequireShapeAssets(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes, const AssetSource& assets,
+                        const std::string& where) {
+  for (int i = 0; i < shapes.size(); ++i) {
+    const v1::SceneShape& s = shapes[i];
+    if (s.has_mesh() && s.mesh().has_asset() && !assets.Has(s.mesh().asset()))
+      throw Error(where + ShapeName(s, i) + ": mesh asset " + s.mesh().asset() +
+                  " is not on this server; upload it with AssetService.Upload before submitting");
+  }
+}
+
 void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
                     const std::set<std::string>& materials, const std::string& where) {
   for (int i = 0; i < shapes.size(); ++i) {
@@ -48,6 +70,7 @@ void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& sh
       const Transform t = FromProto(s.to_world_end(), what + " to_world_end");
       if (std::abs(t.Determinant3()) < 1e-30) throw Error(what + ": degenerate to_world_end");
     }
+    if (s.has_mesh() && s.mesh().has_asset()) ValidateMeshAsset(s.mesh(), what);
     if (s.has_mesh() && s.mesh().source_case() == v1::Mesh::SOURCE_NOT_SET) {
       if (s.mesh().positions_size() % 3 != 0 || s.mesh().indices_size() % 3 != 0 ||
           s.mesh().indices_size() == 0)
@@ -64,7 +87,8 @@ std::string ReadAsset(const std::filesystem::path& root, const std::string& file
   namespace fs = std::filesystem;
   if (root.empty())
     throw Error(what + ": mesh file '" + file +
-                "' cannot be read: this server has no asset root; send the file's bytes in `data`");
+                "' cannot be read: this server has no asset root; upload the file (AssetService) and "
+                "name its SHA-256 in `asset`, or send its bytes in `data`");
   const fs::path base = fs::weakly_canonical(root);
   const fs::path path = fs::weakly_canonical(base / file);
   const auto [end, _] = std::mismatch(base.begin(), base.end(), path.begin(), path.end());
@@ -179,6 +203,10 @@ class Builder {
       }
       case v1::Mesh::kData:
         return ParseMesh(mesh.data(), mesh.format(), what);
+      case v1::Mesh::kAsset:
+        if (!sources_.assets)
+          throw Error(what + ": mesh asset " + mesh.asset() + ": this server keeps no assets");
+        return ParseMesh(sources_.assets->Read(mesh.asset()), mesh.format(), what);
       default: {
         TriangleMesh out;
         for (int i = 0; i + 2 < mesh.positions_size(); i += 3)
@@ -248,7 +276,12 @@ uint64_t CountPlacements(const v1::Scene& scene) {
 
 }  // namespace
 
-void ValidateScene(const v1::Scene& scene) {
+bool IsSha256(const std::string& text) {
+  const auto hex = [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); };
+  return text.size() == 64 && std::all_of(text.begin(), text.end(), hex);
+}
+
+void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
   const v1::Film& film = scene.film();
   if (film.width() == 0 || film.height() == 0 || film.width() > SceneLimits::kMaxFilmSide ||
       film.height() > SceneLimits::kMaxFilmSide ||
@@ -279,10 +312,13 @@ void ValidateScene(const v1::Scene& scene) {
   for (const v1::Group& g : scene.groups()) ValidateShapes(g.shapes(), materials, "group '" + g.name() + "' ");
   if (CountPlacements(scene) > SceneLimits::kMaxPlacements)
     throw Error("instancing expands to more than " + std::to_string(SceneLimits::kMaxPlacements) + " placements");
+  if (!assets) return;
+  RequireShapeAssets(scene.shapes(), *assets, "");
+  for (const v1::Group& g : scene.groups()) RequireShapeAssets(g.shapes(), *assets, "group '" + g.name() + "' ");
 }
 
 std::unique_ptr<KernelScene> BuildScene(const v1::Scene& scene, const SceneSources& sources) {
-  ValidateScene(scene);
+  ValidateScene(scene, sources.assets);
   return Builder(scene, sources).Build();
 }
 

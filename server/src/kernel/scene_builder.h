@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 #include "components/make_component.h"
 #include "kernel/scene.h"
@@ -18,14 +19,32 @@ struct SceneLimits {
   static constexpr uint64_t kMaxPlacements = 1'000'000;
 };
 
+// Mesh files uploaded by content (Mesh.asset), named by their SHA-256.
+// The service's AssetStore implements it; the kernel only reads.
+class AssetSource {
+ public:
+  virtual ~AssetSource() = default;
+  // `sha256` is 64 lowercase hex digits.
+  virtual bool Has(const std::string& sha256) const = 0;
+  // The asset's bytes; throws Error when it is not held.
+  virtual std::string Read(const std::string& sha256) const = 0;
+};
+
+// Whether `text` is a SHA-256 as assets are named: 64 lowercase hex digits.
+bool IsSha256(const std::string& text);
+
 // Cheap checks run before a job is accepted; throws Error naming the part.
-void ValidateScene(const v1::Scene& scene);
+// With `assets`, every mesh asset the scene names must be held there: a
+// job is refused at once rather than failing when it runs.
+void ValidateScene(const v1::Scene& scene, const AssetSource* assets = nullptr);
 
 struct SceneSources {
   ComponentSources components;
   const EmbreeDevice& device;
   // Folder that mesh `file` references resolve in; empty: none allowed.
   std::filesystem::path asset_root;
+  // Where mesh `asset` references are read; null: none allowed.
+  const AssetSource* assets = nullptr;
 };
 
 std::unique_ptr<KernelScene> BuildScene(const v1::Scene& scene, const SceneSources& sources);

@@ -1,0 +1,81 @@
+// Uploaded assets on disk, named by content: <root>/<first 2 hex>/<sha256>,
+// root being <state_dir>/assets, so they outlive the server. An upload
+// streams into a temporary file of its own, is checked against the hash
+// and size it announced, and only then appears under its name: a reader
+// never sees part of an asset, and uploads of the same bytes, even at the
+// same time, keep one file.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "kernel/scene_builder.h"
+
+struct evp_md_ctx_st;
+
+namespace yarf {
+
+class AssetStore final : public AssetSource {
+ public:
+  static constexpr uint64_t kMaxSize = uint64_t(2) << 30;  // 2 GiB
+
+  // Creates the folders (throws std::filesystem::filesystem_error when it
+  // cannot) and drops temporary files that crashed uploads left behind.
+  explicit AssetStore(std::filesystem::path root);
+
+  bool Has(const std::string& sha256) const override;
+  std::string Read(const std::string& sha256) const override;
+
+  const std::filesystem::path& root() const { return root_; }
+  // Where the asset named `sha256` (already checked) lives.
+  std::filesystem::path PathOf(const std::string& sha256) const;
+  std::filesystem::path TempFolder() const { return root_ / "tmp"; }
+
+ private:
+  const std::filesystem::path root_;
+};
+
+// One asset arriving in pieces. Destroyed without a successful Commit, it
+// leaves nothing behind.
+class AssetUpload {
+ public:
+  // Throws Error for a hash that is not 64 lowercase hex digits or a size
+  // over AssetStore::kMaxSize.
+  AssetUpload(const AssetStore& store, std::string sha256, uint64_t size);
+  ~AssetUpload();
+  AssetUpload(const AssetUpload&) = delete;
+  AssetUpload& operator=(const AssetUpload&) = delete;
+
+  // The next bytes; throws Error once they pass the announced size.
+  void Append(std::string_view bytes);
+  // Checks the size and the hash of what arrived (Error when either
+  // differs), then puts the asset in place. False when the store held it
+  // already.
+  bool Commit();
+
+ private:
+  struct FileCloser {
+    void operator()(std::FILE* file) const { std::fclose(file); }
+  };
+  struct DigestFree {
+    void operator()(evp_md_ctx_st* context) const;
+  };
+
+  std::string HexDigest();
+
+  const AssetStore& store_;
+  const std::string sha256_;
+  const uint64_t size_;
+  uint64_t received_ = 0;
+  std::unique_ptr<evp_md_ctx_st, DigestFree> digest_;
+  // Null when the store holds the asset already: the bytes are then only
+  // hashed, to answer truthfully, and dropped.
+  std::unique_ptr<std::FILE, FileCloser> file_;
+  std::filesystem::path temp_path_;
+};
+
+}  // namespace yarf
