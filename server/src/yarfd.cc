@@ -10,15 +10,19 @@
 #include <iostream>
 #include <optional>
 
+#include "service/asset_service.h"
 #include "service/component_service.h"
 #include "service/instance_services.h"
 #include "service/job_scene_service.h"
 #include "service/render_service.h"
+#include "service/server_credentials.h"
 #include "service/server_options.h"
 
 namespace {
 
 int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
+  // First: a refused address or a bad tokens file stops yarfd before any work.
+  const auto credentials = yarf::ListenCredentials(options);
   std::optional<tbb::global_control> threads;
   if (options.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, options.threads);
 
@@ -39,7 +43,14 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
 
   yarf::InstanceTable instances;
   yarf::JobScenes job_scenes(instances);
-  yarf::JobManager jobs({registry, remote_classes, device, options.asset_root, job_scenes});
+  yarf::AssetStore assets(options.state_dir / "assets");
+  yarf::JobManager jobs({registry, remote_classes, device, options.asset_root, job_scenes, &assets},
+                        {.state_dir = options.state_dir,
+                         .max_running_jobs = uint32_t(options.max_running_jobs),
+                         .checkpoint_seconds = options.checkpoint_seconds,
+                         .keep_finished_hours = options.keep_finished_hours,
+                         .max_finished_jobs = uint64_t(options.max_finished_jobs)});
+  yarf::AssetServiceImpl asset_service(assets);
   yarf::RenderServiceImpl render(jobs);
   yarf::RegistryServiceImpl registry_service(registry, remote_classes);
   yarf::ComponentServiceImpl component(registry, remote_classes, instances);
@@ -58,19 +69,21 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(options.listen, credentials, &port);
   // Batches and images are large.
   builder.SetMaxReceiveMessageSize(256 << 20);
   builder.SetMaxSendMessageSize(256 << 20);
   for (grpc::Service* service : std::initializer_list<grpc::Service*>{
            &render, &registry_service, &component, &factory, &integrator, &root_finder, &sampler, &generator, &warp,
-           &surface_model, &emitter, &intersect, &job_scene})
+           &surface_model, &emitter, &intersect, &job_scene, &asset_service})
     builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server) {
     std::cerr << "yarfd: cannot listen on " << options.listen << "\n";
     return 1;
   }
+  // Jobs start once the server listens: their components may call it back.
+  jobs.Start();
   std::cout << "yarfd listening on " << options.listen << " (port " << port << ")" << std::endl;
   if (!options.port_file.empty()) {
     const auto tmp = options.port_file.string() + ".tmp";

@@ -1,7 +1,7 @@
 """The yarf-component command: serve component classes written in Python.
 
     yarf-component serve examples/lambertian.py:Lambertian --listen 127.0.0.1:0 \\
-        [--register YARFD] [--lease SECONDS] [--server YARFD]
+        [--register YARFD] [--lease SECONDS] [--server YARFD] [--token TOKEN] [--ca PEM]
 
 Prints ``yarf-component listening on ADDRESS`` once serving, and stops on
 SIGINT or SIGTERM (unregistering first).
@@ -17,6 +17,7 @@ import threading
 from collections.abc import Sequence
 from types import FrameType
 
+from yarf.credentials import resolve as resolve_credentials
 from yarf_component.loading import TargetError, load_target
 from yarf_component.server import serve
 
@@ -45,6 +46,17 @@ def _parser() -> argparse.ArgumentParser:
         metavar="YARFD",
         help="the yarfd whose job scenes transports call (default: --register's)",
     )
+    run.add_argument(
+        "--token",
+        metavar="TOKEN",
+        help="bearer token for a yarfd that requires TLS and tokens; registering needs an "
+        "admin token (default: $YARF_TOKEN)",
+    )
+    run.add_argument(
+        "--ca",
+        metavar="PEM",
+        help="certificate the yarfd's TLS certificate is checked against (default: $YARF_TLS_CA)",
+    )
     return parser
 
 
@@ -53,8 +65,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="yarf-component: %(message)s")
     try:
         classes = [cls for target in args.targets for cls in load_target(target)]
+        token, tls_ca = resolve_credentials(args.token, args.ca)
         running = serve(
-            classes, args.listen, register=args.register, lease=args.lease, server=args.server
+            classes,
+            args.listen,
+            register=args.register,
+            lease=args.lease,
+            server=args.server,
+            token=token,
+            tls_ca=tls_ca,
         )
     except (TargetError, TypeError, ValueError, OSError, ImportError, SyntaxError) as error:
         print(f"yarf-component: {error}", file=sys.stderr)

@@ -9,7 +9,7 @@ from typing import Self
 
 import grpc
 
-from yarf_component.channels import MESSAGE_OPTIONS
+from yarf_component.channels import MESSAGE_OPTIONS, secure
 from yarf_component.component_services import add_component_services
 from yarf_component.host import Host
 from yarf_component.interface_services import add_interface_services
@@ -83,13 +83,20 @@ def serve(
     register: str | None = None,
     lease: int = 30,
     server: str | None = None,
+    *,
+    token: str = "",
+    tls_ca: str = "",
 ) -> Running:
     """Serves ``classes`` on ``listen`` ("host:port", port 0 picks one, or "unix:/path").
 
     ``register``: a yarfd to register with (and renew every lease/3 seconds);
     ``server``: the yarfd whose job scenes transports call (default: the
-    one registered with).
+    one registered with). ``token`` and ``tls_ca`` (its CA certificate, PEM)
+    reach a yarfd that requires TLS and tokens; registering needs an admin token.
     """
+    for yarfd in (register, server):
+        if yarfd and (token or tls_ca):
+            secure(yarfd, token=token, tls_ca=tls_ca)
     host = Host(classes, server_address=server or register)
     grpc_server = grpc.server(
         futures.ThreadPoolExecutor(max_workers=WORKERS, thread_name_prefix="yarf-component"),

@@ -6,11 +6,25 @@
 #include "yarf/error.h"
 
 namespace yarf {
+namespace {
+
+std::filesystem::path DefaultStateDir() {
+  if (const char* dir = std::getenv("YARF_STATE_DIR"); dir && *dir) return dir;
+  if (const char* dir = std::getenv("XDG_STATE_HOME"); dir && *dir) return std::filesystem::path(dir) / "yarf";
+  if (const char* home = std::getenv("HOME"); home && *home)
+    return std::filesystem::path(home) / ".local" / "state" / "yarf";
+  throw Error("no state folder: set --state-dir, YARF_STATE_DIR or HOME");
+}
+
+}  // namespace
 
 ServerOptions ParseServerOptions(int argc, char** argv) {
   static const char* kUsage =
       "usage: yarfd [--listen HOST:PORT|unix:PATH] [--port-file FILE] [--plugin-path DIR]...\n"
-      "             [--asset-root DIR] [--threads N] [--component ADDRESS]...";
+      "             [--asset-root DIR] [--state-dir DIR] [--threads N] [--component ADDRESS]...\n"
+      "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
+      "             [--max-finished-jobs N]\n"
+      "             [--tls-cert FILE --tls-key FILE] [--tokens FILE]";
   ServerOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
@@ -21,8 +35,16 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--port-file") options.port_file = value;
     else if (flag == "--plugin-path") options.plugin_paths.emplace_back(value);
     else if (flag == "--asset-root") options.asset_root = value;
+    else if (flag == "--state-dir") options.state_dir = value;
+    else if (flag == "--max-running-jobs") options.max_running_jobs = std::atoi(value.c_str());
+    else if (flag == "--checkpoint-seconds") options.checkpoint_seconds = std::atof(value.c_str());
+    else if (flag == "--keep-finished-hours") options.keep_finished_hours = std::atof(value.c_str());
+    else if (flag == "--max-finished-jobs") options.max_finished_jobs = std::atoll(value.c_str());
     else if (flag == "--threads") options.threads = std::atoi(value.c_str());
     else if (flag == "--component") options.components.push_back(value);
+    else if (flag == "--tls-cert") options.tls_cert = value;
+    else if (flag == "--tls-key") options.tls_key = value;
+    else if (flag == "--tokens") options.tokens_file = value;
     else throw Error("unknown option " + flag + "\n" + kUsage);
   }
   if (const char* env = std::getenv("YARF_PLUGIN_PATH")) {
@@ -31,6 +53,11 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       if (!dir.empty()) options.plugin_paths.emplace_back(dir);
   }
   if (options.plugin_paths.empty()) options.plugin_paths.emplace_back(YARF_PLUGIN_DIR);
+  if (options.state_dir.empty()) options.state_dir = DefaultStateDir();
+  if (options.max_running_jobs < 1) throw Error("--max-running-jobs must be at least 1");
+  if (!(options.checkpoint_seconds >= 0)) throw Error("--checkpoint-seconds must be 0 or more");
+  if (!(options.keep_finished_hours >= 0)) throw Error("--keep-finished-hours must be 0 or more");
+  if (options.max_finished_jobs < 0) throw Error("--max-finished-jobs must be 0 or more");
   return options;
 }
 

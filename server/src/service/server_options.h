@@ -12,9 +12,25 @@ struct ServerOptions {
   std::filesystem::path port_file;
   std::vector<std::filesystem::path> plugin_paths;
   std::filesystem::path asset_root;
+  // Where the server keeps what outlives it: the job database, film
+  // checkpoints, results and uploaded assets. --state-dir, else
+  // $YARF_STATE_DIR, else $XDG_STATE_HOME/yarf, else ~/.local/state/yarf.
+  std::filesystem::path state_dir;
+  // The job queue: jobs rendering at once, least seconds between two
+  // checkpoints of a rendering film, and how long and how many ended jobs
+  // are kept (the oldest go first).
+  int max_running_jobs = 2;
+  double checkpoint_seconds = 5;
+  double keep_finished_hours = 168;
+  long long max_finished_jobs = 1000;
   int threads = 0;  // 0: all cores
   // Component processes whose classes are made for good (no lease).
   std::vector<std::string> components;
+  // TLS certificate chain and private key (PEM), and the bearer-token file:
+  // required when --listen is reachable from other machines.
+  std::filesystem::path tls_cert;
+  std::filesystem::path tls_key;
+  std::filesystem::path tokens_file;
 };
 
 // Throws Error with usage for an unknown or incomplete flag.
