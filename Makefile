@@ -64,8 +64,8 @@ render: build
 
 # Python style: formatted and lint-clean (ruff).
 lint: venv
-	$(VENV)/bin/ruff format --check bench tests clients/python components/python
-	$(VENV)/bin/ruff check bench tests clients/python components/python
+	$(VENV)/bin/ruff format --check bench tests clients/python components/python deploy
+	$(VENV)/bin/ruff check bench tests clients/python components/python deploy
 
 test: build lint
 	cd $(BUILD) && ctest --output-on-failure -j2
@@ -90,6 +90,7 @@ bench: build
 	$(PY) bench/render_integrators.py
 	$(PY) bench/light_transport.py
 	$(PY) bench/remote_components.py
+	$(PY) bench/farm.py
 
 clean:
 	rm -rf $(BUILD) $(STAMPS) out

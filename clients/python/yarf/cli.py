@@ -15,12 +15,15 @@ import argparse
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 import grpc
 from tqdm import tqdm
 
-from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, Client
+from yarf.assets import MeshAssets, mesh_assets
+from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, IMAGE_FORMATS, Client
+from yarf.credentials import resolve as resolve_credentials
 from yarf.scene import (
     IMPORTED_SUFFIXES,
     JSON_SUFFIXES,
@@ -35,11 +38,13 @@ from yarf.scene import (
 from yarf.server import LocalServer, ServerError
 from yarf.v1 import render_pb2, scene_pb2
 
-OUTPUT_FORMATS = {
-    ".exr": render_pb2.GetResultRequest.EXR,
-    ".png": render_pb2.GetResultRequest.PNG,
-}
+OUTPUT_FORMATS = IMAGE_FORMATS
 CONNECT_TIMEOUT = 5.0
+# The global --token and --ca of the running command (None: $YARF_TOKEN,
+# $YARF_TLS_CA), for every connect() of its subcommand.
+_CREDENTIALS: ContextVar[tuple[str | None, str | None]] = ContextVar(
+    "yarf_credentials", default=(None, None)
+)
 
 
 class CommandError(Exception):
@@ -57,15 +62,19 @@ def _say(message: str) -> None:
 @contextmanager
 def connect(address: str | None, *, say: Callable[[str], None] = _say) -> Iterator[Client]:
     """A client of ``address``; without one, of 127.0.0.1:50051 or a local yarfd."""
+    token, tls_ca = _CREDENTIALS.get()
+    ca_file = resolve_credentials(token, tls_ca)[1]
+    if ca_file and not Path(ca_file).is_file():
+        raise CommandError(f"cannot read the TLS CA certificate {ca_file}")
     if address:
-        with Client(address) as client:
+        with Client(address, token=token, tls_ca=tls_ca) as client:
             try:
                 grpc.channel_ready_future(client.channel).result(timeout=CONNECT_TIMEOUT)
             except grpc.FutureTimeoutError:
                 raise CommandError(f"no yarfd answers at {address}") from None
             yield client
         return
-    with Client(DEFAULT_ADDRESS) as client:
+    with Client(DEFAULT_ADDRESS, token=token, tls_ca=tls_ca) as client:
         if client.is_serving(timeout=0.5):
             say(f"using the yarfd at {DEFAULT_ADDRESS}")
             yield client
@@ -159,6 +168,24 @@ def _transport(args: argparse.Namespace, scene: scene_pb2.Scene) -> scene_pb2.Co
     return spec
 
 
+def _send_meshes(
+    client: Client, meshes: MeshAssets, scene: scene_pb2.Scene, base_dir: Path, *, quiet: bool
+) -> None:
+    """Uploads the mesh files the server lacks and names every mesh by its hash.
+
+    A server without AssetService gets the files' bytes inline instead.
+    """
+    try:
+        uploaded = meshes.upload(client)
+    except grpc.RpcError as error:
+        if not (isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.UNIMPLEMENTED):
+            raise
+        inline_mesh_files(scene, base_dir)
+        return
+    if uploaded and not quiet:
+        _say(f"uploaded {uploaded} mesh file{'s' if uploaded > 1 else ''} the server lacked")
+
+
 def render_command(args: argparse.Namespace) -> int:
     output = Path(args.output)
     output_format = OUTPUT_FORMATS.get(output.suffix.lower())
@@ -171,15 +198,18 @@ def render_command(args: argparse.Namespace) -> int:
     scene_path = Path(args.scene)
     spp = args.spp
     if scene_path.suffix.lower() in IMPORTED_SUFFIXES:
-        imported = _import(scene_path, args.define, inline_files=True)
+        imported = _import(scene_path, args.define, inline_files=False)
         scene = imported.scene
         spp = spp or imported.sample_count
     else:
         if args.define:
             raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
-        scene = load_scene(scene_path)
+        scene = load_scene(scene_path, inline_files=False)
     _replace_materials(scene, args.material)
+    # Before any server is asked for: a missing or misplaced mesh file fails here.
+    meshes = mesh_assets(scene, scene_path.parent)
     with connect(args.server) as client:
+        _send_meshes(client, meshes, scene, scene_path.parent, quiet=args.quiet)
         job_id = client.submit(
             scene,
             spp,
@@ -257,6 +287,17 @@ def jobs_command(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="yarf", description="Render scene files on a yarf render server (yarfd)."
+    )
+    parser.add_argument(
+        "--token",
+        metavar="TOKEN",
+        help="bearer token for a yarfd that requires one (default: $YARF_TOKEN)",
+    )
+    parser.add_argument(
+        "--ca",
+        metavar="PEM",
+        help="CA or self-signed certificate the yarfd's TLS certificate is checked against "
+        "(default: $YARF_TLS_CA, else the system's CAs when a token is given)",
     )
     commands = parser.add_subparsers(dest="command", required=True)
 
@@ -339,11 +380,17 @@ def build_parser() -> argparse.ArgumentParser:
     jobs = commands.add_parser("jobs", help="list the server's jobs, newest first")
     add_server_option(jobs)
     jobs.set_defaults(handler=jobs_command)
+
+    # Imported here: the job verbs use this module's helpers.
+    from yarf.jobs_cli import add_job_commands
+
+    add_job_commands(commands, add_define_option)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    credentials = _CREDENTIALS.set((args.token, args.ca))
     try:
         return int(args.handler(args))
     except CommandError as error:
@@ -363,6 +410,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         _say("interrupted")
         return 130
+    finally:
+        _CREDENTIALS.reset(credentials)
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from types import TracebackType
 from typing import Any, Self
 
@@ -11,7 +12,11 @@ import grpc
 import numpy as np
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 
+from yarf.assets import AssetData, asset_chunks, sha256_of
+from yarf.credentials import open_channel
 from yarf.v1 import (
+    asset_pb2,
+    asset_pb2_grpc,
     component_pb2,
     component_pb2_grpc,
     render_pb2,
@@ -26,6 +31,11 @@ DEFAULT_ADDRESS = "127.0.0.1:50051"
 DEFAULT_TIMEOUT = 60.0
 
 FINAL_STATES = frozenset({render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CANCELLED})
+# GetResult's file formats, by the extension of the file to write.
+IMAGE_FORMATS: dict[str, int] = {
+    ".exr": render_pb2.GetResultRequest.EXR,
+    ".png": render_pb2.GetResultRequest.PNG,
+}
 
 _NUMPY_DTYPES: dict[int, np.dtype[Any]] = {
     component_pb2.Array.FLOAT32: np.dtype("<f4"),
@@ -114,26 +124,41 @@ _HealthCheckRequest, _HealthCheckResponse = _health_messages()
 
 
 class Client:
-    """yarfd's RenderService, Registry, Component, Factory and health on one channel.
+    """yarfd's RenderService, AssetService, Registry, Component, Factory and health on one channel.
 
     Unary calls carry a deadline of ``timeout`` seconds; rpc failures raise
     ``grpc.RpcError`` (its ``code()`` and ``details()`` say why).
+
+    A server beyond loopback wants TLS and a bearer ``token``; ``tls_ca`` is
+    the PEM file of the CA (or self-signed certificate) to trust. ``None``
+    reads them from $YARF_TOKEN and $YARF_TLS_CA, ``""`` means none. With
+    neither the channel is plaintext.
     """
 
-    def __init__(self, address: str = DEFAULT_ADDRESS, *, timeout: float = DEFAULT_TIMEOUT) -> None:
+    def __init__(
+        self,
+        address: str = DEFAULT_ADDRESS,
+        *,
+        timeout: float = DEFAULT_TIMEOUT,
+        token: str | None = None,
+        tls_ca: str | Path | None = None,
+    ) -> None:
         self.address = address
         self.timeout = timeout
-        self._channel = grpc.insecure_channel(
+        self._channel = open_channel(
             address,
-            options=[
+            [
                 ("grpc.max_send_message_length", MAX_MESSAGE_BYTES),
                 ("grpc.max_receive_message_length", MAX_MESSAGE_BYTES),
             ],
+            token=token,
+            tls_ca=tls_ca,
         )
         self.render_service = render_pb2_grpc.RenderServiceStub(self._channel)
         self.registry = component_pb2_grpc.RegistryStub(self._channel)
         self.component = component_pb2_grpc.ComponentStub(self._channel)
         self.factory = component_pb2_grpc.FactoryStub(self._channel)
+        self.asset_service = asset_pb2_grpc.AssetServiceStub(self._channel)
         self._health_check = self._channel.unary_unary(
             "/grpc.health.v1.Health/Check",
             request_serializer=_HealthCheckRequest.SerializeToString,
@@ -188,11 +213,15 @@ class Client:
         sampler: scene_pb2.ComponentSpec | None = None,
         component_retries: int = 0,
         component_timeout: float = 0.0,
+        priority: int | None = None,
+        max_retries: int | None = None,
     ) -> str:
         """Queues a render of ``scene``; returns the job id.
 
         ``component_retries`` and ``component_timeout`` (seconds, 0: the
         server's 60) govern calls to components in other processes.
+        ``priority`` (1..100, None: the server's 50) orders the queue;
+        ``max_retries`` (None: 0) requeues a job that failed.
         """
         options = render_pb2.RenderOptions(
             spp=spp,
@@ -206,7 +235,13 @@ class Client:
             options.integrator.CopyFrom(integrator)
         if sampler is not None:
             options.sampler.CopyFrom(sampler)
-        request = render_pb2.SubmitRequest(scene=scene, options=options, name=name)
+        request = render_pb2.SubmitRequest(
+            scene=scene,
+            options=options,
+            name=name,
+            priority=priority or 0,
+            max_retries=max_retries or 0,
+        )
         return str(self.render_service.Submit(request, timeout=self.timeout).job_id)
 
     def watch(self, job_id: str, *, timeout: float | None = None) -> Iterator[render_pb2.JobStatus]:
@@ -266,6 +301,26 @@ class Client:
         """The job's image as an EXR or PNG file."""
         return bytes(self.result(job_id, format).image)
 
+    def fetch(self, job_id: str, path: str | Path) -> render_pb2.JobStatus:
+        """Writes the job's image (final or progressive) to ``path``, an .exr or .png file.
+
+        Returns the job's status when the image was taken; raises ValueError
+        for another extension and RuntimeError when the job has no image yet.
+        """
+        path = Path(path)
+        format = IMAGE_FORMATS.get(path.suffix.lower())
+        if format is None:
+            raise ValueError(
+                f"cannot write {path}: the extension must be one of {', '.join(IMAGE_FORMATS)}"
+            )
+        reply = self.result(job_id, format)
+        if not reply.image:
+            state = render_pb2.JobState.Name(reply.status.state)
+            raise RuntimeError(f"job {job_id} ({state}) has no image yet")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(reply.image)
+        return reply.status
+
     def render(
         self,
         scene: scene_pb2.Scene,
@@ -307,6 +362,30 @@ class Client:
         """Every job the server knows, newest first."""
         reply = self.render_service.List(render_pb2.ListJobsRequest(), timeout=self.timeout)
         return list(reply.jobs)
+
+    def set_priority(self, job_id: str, priority: int) -> render_pb2.JobStatus:
+        """Moves a queued job in the queue (1..100); returns its status."""
+        request = render_pb2.SetPriorityRequest(job_id=job_id, priority=priority)
+        return self.render_service.SetPriority(request, timeout=self.timeout)
+
+    # Assets.
+
+    def missing_assets(self, hashes: Iterable[str]) -> list[str]:
+        """Which of the SHA-256 ``hashes`` the server does not hold, in the order given."""
+        request = asset_pb2.MissingAssetsRequest(sha256=list(hashes))
+        return list(self.asset_service.Missing(request, timeout=self.timeout).sha256)
+
+    def upload_asset(
+        self, source: AssetData, *, sha256: str | None = None, timeout: float | None = None
+    ) -> str:
+        """Uploads bytes, or a file read as it is sent, in 1 MiB chunks; returns the SHA-256.
+
+        ``sha256``: the hash when known already (the server checks it).
+        The server keeps one copy however often the same bytes arrive.
+        """
+        digest = sha256 or sha256_of(source)
+        self.asset_service.Upload(asset_chunks(source, digest), timeout=timeout)
+        return digest
 
     # Components.
 
