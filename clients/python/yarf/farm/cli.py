@@ -1,0 +1,194 @@
+"""yarf-farm: run the farm's coordinator or a render node."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import logging
+import os
+import signal
+import socket
+import tempfile
+import time
+from pathlib import Path
+
+import nats
+from nats.aio.client import Client as Nats
+
+from yarf.farm.coordinator import Coordinator
+from yarf.farm.node import Node
+from yarf.farm.service import start_server
+from yarf.farm.store import JobStore
+from yarf.farm.streams import ensure_resources
+from yarf.farm.tasks import SplitPolicy
+from yarf.server import LocalServer
+
+log = logging.getLogger("yarf.farm")
+
+DEFAULT_NATS = "nats://127.0.0.1:4222"
+# How long a process waits for NATS at start.
+CONNECT_SECONDS = 30.0
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="yarf-farm", description="A yarf render farm on NATS JetStream."
+    )
+    commands = parser.add_subparsers(dest="command", required=True)
+    defaults = SplitPolicy()
+
+    coordinator = commands.add_parser(
+        "coordinator", help="serve RenderService, split jobs into tasks, merge their images"
+    )
+    coordinator.add_argument("--nats", default=DEFAULT_NATS, help="NATS server URL")
+    coordinator.add_argument(
+        "--listen", default="127.0.0.1:50051", help="gRPC address (port 0: any free port)"
+    )
+    coordinator.add_argument(
+        "--state-dir", type=Path, required=True, help="folder of the job table (SQLite)"
+    )
+    coordinator.add_argument("--port-file", type=Path, help="write the bound port here")
+    coordinator.add_argument(
+        "--shares",
+        type=int,
+        default=defaults.shares,
+        help=f"sample-pass tasks per job, about twice the nodes (default {defaults.shares})",
+    )
+    coordinator.add_argument(
+        "--min-task-work",
+        type=int,
+        default=defaults.min_task_work,
+        help="pixel samples below which a task is not split further "
+        f"(default {defaults.min_task_work})",
+    )
+    coordinator.add_argument(
+        "--tile-pixels",
+        type=int,
+        default=defaults.tile_pixels,
+        help=f"images above this many pixels are also cut into tiles "
+        f"(default {defaults.tile_pixels})",
+    )
+    coordinator.add_argument(
+        "--tile-size",
+        type=int,
+        default=defaults.tile_size,
+        help=f"tile side in pixels (default {defaults.tile_size})",
+    )
+
+    node = commands.add_parser("node", help="render tasks on a yarfd")
+    node.add_argument("--nats", default=DEFAULT_NATS, help="NATS server URL")
+    node.add_argument(
+        "--yarfd", help="address of the yarfd to render on (default: start one as a child)"
+    )
+    node.add_argument("--threads", type=int, help="render threads of the child yarfd")
+    node.add_argument("--name", help="the node's name in logs and results (default host-pid)")
+    node.add_argument(
+        "--cache-dir", type=Path, help="scene cache (default: a folder in the temp directory)"
+    )
+    return parser
+
+
+async def _connect(url: str, name: str) -> Nats:
+    """Connects, retrying while NATS starts; reconnects forever afterwards."""
+    deadline = time.monotonic() + CONNECT_SECONDS
+    while True:
+        try:
+            return await nats.connect(
+                url,
+                name=name,
+                max_reconnect_attempts=-1,
+                reconnect_time_wait=0.5,
+                connect_timeout=2,
+            )
+        except Exception as error:
+            if time.monotonic() > deadline:
+                raise SystemExit(f"cannot connect to NATS at {url}: {error}") from error
+            await asyncio.sleep(0.25)
+
+
+def _stop_event() -> asyncio.Event:
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for number in (signal.SIGTERM, signal.SIGINT):
+        loop.add_signal_handler(number, stop.set)
+    return stop
+
+
+async def _run_coordinator(args: argparse.Namespace) -> int:
+    stop = _stop_event()
+    policy = SplitPolicy(
+        shares=max(1, args.shares),
+        min_task_work=max(1, args.min_task_work),
+        tile_pixels=args.tile_pixels,
+        tile_size=max(1, args.tile_size),
+    )
+    nc = await _connect(args.nats, "yarf-farm coordinator")
+    buckets = await ensure_resources(nc.jetstream())
+    store = JobStore(args.state_dir)
+    coordinator = Coordinator(nc, store, buckets, policy)
+    await coordinator.start()
+    server, port = await start_server(coordinator, args.listen)
+    if args.port_file is not None:
+        # Written whole or not at all: a reader never sees half a number.
+        partial = args.port_file.with_suffix(".part")
+        partial.write_text(f"{port}\n")
+        partial.replace(args.port_file)
+    log.info("coordinator serving on port %d (state %s)", port, args.state_dir)
+    await stop.wait()
+    await server.stop(grace=1.0)
+    await coordinator.stop()
+    # Everything is committed and acked, or will be redelivered: no drain.
+    await nc.close()
+    store.close()
+    return 0
+
+
+async def _watch_child(server: LocalServer, stop: asyncio.Event) -> None:
+    """Stops the node when its own yarfd exits (a supervisor restarts the pair)."""
+    while not stop.is_set():
+        if not server.is_running():
+            log.error("the node's yarfd exited:\n%s", server.log[-2000:])
+            stop.set()
+            return
+        await asyncio.sleep(1.0)
+
+
+async def _run_node(args: argparse.Namespace) -> int:
+    stop = _stop_event()
+    name = args.name or f"{socket.gethostname()}-{os.getpid()}"
+    cache_dir = args.cache_dir or Path(tempfile.gettempdir()) / "yarf-farm-scenes"
+    server: LocalServer | None = None
+    address = args.yarfd
+    if address is None:
+        # Its job table is private and starts empty: tasks it had queued
+        # before a restart were redelivered elsewhere meanwhile.
+        server = LocalServer(threads=args.threads)
+        await asyncio.to_thread(server.start)
+        address = server.address
+        fields = {"node": name, "pid": server.pid, "address": address}
+        log.info("yarfd started %s", json.dumps(fields))
+    watchdog = asyncio.create_task(_watch_child(server, stop)) if server is not None else None
+    try:
+        nc = await _connect(args.nats, f"yarf-farm node {name}")
+        buckets = await ensure_resources(nc.jetstream())
+        node = Node(nc, buckets, address, name=name, cache_dir=cache_dir)
+        await node.run(stop)
+        await nc.close()
+    finally:
+        if watchdog is not None:
+            watchdog.cancel()
+        crashed = server is not None and not server.is_running()
+        if server is not None:
+            await asyncio.to_thread(server.stop)
+    return 1 if crashed else 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(levelname)s %(message)s")
+    if args.command == "coordinator":
+        return asyncio.run(_run_coordinator(args))
+    if args.yarfd is not None and args.threads is not None:
+        _parser().error("--threads applies to the node's own yarfd, not to --yarfd")
+    return asyncio.run(_run_node(args))

@@ -1,0 +1,140 @@
+"""yarf.v1.RenderService served by the coordinator, so that clients cannot tell it from a yarfd."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+
+import grpc
+
+from yarf.client import MAX_MESSAGE_BYTES, numpy_to_array
+from yarf.farm.coordinator import FINAL_STATES, Coordinator, Job, UnknownJob
+from yarf.farm.images import encode_exr, encode_png
+from yarf.farm.validation import InvalidRequest
+from yarf.v1 import render_pb2, render_pb2_grpc
+
+# A serialized grpc.health.v1.HealthCheckResponse{status: SERVING}: the
+# health protocol's one message, without the grpcio-health-checking package.
+_SERVING = b"\x08\x01"
+# A Watch stream with no news still looks at the job this often.
+WATCH_IDLE_SECONDS = 1.0
+
+
+def _owner(context: grpc.aio.ServicerContext) -> str:
+    """Who submitted: "local" on loopback, as yarfd says; else the peer's address."""
+    peer = context.peer() or ""
+    if peer.startswith(("ipv4:127.", "ipv6:[::1]", "unix:")):
+        return "local"
+    return peer.rsplit(":", 1)[0].split(":", 1)[-1]
+
+
+class FarmRenderService(render_pb2_grpc.RenderServiceServicer):
+    """RenderService on the coordinator's asyncio loop."""
+
+    def __init__(self, coordinator: Coordinator) -> None:
+        self._coordinator = coordinator
+
+    async def _job(self, job_id: str, context: grpc.aio.ServicerContext) -> Job:
+        try:
+            return self._coordinator.job(job_id)
+        except UnknownJob:
+            await context.abort(grpc.StatusCode.NOT_FOUND, f"no job '{job_id}'")
+            raise
+
+    async def Submit(
+        self, request: render_pb2.SubmitRequest, context: grpc.aio.ServicerContext
+    ) -> render_pb2.SubmitReply:
+        try:
+            job_id = await self._coordinator.submit(request, _owner(context))
+        except InvalidRequest as error:
+            await context.abort(grpc.StatusCode.INVALID_ARGUMENT, str(error))
+            raise
+        return render_pb2.SubmitReply(job_id=job_id)
+
+    async def Watch(
+        self, request: render_pb2.WatchRequest, context: grpc.aio.ServicerContext
+    ) -> AsyncIterator[render_pb2.JobStatus]:
+        job = await self._job(request.job_id, context)
+        while True:
+            changed = job.changed
+            status = self._coordinator.status(job)
+            yield status
+            if status.state in FINAL_STATES:
+                return
+            # Waits for a change; the timeout only notices a client that left.
+            while not changed.is_set():
+                try:
+                    await asyncio.wait_for(changed.wait(), WATCH_IDLE_SECONDS)
+                except TimeoutError:
+                    if context.done():
+                        return
+
+    async def GetResult(
+        self, request: render_pb2.GetResultRequest, context: grpc.aio.ServicerContext
+    ) -> render_pb2.GetResultReply:
+        job = await self._job(request.job_id, context)
+        reply = render_pb2.GetResultReply(status=self._coordinator.status(job))
+        image = self._coordinator.image(job)
+        if image is None:
+            error = f": {job.record.error}" if job.record.error else ""
+            await context.abort(
+                grpc.StatusCode.FAILED_PRECONDITION,
+                f"job '{request.job_id}' has no image{error}",
+            )
+        assert image is not None
+        pixels, variance = image
+        if request.format == render_pb2.GetResultRequest.EXR:
+            reply.image = await asyncio.to_thread(encode_exr, pixels)
+        elif request.format == render_pb2.GetResultRequest.PNG:
+            reply.image = await asyncio.to_thread(encode_png, pixels)
+        else:
+            reply.pixels.CopyFrom(numpy_to_array(pixels))
+            reply.variance.CopyFrom(numpy_to_array(variance))
+        return reply
+
+    async def Cancel(
+        self, request: render_pb2.CancelRequest, context: grpc.aio.ServicerContext
+    ) -> render_pb2.CancelReply:
+        job = await self._job(request.job_id, context)
+        await self._coordinator.cancel(job)
+        return render_pb2.CancelReply(status=self._coordinator.status(job))
+
+    async def List(
+        self, request: render_pb2.ListJobsRequest, context: grpc.aio.ServicerContext
+    ) -> render_pb2.ListJobsReply:
+        return render_pb2.ListJobsReply(jobs=self._coordinator.list())
+
+    async def SetPriority(
+        self, request: render_pb2.SetPriorityRequest, context: grpc.aio.ServicerContext
+    ) -> render_pb2.JobStatus:
+        job = await self._job(request.job_id, context)
+        if not 1 <= request.priority <= 100:
+            await context.abort(
+                grpc.StatusCode.INVALID_ARGUMENT, f"priority {request.priority} is not 1 to 100"
+            )
+        await self._coordinator.set_priority(job, request.priority)
+        return self._coordinator.status(job)
+
+
+async def _health_check(request: bytes, context: grpc.aio.ServicerContext) -> bytes:
+    return _SERVING
+
+
+async def start_server(coordinator: Coordinator, listen: str) -> tuple[grpc.aio.Server, int]:
+    """Serves RenderService and the health check at ``listen``; returns the server and its port."""
+    server = grpc.aio.server(
+        options=[
+            ("grpc.max_send_message_length", MAX_MESSAGE_BYTES),
+            ("grpc.max_receive_message_length", MAX_MESSAGE_BYTES),
+        ]
+    )
+    render_pb2_grpc.add_RenderServiceServicer_to_server(FarmRenderService(coordinator), server)
+    health = grpc.method_handlers_generic_handler(
+        "grpc.health.v1.Health", {"Check": grpc.unary_unary_rpc_method_handler(_health_check)}
+    )
+    server.add_generic_rpc_handlers((health,))
+    port = server.add_insecure_port(listen)
+    if port == 0:
+        raise OSError(f"cannot listen at {listen}")
+    await server.start()
+    return server, port
