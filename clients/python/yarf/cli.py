@@ -274,16 +274,6 @@ def classes_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def jobs_command(args: argparse.Namespace) -> int:
-    with connect(args.server) as client:
-        jobs = client.list()
-    for job in jobs:
-        state = render_pb2.JobState.Name(job.state).lower()
-        line = f"{job.job_id}  {state:<9} {job.samples_done:>7}/{job.samples_total:<7} {job.name}"
-        print(line + (f"  ({job.error})" if job.error else ""))
-    return 0
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="yarf", description="Render scene files on a yarf render server (yarfd)."
@@ -376,10 +366,6 @@ def build_parser() -> argparse.ArgumentParser:
     classes = commands.add_parser("classes", help="list the server's classes and plugin errors")
     add_server_option(classes)
     classes.set_defaults(handler=classes_command)
-
-    jobs = commands.add_parser("jobs", help="list the server's jobs, newest first")
-    add_server_option(jobs)
-    jobs.set_defaults(handler=jobs_command)
 
     # Imported here: the job verbs use this module's helpers.
     from yarf.jobs_cli import add_job_commands
