@@ -6,20 +6,25 @@ Every test starts its own yarfd processes on a private state folder.
 
 from __future__ import annotations
 
+import os
+import sqlite3
 import struct
 import time
 from collections.abc import Callable, Iterator
+from contextlib import closing
 from pathlib import Path
 
 import grpc
 import numpy as np
 import pytest
-from conftest import small_scene
+from component_process import ComponentProcess
+from conftest import REPO, small_scene
 
 from yarf import Client, LocalServer, ServerError, component
 from yarf.v1 import render_pb2, scene_pb2
 
 ENDED = {render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CANCELLED}
+AMBIENT_OCCLUSION = REPO / "components" / "python" / "examples" / "ambient_occlusion.py"
 
 
 def submit(
@@ -75,6 +80,20 @@ def checkpoint_samples(state_dir: Path, job_id: str) -> int:
         return 0
     assert head[:8] == b"YARFCKP1", head
     return int(struct.unpack("<I", head[8:12])[0])
+
+
+def wait_for_new_checkpoint(state_dir: Path, job_id: str) -> None:
+    seen = checkpoint_samples(state_dir, job_id)
+    wait_until(lambda: checkpoint_samples(state_dir, job_id) > seen, f"{job_id} checkpoints")
+
+
+def stored_state(state_dir: Path, job_id: str) -> str:
+    """The state of a job's row in the job store of a server that has stopped."""
+    with closing(sqlite3.connect(state_dir / "jobs.sqlite")) as db:
+        row = db.execute(
+            "SELECT state FROM jobs WHERE number = ?", (int(job_id.split("-")[1]),)
+        ).fetchone()
+    return render_pb2.JobState.Name(row[0])
 
 
 @pytest.fixture
@@ -302,11 +321,17 @@ def test_a_second_server_on_the_same_state_folder_refuses_to_start(
     start_server: Callable[..., LocalServer], state_dir: Path
 ) -> None:
     first = start_server()
+    # A temporary file of an upload, old enough for a starting server to drop.
+    upload = state_dir / "assets" / "tmp" / "upload-in-progress"
+    upload.write_bytes(b"part of an asset")
+    two_hours_ago = time.time() - 7200
+    os.utime(upload, (two_hours_ago, two_hours_ago))
     with pytest.raises(ServerError) as caught:
         start_server()
     assert "another yarfd" in str(caught.value) and str(state_dir) in str(caught.value)
     assert "code 0" not in str(caught.value)
     assert first.is_running()
+    assert upload.exists(), "the refused server removed a file of the running one"
 
 
 def test_an_unusable_state_folder_stops_the_server_with_a_clear_error(
@@ -325,3 +350,141 @@ def test_an_unusable_state_folder_stops_the_server_with_a_clear_error(
         start_server(state=damaged)
     message = str(caught.value)
     assert "jobs.sqlite" in message and "not a database" in message, message
+
+
+def test_a_job_whose_transport_calls_the_server_back_waits_queued_after_a_plain_stop(
+    start_server: Callable[..., LocalServer], state_dir: Path, tmp_path: Path
+) -> None:
+    server = start_server()
+    target = f"{AMBIENT_OCCLUSION}:AmbientOcclusion"
+    socket = f"unix:{tmp_path / 'transport.sock'}"
+    with ComponentProcess.python([target], socket, "--server", server.address) as process:
+        transport = component("py_ambient_occlusion")
+        transport.address = process.address
+        with server.client() as client:
+            job_id = client.submit(small_scene(8), spp=1_000_000, seed=1, transport=transport)
+            wait_until(lambda: client.status(job_id).samples_done > 0, "the transport renders")
+        # The transport calls the server until its run stops: the server
+        # must still answer it, so that the job stops rather than fails.
+        assert server.stop() == 0
+    assert stored_state(state_dir, job_id) == "QUEUED"
+
+
+def test_only_crashes_without_progress_between_them_fail_a_job(
+    start_server: Callable[..., LocalServer], state_dir: Path
+) -> None:
+    job_id = ""
+    for _ in range(3):
+        server = start_server("--checkpoint-seconds", "0.1")
+        with server.client() as client:
+            if not job_id:
+                job_id = submit(client, small_scene(32), spp=1_000_000)
+            wait_for_new_checkpoint(state_dir, job_id)
+            # And the next one: the previous one's row is stored by now.
+            wait_for_new_checkpoint(state_dir, job_id)
+        server.kill()
+    server = start_server()
+    with server.client() as client:
+        assert state_of(client, job_id) in ("QUEUED", "RUNNING"), client.status(job_id).error
+        client.cancel(job_id)
+    server.stop()
+
+    # Neither does a clean stop between crashes count toward the limit.
+    job_id = ""
+    for how in ("kill", "kill", "stop", "kill"):
+        server = start_server()
+        with server.client() as client:
+            if not job_id:
+                job_id = submit(client, small_scene(32), spp=1_000_000)
+            wait_for_state(client, job_id, "RUNNING")
+        if how == "kill":
+            server.kill()
+        else:
+            assert server.stop() == 0
+    server = start_server()
+    with server.client() as client:
+        status = client.status(job_id)
+        assert status.state in (render_pb2.QUEUED, render_pb2.RUNNING), status.error
+        client.cancel(job_id)
+
+
+def test_a_job_cancelled_while_it_runs_stays_cancelled_after_a_crash(
+    start_server: Callable[..., LocalServer], state_dir: Path
+) -> None:
+    server = start_server("--checkpoint-seconds", "0.1")
+    with server.client() as client:
+        job_id = submit(client, small_scene(256), spp=1_000_000)
+        wait_until(lambda: checkpoint_samples(state_dir, job_id) > 0, "a checkpoint")
+        client.cancel(job_id)
+    # At once: the run has not ended yet, only the cancel is stored.
+    server.kill()
+
+    again = start_server()
+    with again.client() as client:
+        status = client.status(job_id)
+        assert status.state == render_pb2.CANCELLED, render_pb2.JobState.Name(status.state)
+        # With the image of its last checkpoint (or of its run, had it ended).
+        image = client.image(job_id)
+        assert image.shape == (256, 256, 3) and image.mean() > 0
+        time.sleep(0.5)
+        assert client.status(job_id).state == render_pb2.CANCELLED
+    assert not list((state_dir / "checkpoints").iterdir())
+
+
+def test_a_checkpoint_with_more_samples_than_the_job_has_is_not_resumed(
+    start_server: Callable[..., LocalServer], state_dir: Path
+) -> None:
+    server = start_server("--checkpoint-seconds", "0.1")
+    with server.client() as client:
+        job_id = submit(client, small_scene(), spp=8000, seed=7)
+        wait_until(lambda: checkpoint_samples(state_dir, job_id) > 0, "a checkpoint")
+    server.kill()
+    checkpoint = state_dir / "checkpoints" / f"{job_id}.film"
+    damaged = bytearray(checkpoint.read_bytes())
+    damaged[8:12] = struct.pack("<I", 9000)
+    checkpoint.write_bytes(bytes(damaged))
+
+    again = start_server()
+    with again.client() as client:
+        status = client.wait(job_id, timeout=60)
+        assert status.state == render_pb2.SUCCEEDED, status.error
+        # Rendered anew: every sample traced in this run.
+        assert status.samples_done == 8000
+        assert status.closest_hit_rays >= 16 * 16 * 8000
+
+
+def test_a_job_database_of_the_previous_schema_is_upgraded(
+    start_server: Callable[..., LocalServer], state_dir: Path
+) -> None:
+    state_dir.mkdir()
+    request = render_pb2.SubmitRequest(
+        scene=small_scene(), options=render_pb2.RenderOptions(spp=4, seed=1), priority=50
+    )
+    with closing(sqlite3.connect(state_dir / "jobs.sqlite")) as db:
+        db.executescript(
+            """
+            CREATE TABLE jobs (
+              number INTEGER PRIMARY KEY AUTOINCREMENT, request BLOB NOT NULL,
+              name TEXT NOT NULL, owner TEXT NOT NULL, state INTEGER NOT NULL,
+              priority INTEGER NOT NULL, max_retries INTEGER NOT NULL,
+              attempts INTEGER NOT NULL, failures INTEGER NOT NULL, crashes INTEGER NOT NULL,
+              samples_done INTEGER NOT NULL, samples_total INTEGER NOT NULL,
+              error TEXT NOT NULL, submitted_at REAL NOT NULL, finished_at REAL NOT NULL,
+              elapsed_seconds REAL NOT NULL, closest_hit_rays INTEGER NOT NULL,
+              shadow_rays INTEGER NOT NULL);
+            PRAGMA user_version = 1;
+            """
+        )
+        db.execute(
+            "INSERT INTO jobs VALUES (7, ?, 'old', 'local', ?, 50, 0, 0, 0, 0, 0, 4, '',"
+            " 1.0, 0, 0, 0, 0)",
+            (request.SerializeToString(), render_pb2.QUEUED),
+        )
+        db.commit()
+    server = start_server()
+    with server.client() as client:
+        status = client.wait("job-000007", timeout=30)
+        assert status.state == render_pb2.SUCCEEDED, status.error
+        assert client.wait(submit(client, small_scene(), spp=2), timeout=30).state == (
+            render_pb2.SUCCEEDED
+        )

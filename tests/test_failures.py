@@ -126,6 +126,24 @@ def test_absurd_resolution_is_rejected_naming_it(
     assert_still_renders()
 
 
+def test_a_filter_of_unknown_kind_or_bad_radius_is_rejected_naming_it(
+    client: Client, scene: scene_pb2.Scene, assert_still_renders: StillRenders
+) -> None:
+    # Proto3 enums carry any number: the server must not index by it.
+    scene.film.filter.kind = 1_000_000_000  # type: ignore[assignment]
+    details = str(submit_rejection(client, scene).details())
+    assert "film.filter.kind" in details and "1000000000" in details, details
+    scene.film.filter.kind = scene_pb2.ReconstructionFilter.TENT
+    for radius in (float("nan"), float("inf"), -1.0, 16.5, 1e30):
+        scene.film.filter.radius = radius
+        details = str(submit_rejection(client, scene).details())
+        assert "film.filter.radius" in details, (radius, details)
+    scene.film.filter.radius = 16.0
+    job_id = client.submit(scene, spp=1, seed=0)
+    assert client.wait(job_id, timeout=30).state == render_pb2.SUCCEEDED
+    assert_still_renders()
+
+
 def test_absurd_samples_per_pixel_are_rejected_naming_them(
     client: Client, scene: scene_pb2.Scene, assert_still_renders: StillRenders
 ) -> None:

@@ -43,13 +43,15 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
 
   yarf::InstanceTable instances;
   yarf::JobScenes job_scenes(instances);
+  // Locked before anything touches the folder: a second yarfd on it stops here.
+  yarf::StateFolder state_folder(options.state_dir);
   yarf::AssetStore assets(options.state_dir / "assets");
   yarf::JobManager jobs({registry, remote_classes, device, options.asset_root, job_scenes, &assets},
-                        {.state_dir = options.state_dir,
-                         .max_running_jobs = uint32_t(options.max_running_jobs),
+                        {.max_running_jobs = uint32_t(options.max_running_jobs),
                          .checkpoint_seconds = options.checkpoint_seconds,
                          .keep_finished_hours = options.keep_finished_hours,
-                         .max_finished_jobs = uint64_t(options.max_finished_jobs)});
+                         .max_finished_jobs = uint64_t(options.max_finished_jobs)},
+                        state_folder);
   yarf::AssetServiceImpl asset_service(assets);
   yarf::RenderServiceImpl render(jobs);
   yarf::RegistryServiceImpl registry_service(registry, remote_classes);
@@ -93,6 +95,9 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   int signal = 0;
   sigwait(&signals, &signal);
   std::cout << "yarfd: shutting down" << std::endl;
+  // Jobs first, while the server still answers the calls their components
+  // make back to it: a stopped job waits, QUEUED, for the next start.
+  jobs.StopAll();
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
   return 0;
 }

@@ -11,6 +11,12 @@ namespace yarf {
 
 ReconstructionFilter::ReconstructionFilter(const v1::ReconstructionFilter& filter)
     : kind_(filter.kind()) {
+  // Proto3 enums carry any number: an unknown kind would index past `defaults`.
+  if (!v1::ReconstructionFilter::Kind_IsValid(kind_))
+    throw Error("film.filter.kind " + std::to_string(int(kind_)) + " is not BOX, TENT or GAUSSIAN");
+  if (!(std::isfinite(filter.radius()) && filter.radius() >= 0 && filter.radius() <= kMaxRadius))
+    throw Error("film.filter.radius " + std::to_string(filter.radius()) + " is out of range (0 to " +
+                std::to_string(int(kMaxRadius)) + " pixels; 0 means the kind's default)");
   const double defaults[] = {0.5, 1.0, 2.0};
   radius_ = float(filter.radius() > 0 ? filter.radius() : defaults[kind_]);
   if (kind_ == v1::ReconstructionFilter::GAUSSIAN)
@@ -141,6 +147,7 @@ namespace {
 
 constexpr char kFilmMagic[8] = {'Y', 'A', 'R', 'F', 'F', 'I', 'L', 'M'};
 constexpr uint32_t kFilmVersion = 1;
+constexpr uint32_t kMaxSavedFilter = 4096;
 static_assert(std::endian::native == std::endian::little, "saved films are little-endian");
 
 void Put(std::string& out, const void* data, size_t size) { out.append(static_cast<const char*>(data), size); }
@@ -200,15 +207,24 @@ Film Film::Load(std::string_view bytes) {
     throw Error("saved film has format version " + std::to_string(version) + ", not " + std::to_string(kFilmVersion));
   const uint32_t width = in.U32(), height = in.U32(), passes = in.U32(), splat_passes = in.U32();
   const uint32_t splats = in.U32(), filter_size = in.U32();
+  // A saved filter is a few bytes; a large size would overflow the int below.
+  if (filter_size > kMaxSavedFilter)
+    throw Error("saved film has a filter of " + std::to_string(filter_size) + " bytes");
   v1::ReconstructionFilter filter;
   if (!filter.ParseFromArray(in.Take(filter_size).data(), int(filter_size)))
     throw Error("saved film has an unreadable filter");
+  // Pixels() reads the splat sums whenever there are splat passes: a film
+  // without splat images has none, and none has more than its passes.
+  if (splat_passes > passes || (!splats && splat_passes != 0))
+    throw Error("saved film has " + std::to_string(splat_passes) + " splat passes of " + std::to_string(passes) +
+                " passes" + (splats ? "" : " and no splat images"));
   if (height != 0 && width > in.Left() / sizeof(Pixel) / height) throw Error("saved film is truncated");
   const size_t pixels = size_t(width) * height;
   const size_t expected = pixels * sizeof(Pixel) + (splats ? 3 * pixels * 3 * sizeof(double) : 0);
   if (splats > 1 || in.Left() != expected)
     throw Error("saved film of " + std::to_string(width) + "x" + std::to_string(height) + " pixels has " +
                 std::to_string(in.Left()) + " bytes of data, not " + std::to_string(expected));
+  // The filter throws Error for a kind or radius out of range.
   Film film(width, height, filter);
   in.Get(film.pixels_.data(), pixels * sizeof(Pixel));
   if (splats)

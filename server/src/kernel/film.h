@@ -16,6 +16,10 @@ namespace yarf {
 
 class ReconstructionFilter {
  public:
+  // Largest radius in pixels; beyond it a sample would touch too many pixels.
+  static constexpr double kMaxRadius = 16;
+  // Throws Error for a kind the proto does not name or a radius that is
+  // not finite or outside [0, kMaxRadius].
   explicit ReconstructionFilter(const v1::ReconstructionFilter& filter);
   float radius() const { return radius_; }
   float Weight(float dx, float dy) const { return Weight1(dx) * Weight1(dy); }

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "components/properties_proto.h"
+#include "kernel/film.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -289,6 +290,9 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
     throw Error("film resolution " + std::to_string(film.width()) + "x" + std::to_string(film.height()) +
                 " is out of range (1 to " + std::to_string(SceneLimits::kMaxFilmSide) +
                 " per side, at most " + std::to_string(SceneLimits::kMaxPixels) + " pixels)");
+  // Built here so that Submit refuses an unknown kind or a bad radius
+  // (Error naming the field) rather than the job failing later.
+  ReconstructionFilter{film.filter()};
   if (!scene.has_camera()) throw Error("scene has no camera");
   Camera(scene.camera(), film.width(), film.height());
   std::set<std::string> materials;

@@ -122,10 +122,18 @@ bool Job::RequestCancel() {
   cancel_ = true;
   halt_ = true;
   remote_calls_->Cancel();
-  const bool was_queued = Commit([](JobRecord& row) {
-    if (row.state != v1::QUEUED) return false;
-    row.state = v1::CANCELLED;
-    row.finished_at = Now();
+  bool was_queued = false;
+  Commit([&](JobRecord& row) {
+    if (row.state == v1::QUEUED) {
+      was_queued = true;
+      row.state = v1::CANCELLED;
+      row.finished_at = Now();
+      return true;
+    }
+    // Stored, so that a crash before the run ends still ends the job
+    // CANCELLED instead of resuming it.
+    if (row.state != v1::RUNNING || row.cancel_requested) return false;
+    row.cancel_requested = true;
     return true;
   });
   if (was_queued) {
@@ -191,7 +199,8 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
     JobComponents parts = MakeJobComponents(*request_, resources, remote_calls_);
     const std::shared_ptr<KernelScene> kernel = parts.scene;
     const bool resumable = parts.resumable;
-    std::optional<FilmCheckpoint> checkpoint = resumable ? UsableCheckpoint(scene.film()) : std::nullopt;
+    std::optional<FilmCheckpoint> checkpoint =
+        resumable ? UsableCheckpoint(scene.film(), options.spp()) : std::nullopt;
     // A checkpoint in use stays until the next one replaces it, so that a
     // crash before then still resumes from it.
     if (!checkpoint) RemoveFile(files_.checkpoint);
@@ -231,14 +240,21 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
   } catch (const std::exception& e) {
     // A halt that cut a remote call short is a cancel or a stop, not a failure.
     return {outcome(Outcome::kFailed), e.what()};
+  } catch (...) {
+    // A plugin may throw anything; it fails the job, not the server.
+    return {outcome(Outcome::kFailed), "a component threw an exception that is not a std::exception"};
   }
 }
 
-std::optional<FilmCheckpoint> Job::UsableCheckpoint(const v1::Film& film) const {
+std::optional<FilmCheckpoint> Job::UsableCheckpoint(const v1::Film& film, uint32_t spp) const {
   try {
     std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(files_.checkpoint);
     if (checkpoint && (checkpoint->film.width() != film.width() || checkpoint->film.height() != film.height()))
       throw Error("the checkpoint is not of this job's film size");
+    // Resuming past spp would report more samples than the job has.
+    if (checkpoint && checkpoint->samples_done > spp)
+      throw Error("the checkpoint has " + std::to_string(checkpoint->samples_done) + " samples per pixel, more than " +
+                  std::to_string(spp));
     return checkpoint;
   } catch (const Error& e) {
     std::cerr << "yarfd: job " << id_ << ": starting anew: " << e.what() << "\n";
@@ -256,6 +272,8 @@ void Job::WriteCheckpoint(uint32_t samples_done) {
     ::yarf::WriteCheckpoint(files_.checkpoint, samples_done, film);
     Commit([&](JobRecord& row) {
       row.samples_done = samples_done;
+      // The job gets on: crashes before this one need not be its doing.
+      row.crashes = 0;
       return true;
     });
   } catch (const std::exception& e) {
@@ -272,10 +290,14 @@ bool Job::EndRun(const RunResult& result) {
       // checkpoint (row_.samples_done says where).
       Commit([](JobRecord& row) {
         row.state = v1::QUEUED;
+        row.crashes = 0;  // a clean stop ends a run of crashes
         return true;
       });
       return false;
     case Outcome::kFailed:
+      // Gone before the row says QUEUED: a crash in between must not let
+      // the retry resume from the failed run's film.
+      RemoveFile(files_.checkpoint);
       if (Commit([&](JobRecord& row) {
             if (row.failures + 1 > row.max_retries) return false;
             ++row.failures;
@@ -290,7 +312,6 @@ bool Job::EndRun(const RunResult& result) {
           std::lock_guard lock(film_mutex_);
           film_.reset();
         }
-        RemoveFile(files_.checkpoint);
         std::lock_guard lock(mutex_);
         samples_done_ = 0;
         return true;
@@ -321,7 +342,6 @@ void Job::Finish(v1::JobState state, const std::string& error) {
       std::cerr << "yarfd: job " << id_ << ": image not kept: " << e.what() << "\n";
     }
   }
-  RemoveFile(files_.checkpoint);
   Commit([&](JobRecord& row) {
     if (state == v1::FAILED) ++row.failures;
     row.state = state;
@@ -334,6 +354,9 @@ void Job::Finish(v1::JobState state, const std::string& error) {
     row.shadow_rays = shadow_rays_;
     return true;
   });
+  // Only once the row has ended: a crash before the commit resumes the run
+  // from the checkpoint rather than redoing it.
+  RemoveFile(files_.checkpoint);
   {
     std::lock_guard lock(film_mutex_);
     film_.reset();

@@ -60,7 +60,8 @@ class Job {
   // the job in its queue.
   void SetPriority(uint32_t priority);
   // A queued job ends CANCELLED at once (returns true); a running one
-  // stops within a second.
+  // stops within a second; its row records the cancel at once, so that a
+  // crash before then still ends it CANCELLED.
   bool RequestCancel();
   // The server is going down: a running job stops and waits, with its
   // checkpoint, for the next start.
@@ -85,8 +86,9 @@ class Job {
   // Progress of the render, shown to watchers but not stored.
   void Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays);
   void Finish(v1::JobState state, const std::string& error);
-  // The checkpoint a resumable render goes on from, if there is a sound one.
-  std::optional<FilmCheckpoint> UsableCheckpoint(const v1::Film& film) const;
+  // The checkpoint a resumable render goes on from, if there is a sound one
+  // (of at most `spp` samples per pixel).
+  std::optional<FilmCheckpoint> UsableCheckpoint(const v1::Film& film, uint32_t spp) const;
   void WriteCheckpoint(uint32_t samples_done);
 
   const std::string id_;

@@ -8,7 +8,7 @@ namespace {
 
 // Bumped when the schema changes, so a newer database is refused rather
 // than misread.
-constexpr int kSchemaVersion = 1;
+constexpr int kSchemaVersion = 2;
 
 // AUTOINCREMENT: numbers of deleted jobs are never handed out again.
 constexpr char kSchema[] = R"sql(
@@ -30,7 +30,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   finished_at REAL NOT NULL,
   elapsed_seconds REAL NOT NULL,
   closest_hit_rays INTEGER NOT NULL,
-  shadow_rays INTEGER NOT NULL);
+  shadow_rays INTEGER NOT NULL,
+  cancel_requested INTEGER NOT NULL DEFAULT 0);
 CREATE INDEX IF NOT EXISTS jobs_ended ON jobs (finished_at) WHERE finished_at > 0;
 )sql";
 
@@ -129,6 +130,13 @@ JobStore::JobStore(const std::filesystem::path& file) : file_(file) {
     Execute(db, "PRAGMA journal_mode = WAL", file_);
     Execute(db, "PRAGMA synchronous = FULL", file_);
     Execute(db, kSchema, file_);
+    {
+      // Version 1 tables lack the cancel_requested column.
+      Statement column(db, "SELECT COUNT(*) FROM pragma_table_info('jobs') WHERE name = 'cancel_requested'", file_);
+      column.Step();
+      if (column.Int(0) == 0)
+        Execute(db, "ALTER TABLE jobs ADD COLUMN cancel_requested INTEGER NOT NULL DEFAULT 0", file_);
+    }
     Execute(db, ("PRAGMA user_version = " + std::to_string(kSchemaVersion)).c_str(), file_);
   } catch (const StorageError& e) {
     throw StorageError(std::string(e.what()) +
@@ -143,14 +151,15 @@ uint64_t JobStore::Insert(const JobRecord& r) {
   Statement insert(db_.get(),
                    "INSERT INTO jobs (request, name, owner, state, priority, max_retries, attempts, failures, crashes,"
                    " samples_done, samples_total, error, submitted_at, finished_at, elapsed_seconds,"
-                   " closest_hit_rays, shadow_rays) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12,"
-                   " ?13, ?14, ?15, ?16, ?17)",
+                   " closest_hit_rays, shadow_rays, cancel_requested) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9,"
+                   " ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)",
                    file_);
   insert.BindBlob(1, r.request).Bind(2, r.name).Bind(3, r.owner).Bind(4, int64_t(r.state));
   insert.Bind(5, int64_t(r.priority)).Bind(6, int64_t(r.max_retries)).Bind(7, int64_t(r.attempts));
   insert.Bind(8, int64_t(r.failures)).Bind(9, int64_t(r.crashes)).Bind(10, int64_t(r.samples_done));
   insert.Bind(11, int64_t(r.samples_total)).Bind(12, r.error).Bind(13, r.submitted_at).Bind(14, r.finished_at);
   insert.Bind(15, r.elapsed_seconds).Bind(16, int64_t(r.closest_hit_rays)).Bind(17, int64_t(r.shadow_rays));
+  insert.Bind(18, int64_t(r.cancel_requested));
   insert.Step();
   return uint64_t(sqlite3_last_insert_rowid(db_.get()));
 }
@@ -161,13 +170,14 @@ void JobStore::Update(const JobRecord& r) {
                    "UPDATE jobs SET name = ?2, owner = ?3, state = ?4, priority = ?5, max_retries = ?6,"
                    " attempts = ?7, failures = ?8, crashes = ?9, samples_done = ?10, samples_total = ?11,"
                    " error = ?12, submitted_at = ?13, finished_at = ?14, elapsed_seconds = ?15,"
-                   " closest_hit_rays = ?16, shadow_rays = ?17 WHERE number = ?1",
+                   " closest_hit_rays = ?16, shadow_rays = ?17, cancel_requested = ?18 WHERE number = ?1",
                    file_);
   update.Bind(1, int64_t(r.number)).Bind(2, r.name).Bind(3, r.owner).Bind(4, int64_t(r.state));
   update.Bind(5, int64_t(r.priority)).Bind(6, int64_t(r.max_retries)).Bind(7, int64_t(r.attempts));
   update.Bind(8, int64_t(r.failures)).Bind(9, int64_t(r.crashes)).Bind(10, int64_t(r.samples_done));
   update.Bind(11, int64_t(r.samples_total)).Bind(12, r.error).Bind(13, r.submitted_at).Bind(14, r.finished_at);
   update.Bind(15, r.elapsed_seconds).Bind(16, int64_t(r.closest_hit_rays)).Bind(17, int64_t(r.shadow_rays));
+  update.Bind(18, int64_t(r.cancel_requested));
   update.Step();
 }
 
@@ -177,7 +187,7 @@ std::vector<JobRecord> JobStore::LoadAll() const {
   Statement select(db_.get(),
                    "SELECT number, CASE WHEN state IN (3, 4, 5) THEN x'' ELSE request END, name, owner, state,"
                    " priority, max_retries, attempts, failures, crashes, samples_done, samples_total, error,"
-                   " submitted_at, finished_at, elapsed_seconds, closest_hit_rays, shadow_rays"
+                   " submitted_at, finished_at, elapsed_seconds, closest_hit_rays, shadow_rays, cancel_requested"
                    " FROM jobs ORDER BY number",
                    file_);
   std::vector<JobRecord> records;
@@ -202,6 +212,7 @@ std::vector<JobRecord> JobStore::LoadAll() const {
     r.elapsed_seconds = select.Real(15);
     r.closest_hit_rays = uint64_t(select.Int(16));
     r.shadow_rays = uint64_t(select.Int(17));
+    r.cancel_requested = select.Int(18) != 0;
     if (!EndedState(r.state) && r.finished_at > 0) r.finished_at = 0;
   }
   return records;

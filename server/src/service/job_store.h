@@ -43,6 +43,8 @@ struct JobRecord {
   double submitted_at = 0, finished_at = 0;
   double elapsed_seconds = 0;
   uint64_t closest_hit_rays = 0, shadow_rays = 0;
+  // Cancel was asked while the job ran: a restart ends it CANCELLED.
+  bool cancel_requested = false;
 };
 
 class JobStore {

@@ -5,6 +5,7 @@
 
 #include <fstream>
 
+#include "service/job.h"
 #include "service/job_files.h"
 #include "service/state_folder.h"
 #include "yarf/error.h"
@@ -54,6 +55,7 @@ TEST(JobStore, RowsSurviveReopeningAndNumbersAreNeverReused) {
     r.state = v1::RUNNING;
     r.attempts = 1;
     r.samples_done = 16;
+    r.cancel_requested = true;
     store.Update(r);
     EXPECT_EQ(store.DeleteEnded(1e18, 0), std::vector<uint64_t>{});  // none has ended
     r.number = second;
@@ -73,8 +75,10 @@ TEST(JobStore, RowsSurviveReopeningAndNumbersAreNeverReused) {
   EXPECT_EQ(rows[0].priority, 70u);
   EXPECT_EQ(rows[0].attempts, 1u);
   EXPECT_EQ(rows[0].samples_done, 16u);
+  EXPECT_TRUE(rows[0].cancel_requested);
   EXPECT_DOUBLE_EQ(rows[0].submitted_at, 1234.5);
   EXPECT_GT(store.Insert(JobRecord{}), second);
+  EXPECT_FALSE(store.LoadAll().back().cancel_requested);
 }
 
 TEST(JobStore, RetentionDeletesTheOldestEndedJobsBeyondTheLimits) {
@@ -135,6 +139,80 @@ TEST(JobFiles, CheckpointsAndImagesRoundTrip) {
   EXPECT_EQ(read->variances, image.variances);
   std::ofstream(folder.path() / "b.image") << "YARFIMG1 truncated";
   EXPECT_THROW(ReadJobImage(folder.path() / "b.image"), Error);
+}
+
+// A job whose stored rows are recorded with whether its checkpoint file
+// existed when each was stored.
+class RecordedJob {
+ public:
+  explicit RecordedJob(const std::filesystem::path& folder, JobRecord row = {})
+      : files_{folder / "job-000001.film", folder / "job-000001.image"} {
+    row.number = 1;
+    job_ = std::make_unique<Job>("job-000001", row, std::make_shared<v1::SubmitRequest>(), files_,
+                                 [this](const JobRecord& stored) {
+                                   rows.push_back(stored);
+                                   had_checkpoint.push_back(std::filesystem::exists(files_.checkpoint));
+                                 });
+  }
+  Job& operator*() { return *job_; }
+  Job* operator->() { return job_.get(); }
+  void Checkpoint() const { std::ofstream(files_.checkpoint) << "a film"; }
+  bool HasCheckpoint() const { return std::filesystem::exists(files_.checkpoint); }
+
+  std::vector<JobRecord> rows;
+  std::vector<bool> had_checkpoint;
+
+ private:
+  Job::Files files_;
+  std::unique_ptr<Job> job_;
+};
+
+TEST(Job, AFailedRunDropsItsCheckpointBeforeItIsQueuedAgain) {
+  TempFolder folder;
+  JobRecord row;
+  row.max_retries = 1;
+  RecordedJob job(folder.path(), row);
+  job.Checkpoint();
+  ASSERT_TRUE(job->Begin());
+  EXPECT_TRUE(job->EndRun({Job::Outcome::kFailed, "broken"}));
+  EXPECT_EQ(job.rows.back().state, v1::QUEUED);
+  EXPECT_FALSE(job.had_checkpoint.back()) << "a crash now would resume from the failed run's film";
+}
+
+TEST(Job, AnEndedRunKeepsItsCheckpointUntilTheEndIsStored) {
+  TempFolder folder;
+  for (const auto& [outcome, state] : {std::pair(Job::Outcome::kSucceeded, v1::SUCCEEDED),
+                                      std::pair(Job::Outcome::kCancelled, v1::CANCELLED)}) {
+    RecordedJob job(folder.path());
+    job.Checkpoint();
+    ASSERT_TRUE(job->Begin());
+    EXPECT_FALSE(job->EndRun({outcome, ""}));
+    EXPECT_EQ(job.rows.back().state, state);
+    EXPECT_TRUE(job.had_checkpoint.back()) << "a crash before the end was stored would redo the run";
+    EXPECT_FALSE(job.HasCheckpoint());
+  }
+}
+
+TEST(Job, ACleanStopEndsTheRunOfCrashes) {
+  TempFolder folder;
+  JobRecord row;
+  row.crashes = 2;
+  RecordedJob job(folder.path(), row);
+  ASSERT_TRUE(job->Begin());
+  EXPECT_FALSE(job->EndRun({Job::Outcome::kStopped, ""}));
+  EXPECT_EQ(job.rows.back().state, v1::QUEUED);
+  EXPECT_EQ(job.rows.back().crashes, 0u);
+}
+
+TEST(Job, ACancelOfARunningJobIsStoredAtOnce) {
+  TempFolder folder;
+  RecordedJob job(folder.path());
+  ASSERT_TRUE(job->Begin());
+  EXPECT_FALSE(job->RequestCancel());  // it ends through its run
+  EXPECT_EQ(job.rows.back().state, v1::RUNNING);
+  EXPECT_TRUE(job.rows.back().cancel_requested);
+  EXPECT_FALSE(job->EndRun({Job::Outcome::kCancelled, ""}));
+  EXPECT_EQ(job.rows.back().state, v1::CANCELLED);
 }
 
 }  // namespace

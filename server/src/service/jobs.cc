@@ -3,9 +3,11 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <set>
 
 #include "kernel/scene_builder.h"
+#include "service/job_files.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -100,10 +102,10 @@ void RemoveFile(const std::filesystem::path& path) {
 
 }  // namespace
 
-JobManager::JobManager(JobResources resources, JobQueueOptions options)
+JobManager::JobManager(JobResources resources, JobQueueOptions options, const StateFolder& folder)
     : resources_(std::move(resources)),
       options_(std::move(options)),
-      folder_(options_.state_dir),
+      folder_(folder),
       store_(folder_.Database()),
       scheduler_([this](const std::shared_ptr<Job>& job) { RunJob(job); }) {
   Restore();
@@ -111,10 +113,12 @@ JobManager::JobManager(JobResources resources, JobQueueOptions options)
   RemoveStrayFiles();
 }
 
-JobManager::~JobManager() {
+JobManager::~JobManager() { StopAll(); }
+
+void JobManager::StopAll() {
   scheduler_.Stop();
   for (const auto& job : List()) job->RequestStop();
-  // The scheduler, destroyed first, waits for the stopped runs.
+  scheduler_.Join();
 }
 
 void JobManager::Start() { scheduler_.Start(options_.max_running_jobs); }
@@ -124,6 +128,23 @@ std::shared_ptr<Job> JobManager::MakeJob(JobRecord record, std::shared_ptr<const
   Job::Files files{folder_.Checkpoint(id), folder_.Result(id)};
   return std::make_shared<Job>(id, std::move(record), std::move(request), std::move(files),
                                [this](const JobRecord& row) { store_.Update(row); });
+}
+
+void JobManager::EndCancelled(JobRecord& row) const {
+  row.state = v1::CANCELLED;
+  row.finished_at = Now();
+  // The image of the last checkpoint, if there is a sound one, as a
+  // cancelled run would have left it.
+  const std::string id = IdOf(row.number);
+  try {
+    if (std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(folder_.Checkpoint(id))) {
+      const Film& film = checkpoint->film;
+      WriteJobImage(folder_.Result(id), {film.width(), film.height(), film.Pixels(), film.Variances()});
+      row.samples_done = checkpoint->samples_done;
+    }
+  } catch (const Error& e) {
+    std::cerr << "yarfd: job " << id << ": cancelled without an image: " << e.what() << "\n";
+  }
 }
 
 void JobManager::Restore() {
@@ -139,6 +160,12 @@ void JobManager::Restore() {
         row.finished_at = Now();
         changed = true;
       }
+    }
+    if (!Ended(row.state) && row.cancel_requested) {
+      // Cancelled while it ran, and the server died before the run ended.
+      EndCancelled(row);
+      request.reset();
+      changed = true;
     }
     if (row.state == v1::RUNNING) {
       // The server died under it: it runs again from its checkpoint, unless
@@ -222,6 +249,9 @@ void JobManager::RunJob(const std::shared_ptr<Job>& job) {
     if (job->Finished()) ApplyRetention();
   } catch (const std::exception& e) {
     std::cerr << "yarfd: job " << job->id() << ": " << e.what() << std::endl;
+  } catch (...) {
+    // On a worker thread: anything escaping would end the server.
+    std::cerr << "yarfd: job " << job->id() << ": an exception that is not a std::exception" << std::endl;
   }
 }
 

@@ -20,7 +20,6 @@
 namespace yarf {
 
 struct JobQueueOptions {
-  std::filesystem::path state_dir;
   // Jobs that render at once.
   uint32_t max_running_jobs = 2;
   // Least time between two checkpoints of a rendering film.
@@ -33,12 +32,13 @@ struct JobQueueOptions {
 
 class JobManager {
  public:
-  // Locks the state folder, opens its job store and takes back the jobs a
-  // previous server left: queued ones wait again, those it was running
-  // resume (or fail, if the server died under them too often). Throws
-  // Error or StorageError when the folder or the store is unusable.
-  JobManager(JobResources resources, JobQueueOptions options);
-  // Stops the running jobs (they resume at the next start) and waits.
+  // Opens the job store of `folder` (locked by the caller, and outliving
+  // this) and takes back the jobs a previous server left: queued ones wait
+  // again, those it was running resume (or fail, if the server died under
+  // them too often; or end CANCELLED, if a cancel was asked). Throws Error
+  // or StorageError when the folder or the store is unusable.
+  JobManager(JobResources resources, JobQueueOptions options, const StateFolder& folder);
+  // StopAll().
   ~JobManager();
   JobManager(const JobManager&) = delete;
   JobManager& operator=(const JobManager&) = delete;
@@ -46,6 +46,11 @@ class JobManager {
   // Starts running jobs: call once the server listens, since a job's
   // components in other processes may call it back.
   void Start();
+  // Starts no more jobs and stops the running ones (they wait, QUEUED, for
+  // the next start), then waits for their runs to end. Call it before the
+  // server shuts down: a job's components in other processes may call it
+  // back until their run ends.
+  void StopAll();
   // Validates and stores a job of `owner`, then queues it; throws Error
   // for a scene or options it refuses, StorageError when it cannot store it.
   std::string Submit(const v1::SubmitRequest& request, const std::string& owner);
@@ -58,6 +63,8 @@ class JobManager {
 
  private:
   void Restore();
+  // Ends the row of a job cancelled before a crash.
+  void EndCancelled(JobRecord& row) const;
   void RunJob(const std::shared_ptr<Job>& job);
   // Deletes ended jobs past the retention limits, with their files.
   void ApplyRetention();
@@ -66,7 +73,7 @@ class JobManager {
 
   const JobResources resources_;
   const JobQueueOptions options_;
-  StateFolder folder_;
+  const StateFolder& folder_;
   JobStore store_;
   mutable std::mutex mutex_;
   std::map<uint64_t, std::shared_ptr<Job>> jobs_;

@@ -51,6 +51,12 @@ void Scheduler::Stop() {
   queued_.notify_all();
 }
 
+void Scheduler::Join() {
+  Stop();
+  for (auto& worker : workers_)
+    if (worker.joinable()) worker.join();
+}
+
 void Scheduler::Work(std::stop_token stop) {
   for (;;) {
     std::shared_ptr<Job> job;

@@ -39,6 +39,8 @@ class Scheduler {
   void Remove(const Job& job);
   // No job starts any more.
   void Stop();
+  // Stop(), then waits for the jobs being run to return. Not from a job's run.
+  void Join();
 
  private:
   // Highest priority first, then the lowest job number (the oldest).

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -60,6 +61,21 @@ TEST(Scheduler, AStoppedSchedulerStartsNothingMore) {
   scheduler.Start(2);
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   EXPECT_TRUE(recorder.WaitFor(0).empty());
+}
+
+TEST(Scheduler, JoinWaitsForTheJobsBeingRun) {
+  std::atomic<bool> started{false}, finished{false};
+  Scheduler scheduler([&](const std::shared_ptr<Job>&) {
+    started = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    finished = true;
+  });
+  scheduler.Enqueue(QueuedJob(1, 50));
+  scheduler.Enqueue(QueuedJob(2, 50));
+  scheduler.Start(1);
+  while (!started) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  scheduler.Join();
+  EXPECT_TRUE(finished);
 }
 
 }  // namespace
