@@ -244,16 +244,38 @@ def test_a_component_with_a_submit_token_is_not_registered(
 def test_a_python_transport_calls_the_secured_server_back(
     secured: LocalServer, secrets: Secrets, as_user: dict[str, Client]
 ) -> None:
-    # The transport reads the job's scene from yarfd over TLS with a token.
-    extra = ["--server", secured.address, "--token", ALICE, "--ca", str(secrets.cert)]
+    # The transport reads the job's scene from yarfd over TLS with an admin
+    # token; only an admin may name a component process by address.
+    extra = ["--server", secured.address, "--token", ROOT, "--ca", str(secrets.cert)]
     with ComponentProcess.python([AMBIENT_OCCLUSION], "127.0.0.1:0", *extra) as process:
         transport = scene_pb2.ComponentSpec(
             class_name="py_ambient_occlusion", address=process.address
         )
-        alice = as_user["alice"]
-        job_id = alice.submit(small_scene(), spp=1, transport=transport)
-        status = alice.wait(job_id, timeout=120)
+        with pytest.raises(grpc.RpcError) as error:
+            as_user["alice"].submit(small_scene(), spp=1, transport=transport)
+        assert code_of(error) == grpc.StatusCode.PERMISSION_DENIED
+        assert "admin" in (error.value.details() or "")
+        root = as_user["root"]
+        job_id = root.submit(small_scene(), spp=1, transport=transport)
+        status = root.wait(job_id, timeout=120)
     assert status.state == render_pb2.SUCCEEDED, status.error
+
+
+def test_a_submitter_may_not_read_or_write_running_jobs_scenes(
+    secured: LocalServer, secrets: Secrets
+) -> None:
+    # Scene handles name any user's running job; only admins' component
+    # processes may use them.
+    credentials = grpc.composite_channel_credentials(
+        grpc.ssl_channel_credentials(secrets.cert.read_bytes()),
+        grpc.access_token_call_credentials(ALICE),
+    )
+    with grpc.secure_channel(secured.address, credentials) as channel:
+        for service, method in (("JobScene", "Layout"), ("Intersect", "Intersect")):
+            call = channel.unary_unary(f"/yarf.v1.{service}/{method}")
+            with pytest.raises(grpc.RpcError) as error:
+                call(b"", timeout=10)
+            assert code_of(error) == grpc.StatusCode.PERMISSION_DENIED, service
 
 
 # Ownership of jobs.

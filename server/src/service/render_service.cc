@@ -1,6 +1,7 @@
 #include "service/render_service.h"
 
 #include <chrono>
+#include <vector>
 
 #include "components/array_codec.h"
 #include "kernel/image_io.h"
@@ -8,6 +9,31 @@
 #include "yarf/error.h"
 
 namespace yarf {
+namespace {
+
+// Whether a message names a component process anywhere (a Material's or
+// a ComponentSpec's `address`): yarfd would dial that address and hand
+// the process the job's scene.
+bool NamesAddress(const google::protobuf::Message& message) {
+  const google::protobuf::Reflection& reflection = *message.GetReflection();
+  std::vector<const google::protobuf::FieldDescriptor*> fields;
+  reflection.ListFields(message, &fields);
+  for (const google::protobuf::FieldDescriptor* field : fields) {
+    if (field->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_STRING && field->name() == "address" &&
+        !field->is_repeated() && !reflection.GetString(message, field).empty())
+      return true;
+    if (field->cpp_type() != google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE) continue;
+    if (field->is_repeated()) {
+      for (int i = 0; i < reflection.FieldSize(message, field); ++i)
+        if (NamesAddress(reflection.GetRepeatedMessage(message, field, i))) return true;
+    } else if (NamesAddress(reflection.GetMessage(message, field))) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
 
 grpc::Status RenderServiceImpl::Reach(const grpc::ServerContext& context, const std::string& id,
                                       std::shared_ptr<Job>& job) const {
@@ -21,8 +47,13 @@ grpc::Status RenderServiceImpl::Reach(const grpc::ServerContext& context, const 
 
 grpc::Status RenderServiceImpl::Submit(grpc::ServerContext* context, const v1::SubmitRequest* request,
                                        v1::SubmitReply* reply) {
+  const Caller caller = CallerOf(*context);
+  // Other users' processes are reached through classes an admin registered.
+  if (caller.role != Role::kAdmin && NamesAddress(*request))
+    return {grpc::StatusCode::PERMISSION_DENIED,
+            "naming a component process by address needs the admin role; use a class an admin registered"};
   try {
-    reply->set_job_id(jobs_.Submit(*request, CallerOf(*context).user));
+    reply->set_job_id(jobs_.Submit(*request, caller.user));
     return grpc::Status::OK;
   } catch (const Error& e) {
     return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};

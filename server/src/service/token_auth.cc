@@ -24,6 +24,13 @@ constexpr std::array<std::string_view, 3> kAdminMethods = {
     "/yarf.v1.Registry/Register",
     "/yarf.v1.Registry/Unregister",
 };
+// The running jobs' scenes, served to transports in component processes
+// (which an admin registers, with an admin token): their handles name any
+// user's job, and Splat writes into its film.
+constexpr std::array<std::string_view, 2> kAdminServices = {
+    "/yarf.v1.JobScene/",
+    "/yarf.v1.Intersect/",
+};
 
 constexpr std::string_view kBearer = "bearer ";
 
@@ -78,7 +85,9 @@ bool IsOpenMethod(std::string_view method) {
 }
 
 bool IsAdminMethod(std::string_view method) {
-  return std::find(kAdminMethods.begin(), kAdminMethods.end(), method) != kAdminMethods.end();
+  const auto in_service = [&](std::string_view service) { return method.starts_with(service); };
+  return std::find(kAdminMethods.begin(), kAdminMethods.end(), method) != kAdminMethods.end() ||
+         std::any_of(kAdminServices.begin(), kAdminServices.end(), in_service);
 }
 
 TokenAuthProcessor::TokenAuthProcessor(TokenTable tokens) : tokens_(std::move(tokens)) {}
