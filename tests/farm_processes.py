@@ -123,11 +123,21 @@ class NatsServer(FarmProcess):
 
 
 class Coordinator(FarmProcess):
-    """``yarf-farm coordinator`` at a free port; ``address`` once it serves."""
+    """``yarf-farm coordinator`` at a free port; ``address`` once it serves.
+
+    A coordinator given TLS in ``extra_args`` needs ``tls_ca`` (its
+    certificate) for the health check and its clients.
+    """
 
     def __init__(
-        self, nats_url: str, state_dir: Path, log_path: Path, extra_args: Sequence[str] = ()
+        self,
+        nats_url: str,
+        state_dir: Path,
+        log_path: Path,
+        extra_args: Sequence[str] = (),
+        tls_ca: Path | None = None,
     ) -> None:
+        self.tls_ca = tls_ca
         port_file = state_dir.parent / f"{state_dir.name}.port"
         port_file.unlink(missing_ok=True)
         super().__init__(
@@ -155,22 +165,34 @@ class Coordinator(FarmProcess):
                 port = int(port_file.read_text().strip())
             except (OSError, ValueError):
                 return None
-            with Client(f"127.0.0.1:{port}") as client:
+            # The health check needs no token.
+            ca = str(self.tls_ca or "")
+            with Client(f"127.0.0.1:{port}", token="", tls_ca=ca) as client:
                 return f"127.0.0.1:{port}" if client.is_serving(timeout=1.0) else None
 
         self.address: str = _wait_for(serving, "the coordinator did not serve")
 
-    def client(self, timeout: float = 60.0) -> Client:
-        return Client(self.address, timeout=timeout)
+    def client(self, timeout: float = 60.0, token: str | None = None) -> Client:
+        """A client; ``token`` None: $YARF_TOKEN, as any client."""
+        return Client(self.address, timeout=timeout, token=token, tls_ca=self.tls_ca)
 
 
 class Node(FarmProcess):
-    """``yarf-farm node`` with its own yarfd (``threads`` render threads)."""
+    """``yarf-farm node`` with its own yarfd (``threads`` render threads), or
+    on the yarfd at ``yarfd`` with ``yarfd_args`` (``--token``, ``--ca``)."""
 
     def __init__(
-        self, nats_url: str, name: str, log_path: Path, cache_dir: Path, threads: int = 1
+        self,
+        nats_url: str,
+        name: str,
+        log_path: Path,
+        cache_dir: Path,
+        threads: int = 1,
+        yarfd: str | None = None,
+        yarfd_args: Sequence[str] = (),
     ) -> None:
         self.name = name
+        target = ["--threads", str(threads)] if yarfd is None else ["--yarfd", yarfd, *yarfd_args]
         super().__init__(
             [
                 sys.executable,
@@ -179,8 +201,7 @@ class Node(FarmProcess):
                 "node",
                 "--nats",
                 nats_url,
-                "--threads",
-                str(threads),
+                *target,
                 "--name",
                 name,
                 "--cache-dir",
@@ -194,7 +215,10 @@ class Node(FarmProcess):
             return "node ready" in self.log
 
         _wait_for(ready, f"node {name} was not ready")
-        self.yarfd_pid = int(self.events("yarfd started")[0]["pid"])
+        # The node's own yarfd, which stops with it; None: someone else's.
+        self.yarfd_pid: int | None = None
+        if yarfd is None:
+            self.yarfd_pid = int(self.events("yarfd started")[0]["pid"])
 
     def events(self, kind: str) -> list[dict[str, Any]]:
         """The node's ``<kind> {json}`` log lines, oldest first."""
@@ -216,6 +240,8 @@ class Node(FarmProcess):
             self._kill_yarfd()  # the node had no chance to stop it
 
     def _kill_yarfd(self) -> None:
+        if self.yarfd_pid is None:
+            return
         try:
             command = Path(f"/proc/{self.yarfd_pid}/cmdline").read_bytes()
         except OSError:
@@ -227,9 +253,10 @@ class Node(FarmProcess):
 class Farm:
     """A nats-server, and the coordinators and nodes a test starts on it; all stop at exit."""
 
-    def __init__(self, *, coordinator_args: Sequence[str] = ()) -> None:
+    def __init__(self, *, coordinator_args: Sequence[str] = (), tls_ca: Path | None = None) -> None:
         self.folder = Path(tempfile.mkdtemp(prefix="yarf-farm-"))
         self.coordinator_args = list(coordinator_args)
+        self.tls_ca = tls_ca
         self.state_dir = self.folder / "state"
         self.nats: NatsServer | None = None
         self.coordinator: Coordinator | None = None
@@ -259,21 +286,23 @@ class Farm:
         self._coordinators += 1
         log_path = self.folder / f"coordinator-{self._coordinators}.log"
         self.coordinator = Coordinator(
-            self.nats_url, self.state_dir, log_path, self.coordinator_args
+            self.nats_url, self.state_dir, log_path, self.coordinator_args, self.tls_ca
         )
         return self.coordinator
 
-    def start_node(self, threads: int = 1) -> Node:
+    def start_node(
+        self, threads: int = 1, yarfd: str | None = None, yarfd_args: Sequence[str] = ()
+    ) -> Node:
+        """A node with its own yarfd, or on ``yarfd`` (see Node)."""
         name = f"node-{len(self.nodes) + 1}"
-        node = Node(
-            self.nats_url, name, self.folder / f"{name}.log", self.folder / "scene-cache", threads
-        )
+        log_path, cache = self.folder / f"{name}.log", self.folder / "scene-cache"
+        node = Node(self.nats_url, name, log_path, cache, threads, yarfd, yarfd_args)
         self.nodes.append(node)
         return node
 
-    def client(self, timeout: float = 60.0) -> Client:
+    def client(self, timeout: float = 60.0, token: str | None = None) -> Client:
         assert self.coordinator is not None
-        return self.coordinator.client(timeout)
+        return self.coordinator.client(timeout, token)
 
     def log_tail(self, lines: int = 25) -> str:
         """The end of every process's log, for a failing test's report."""

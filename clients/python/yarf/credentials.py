@@ -60,3 +60,17 @@ def open_channel(
     if credentials is None:
         return grpc.insecure_channel(address, options=list(options))
     return grpc.secure_channel(address, credentials, options=list(options))
+
+
+def open_aio_channel(
+    address: str,
+    options: Sequence[tuple[str, Any]] = (),
+    *,
+    token: str | None = None,
+    tls_ca: str | Path | None = None,
+) -> grpc.aio.Channel:
+    """``open_channel`` for asyncio code."""
+    credentials = channel_credentials(*resolve(token, tls_ca))
+    if credentials is None:
+        return grpc.aio.insecure_channel(address, options=list(options))
+    return grpc.aio.secure_channel(address, credentials, options=list(options))

@@ -22,5 +22,8 @@ Run ``nats-server -js -sd DIR``, then for example::
         --state-dir /var/lib/yarf-farm
     yarf-farm node --nats nats://127.0.0.1:4222 --threads 8
 
-and point any yarf client at 127.0.0.1:50051.
+and point any yarf client at 127.0.0.1:50051. Beyond loopback the
+coordinator requires ``--tls-cert``, ``--tls-key`` and ``--tokens``, as
+yarfd does (``yarf.farm.listen``, ``yarf.farm.auth``); each job is its
+submitter's (``yarf.farm.access``).
 """

@@ -7,8 +7,10 @@ import asyncio
 import json
 import logging
 import os
+import re
 import signal
 import socket
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -16,7 +18,10 @@ from pathlib import Path
 import nats
 from nats.aio.client import Client as Nats
 
-from yarf.farm.coordinator import Coordinator
+from yarf.credentials import channel_credentials, resolve
+from yarf.farm.access import AccessError
+from yarf.farm.coordinator import Coordinator, Retention
+from yarf.farm.listen import ListenSecurity, listen_security
 from yarf.farm.node import Node
 from yarf.farm.service import start_server
 from yarf.farm.store import JobStore
@@ -27,6 +32,7 @@ from yarf.server import LocalServer
 log = logging.getLogger("yarf.farm")
 
 DEFAULT_NATS = "nats://127.0.0.1:4222"
+NATS_HELP = "NATS server URL: nats://[USER:PASSWORD@]HOST:PORT or tls://... (default %(default)s)"
 # How long a process waits for NATS at start.
 CONNECT_SECONDS = 30.0
 
@@ -41,7 +47,7 @@ def _parser() -> argparse.ArgumentParser:
     coordinator = commands.add_parser(
         "coordinator", help="serve RenderService, split jobs into tasks, merge their images"
     )
-    coordinator.add_argument("--nats", default=DEFAULT_NATS, help="NATS server URL")
+    coordinator.add_argument("--nats", default=DEFAULT_NATS, help=NATS_HELP)
     coordinator.add_argument(
         "--listen", default="127.0.0.1:50051", help="gRPC address (port 0: any free port)"
     )
@@ -49,6 +55,37 @@ def _parser() -> argparse.ArgumentParser:
         "--state-dir", type=Path, required=True, help="folder of the job table (SQLite)"
     )
     coordinator.add_argument("--port-file", type=Path, help="write the bound port here")
+    coordinator.add_argument(
+        "--tls-cert",
+        type=Path,
+        metavar="FILE",
+        help="serve TLS with this PEM certificate (with --tls-key); "
+        "required, with --tokens, on a non-loopback address",
+    )
+    coordinator.add_argument("--tls-key", type=Path, metavar="FILE", help="its PEM private key")
+    coordinator.add_argument(
+        "--tokens",
+        type=Path,
+        metavar="FILE",
+        help="bearer tokens, yarfd's format: `TOKEN USER ROLE` per line, ROLE submit|admin "
+        "(needs TLS)",
+    )
+    retention = Retention()
+    coordinator.add_argument(
+        "--keep-finished-hours",
+        type=float,
+        default=retention.keep_finished_hours,
+        metavar="H",
+        help="ended jobs and their images are deleted after H hours "
+        f"(default {retention.keep_finished_hours:g})",
+    )
+    coordinator.add_argument(
+        "--max-finished-jobs",
+        type=int,
+        default=retention.max_finished_jobs,
+        metavar="N",
+        help=f"and beyond N ended jobs, the oldest first (default {retention.max_finished_jobs})",
+    )
     coordinator.add_argument(
         "--shares",
         type=int,
@@ -77,9 +114,20 @@ def _parser() -> argparse.ArgumentParser:
     )
 
     node = commands.add_parser("node", help="render tasks on a yarfd")
-    node.add_argument("--nats", default=DEFAULT_NATS, help="NATS server URL")
+    node.add_argument("--nats", default=DEFAULT_NATS, help=NATS_HELP)
     node.add_argument(
         "--yarfd", help="address of the yarfd to render on (default: start one as a child)"
+    )
+    node.add_argument(
+        "--token",
+        metavar="TOKEN",
+        help="bearer token for a --yarfd that requires TLS and tokens (default: $YARF_TOKEN)",
+    )
+    node.add_argument(
+        "--ca",
+        metavar="PEM",
+        help="certificate the --yarfd's TLS certificate is checked against "
+        "(default: $YARF_TLS_CA, else the system's CAs when a token is given)",
     )
     node.add_argument("--threads", type=int, help="render threads of the child yarfd")
     node.add_argument("--name", help="the node's name in logs and results (default host-pid)")
@@ -89,8 +137,17 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _without_secrets(url: str) -> str:
+    """``url`` for a log line: nats://user:password@host becomes nats://***@host."""
+    return re.sub(r"//[^/@]*@", "//***@", url)
+
+
 async def _connect(url: str, name: str) -> Nats:
-    """Connects, retrying while NATS starts; reconnects forever afterwards."""
+    """Connects, retrying while NATS starts; reconnects forever afterwards.
+
+    ``url`` goes to nats-py as it is: nats://user:password@host:4222 and
+    tls://host:4222 (checked against the system's CAs, or $SSL_CERT_FILE) work.
+    """
     deadline = time.monotonic() + CONNECT_SECONDS
     while True:
         try:
@@ -103,7 +160,8 @@ async def _connect(url: str, name: str) -> Nats:
             )
         except Exception as error:
             if time.monotonic() > deadline:
-                raise SystemExit(f"cannot connect to NATS at {url}: {error}") from error
+                where = _without_secrets(url)
+                raise SystemExit(f"cannot connect to NATS at {where}: {error}") from error
             await asyncio.sleep(0.25)
 
 
@@ -115,7 +173,7 @@ def _stop_event() -> asyncio.Event:
     return stop
 
 
-async def _run_coordinator(args: argparse.Namespace) -> int:
+async def _run_coordinator(args: argparse.Namespace, security: ListenSecurity) -> int:
     stop = _stop_event()
     policy = SplitPolicy(
         shares=max(1, args.shares),
@@ -126,15 +184,17 @@ async def _run_coordinator(args: argparse.Namespace) -> int:
     nc = await _connect(args.nats, "yarf-farm coordinator")
     buckets = await ensure_resources(nc.jetstream())
     store = JobStore(args.state_dir)
-    coordinator = Coordinator(nc, store, buckets, policy)
+    retention = Retention(args.keep_finished_hours, args.max_finished_jobs)
+    coordinator = Coordinator(nc, store, buckets, policy, retention)
     await coordinator.start()
-    server, port = await start_server(coordinator, args.listen)
+    server, port = await start_server(coordinator, args.listen, security)
     if args.port_file is not None:
         # Written whole or not at all: a reader never sees half a number.
         partial = args.port_file.with_suffix(".part")
         partial.write_text(f"{port}\n")
         partial.replace(args.port_file)
-    log.info("coordinator serving on port %d (state %s)", port, args.state_dir)
+    access = "TLS and tokens" if security.tokens else "TLS" if security.credentials else "plaintext"
+    log.info("coordinator serving on port %d, %s (state %s)", port, access, args.state_dir)
     await stop.wait()
     await server.stop(grace=1.0)
     await coordinator.stop()
@@ -154,7 +214,7 @@ async def _watch_child(server: LocalServer, stop: asyncio.Event) -> None:
         await asyncio.sleep(1.0)
 
 
-async def _run_node(args: argparse.Namespace) -> int:
+async def _run_node(args: argparse.Namespace, token: str, tls_ca: str) -> int:
     stop = _stop_event()
     name = args.name or f"{socket.gethostname()}-{os.getpid()}"
     cache_dir = args.cache_dir or Path(tempfile.gettempdir()) / "yarf-farm-scenes"
@@ -172,7 +232,13 @@ async def _run_node(args: argparse.Namespace) -> int:
     try:
         nc = await _connect(args.nats, f"yarf-farm node {name}")
         buckets = await ensure_resources(nc.jetstream())
-        node = Node(nc, buckets, address, name=name, cache_dir=cache_dir)
+        node = Node(
+            nc, buckets, address, name=name, cache_dir=cache_dir, token=token, tls_ca=tls_ca
+        )
+        try:
+            await node.check_yarfd()
+        except PermissionError as error:
+            raise SystemExit(f"yarf-farm: {error}") from None
         await node.run(stop)
         await nc.close()
     finally:
@@ -184,11 +250,36 @@ async def _run_node(args: argparse.Namespace) -> int:
     return 1 if crashed else 0
 
 
+def _node_credentials(args: argparse.Namespace) -> tuple[str, str]:
+    """The token and CA for --yarfd: the flags, else $YARF_TOKEN and $YARF_TLS_CA."""
+    if args.yarfd is None:
+        # The node's own yarfd listens on loopback in plaintext.
+        return "", ""
+    token, tls_ca = resolve(args.token, args.ca)
+    channel_credentials(token, tls_ca)  # reads the CA now: a bad path fails at start
+    return token, tls_ca
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(levelname)s %(message)s")
     if args.command == "coordinator":
-        return asyncio.run(_run_coordinator(args))
+        if args.keep_finished_hours < 0 or args.max_finished_jobs < 0:
+            _parser().error("--keep-finished-hours and --max-finished-jobs must be 0 or more")
+        try:
+            # Checked before NATS is reached: a wrong command line fails at once.
+            security = listen_security(args.listen, args.tls_cert, args.tls_key, args.tokens)
+        except AccessError as error:
+            print(f"yarf-farm: {error}", file=sys.stderr)
+            return 2
+        return asyncio.run(_run_coordinator(args, security))
     if args.yarfd is not None and args.threads is not None:
         _parser().error("--threads applies to the node's own yarfd, not to --yarfd")
-    return asyncio.run(_run_node(args))
+    if args.yarfd is None and (args.token is not None or args.ca is not None):
+        _parser().error("--token and --ca apply to --yarfd, not to the node's own yarfd")
+    try:
+        token, tls_ca = _node_credentials(args)
+    except OSError as error:
+        print(f"yarf-farm: {error}", file=sys.stderr)
+        return 2
+    return asyncio.run(_run_node(args, token, tls_ca))

@@ -41,6 +41,14 @@ DEFAULT_PRIORITY = 50
 FINISHED_IMAGES_KEPT = 16
 
 
+@dataclass(frozen=True)
+class Retention:
+    """How long ended jobs stay, as yarfd's --keep-finished-hours and --max-finished-jobs."""
+
+    keep_finished_hours: float = 168.0
+    max_finished_jobs: int = 1000
+
+
 class UnknownJob(KeyError):
     """A job id the coordinator never gave (NOT_FOUND)."""
 
@@ -77,7 +85,12 @@ class Coordinator:
     """Jobs in, tasks out, results merged: the farm's side of RenderService."""
 
     def __init__(
-        self, nc: Nats, store: JobStore, buckets: streams.Buckets, policy: SplitPolicy
+        self,
+        nc: Nats,
+        store: JobStore,
+        buckets: streams.Buckets,
+        policy: SplitPolicy,
+        retention: Retention | None = None,
     ) -> None:
         self._nc = nc
         self._js: JetStreamContext = nc.jetstream()
@@ -85,6 +98,7 @@ class Coordinator:
         self._buckets = buckets
         self._kv: KeyValue = buckets.jobs
         self._policy = policy
+        self._retention = retention or Retention()
         self._jobs: dict[str, Job] = {}
         self._next_seq = store.last_seq() + 1
         self._scenes_stored: set[str] = set()
@@ -105,6 +119,7 @@ class Coordinator:
                 totals.shadow_rays,
             )
             self._jobs[record.id] = job
+        self._apply_retention()
         await self._resume()
         self._background = [
             asyncio.create_task(self._consume_results(), name="results"),
@@ -122,7 +137,8 @@ class Coordinator:
         dropped as duplicates, those lost with a node or never published are
         queued. Results delivered but not acked are redelivered by JetStream.
         """
-        for job in self._jobs.values():
+        # A copy: a job that ends here may take older ones with it (retention).
+        for job in list(self._jobs.values()):
             record = job.record
             if job.final:
                 continue
@@ -268,7 +284,8 @@ class Coordinator:
         self._finished_merges.move_to_end(job.record.id)
         while len(self._finished_merges) > FINISHED_IMAGES_KEPT:
             evicted, _ = self._finished_merges.popitem(last=False)
-            self._jobs[evicted].merge = None
+            if evicted in self._jobs:
+                self._jobs[evicted].merge = None
 
     async def cancel(self, job: Job) -> None:
         if not job.final:
@@ -373,12 +390,28 @@ class Coordinator:
         if record.started_at is None:
             record.started_at = record.finished_at
         self._store.update_job(record)
+        # Before anyone hears the job ended: they then see the job table as it stays.
+        self._apply_retention()
         self._notify(job)
         if state != render_pb2.SUCCEEDED:
             # The job's queued tasks go at once.
             await self._js.purge_stream(
                 streams.TASKS_STREAM, subject=streams.job_tasks_filter(record.id)
             )
+
+    def _apply_retention(self) -> None:
+        """Deletes the ended jobs beyond the retention limits, with their task images.
+
+        Runs at start and whenever a job ends, as yarfd does. A Watch still
+        holding a deleted job sees its last state; new calls get NOT_FOUND.
+        """
+        cutoff = time.time() - self._retention.keep_finished_hours * 3600
+        deleted = self._store.delete_ended(cutoff, self._retention.max_finished_jobs)
+        for job_id in deleted:
+            self._jobs.pop(job_id, None)
+            self._finished_merges.pop(job_id, None)
+        if deleted:
+            log.info("deleted %d ended jobs: %s", len(deleted), " ".join(deleted))
 
     async def _task_failed(self, job: Job, task: int, error: str) -> None:
         if job.final or task in job.done:
@@ -480,6 +513,7 @@ class Coordinator:
             job.merge.add(image)
         if finished:
             log.info("job %s: succeeded", record.id)
+            self._apply_retention()
         self._notify(job)
         await message.ack()
         await self._delete_image(result.image_object)

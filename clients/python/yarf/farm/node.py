@@ -25,6 +25,7 @@ from nats.aio.subscription import Subscription
 from nats.js.errors import NotFoundError
 
 from yarf.client import FINAL_STATES, MAX_MESSAGE_BYTES, array_to_numpy
+from yarf.credentials import open_aio_channel
 from yarf.farm import streams
 from yarf.farm.merge import TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
@@ -38,6 +39,8 @@ HEARTBEAT_SECONDS = 1.0
 IDLE_POLL_SECONDS = 0.5
 # Deadline of unary calls to yarfd.
 CALL_TIMEOUT = 60.0
+# Deadline of the start-up call that proves yarfd accepts the node's credentials.
+CHECK_TIMEOUT = 10.0
 # A pull request is answered within milliseconds, with a task or "none".
 PULL_TIMEOUT = 0.5
 _NO_WAIT_PULL = json.dumps({"batch": 1, "no_wait": True}).encode()
@@ -105,7 +108,12 @@ class RunningTask:
 
 
 class Node:
-    """Renders the farm's tasks on the yarfd at ``yarfd_address``."""
+    """Renders the farm's tasks on the yarfd at ``yarfd_address``.
+
+    A yarfd that requires TLS and tokens takes ``token`` (the jobs the node
+    submits are that token's user's) and ``tls_ca`` (its certificate or CA);
+    "" means none.
+    """
 
     def __init__(
         self,
@@ -115,6 +123,8 @@ class Node:
         *,
         name: str,
         cache_dir: Path,
+        token: str = "",
+        tls_ca: str = "",
     ) -> None:
         self.name = name
         self._nc = nc
@@ -122,12 +132,14 @@ class Node:
         self._buckets = buckets
         self._cache_dir = cache_dir
         self._cache_dir.mkdir(parents=True, exist_ok=True)
-        self._channel = grpc.aio.insecure_channel(
+        self._channel = open_aio_channel(
             yarfd_address,
-            options=[
+            [
                 ("grpc.max_send_message_length", MAX_MESSAGE_BYTES),
                 ("grpc.max_receive_message_length", MAX_MESSAGE_BYTES),
             ],
+            token=token,
+            tls_ca=tls_ca,
         )
         self._yarfd = render_pb2_grpc.RenderServiceStub(self._channel)
         self._puller = TaskPuller(nc)
@@ -137,6 +149,20 @@ class Node:
         self._stopping = False
         self._scene: tuple[str, scene_pb2.Scene] | None = None
         self._watcher: asyncio.Task[None] | None = None
+
+    async def check_yarfd(self) -> None:
+        """Fails at start, not task by task, when yarfd refuses the node's token or TLS.
+
+        Raises ``PermissionError``; a yarfd that does not answer yet is only logged.
+        """
+        try:
+            await self._yarfd.List(render_pb2.ListJobsRequest(), timeout=CHECK_TIMEOUT)
+        except grpc.aio.AioRpcError as error:
+            code = error.code()
+            if code in (grpc.StatusCode.UNAUTHENTICATED, grpc.StatusCode.PERMISSION_DENIED):
+                why = f"yarfd refuses the node: {code.name} {error.details()}"
+                raise PermissionError(why) from None
+            log.warning("yarfd does not answer yet: %s %s", code.name, error.details())
 
     async def run(self, stop: asyncio.Event) -> None:
         """Renders tasks until ``stop`` is set; a task in hand then goes back to the queue."""

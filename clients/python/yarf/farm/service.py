@@ -8,8 +8,11 @@ from collections.abc import AsyncIterator
 import grpc
 
 from yarf.client import MAX_MESSAGE_BYTES, numpy_to_array
+from yarf.farm.access import Caller, Role, may_act_on, names_address
+from yarf.farm.auth import TokenCheck, TokenInterceptor, Unauthenticated
 from yarf.farm.coordinator import FINAL_STATES, Coordinator, Job, UnknownJob
 from yarf.farm.images import encode_exr, encode_png
+from yarf.farm.listen import ListenSecurity
 from yarf.farm.validation import InvalidRequest
 from yarf.v1 import render_pb2, render_pb2_grpc
 
@@ -20,32 +23,47 @@ _SERVING = b"\x08\x01"
 WATCH_IDLE_SECONDS = 1.0
 
 
-def _owner(context: grpc.aio.ServicerContext) -> str:
-    """Who submitted: "local" on loopback, as yarfd says; else the peer's address."""
-    peer = context.peer() or ""
-    if peer.startswith(("ipv4:127.", "ipv6:[::1]", "unix:")):
-        return "local"
-    return peer.rsplit(":", 1)[0].split(":", 1)[-1]
-
-
 class FarmRenderService(render_pb2_grpc.RenderServiceServicer):
-    """RenderService on the coordinator's asyncio loop."""
+    """RenderService on the coordinator's asyncio loop; each job is its owner's (and admins')."""
 
-    def __init__(self, coordinator: Coordinator) -> None:
+    def __init__(self, coordinator: Coordinator, check: TokenCheck) -> None:
         self._coordinator = coordinator
+        self._check = check
+
+    async def _caller(self, context: grpc.aio.ServicerContext) -> Caller:
+        try:
+            return self._check.caller(context.invocation_metadata())
+        except Unauthenticated as error:
+            # The interceptor turned such calls away already; this is a second lock.
+            await context.abort(grpc.StatusCode.UNAUTHENTICATED, str(error))
+            raise
 
     async def _job(self, job_id: str, context: grpc.aio.ServicerContext) -> Job:
+        """The job, if the caller may act on it; else NOT_FOUND or PERMISSION_DENIED."""
+        caller = await self._caller(context)
         try:
-            return self._coordinator.job(job_id)
+            job = self._coordinator.job(job_id)
         except UnknownJob:
             await context.abort(grpc.StatusCode.NOT_FOUND, f"no job '{job_id}'")
             raise
+        if not may_act_on(caller, job.record.owner):
+            await context.abort(
+                grpc.StatusCode.PERMISSION_DENIED, f"job '{job_id}' is not {caller.user}'s"
+            )
+        return job
 
     async def Submit(
         self, request: render_pb2.SubmitRequest, context: grpc.aio.ServicerContext
     ) -> render_pb2.SubmitReply:
+        caller = await self._caller(context)
+        if caller.role is not Role.ADMIN and names_address(request):
+            await context.abort(
+                grpc.StatusCode.PERMISSION_DENIED,
+                "naming a component process by address needs the admin role; "
+                "use a class an admin registered",
+            )
         try:
-            job_id = await self._coordinator.submit(request, _owner(context))
+            job_id = await self._coordinator.submit(request, caller.user)
         except InvalidRequest as error:
             await context.abort(grpc.StatusCode.INVALID_ARGUMENT, str(error))
             raise
@@ -102,7 +120,9 @@ class FarmRenderService(render_pb2_grpc.RenderServiceServicer):
     async def List(
         self, request: render_pb2.ListJobsRequest, context: grpc.aio.ServicerContext
     ) -> render_pb2.ListJobsReply:
-        return render_pb2.ListJobsReply(jobs=self._coordinator.list())
+        caller = await self._caller(context)
+        jobs = [job for job in self._coordinator.list() if may_act_on(caller, job.owner)]
+        return render_pb2.ListJobsReply(jobs=jobs)
 
     async def SetPriority(
         self, request: render_pb2.SetPriorityRequest, context: grpc.aio.ServicerContext
@@ -120,20 +140,29 @@ async def _health_check(request: bytes, context: grpc.aio.ServicerContext) -> by
     return _SERVING
 
 
-async def start_server(coordinator: Coordinator, listen: str) -> tuple[grpc.aio.Server, int]:
+async def start_server(
+    coordinator: Coordinator, listen: str, security: ListenSecurity
+) -> tuple[grpc.aio.Server, int]:
     """Serves RenderService and the health check at ``listen``; returns the server and its port."""
+    check = TokenCheck(security.tokens)
     server = grpc.aio.server(
+        interceptors=[TokenInterceptor(check)] if check.enabled else [],
         options=[
             ("grpc.max_send_message_length", MAX_MESSAGE_BYTES),
             ("grpc.max_receive_message_length", MAX_MESSAGE_BYTES),
-        ]
+        ],
     )
-    render_pb2_grpc.add_RenderServiceServicer_to_server(FarmRenderService(coordinator), server)
+    render_pb2_grpc.add_RenderServiceServicer_to_server(
+        FarmRenderService(coordinator, check), server
+    )
     health = grpc.method_handlers_generic_handler(
         "grpc.health.v1.Health", {"Check": grpc.unary_unary_rpc_method_handler(_health_check)}
     )
     server.add_generic_rpc_handlers((health,))
-    port = server.add_insecure_port(listen)
+    if security.credentials is None:
+        port = server.add_insecure_port(listen)
+    else:
+        port = server.add_secure_port(listen, security.credentials)
     if port == 0:
         raise OSError(f"cannot listen at {listen}")
     await server.start()

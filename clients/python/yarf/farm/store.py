@@ -16,6 +16,10 @@ from pathlib import Path
 
 from yarf.farm.merge import TaskImage
 from yarf.farm.tasks import Task, Window
+from yarf.v1 import render_pb2
+
+# The states of an ended job, which retention may delete.
+_ENDED = (render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CANCELLED)
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -136,7 +140,11 @@ class JobStore:
         self._db.close()
 
     def last_seq(self) -> int:
-        row = self._db.execute("SELECT MAX(seq) FROM jobs").fetchone()
+        """The highest job number ever given, deleted jobs' included."""
+        row = self._db.execute(
+            "SELECT MAX(COALESCE((SELECT MAX(seq) FROM jobs), 0),"
+            " COALESCE((SELECT CAST(value AS INTEGER) FROM meta WHERE key = 'last_seq'), 0))"
+        ).fetchone()
         return int(row[0] or 0)
 
     def add_job(self, job: JobRecord, tasks: list[Task]) -> None:
@@ -228,6 +236,34 @@ class JobStore:
                 return False
             self._update(job)
         return True
+
+    def delete_ended(self, finished_before: float, keep: int) -> list[str]:
+        """Deletes the ended jobs, with their tasks and task images, that finished
+        before ``finished_before`` or are not among the ``keep`` that finished last.
+
+        Returns their ids.
+        """
+        states = ", ".join(str(int(state)) for state in _ENDED)
+        with self._transaction():
+            rows = self._db.execute(
+                f"SELECT id FROM jobs WHERE state IN ({states}) AND (finished_at < ? OR seq NOT IN"
+                f" (SELECT seq FROM jobs WHERE state IN ({states})"
+                "  ORDER BY finished_at DESC, seq DESC LIMIT ?))",
+                (finished_before, max(0, keep)),
+            ).fetchall()
+            ids = [str(row[0]) for row in rows]
+            if not ids:
+                return []
+            # Job ids are never given twice, even once the newest job is deleted:
+            # a client or a node may still hold the old one.
+            self._db.execute(
+                "INSERT OR REPLACE INTO meta VALUES ('last_seq', ?)", (str(self.last_seq()),)
+            )
+            for table, column in (("results", "job"), ("tasks", "job"), ("jobs", "id")):
+                self._db.executemany(
+                    f"DELETE FROM {table} WHERE {column} = ?", [(job_id,) for job_id in ids]
+                )
+        return ids
 
     def images(self, job_id: str) -> Iterator[TaskImage]:
         rows = self._db.execute("SELECT image FROM results WHERE job = ? ORDER BY task", (job_id,))
