@@ -397,15 +397,16 @@ def test_yarfd_serves_a_public_address_with_tls_and_tokens(
             assert client.list() == []
 
 
-@pytest.mark.parametrize(
-    ("line", "complaint"),
-    [
-        ("carol-secret carol", "expected `TOKEN USER ROLE`"),
-        ("carol-secret carol submit extra", "expected `TOKEN USER ROLE`"),
-        ("carol-secret carol owner", "role 'owner' is neither submit nor admin"),
-        ("alice-secret carol submit", "this token is already given to alice"),
-    ],
-)
+# Tokens-file lines yarfd and the farm coordinator refuse, with the complaint.
+MALFORMED_TOKEN_LINES = [
+    ("carol-secret carol", "expected `TOKEN USER ROLE`"),
+    ("carol-secret carol submit extra", "expected `TOKEN USER ROLE`"),
+    ("carol-secret carol owner", "role 'owner' is neither submit nor admin"),
+    ("alice-secret carol submit", "this token is already given to alice"),
+]
+
+
+@pytest.mark.parametrize(("line", "complaint"), MALFORMED_TOKEN_LINES)
 def test_yarfd_names_the_malformed_line_of_a_tokens_file(
     secrets: Secrets, tmp_path: Path, line: str, complaint: str
 ) -> None:

@@ -17,7 +17,15 @@ import grpc
 import pytest
 from conftest import small_scene
 from farm_processes import Coordinator, Farm, NatsServer, find_nats_server
-from test_access import ALICE, BOB, ROOT, TOKENS, Secrets, code_of
+from test_access import (
+    ALICE,
+    BOB,
+    MALFORMED_TOKEN_LINES,
+    ROOT,
+    TOKENS,
+    Secrets,
+    code_of,
+)
 
 from yarf import Client, LocalServer
 from yarf.v1 import render_pb2
@@ -230,15 +238,7 @@ def test_the_coordinator_refuses_half_the_flags(
     assert complaint in coordinator_refuses(["--listen", "127.0.0.1:0", *args], tmp_path)
 
 
-@pytest.mark.parametrize(
-    ("line", "complaint"),
-    [
-        ("carol-secret carol", "expected `TOKEN USER ROLE`"),
-        ("carol-secret carol submit extra", "expected `TOKEN USER ROLE`"),
-        ("carol-secret carol owner", "role 'owner' is neither submit nor admin"),
-        ("alice-secret carol submit", "this token is already given to alice"),
-    ],
-)
+@pytest.mark.parametrize(("line", "complaint"), MALFORMED_TOKEN_LINES)
 def test_the_coordinator_names_the_malformed_line_of_a_tokens_file(
     secrets: Secrets, tmp_path: Path, line: str, complaint: str
 ) -> None:
