@@ -179,7 +179,8 @@ class Coordinator(FarmProcess):
 
 class Node(FarmProcess):
     """``yarf-farm node`` with its own yarfd (``threads`` render threads), or
-    on the yarfd at ``yarfd`` with ``yarfd_args`` (``--token``, ``--ca``)."""
+    on the yarfd at ``yarfd`` with ``yarfd_args`` (``--token``, ``--ca``);
+    ``extra_args`` go to the node (``--task-timeout``)."""
 
     def __init__(
         self,
@@ -190,6 +191,7 @@ class Node(FarmProcess):
         threads: int = 1,
         yarfd: str | None = None,
         yarfd_args: Sequence[str] = (),
+        extra_args: Sequence[str] = (),
     ) -> None:
         self.name = name
         target = ["--threads", str(threads)] if yarfd is None else ["--yarfd", yarfd, *yarfd_args]
@@ -206,6 +208,7 @@ class Node(FarmProcess):
                 name,
                 "--cache-dir",
                 str(cache_dir),
+                *extra_args,
             ],
             log_path,
         )
@@ -291,12 +294,16 @@ class Farm:
         return self.coordinator
 
     def start_node(
-        self, threads: int = 1, yarfd: str | None = None, yarfd_args: Sequence[str] = ()
+        self,
+        threads: int = 1,
+        yarfd: str | None = None,
+        yarfd_args: Sequence[str] = (),
+        extra_args: Sequence[str] = (),
     ) -> Node:
         """A node with its own yarfd, or on ``yarfd`` (see Node)."""
         name = f"node-{len(self.nodes) + 1}"
         log_path, cache = self.folder / f"{name}.log", self.folder / "scene-cache"
-        node = Node(self.nats_url, name, log_path, cache, threads, yarfd, yarfd_args)
+        node = Node(self.nats_url, name, log_path, cache, threads, yarfd, yarfd_args, extra_args)
         self.nodes.append(node)
         return node
 

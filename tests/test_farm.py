@@ -9,19 +9,24 @@ float rounding: it must pass the block z-test and agree pixel for pixel.
 
 from __future__ import annotations
 
+import asyncio
+import os
 import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import grpc
 import numpy as np
 import pytest
 from conftest import CORNELL_BOX, small_scene
-from farm_processes import Farm, Node, find_nats_server
+from farm_processes import Farm, Node, find_nats_server, free_port
 from imagestats import block_z_test
 
 from yarf import Client, LocalServer, RenderResult, load_scene
+from yarf.farm import streams
+from yarf.farm.cache import SceneCache
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.tasks import SplitPolicy, Task, Window, split
 from yarf.v1 import render_pb2, scene_pb2
@@ -391,3 +396,130 @@ def test_many_concurrent_clients_lose_no_job(farm: Farm) -> None:
     with farm.client() as client:
         listed = {status.job_id: status.state for status in client.list()}
     assert all(listed[job_id] == render_pb2.SUCCEEDED for job_id in job_ids)
+
+
+def submit(client: Client, scene: scene_pb2.Scene, spp: int, name: str, **fields: int) -> str:
+    """Submits with SubmitRequest fields the Client does not take (max_retries)."""
+    request = render_pb2.SubmitRequest(
+        scene=scene, options=render_pb2.RenderOptions(spp=spp, seed=SEED), name=name, **fields
+    )
+    return str(client.render_service.Submit(request).job_id)
+
+
+def stored_advisories(nats_url: str) -> int:
+    """Max-deliveries advisories waiting in the farm's advisory stream."""
+
+    async def count() -> int:
+        import nats
+
+        nc = await nats.connect(nats_url)
+        try:
+            info = await nc.jetstream().stream_info(streams.ADVISORIES_STREAM)
+            return int(info.state.messages)
+        finally:
+            await nc.close()
+
+    return asyncio.run(count())
+
+
+def test_a_task_whose_deliveries_run_out_without_a_coordinator_is_retried(
+    own_farm: Farm,
+) -> None:
+    coordinator = own_farm.start_coordinator()
+    with own_farm.client() as client:
+        job_id = submit(client, small_scene(8), 1, "spent", max_retries=1)
+    coordinator.kill()
+    # A node whose yarfd never answers gives every delivery of the task back.
+    broken = own_farm.start_node(yarfd=f"127.0.0.1:{free_port()}")
+    wait_until(
+        lambda: stored_advisories(own_farm.nats_url) >= 1,
+        "JetStream gives up on the task",
+        timeout=40,
+    )
+    broken.stop()
+    assert max(int(e["delivered"]) for e in events_of([broken], "task started", job_id)) == 5
+    own_farm.start_node()
+    # The advisory sent while no coordinator ran is handled by the next one.
+    own_farm.start_coordinator()
+    with own_farm.client() as client:
+        status = client.wait(job_id, timeout=60)
+    assert status.state == render_pb2.SUCCEEDED, status
+    assert stored_advisories(own_farm.nats_url) == 0
+
+
+def test_a_task_past_the_node_timeout_fails_and_the_node_serves_on(own_farm: Farm) -> None:
+    own_farm.start_coordinator()
+    node = own_farm.start_node(extra_args=["--task-timeout", "1"])
+    with own_farm.client() as client:
+        # Even the short first share of 32768 samples takes seconds.
+        slow = submit(client, cornell(32), 32768, "too-slow", max_retries=1)
+        status = client.wait(slow, timeout=60)
+        assert status.state == render_pb2.FAILED, status
+        assert "timed out after 1 s" in status.error, status.error
+        # The first try and its retry.
+        assert len(events_of([node], "task timed out", slow)) >= 2
+        later = render(client, small_scene(), 4)
+    assert events_of([node], "task finished", later)
+    assert not events_of([node], "task timed out", later)
+
+
+def test_set_priority_leaves_a_running_task_on_its_node(own_farm: Farm) -> None:
+    own_farm.start_coordinator()
+    node = own_farm.start_node()
+    with own_farm.client() as client:
+        # 8 shares of 32² pixels, about a second each on one thread.
+        job_id = submit(client, cornell(32), 3072, "moved")
+
+        def in_flight() -> bool:
+            """A full share the node began 0.2 s ago: the coordinator has its heartbeat."""
+            finished = {e["task"] for e in events_of([node], "task finished", job_id)}
+            return any(
+                event["task"] != 0
+                and event["task"] not in finished
+                and time.time() - float(event["at"]) > 0.2
+                for event in events_of([node], "task started", job_id)
+            )
+
+        wait_until(in_flight, "the node is in the middle of a task")
+        client.render_service.SetPriority(render_pb2.SetPriorityRequest(job_id=job_id, priority=90))
+        status = client.wait(job_id, timeout=60)
+    assert status.state == render_pb2.SUCCEEDED, status
+    started = sorted(int(e["task"]) for e in events_of([node], "task started", job_id))
+    assert started == list(range(8)), f"tasks started: {started}"
+
+
+def test_the_scene_cache_deletes_the_least_recently_used_scenes(tmp_path: Path) -> None:
+    import hashlib
+
+    scenes = {name: name.encode() * 100 for name in ("a", "b", "c")}  # 100 bytes each
+    hashes = {name: hashlib.sha256(data).hexdigest() for name, data in scenes.items()}
+    cache = SceneCache(tmp_path / "cache", max_bytes=250)
+    clock = iter(range(1_000_000_000, 2_000_000_000, 1_000_000_000 // 10))
+
+    def used(name: str) -> None:
+        """Gives the file a distinct use time (file times may be coarse)."""
+        path = tmp_path / "cache" / f"{hashes[name]}.scene"
+        stamp = next(clock)
+        os.utime(path, ns=(stamp, stamp))
+
+    cache.put(hashes["a"], scenes["a"])
+    used("a")
+    cache.put(hashes["b"], scenes["b"])
+    used("b")
+    assert cache.get(hashes["a"]) == scenes["a"]  # a is now used after b
+    used("a")
+    cache.put(hashes["c"], scenes["c"])
+    assert cache.get(hashes["b"]) is None, "b was the least recently used"
+    assert cache.get(hashes["a"]) == scenes["a"] and cache.get(hashes["c"]) == scenes["c"]
+    assert sum(p.stat().st_size for p in (tmp_path / "cache").iterdir()) <= 250
+    # A scene larger than the limit still stays while it is used.
+    big = b"x" * 400
+    cache.put(hashlib.sha256(big).hexdigest(), big)
+    assert [p.stat().st_size for p in (tmp_path / "cache").iterdir()] == [400]
+    # A damaged file is a miss; no limit keeps everything.
+    (tmp_path / "cache" / f"{hashes['a']}.scene").write_bytes(b"damaged")
+    assert cache.get(hashes["a"]) is None
+    unlimited = SceneCache(tmp_path / "all", max_bytes=0)
+    for name, data in scenes.items():
+        unlimited.put(hashes[name], data)
+    assert len(list((tmp_path / "all").iterdir())) == 3

@@ -20,9 +20,10 @@ from nats.aio.client import Client as Nats
 
 from yarf.credentials import channel_credentials, resolve
 from yarf.farm.access import AccessError
+from yarf.farm.cache import DEFAULT_CACHE_BYTES
 from yarf.farm.coordinator import Coordinator, Retention
 from yarf.farm.listen import ListenSecurity, listen_security
-from yarf.farm.node import Node
+from yarf.farm.node import DEFAULT_TASK_TIMEOUT, Node
 from yarf.farm.service import start_server
 from yarf.farm.store import JobStore
 from yarf.farm.streams import ensure_resources
@@ -134,6 +135,22 @@ def _parser() -> argparse.ArgumentParser:
     node.add_argument(
         "--cache-dir", type=Path, help="scene cache (default: a folder in the temp directory)"
     )
+    node.add_argument(
+        "--cache-bytes",
+        type=int,
+        default=DEFAULT_CACHE_BYTES,
+        metavar="N",
+        help="the scene cache's size limit: least recently used scenes are deleted "
+        f"beyond it; 0: no limit (default {DEFAULT_CACHE_BYTES})",
+    )
+    node.add_argument(
+        "--task-timeout",
+        type=float,
+        default=DEFAULT_TASK_TIMEOUT,
+        metavar="SECONDS",
+        help="a task rendering longer is cancelled and reported failed (the job's "
+        f"max_retries apply); 0: no limit (default {DEFAULT_TASK_TIMEOUT:g})",
+    )
     return parser
 
 
@@ -233,7 +250,15 @@ async def _run_node(args: argparse.Namespace, token: str, tls_ca: str) -> int:
         nc = await _connect(args.nats, f"yarf-farm node {name}")
         buckets = await ensure_resources(nc.jetstream())
         node = Node(
-            nc, buckets, address, name=name, cache_dir=cache_dir, token=token, tls_ca=tls_ca
+            nc,
+            buckets,
+            address,
+            name=name,
+            cache_dir=cache_dir,
+            cache_bytes=args.cache_bytes,
+            task_timeout=args.task_timeout,
+            token=token,
+            tls_ca=tls_ca,
         )
         try:
             await node.check_yarfd()
@@ -273,6 +298,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"yarf-farm: {error}", file=sys.stderr)
             return 2
         return asyncio.run(_run_coordinator(args, security))
+    if args.cache_bytes < 0 or args.task_timeout < 0:
+        _parser().error("--cache-bytes and --task-timeout must be 0 or more")
     if args.yarfd is not None and args.threads is not None:
         _parser().error("--threads applies to the node's own yarfd, not to --yarfd")
     if args.yarfd is None and (args.token is not None or args.ca is not None):

@@ -15,6 +15,7 @@ import logging
 import time
 import uuid
 from collections import OrderedDict
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,6 +40,9 @@ DEFAULT_PRIORITY = 50
 # Merged images of finished jobs kept in memory (the others are rebuilt
 # from the job table when asked for).
 FINISHED_IMAGES_KEPT = 16
+# A task whose node reported within this many seconds is being rendered
+# (nodes report every second; after the ack wait it goes to another node).
+HEARTBEAT_FRESH_SECONDS = streams.TASK_ACK_WAIT
 
 
 @dataclass(frozen=True)
@@ -65,6 +69,8 @@ class Job:
     shadow_rays: int = 0
     # Samples rendered so far of running tasks, from the nodes' heartbeats.
     progress: dict[int, int] = field(default_factory=dict)
+    # When each running task's last heartbeat came (time.monotonic()).
+    heartbeats: dict[int, float] = field(default_factory=dict)
     merge: ImageMerge | None = None
     # Set (and replaced) at every change, waking the Watch streams.
     changed: asyncio.Event = field(default_factory=asyncio.Event)
@@ -79,6 +85,13 @@ class Job:
 
     def pending_tasks(self) -> list[Task]:
         return [task for task in self.tasks if task.index not in self.done]
+
+    def rendering(self) -> set[int]:
+        """The tasks not done that a node reported on lately."""
+        since = time.monotonic() - HEARTBEAT_FRESH_SECONDS
+        return {
+            index for index, at in self.heartbeats.items() if at >= since and index not in self.done
+        }
 
 
 class Coordinator:
@@ -122,13 +135,22 @@ class Coordinator:
         self._apply_retention()
         await self._resume()
         self._background = [
-            asyncio.create_task(self._consume_results(), name="results"),
+            asyncio.create_task(
+                self._consume(streams.RESULTS_STREAM, streams.RESULTS_DURABLE, self._handle_result),
+                name="results",
+            ),
+            # A durable consumer, not a subscription: advisories sent while
+            # no coordinator ran are handled now (see streams.ADVISORIES_STREAM).
+            asyncio.create_task(
+                self._consume(
+                    streams.ADVISORIES_STREAM,
+                    streams.ADVISORIES_DURABLE,
+                    self._on_max_deliveries,
+                ),
+                name="advisories",
+            ),
             asyncio.create_task(self._watch_progress(), name="progress"),
         ]
-        await self._nc.subscribe(
-            f"$JS.EVENT.ADVISORY.CONSUMER.MAX_DELIVERIES.{streams.TASKS_STREAM}.*",
-            cb=self._on_max_deliveries,
-        )
 
     async def _resume(self) -> None:
         """Brings the streams in line with the job table after a restart.
@@ -302,13 +324,35 @@ class Coordinator:
             record.generation += 1
         self._store.update_job(record)
         if moves:
-            await self._js.purge_stream(
-                streams.TASKS_STREAM, subject=streams.job_tasks_filter(record.id)
-            )
-            # Tasks running on a node were purged too: queued again, at worst
-            # rendered twice (the second result is discarded).
-            await self._publish_tasks(job, job.pending_tasks())
+            # Tasks a node is rendering keep their message (its lease) and tier:
+            # queued again they would be rendered twice. The rest move; one a
+            # node takes meanwhile may still render twice (the second result
+            # is discarded).
+            rendering = job.rendering()
+            await self._delete_queued(record.id, keep=rendering)
+            moved = [task for task in job.pending_tasks() if task.index not in rendering]
+            await self._publish_tasks(job, moved)
         self._notify(job)
+
+    async def _delete_queued(self, job_id: str, keep: set[int]) -> None:
+        """Deletes the job's task messages from the stream but those of tasks in ``keep``."""
+        sequence = 1
+        while True:
+            try:
+                stored = await self._js.get_msg(
+                    streams.TASKS_STREAM, sequence, streams.job_tasks_filter(job_id), next=True
+                )
+            except NotFoundError:
+                return
+            assert stored.seq is not None
+            sequence = stored.seq + 1
+            try:
+                index = TaskMessage.decode(stored.data or b"").task
+            except (ValueError, KeyError, TypeError):
+                index = -1
+            if index not in keep:
+                with contextlib.suppress(NotFoundError):
+                    await self._js.delete_msg(streams.TASKS_STREAM, stored.seq)
 
     # Tasks out.
 
@@ -428,10 +472,10 @@ class Coordinator:
 
     # Results in.
 
-    async def _consume_results(self) -> None:
-        subscription = await self._js.pull_subscribe_bind(
-            streams.RESULTS_DURABLE, stream=streams.RESULTS_STREAM
-        )
+    async def _consume(
+        self, stream: str, durable: str, handle: Callable[[Msg], Awaitable[None]]
+    ) -> None:
+        subscription = await self._js.pull_subscribe_bind(durable, stream=stream)
         while True:
             try:
                 messages = await subscription.fetch(32, timeout=1.0)
@@ -443,10 +487,10 @@ class Coordinator:
                 continue
             for message in messages:
                 try:
-                    await self._handle_result(message)
+                    await handle(message)
                 except Exception:
                     # Not acked: redelivered after the ack wait.
-                    log.exception("handling a result")
+                    log.exception("handling a message of %s", stream)
 
     async def _handle_result(self, message: Msg) -> None:
         try:
@@ -495,6 +539,7 @@ class Coordinator:
         job.closest_hit_rays += result.closest_hit_rays
         job.shadow_rays += result.shadow_rays
         job.progress.pop(task.index, None)
+        job.heartbeats.pop(task.index, None)
         record = job.record
         finished = not job.final and len(job.done) == len(job.tasks)
         if finished:
@@ -544,6 +589,7 @@ class Coordinator:
         job_id, task = parts[1], int(parts[2])
         if operation in ("DEL", "PURGE") or not value:
             job.progress.pop(task, None)
+            job.heartbeats.pop(task, None)
             return
         if job.final or task in job.done or task >= len(job.tasks):
             return
@@ -551,6 +597,7 @@ class Coordinator:
             job.progress[task] = int(json.loads(value).get("samples", 0))
         except (ValueError, AttributeError):
             return
+        job.heartbeats[task] = time.monotonic()
         if job.record.state == render_pb2.QUEUED:
             self._mark_running(job)
             self._store.update_job(job.record)
@@ -558,16 +605,26 @@ class Coordinator:
         self._notify(job)
 
     async def _on_max_deliveries(self, advisory: Msg) -> None:
-        """A task JetStream gave up on (its nodes kept dying or stalling): retry or fail."""
+        """A task JetStream gave up on (its nodes kept dying or stalling): retry or fail.
+
+        The retry is published before the spent message is deleted and the
+        advisory acked: a coordinator dying in between is redelivered the
+        advisory and at worst counts the failure twice, never loses the task.
+        """
         try:
             event = json.loads(advisory.data)
             sequence = int(event["stream_seq"])
+        except (ValueError, KeyError, TypeError):
+            log.warning("a malformed advisory: %r", advisory.data[:200])
+            await advisory.term()
+            return
+        try:
             stored = await self._js.get_msg(streams.TASKS_STREAM, sequence)
             assert stored.data is not None
             task = TaskMessage.decode(stored.data)
-            await self._js.delete_msg(streams.TASKS_STREAM, sequence)
-        except Exception:
-            log.exception("handling a max-deliveries advisory")
+        except NotFoundError:
+            # Handled before (deleted), or purged with its job.
+            await advisory.ack()
             return
         job = self._jobs.get(task.job_id)
         if job is not None and task.farm == self._store.farm_id:
@@ -577,3 +634,6 @@ class Coordinator:
                 f"delivered {event.get('deliveries')} times without finishing "
                 "(its nodes died or stalled)",
             )
+        with contextlib.suppress(NotFoundError):
+            await self._js.delete_msg(streams.TASKS_STREAM, sequence)
+        await advisory.ack()

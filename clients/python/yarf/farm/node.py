@@ -27,6 +27,7 @@ from nats.js.errors import NotFoundError
 from yarf.client import FINAL_STATES, MAX_MESSAGE_BYTES, array_to_numpy
 from yarf.credentials import open_aio_channel
 from yarf.farm import streams
+from yarf.farm.cache import DEFAULT_CACHE_BYTES, SceneCache
 from yarf.farm.merge import TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
 from yarf.v1 import render_pb2, render_pb2_grpc, scene_pb2
@@ -39,6 +40,9 @@ HEARTBEAT_SECONDS = 1.0
 IDLE_POLL_SECONDS = 0.5
 # Deadline of unary calls to yarfd.
 CALL_TIMEOUT = 60.0
+# How long a timed-out task's Cancel may take: its yarfd may be the one hanging.
+TIMEOUT_CANCEL_SECONDS = 10.0
+DEFAULT_TASK_TIMEOUT = 3600.0
 # Deadline of the start-up call that proves yarfd accepts the node's credentials.
 CHECK_TIMEOUT = 10.0
 # A pull request is answered within milliseconds, with a task or "none".
@@ -110,6 +114,8 @@ class RunningTask:
 class Node:
     """Renders the farm's tasks on the yarfd at ``yarfd_address``.
 
+    ``task_timeout`` (seconds, 0: none) bounds a task's render: a yarfd that
+    hangs while the node keeps its lease would hold the task forever.
     A yarfd that requires TLS and tokens takes ``token`` (the jobs the node
     submits are that token's user's) and ``tls_ca`` (its certificate or CA);
     "" means none.
@@ -123,6 +129,8 @@ class Node:
         *,
         name: str,
         cache_dir: Path,
+        cache_bytes: int = DEFAULT_CACHE_BYTES,
+        task_timeout: float = DEFAULT_TASK_TIMEOUT,
         token: str = "",
         tls_ca: str = "",
     ) -> None:
@@ -130,8 +138,8 @@ class Node:
         self._nc = nc
         self._js = nc.jetstream()
         self._buckets = buckets
-        self._cache_dir = cache_dir
-        self._cache_dir.mkdir(parents=True, exist_ok=True)
+        self._cache = SceneCache(cache_dir, cache_bytes)
+        self._task_timeout = task_timeout
         self._channel = open_aio_channel(
             yarfd_address,
             [
@@ -309,13 +317,13 @@ class Node:
         if task.job_id in self._cancelled or self._stopping:
             running.cancel.set()
         canceller = asyncio.create_task(self._cancel_when_flagged(running, reply.job_id))
-        final: render_pb2.JobStatus | None = None
         try:
-            async for status in self._yarfd.Watch(render_pb2.WatchRequest(job_id=reply.job_id)):
-                running.samples = max(0, status.samples_done - task.options.first_sample)
-                if status.state in FINAL_STATES:
-                    final = status
-                    break
+            final = await asyncio.wait_for(
+                self._watch_final(running, reply.job_id), self._task_timeout or None
+            )
+        except TimeoutError:
+            await self._time_out(running, reply.job_id)
+            return
         finally:
             canceller.cancel()
         if final is None:
@@ -341,6 +349,34 @@ class Node:
             error = final.error or f"yarfd ended the task {render_pb2.JobState.Name(final.state)}"
             await self._report_failure(running, error)
 
+    async def _watch_final(
+        self, running: RunningTask, yarfd_job: str
+    ) -> render_pb2.JobStatus | None:
+        """Follows the render to its final status (None: the Watch ended before it)."""
+        first_sample = running.task.options.first_sample
+        async for status in self._yarfd.Watch(render_pb2.WatchRequest(job_id=yarfd_job)):
+            running.samples = max(0, status.samples_done - first_sample)
+            if status.state in FINAL_STATES:
+                return status
+        return None
+
+    async def _time_out(self, running: RunningTask, yarfd_job: str) -> None:
+        """Stops a render that ran past --task-timeout and reports the task failed.
+
+        A failure, as for a render yarfd fails: the coordinator's retry rule
+        (the job's max_retries) decides, and the job's error names the
+        timeout. A nak would instead pass a task too slow for the limit from
+        node to node, each holding it the whole timeout.
+        """
+        task = running.task
+        with contextlib.suppress(Exception):
+            await self._yarfd.Cancel(
+                render_pb2.CancelRequest(job_id=yarfd_job), timeout=TIMEOUT_CANCEL_SECONDS
+            )
+        _event("task timed out", job=task.job_id, task=task.task, node=self.name)
+        error = f"timed out after {self._task_timeout:g} s on node {self.name} (--task-timeout)"
+        await self._report_failure(running, error)
+
     async def _cancel_when_flagged(self, running: RunningTask, yarfd_job: str) -> None:
         await running.cancel.wait()
         running.cancel_sent_at = time.time()
@@ -350,17 +386,14 @@ class Node:
         """The scene from the disk cache, else from the object store (then cached)."""
         if self._scene is not None and self._scene[0] == scene_hash:
             return self._scene[1]
-        path = self._cache_dir / f"{scene_hash}.scene"
-        data = path.read_bytes() if path.exists() else b""
-        if hashlib.sha256(data).hexdigest() != scene_hash:
+        data = self._cache.get(scene_hash)
+        if data is None:
             fetched = (await self._buckets.scenes.get(scene_hash)).data
             assert fetched is not None
             data = bytes(fetched)
             if hashlib.sha256(data).hexdigest() != scene_hash:
                 raise ValueError(f"scene {scene_hash} in the object store has another hash")
-            partial = path.with_suffix(f".{uuid.uuid4().hex[:8]}.part")
-            partial.write_bytes(data)
-            partial.replace(path)
+            self._cache.put(scene_hash, data)
         scene = scene_pb2.Scene.FromString(data)
         self._scene = (scene_hash, scene)
         return scene

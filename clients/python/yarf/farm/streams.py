@@ -40,6 +40,13 @@ RESULTS_BUCKET_TTL = 24 * 3600.0
 JOBS_BUCKET = "yarf-jobs"
 # The coordinator's durable consumer of RESULTS_STREAM.
 RESULTS_DURABLE = "yarf-coordinator"
+# The server's advisories of tasks whose deliveries ran out, kept in a
+# stream: one sent while no coordinator runs waits for the next one (a
+# plain subscription would miss it and the task would stall for good).
+ADVISORIES_STREAM = "YARF_TASK_ADVISORIES"
+MAX_DELIVERIES_SUBJECT = f"$JS.EVENT.ADVISORY.CONSUMER.MAX_DELIVERIES.{TASKS_STREAM}.*"
+ADVISORIES_DURABLE = "yarf-coordinator-advisories"
+ADVISORIES_MAX_AGE = 7 * 24 * 3600.0
 
 # JetStream 2.9 has no per-message priority: one subject and one consumer
 # per tier, pulled in this order.
@@ -157,6 +164,25 @@ async def ensure_resources(js: JetStreamContext) -> Buckets:
             retention=RetentionPolicy.WORK_QUEUE,
             storage=StorageType.FILE,
             duplicate_window=DUPLICATE_WINDOW,
+        ),
+    )
+    await _ensure_stream(
+        js,
+        StreamConfig(
+            name=ADVISORIES_STREAM,
+            subjects=[MAX_DELIVERIES_SUBJECT],
+            retention=RetentionPolicy.WORK_QUEUE,
+            storage=StorageType.FILE,
+            max_age=ADVISORIES_MAX_AGE,
+        ),
+    )
+    await _ensure_consumer(
+        js,
+        ADVISORIES_STREAM,
+        ConsumerConfig(
+            durable_name=ADVISORIES_DURABLE,
+            ack_policy=AckPolicy.EXPLICIT,
+            ack_wait=RESULT_ACK_WAIT,
         ),
     )
     for tier in TIERS:
