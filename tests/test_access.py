@@ -382,6 +382,13 @@ def test_yarfd_refuses_a_public_address_with_tls_but_no_tokens(
     assert "add --tokens FILE" in message
 
 
+def test_yarfd_refuses_an_abstract_unix_socket_without_tls_and_tokens(tmp_path: Path) -> None:
+    # Abstract sockets have no file permissions: anyone on the machine may connect.
+    message = yarfd_refuses(["--listen", f"unix-abstract:yarf-test-{tmp_path.name}"], tmp_path)
+    assert "abstract socket" in message, message
+    assert "add --tls-cert FILE --tls-key FILE --tokens FILE" in message, message
+
+
 def test_yarfd_refuses_tokens_without_tls(secrets: Secrets, tmp_path: Path) -> None:
     message = yarfd_refuses(["--listen", "127.0.0.1:0", "--tokens", str(secrets.tokens)], tmp_path)
     assert "--tokens needs TLS" in message

@@ -96,6 +96,23 @@ def stored_state(state_dir: Path, job_id: str) -> str:
     return render_pb2.JobState.Name(row[0])
 
 
+def refuse_to_store(state_dir: Path, states: tuple[int, ...]) -> None:
+    """Makes a running server's job store fail to store a job in ``states``, like a full disk."""
+    listed = ", ".join(str(state) for state in states)
+    with closing(sqlite3.connect(state_dir / "jobs.sqlite")) as db:
+        db.execute(
+            f"CREATE TRIGGER refuse BEFORE UPDATE ON jobs WHEN NEW.state IN ({listed})"
+            " BEGIN SELECT RAISE(ABORT, 'database or disk is full'); END"
+        )
+        db.commit()
+
+
+def store_again(state_dir: Path) -> None:
+    with closing(sqlite3.connect(state_dir / "jobs.sqlite")) as db:
+        db.execute("DROP TRIGGER refuse")
+        db.commit()
+
+
 @pytest.fixture
 def state_dir(tmp_path: Path) -> Path:
     return tmp_path / "state"
@@ -488,3 +505,47 @@ def test_a_job_database_of_the_previous_schema_is_upgraded(
         assert client.wait(submit(client, small_scene(), spp=2), timeout=30).state == (
             render_pb2.SUCCEEDED
         )
+
+
+def test_a_job_whose_end_cannot_be_stored_fails_until_a_restart_resumes_it(
+    start_server: Callable[..., LocalServer], state_dir: Path
+) -> None:
+    server = start_server()
+    refuse_to_store(state_dir, (render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CANCELLED))
+    with server.client() as client:
+        job_id = submit(client, small_scene(), spp=4, seed=1)
+        # Watchers see it end, though the store could not record it.
+        status = client.wait(job_id, timeout=30)
+        assert status.state == render_pb2.FAILED, render_pb2.JobState.Name(status.state)
+        assert "could not be stored" in status.error, status.error
+        assert "database or disk is full" in status.error, status.error
+        assert stored_state(state_dir, job_id) == "RUNNING"
+        store_again(state_dir)
+        other = submit(client, small_scene(), spp=2)
+        assert client.wait(other, timeout=30).state == render_pb2.SUCCEEDED
+    assert server.stop() == 0
+    assert "cannot be stored" in server.log
+
+    # Stored as RUNNING: the next start takes it for a crash and runs it again.
+    again = start_server()
+    with again.client() as client:
+        status = client.wait(job_id, timeout=30)
+        assert status.state == render_pb2.SUCCEEDED, status.error
+        assert status.attempts == 2
+        assert client.image(job_id).mean() > 0
+
+
+def test_a_job_whose_start_cannot_be_stored_waits_queued_until_it_can_be(
+    start_server: Callable[..., LocalServer], state_dir: Path
+) -> None:
+    server = start_server()
+    refuse_to_store(state_dir, (render_pb2.RUNNING,))
+    with server.client() as client:
+        job_id = submit(client, small_scene(), spp=4)
+        wait_until(lambda: "database or disk is full" in server.log, "a start is refused")
+        status = client.status(job_id)
+        assert (status.state, status.attempts) == (render_pb2.QUEUED, 0)
+        store_again(state_dir)
+        status = client.wait(job_id, timeout=30)
+        assert status.state == render_pb2.SUCCEEDED, status.error
+        assert status.attempts == 1

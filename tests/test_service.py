@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import struct
+import time
 
 import grpc
 import pytest
@@ -91,3 +93,26 @@ def test_mesh_file_inside_the_asset_root_renders(client: Client) -> None:
     job_id = client.submit(scene, spp=2, seed=1)
     status = client.wait(job_id, timeout=30)
     assert status.state == render_pb2.SUCCEEDED, status.error
+
+
+def test_a_raw_result_too_large_to_send_is_refused_before_it_is_copied(client: Client) -> None:
+    # Just over the 256 MiB a reply may carry as RAW (24 bytes a pixel);
+    # its film takes about 1 GB while it renders.
+    width, height = 3400, 3300
+    scene = small_scene()
+    scene.film.width, scene.film.height = width, height
+    job_id = client.submit(scene, spp=1, name="too large for RAW")
+    deadline = time.monotonic() + 60
+    while client.status(job_id).state == render_pb2.QUEUED:
+        assert time.monotonic() < deadline, "the job did not start"
+        time.sleep(0.01)
+    client.cancel(job_id)
+    assert client.wait(job_id, timeout=120).state in (render_pb2.CANCELLED, render_pb2.SUCCEEDED)
+    with pytest.raises(grpc.RpcError) as caught:
+        client.result(job_id)
+    assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED  # type: ignore[attr-defined]
+    message = caught.value.details()  # type: ignore[attr-defined]
+    assert f"{width}x{height}" in message and "EXR or PNG" in message, message
+    png = client.result(job_id, render_pb2.GetResultRequest.PNG)
+    assert png.image.startswith(b"\x89PNG")
+    assert struct.unpack(">II", png.image[16:24]) == (width, height)

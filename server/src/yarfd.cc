@@ -73,8 +73,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   int port = 0;
   builder.AddListeningPort(options.listen, credentials, &port);
   // Batches and images are large.
-  builder.SetMaxReceiveMessageSize(256 << 20);
-  builder.SetMaxSendMessageSize(256 << 20);
+  builder.SetMaxReceiveMessageSize(yarf::kMaxMessageBytes);
+  builder.SetMaxSendMessageSize(yarf::kMaxMessageBytes);
   for (grpc::Service* service : std::initializer_list<grpc::Service*>{
            &render, &registry_service, &component, &factory, &integrator, &root_finder, &sampler, &generator, &warp,
            &surface_model, &emitter, &intersect, &job_scene, &asset_service})

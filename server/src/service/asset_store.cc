@@ -9,6 +9,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "service/state_folder.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -123,7 +124,7 @@ bool AssetUpload::Commit() {
     ThrowErrno("cannot write " + temp_path_.string());
   file_.reset();
   const fs::path target = store_.PathOf(sha256_);
-  fs::create_directories(target.parent_path());
+  const bool new_folder = fs::create_directories(target.parent_path());
   // A link, unlike a rename, fails when the name exists: of two uploads of
   // the same bytes at once, exactly one reports that it stored them.
   std::error_code ec;
@@ -133,6 +134,14 @@ bool AssetUpload::Commit() {
   if (ec && stored) fs::rename(temp_path_, target);
   fs::remove(temp_path_, ec);
   temp_path_.clear();
+  // The new name (and a new folder's) on disk before the upload is
+  // reported stored: else a power loss could lose an asset jobs rely on.
+  const auto sync = [](const fs::path& folder) {
+    if (const std::error_code synced = SyncFolder(folder))
+      throw std::system_error(synced, "cannot sync " + folder.string());
+  };
+  sync(target.parent_path());
+  if (new_folder) sync(store_.root());
   return stored;
 }
 

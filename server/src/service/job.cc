@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <iostream>
 #include <optional>
+#include <thread>
+#include <tuple>
 
 #include "kernel/film_target.h"
 #include "service/job_files.h"
@@ -19,6 +21,11 @@ void RemoveFile(const std::filesystem::path& path) {
   std::error_code ignored;
   std::filesystem::remove(path, ignored);
 }
+
+// A store that fails for a moment (a busy or briefly full disk) gets this
+// many tries, the pauses between them growing threefold.
+constexpr int kCommitTries = 4;
+constexpr std::chrono::milliseconds kFirstCommitPause(100);
 
 }  // namespace
 
@@ -100,6 +107,42 @@ bool Job::Commit(const std::function<bool(JobRecord&)>& change) {
   return true;
 }
 
+bool Job::CommitRetrying(const std::function<bool(JobRecord&)>& change) {
+  auto pause = kFirstCommitPause;
+  for (int tries = 1;; ++tries) {
+    try {
+      return Commit(change);
+    } catch (const StorageError& e) {
+      if (tries == kCommitTries) throw;
+      std::cerr << "yarfd: job " << id_ << ": storing its state failed, trying again: " << e.what() << "\n";
+    }
+    std::this_thread::sleep_for(pause);
+    pause *= 3;
+  }
+}
+
+void Job::EndUnstored(const StorageError& error) {
+  std::cerr << "yarfd: job " << id_ << ": the end of its run cannot be stored: " << error.what() << std::endl;
+  // The film may be large; nothing renders into it any more.
+  {
+    std::lock_guard lock(film_mutex_);
+    film_.reset();
+  }
+  {
+    std::lock_guard lock(mutex_);
+    // In memory only: the stored row stays RUNNING, which the next start
+    // takes for a crash and resumes from the checkpoint.
+    row_.state = v1::FAILED;
+    row_.error = std::string("the state of this job could not be stored (") + error.what() +
+                 "); it runs again when yarfd restarts";
+    row_.finished_at = Now();
+    row_.elapsed_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+    ++version_;
+  }
+  changed_.notify_all();
+  request_.reset();
+}
+
 void Job::Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays) {
   {
     std::lock_guard lock(mutex_);
@@ -178,8 +221,29 @@ bool Job::Snapshot(std::vector<float>& pixels, std::vector<float>& variances, ui
   return true;
 }
 
+bool Job::ImageSize(uint32_t& width, uint32_t& height) const {
+  {
+    std::lock_guard lock(film_mutex_);
+    if (film_) {
+      width = film_->width();
+      height = film_->height();
+      return true;
+    }
+  }
+  if (!Finished()) return false;
+  try {
+    if (const auto size = ReadJobImageSize(files_.result)) {
+      std::tie(width, height) = *size;
+      return true;
+    }
+  } catch (const Error& e) {
+    std::cerr << "yarfd: job " << id_ << ": " << e.what() << "\n";
+  }
+  return false;
+}
+
 bool Job::Begin() {
-  return Commit([&](JobRecord& row) {
+  return CommitRetrying([&](JobRecord& row) {
     if (row.state != v1::QUEUED || stop_ || !request_) return false;
     row.state = v1::RUNNING;
     ++row.attempts;
@@ -284,11 +348,20 @@ void Job::WriteCheckpoint(uint32_t samples_done) {
 }
 
 bool Job::EndRun(const RunResult& result) {
+  try {
+    return StoreEndOfRun(result);
+  } catch (const StorageError& e) {
+    EndUnstored(e);
+    return false;
+  }
+}
+
+bool Job::StoreEndOfRun(const RunResult& result) {
   switch (result.outcome) {
     case Outcome::kStopped:
       // Back in the queue for the next start, which goes on from the last
       // checkpoint (row_.samples_done says where).
-      Commit([](JobRecord& row) {
+      CommitRetrying([](JobRecord& row) {
         row.state = v1::QUEUED;
         row.crashes = 0;  // a clean stop ends a run of crashes
         return true;
@@ -298,7 +371,7 @@ bool Job::EndRun(const RunResult& result) {
       // Gone before the row says QUEUED: a crash in between must not let
       // the retry resume from the failed run's film.
       RemoveFile(files_.checkpoint);
-      if (Commit([&](JobRecord& row) {
+      if (CommitRetrying([&](JobRecord& row) {
             if (row.failures + 1 > row.max_retries) return false;
             ++row.failures;
             row.crashes = 0;
@@ -342,7 +415,7 @@ void Job::Finish(v1::JobState state, const std::string& error) {
       std::cerr << "yarfd: job " << id_ << ": image not kept: " << e.what() << "\n";
     }
   }
-  Commit([&](JobRecord& row) {
+  CommitRetrying([&](JobRecord& row) {
     if (state == v1::FAILED) ++row.failures;
     row.state = state;
     row.error = error;

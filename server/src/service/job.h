@@ -70,11 +70,17 @@ class Job {
   // stored image once the job has ended; false when there are none.
   bool Snapshot(std::vector<float>& pixels, std::vector<float>& variances, uint32_t& width,
                 uint32_t& height) const;
+  // The width and height Snapshot would give, without copying the pixels;
+  // false when there is no image.
+  bool ImageSize(uint32_t& width, uint32_t& height) const;
 
   // A run, on a worker thread: Begin marks the job RUNNING for one more
-  // attempt (false if it no longer waits), Render renders it, EndRun
+  // attempt (false if it no longer waits; throws StorageError, the job
+  // still QUEUED, when that cannot be stored), Render renders it, EndRun
   // records how the run ended and returns true when the job is to be
-  // queued again (it failed and has retries left).
+  // queued again (it failed and has retries left). When the end of the run
+  // cannot be stored, EndRun ends the job FAILED in memory only: its stored
+  // row still says RUNNING, so the next start resumes it.
   bool Begin();
   RunResult Render(const JobResources& resources, const RunSettings& settings);
   bool EndRun(const RunResult& result);
@@ -83,8 +89,17 @@ class Job {
   // Applies `change` to a copy of the row, stores it and publishes it;
   // nothing changes when `change` returns false or the store fails.
   bool Commit(const std::function<bool(JobRecord&)>& change);
+  // Commit, tried again a few times, with growing pauses, while the store
+  // fails; then throws the last StorageError.
+  bool CommitRetrying(const std::function<bool(JobRecord&)>& change);
+  // The end of a run could not be stored: the job ends FAILED in memory
+  // (so watchers stop waiting) and frees its film; its row and checkpoint
+  // stay as they are for the next start to resume.
+  void EndUnstored(const StorageError& error);
   // Progress of the render, shown to watchers but not stored.
   void Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays);
+  // EndRun's work; throws StorageError when the store keeps failing.
+  bool StoreEndOfRun(const RunResult& result);
   void Finish(v1::JobState state, const std::string& error);
   // The checkpoint a resumable render goes on from, if there is a sound one
   // (of at most `spp` samples per pixel).

@@ -2,6 +2,7 @@
 
 #include <bit>
 #include <cstring>
+#include <fstream>
 #include <string_view>
 
 #include "service/state_folder.h"
@@ -65,6 +66,19 @@ void WriteJobImage(const std::filesystem::path& path, const JobImage& image) {
   for (const std::vector<float>* values : {&image.pixels, &image.variances})
     bytes.append(reinterpret_cast<const char*>(values->data()), values->size() * sizeof(float));
   WriteFileAtomically(path, bytes);
+}
+
+std::optional<std::pair<uint32_t, uint32_t>> ReadJobImageSize(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    if (!std::filesystem::exists(path)) return std::nullopt;
+    throw Error("cannot read " + path.string());
+  }
+  std::string header(kImageTag.size() + 8, '\0');
+  in.read(header.data(), std::streamsize(header.size()));
+  header.resize(size_t(in.gcount()));
+  const std::string_view body = Body(header, kImageTag, 8, path);
+  return std::pair(GetU32(body, 0), GetU32(body, 4));
 }
 
 std::optional<JobImage> ReadJobImage(const std::filesystem::path& path) {

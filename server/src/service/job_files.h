@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "kernel/film.h"
@@ -31,5 +32,7 @@ struct JobImage {
 void WriteJobImage(const std::filesystem::path& path, const JobImage& image);
 // nullopt when there is none; throws Error for a damaged one.
 std::optional<JobImage> ReadJobImage(const std::filesystem::path& path);
+// The width and height of a job's image, from its header only.
+std::optional<std::pair<uint32_t, uint32_t>> ReadJobImageSize(const std::filesystem::path& path);
 
 }  // namespace yarf

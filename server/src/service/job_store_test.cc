@@ -150,6 +150,11 @@ class RecordedJob {
     row.number = 1;
     job_ = std::make_unique<Job>("job-000001", row, std::make_shared<v1::SubmitRequest>(), files_,
                                  [this](const JobRecord& stored) {
+                                   ++stores;
+                                   if (failures_left != 0) {
+                                     if (failures_left > 0) --failures_left;
+                                     throw StorageError("database or disk is full");
+                                   }
                                    rows.push_back(stored);
                                    had_checkpoint.push_back(std::filesystem::exists(files_.checkpoint));
                                  });
@@ -161,6 +166,8 @@ class RecordedJob {
 
   std::vector<JobRecord> rows;
   std::vector<bool> had_checkpoint;
+  // Stores tried, and how many of the next ones fail (-1: all of them).
+  int stores = 0, failures_left = 0;
 
  private:
   Job::Files files_;
@@ -213,6 +220,63 @@ TEST(Job, ACancelOfARunningJobIsStoredAtOnce) {
   EXPECT_TRUE(job.rows.back().cancel_requested);
   EXPECT_FALSE(job->EndRun({Job::Outcome::kCancelled, ""}));
   EXPECT_EQ(job.rows.back().state, v1::CANCELLED);
+}
+
+TEST(Job, AnEndOfRunTheStoreKeepsRefusingEndsTheJobInMemoryForARestartToResume) {
+  TempFolder folder;
+  JobRecord retried;
+  retried.max_retries = 1;
+  for (const auto& [outcome, row] :
+       {std::pair(Job::Outcome::kSucceeded, JobRecord{}), std::pair(Job::Outcome::kCancelled, JobRecord{}),
+        std::pair(Job::Outcome::kFailed, JobRecord{}), std::pair(Job::Outcome::kFailed, retried),
+        std::pair(Job::Outcome::kStopped, JobRecord{})}) {
+    RecordedJob job(folder.path(), row);
+    ASSERT_TRUE(job->Begin());
+    job.Checkpoint();
+    const uint64_t version = job->Version();
+    job.failures_left = -1;
+    EXPECT_FALSE(job->EndRun({outcome, "broken"})) << "queued again without a stored row";
+    EXPECT_GT(job.stores, 2) << "not tried again";
+    // Watchers see it end...
+    EXPECT_TRUE(job->Finished());
+    EXPECT_GT(job->Version(), version);
+    const v1::JobStatus status = job->Status();
+    EXPECT_EQ(status.state(), v1::FAILED);
+    EXPECT_NE(status.error().find("could not be stored"), std::string::npos) << status.error();
+    EXPECT_NE(status.error().find("database or disk is full"), std::string::npos) << status.error();
+    // ...while the store still says RUNNING: a restart resumes the run.
+    EXPECT_EQ(job.rows.back().state, v1::RUNNING);
+    if (outcome != Job::Outcome::kFailed) {
+      EXPECT_TRUE(job.HasCheckpoint()) << "nothing left to resume from";
+    }
+    EXPECT_FALSE(job->RequestCancel());
+  }
+}
+
+TEST(Job, AStoreThatFailsBrieflyIsTriedAgain) {
+  TempFolder folder;
+  RecordedJob job(folder.path());
+  job.failures_left = 2;
+  ASSERT_TRUE(job->Begin());
+  job.failures_left = 2;
+  EXPECT_FALSE(job->EndRun({Job::Outcome::kSucceeded, ""}));
+  EXPECT_EQ(job.rows.back().state, v1::SUCCEEDED);
+  EXPECT_EQ(job->Status().state(), v1::SUCCEEDED);
+  EXPECT_EQ(job.stores, 6);
+}
+
+TEST(Job, AStartTheStoreRefusesLeavesTheJobQueued) {
+  TempFolder folder;
+  RecordedJob job(folder.path());
+  job.failures_left = -1;
+  EXPECT_THROW(job->Begin(), StorageError);
+  EXPECT_EQ(job->Status().state(), v1::QUEUED);
+  EXPECT_EQ(job->Status().attempts(), 0u);
+  EXPECT_FALSE(job->Finished());
+  job.failures_left = 0;
+  ASSERT_TRUE(job->Begin()) << "the job no longer waits";
+  EXPECT_EQ(job.rows.back().state, v1::RUNNING);
+  EXPECT_EQ(job.rows.back().attempts, 1u);
 }
 
 }  // namespace

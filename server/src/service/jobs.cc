@@ -240,7 +240,17 @@ bool JobManager::SetPriority(Job& job, uint32_t priority) {
 
 void JobManager::RunJob(const std::shared_ptr<Job>& job) {
   try {
-    if (!job->Begin()) return;  // cancelled while queued, or the server is stopping
+    bool began = false;
+    try {
+      began = job->Begin();
+    } catch (const StorageError& e) {
+      // Still QUEUED, in memory as in the store: it waits for another try
+      // (Begin's own retries pace these).
+      std::cerr << "yarfd: job " << job->id() << " cannot start, queued again: " << e.what() << std::endl;
+      scheduler_.Enqueue(job);
+      return;
+    }
+    if (!began) return;  // cancelled while queued, or the server is stopping
     const Job::RunResult result = job->Render(resources_, {options_.checkpoint_seconds});
     if (job->EndRun(result)) {
       scheduler_.Enqueue(job);

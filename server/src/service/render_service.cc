@@ -6,6 +6,7 @@
 #include "components/array_codec.h"
 #include "kernel/image_io.h"
 #include "service/access.h"
+#include "service/server_options.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -31,6 +32,19 @@ bool NamesAddress(const google::protobuf::Message& message) {
     }
   }
   return false;
+}
+
+// Whether a RAW reply of a width x height image stays within what a reply
+// may carry; else RESOURCE_EXHAUSTED pointing to the smaller formats.
+grpc::Status RawFits(const std::string& job_id, uint32_t width, uint32_t height) {
+  // Pixels and variances, 3 floats each per pixel, and room for the status.
+  const uint64_t bytes = uint64_t(width) * height * 3 * sizeof(float) * 2 + (64 << 10);
+  if (bytes <= uint64_t(kMaxMessageBytes)) return grpc::Status::OK;
+  return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+          "the RAW result of job '" + job_id + "' (" + std::to_string(width) + "x" + std::to_string(height) +
+              " pixels and their variances) takes " + std::to_string(bytes) + " bytes, more than the " +
+              std::to_string(kMaxMessageBytes) +
+              " (256 MiB) a reply may carry; ask for EXR or PNG (about 6 or 3 bytes a pixel at most)"};
 }
 
 }  // namespace
@@ -85,12 +99,20 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1
   std::shared_ptr<Job> job;
   if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok()) return reached;
   *reply->mutable_status() = job->Status();
-  std::vector<float> pixels, variances;
+  const bool raw = request->format() != v1::GetResultRequest::EXR && request->format() != v1::GetResultRequest::PNG;
   uint32_t width = 0, height = 0;
+  // Before any copy of the film: a RAW reply too large to send is refused
+  // at once, not after several copies of a film that may take gigabytes.
+  if (raw && job->ImageSize(width, height))
+    if (grpc::Status fits = RawFits(request->job_id(), width, height); !fits.ok()) return fits;
+  std::vector<float> pixels, variances;
   if (!job->Snapshot(pixels, variances, width, height))
     return {grpc::StatusCode::FAILED_PRECONDITION,
             "job '" + request->job_id() + "' has no image" +
                 (reply->status().error().empty() ? "" : ": " + reply->status().error())};
+  // Again for a film that appeared in between.
+  if (raw)
+    if (grpc::Status fits = RawFits(request->job_id(), width, height); !fits.ok()) return fits;
   try {
     switch (request->format()) {
       case v1::GetResultRequest::EXR:
@@ -106,6 +128,13 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1
   } catch (const Error& e) {
     return {grpc::StatusCode::INTERNAL, e.what()};
   }
+  // An encoded image's size is known only now; said plainly rather than
+  // left to the transport's limit.
+  if (reply->image().size() + (64 << 10) > size_t(kMaxMessageBytes))
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+            "the " + std::string(request->format() == v1::GetResultRequest::EXR ? "EXR" : "PNG") +
+                " image of job '" + request->job_id() + "' takes " + std::to_string(reply->image().size()) +
+                " bytes, more than the " + std::to_string(kMaxMessageBytes) + " (256 MiB) a reply may carry"};
   return grpc::Status::OK;
 }
 

@@ -33,7 +33,9 @@ std::string Join(const std::vector<std::string>& parts) {
 }  // namespace
 
 bool IsLoopback(std::string_view listen) {
-  if (listen.starts_with("unix:") || listen.starts_with("unix-abstract:")) return true;
+  // unix-abstract: is not: an abstract socket has no file permissions, so
+  // any process in the network namespace may connect to it.
+  if (listen.starts_with("unix:")) return true;
   // HOST:PORT, [IPV6]:PORT, or HOST alone.
   std::string host(listen.substr(0, listen.rfind(':')));
   if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
@@ -56,8 +58,11 @@ std::shared_ptr<grpc::ServerCredentials> ListenCredentials(const ServerOptions& 
     std::vector<std::string> missing;
     if (!tls) missing.push_back("--tls-cert FILE --tls-key FILE");
     if (!tokens) missing.push_back("--tokens FILE");
-    throw Error("--listen " + options.listen +
-                " is reachable from other machines, which needs TLS and bearer tokens: add " + Join(missing) +
+    const std::string reach = options.listen.starts_with("unix-abstract:")
+                                  ? " is an abstract socket, which any process in this network namespace can"
+                                    " connect to (it has no file permissions)"
+                                  : " is reachable from other machines";
+    throw Error("--listen " + options.listen + reach + ", which needs TLS and bearer tokens: add " + Join(missing) +
                 " (or listen on 127.0.0.1 or unix:PATH)");
   }
   if (!tls) return grpc::InsecureServerCredentials();

@@ -12,8 +12,8 @@
 namespace yarf {
 
 // Whether `listen` (as --listen takes it) is reachable from this machine
-// only: 127.0.0.0/8, ::1, localhost or a unix socket. Any other form counts
-// as reachable from elsewhere.
+// only: 127.0.0.0/8, ::1, localhost or a unix socket with a path. Any
+// other form, unix-abstract: included, counts as reachable from elsewhere.
 bool IsLoopback(std::string_view listen);
 
 // TLS from --tls-cert/--tls-key, with --tokens checked on every call; or

@@ -7,6 +7,9 @@
 
 namespace yarf {
 
+// The largest message yarfd receives or sends (a batch, a job's result).
+inline constexpr int kMaxMessageBytes = 256 << 20;
+
 struct ServerOptions {
   std::string listen = "127.0.0.1:50051";
   std::filesystem::path port_file;

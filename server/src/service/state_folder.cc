@@ -33,12 +33,15 @@ class Descriptor {
   int fd_;
 };
 
-void SyncFolder(const std::filesystem::path& folder) {
-  Descriptor fd(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
-  if (fd.get() >= 0) ::fsync(fd.get());
-}
-
 }  // namespace
+
+std::error_code SyncFolder(const std::filesystem::path& folder) {
+  Descriptor fd(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (fd.get() < 0) return {errno, std::generic_category()};
+  // EINVAL: a file system that cannot sync folders; there is nothing more to do.
+  if (::fsync(fd.get()) != 0 && errno != EINVAL) return {errno, std::generic_category()};
+  return {};
+}
 
 StateFolder::StateFolder(std::filesystem::path root) : root_(std::move(root)) {
   std::error_code error;
@@ -83,7 +86,8 @@ void WriteFileAtomically(const std::filesystem::path& path, std::string_view byt
   std::error_code error;
   std::filesystem::rename(temporary, path, error);
   if (error) throw Error("cannot rename " + temporary.string() + ": " + error.message());
-  SyncFolder(path.parent_path());
+  if (const std::error_code synced = SyncFolder(path.parent_path()))
+    throw Error("cannot sync the folder of " + path.string() + ": " + synced.message());
 }
 
 std::optional<std::string> ReadWholeFile(const std::filesystem::path& path) {

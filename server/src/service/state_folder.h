@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 namespace yarf {
 
@@ -31,6 +32,9 @@ class StateFolder {
   int lock_fd_ = -1;
 };
 
+// Syncs the entries of `folder` (names created, renamed or removed in it)
+// to disk, so that they survive a power loss; returns why it could not.
+std::error_code SyncFolder(const std::filesystem::path& folder);
 // Replaces `path` with `bytes` so that a crash leaves either the old file
 // or the new one, never a torn one: a synced temporary file, renamed.
 void WriteFileAtomically(const std::filesystem::path& path, std::string_view bytes);
