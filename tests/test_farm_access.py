@@ -215,6 +215,13 @@ def test_the_coordinator_refuses_a_public_address_without_tls_and_tokens(tmp_pat
     assert "add --tls-cert FILE --tls-key FILE --tokens FILE" in message
 
 
+def test_the_coordinator_refuses_an_abstract_unix_socket_without_tls_and_tokens(
+    tmp_path: Path,
+) -> None:
+    message = coordinator_refuses(["--listen", "unix-abstract:yarf-farm-test"], tmp_path)
+    assert "--tls-cert" in message
+
+
 def test_the_coordinator_refuses_a_public_address_with_tls_but_no_tokens(
     secrets: Secrets, tmp_path: Path
 ) -> None:

@@ -18,7 +18,9 @@ from yarf.farm.access import AccessError, TokenTable, read_token_file
 
 def is_loopback(listen: str) -> bool:
     """Whether ``listen`` (HOST:PORT, [IPV6]:PORT, HOST or unix:PATH) is this machine only."""
-    if listen.startswith(("unix:", "unix-abstract:")):
+    # An abstract socket (unix-abstract:) has no file permissions: any
+    # process in the network namespace reaches it, so it is not "local".
+    if listen.startswith("unix:"):
         return True
     host = listen[: listen.rfind(":")] if ":" in listen else listen
     if len(host) >= 2 and host[0] == "[" and host[-1] == "]":
