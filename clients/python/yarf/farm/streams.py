@@ -146,26 +146,17 @@ async def _ensure_object_store(js: JetStreamContext, bucket: str, ttl: float | N
 
 async def ensure_resources(js: JetStreamContext) -> Buckets:
     """Creates the streams, consumers and buckets that are missing; returns the buckets."""
-    await _ensure_stream(
-        js,
-        StreamConfig(
-            name=TASKS_STREAM,
-            subjects=["yarf.tasks.>"],
-            retention=RetentionPolicy.WORK_QUEUE,
-            storage=StorageType.FILE,
-            duplicate_window=DUPLICATE_WINDOW,
-        ),
-    )
-    await _ensure_stream(
-        js,
-        StreamConfig(
-            name=RESULTS_STREAM,
-            subjects=["yarf.results.>"],
-            retention=RetentionPolicy.WORK_QUEUE,
-            storage=StorageType.FILE,
-            duplicate_window=DUPLICATE_WINDOW,
-        ),
-    )
+    for name, subject in ((TASKS_STREAM, "yarf.tasks.>"), (RESULTS_STREAM, "yarf.results.>")):
+        await _ensure_stream(
+            js,
+            StreamConfig(
+                name=name,
+                subjects=[subject],
+                retention=RetentionPolicy.WORK_QUEUE,
+                storage=StorageType.FILE,
+                duplicate_window=DUPLICATE_WINDOW,
+            ),
+        )
     await _ensure_stream(
         js,
         StreamConfig(
