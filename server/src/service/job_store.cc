@@ -99,6 +99,16 @@ void Execute(sqlite3* db, const char* sql, const std::filesystem::path& file) {
   }
 }
 
+// Parameters ?2..?18 of Insert and Update: every column but the first.
+void BindFields(Statement& statement, const JobRecord& r) {
+  statement.Bind(2, r.name).Bind(3, r.owner).Bind(4, int64_t(r.state));
+  statement.Bind(5, int64_t(r.priority)).Bind(6, int64_t(r.max_retries)).Bind(7, int64_t(r.attempts));
+  statement.Bind(8, int64_t(r.failures)).Bind(9, int64_t(r.crashes)).Bind(10, int64_t(r.samples_done));
+  statement.Bind(11, int64_t(r.samples_total)).Bind(12, r.error).Bind(13, r.submitted_at).Bind(14, r.finished_at);
+  statement.Bind(15, r.elapsed_seconds).Bind(16, int64_t(r.closest_hit_rays)).Bind(17, int64_t(r.shadow_rays));
+  statement.Bind(18, int64_t(r.cancel_requested));
+}
+
 }  // namespace
 
 void JobStore::Close::operator()(sqlite3* db) const { sqlite3_close(db); }
@@ -154,12 +164,8 @@ uint64_t JobStore::Insert(const JobRecord& r) {
                    " closest_hit_rays, shadow_rays, cancel_requested) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9,"
                    " ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)",
                    file_);
-  insert.BindBlob(1, r.request).Bind(2, r.name).Bind(3, r.owner).Bind(4, int64_t(r.state));
-  insert.Bind(5, int64_t(r.priority)).Bind(6, int64_t(r.max_retries)).Bind(7, int64_t(r.attempts));
-  insert.Bind(8, int64_t(r.failures)).Bind(9, int64_t(r.crashes)).Bind(10, int64_t(r.samples_done));
-  insert.Bind(11, int64_t(r.samples_total)).Bind(12, r.error).Bind(13, r.submitted_at).Bind(14, r.finished_at);
-  insert.Bind(15, r.elapsed_seconds).Bind(16, int64_t(r.closest_hit_rays)).Bind(17, int64_t(r.shadow_rays));
-  insert.Bind(18, int64_t(r.cancel_requested));
+  insert.BindBlob(1, r.request);
+  BindFields(insert, r);
   insert.Step();
   return uint64_t(sqlite3_last_insert_rowid(db_.get()));
 }
@@ -172,12 +178,8 @@ void JobStore::Update(const JobRecord& r) {
                    " error = ?12, submitted_at = ?13, finished_at = ?14, elapsed_seconds = ?15,"
                    " closest_hit_rays = ?16, shadow_rays = ?17, cancel_requested = ?18 WHERE number = ?1",
                    file_);
-  update.Bind(1, int64_t(r.number)).Bind(2, r.name).Bind(3, r.owner).Bind(4, int64_t(r.state));
-  update.Bind(5, int64_t(r.priority)).Bind(6, int64_t(r.max_retries)).Bind(7, int64_t(r.attempts));
-  update.Bind(8, int64_t(r.failures)).Bind(9, int64_t(r.crashes)).Bind(10, int64_t(r.samples_done));
-  update.Bind(11, int64_t(r.samples_total)).Bind(12, r.error).Bind(13, r.submitted_at).Bind(14, r.finished_at);
-  update.Bind(15, r.elapsed_seconds).Bind(16, int64_t(r.closest_hit_rays)).Bind(17, int64_t(r.shadow_rays));
-  update.Bind(18, int64_t(r.cancel_requested));
+  update.Bind(1, int64_t(r.number));
+  BindFields(update, r);
   update.Step();
 }
 
