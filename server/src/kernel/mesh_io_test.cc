@@ -1,0 +1,216 @@
+#include "kernel/mesh_io.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "yarf/error.h"
+
+namespace yarf {
+namespace {
+
+// The message ParseMesh throws for `bytes`, or "" when it parses.
+std::string ErrorOf(const std::string& bytes, const std::string& format) {
+  try {
+    ParseMesh(bytes, format, "x." + format);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::vector<float> Flat(const TriangleMesh& mesh) {
+  std::vector<float> out;
+  for (const Vec3& p : mesh.positions) out.insert(out.end(), {p.x, p.y, p.z});
+  return out;
+}
+
+// Binary PLY data in either byte order.
+class Bytes {
+ public:
+  explicit Bytes(bool big_endian) : big_(big_endian) {}
+  template <typename T>
+  Bytes& Put(T value) {
+    char raw[sizeof(T)];
+    std::memcpy(raw, &value, sizeof(T));
+    if (big_ != (std::endian::native == std::endian::big)) std::reverse(raw, raw + sizeof(T));
+    text.append(raw, sizeof(T));
+    return *this;
+  }
+  std::string text;
+
+ private:
+  bool big_;
+};
+
+// --- hostile PLY headers -------------------------------------------------
+
+TEST(PlyReader, RefusesAnElementOfTwoToTheSixtyFourEntriesWithoutProperties) {
+  // Once looped forever: one pass per declared entry, none consuming a byte.
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 18446744073709551615\nend_header\n";
+  EXPECT_NE(ErrorOf(ply, "ply").find("element 'vertex' lacks an x, y or z property"), std::string::npos)
+      << ErrorOf(ply, "ply");
+  const std::string other = "ply\nformat binary_little_endian 1.0\nelement foo 18446744073709551615\nend_header\n";
+  EXPECT_EQ(ErrorOf(other, "ply"), "mesh 'x.ply': not a valid PLY file: no faces");
+}
+
+TEST(PlyReader, RefusesCountsTheBytesCannotHold) {
+  // Once allocated gigabytes for 2·10⁹ vertices declared in 120 bytes.
+  std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 2000000000\n"
+      "property float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n";
+  ASSERT_EQ(ply.size(), 121u);
+  EXPECT_EQ(ErrorOf(ply, "ply"),
+            "mesh 'x.ply': not a valid PLY file: element 'vertex' declares 2000000000 entries but only 12 bytes follow");
+  std::string binary =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 2000000000\n"
+      "property float x\nproperty float y\nproperty float z\nend_header\n";
+  binary.resize(binary.size() + 54, '\0');
+  EXPECT_EQ(ErrorOf(binary, "ply"),
+            "mesh 'x.ply': not a valid PLY file: element 'vertex' declares 2000000000 entries but only 54 bytes follow");
+  const std::string faces =
+      "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 18446744073709551615\nproperty list uchar int vertex_indices\nend_header\n3 0 1 2\n";
+  EXPECT_NE(ErrorOf(faces, "ply").find("element 'face' declares 18446744073709551615 entries but only 8 bytes"),
+            std::string::npos)
+      << ErrorOf(faces, "ply");
+}
+
+TEST(PlyReader, RefusesUnknownTypesInTheHeader) {
+  const std::string head = "ply\nformat binary_little_endian 1.0\nelement vertex 1\n";
+  EXPECT_NE(ErrorOf(head + "property int128 x\nend_header\n", "ply").find("property 'x' has unknown type 'int128'"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(head + "property list float int vertex_indices\nend_header\n", "ply").find("count type 'float'"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(head + "property list uchar\nend_header\n", "ply").find("bad property line"), std::string::npos);
+  EXPECT_NE(ErrorOf("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "ply").find("bad element line"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("ply\nformat ascii 1.0\nelement vertex 1\n", "ply").find("truncated header"), std::string::npos);
+  EXPECT_NE(ErrorOf("ply\nelement vertex 1\nend_header\n", "ply").find("no format line"), std::string::npos);
+}
+
+TEST(PlyReader, RefusesBadListsAndIndices) {
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  EXPECT_EQ(ErrorOf(head + "3 0 1 2\n", "ply"), "");
+  EXPECT_NE(ErrorOf(head + "3 0 -1 2\n", "ply").find("face vertex index -1 is not an index"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + "3 0 1 7\n", "ply").find("index 7 out of range (3 vertices)"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + "3 0 1.5 2\n", "ply").find("is not an index"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + "2000 0 1 2\n", "ply").find("has 2000 entries (at most 1024)"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + "3 0 1\n", "ply").find("unexpected end of data"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + "3 0 1 x\n", "ply").find("bad number 'x'"), std::string::npos);
+  Bytes data(false);
+  data.Put<float>(1e30f).Put<float>(0).Put<float>(0).Put<uint8_t>(3).Put<int32_t>(0).Put<int32_t>(0);
+  const std::string truncated =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n" + data.text;
+  EXPECT_NE(ErrorOf(truncated, "ply").find("unexpected end of data"), std::string::npos);
+  const std::string huge_double =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n1e300 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  EXPECT_NE(ErrorOf(huge_double, "ply").find("non-finite vertex position"), std::string::npos);
+}
+
+// --- PLY files that must keep working --------------------------------------
+
+TEST(PlyReader, ReadsBinaryBigEndianWithExtraPropertiesAndElements) {
+  Bytes data(true);
+  const float xyz[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 2, 0}, {0, 2, 0.5f}};
+  for (int i = 0; i < 4; ++i)
+    data.Put<double>(-1).Put<float>(xyz[i][0]).Put<uint8_t>(200).Put<float>(xyz[i][1]).Put<float>(xyz[i][2]);
+  // One quad, then one triangle, each with a list that is not indices.
+  data.Put<uint8_t>(2).Put<float>(0.5f).Put<float>(0.25f).Put<uint8_t>(4);
+  for (int32_t i : {0, 1, 2, 3}) data.Put(i);
+  data.Put<uint8_t>(0).Put<uint8_t>(3);
+  for (int32_t i : {2, 3, 0}) data.Put(i);
+  data.Put<int16_t>(7).Put<int16_t>(-7);  // the edge element
+  const std::string ply =
+      "ply\r\nformat binary_big_endian 1.0\ncomment not end_header\nobj_info any\nelement vertex 4\n"
+      "property double nx\nproperty float x\nproperty uchar red\nproperty float y\nproperty float z\n"
+      "element face 2\nproperty list uchar float texcoord\nproperty list uchar int vertex_indices\n"
+      "element edge 1\nproperty short a\nproperty int16 b\nelement empty 5\nend_header\n" + data.text;
+  const TriangleMesh mesh = ParseMesh(ply, "ply", "x.ply");
+  EXPECT_EQ(Flat(mesh), (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 2, 0, 0, 2, 0.5f}));
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 2, 3, 0}));
+}
+
+TEST(PlyReader, ReadsAsciiWithPropertiesInAnyOrder) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement material 1\nproperty float shine\n"
+      "element vertex 5\nproperty float z\nproperty float nx\nproperty float x\nproperty uint id\nproperty float y\n"
+      "element face 1\nproperty uchar flags\nproperty list uint8 uint32 vertex_index\nproperty float area\n"
+      "end_header\n0.5\n"
+      "3 9 0 0 1\n+3 9 1 1 2.5e0\n3 9 2 2 4\n3 9 3 3 5\n3 9 4 4 6\n"
+      "1 5 0 1 2 3 4 -0.25";  // no final line break
+  const TriangleMesh mesh = ParseMesh(ply, "ply", "x.ply");
+  EXPECT_EQ(Flat(mesh), (std::vector<float>{0, 1, 3, 1, 2.5f, 3, 2, 4, 3, 3, 5, 3, 4, 6, 3}));
+  // A pentagon as a fan.
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 3, 4}));
+}
+
+TEST(PlyReader, SplitsQuadsOfTheTestScenes) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "-1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n4 0 1 2 3\n";
+  const TriangleMesh mesh = ParseMesh(ply, "ply", "x.ply");
+  EXPECT_EQ(mesh.positions.size(), 4u);
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+}
+
+// --- OBJ --------------------------------------------------------------------
+
+const std::string kObjVertices = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\n";
+
+TEST(ObjReader, ReadsTrianglesQuadsRelativeIndicesAndPolygons) {
+  const TriangleMesh mesh =
+      ParseMesh(kObjVertices + "g a\nusemtl m\nf 1/1/1 2/2/2 3/3/3\nvn 0 0 1\nvt 0 0\ng b\nf -4 -3 -2 -1\n"
+                "f 1 2 3 4 1 2\n",
+                "obj", "x.obj");
+  EXPECT_EQ(Flat(mesh), (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 2, 0, 0, 2, 0}));
+  // The quad along its shorter diagonal (both are equal here: 1-3); the
+  // hexagon as a fan.
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 1, 3, 1, 2, 3, 0, 1, 2, 0, 2, 3, 0, 3, 0, 0, 0, 1}));
+  const TriangleMesh skewed = ParseMesh("v 0 0 0\nv 1 0 0\nv 5 1 0\nv 0 1 0\nf 1 2 3 4\n", "obj", "x.obj");
+  EXPECT_EQ(skewed.indices, (std::vector<uint32_t>{0, 1, 3, 1, 2, 3}));
+}
+
+TEST(ObjReader, RefusesIndicesOutOfRange) {
+  for (const std::string face : {"f 1 2 99999999999\n", "f 1 2 5\n", "f -1 -2 -5\n", "f 1 2 -2147483648\n",
+                                 "f 1 2 3 9\n", "f 0 1 2\n"})
+    EXPECT_NE(ErrorOf(kObjVertices + face, "obj"), "") << face;
+  EXPECT_NE(ErrorOf("f -1 -2 -3\n", "obj").find("out of range (0 vertices)"), std::string::npos);
+  EXPECT_NE(ErrorOf(kObjVertices + "l 1 2\np 1\n", "obj").find("has no faces"), std::string::npos);
+}
+
+TEST(ObjReader, RefusesFacesOfMoreThan255Vertices) {
+  for (int n : {255, 256, 258, 1000, 5000}) {
+    std::string obj = kObjVertices + "f";
+    for (int k = 0; k < n; ++k) obj.append(1, ' ').append(std::to_string(k % 4 + 1));
+    obj += "\n";
+    const std::string error = ErrorOf(obj, "obj");
+    if (n == 255) EXPECT_EQ(error, "");
+    else EXPECT_NE(error.find("a face has more than 255 vertices"), std::string::npos) << n << ": " << error;
+  }
+}
+
+TEST(ObjReader, IgnoresLinesItDoesNotUse) {
+  // `t` lines once cost tinyobjloader 300 KB each; `vw` weights beyond an
+  // int were converted with undefined behaviour.
+  std::string obj = kObjVertices + "mtllib /etc/passwd\nvw 0 1e30 1\n";
+  for (int i = 0; i < 2000; ++i) obj += "t crease 8192/8192/8192\n";
+  obj += "# " + std::string(1 << 20, 'x') + "\nf 1 2 3\n";
+  EXPECT_EQ(ParseMesh(obj, "obj", "x.obj").indices, (std::vector<uint32_t>{0, 1, 2}));
+}
+
+TEST(MeshReader, NamesTheFormatItDoesNotKnow) {
+  EXPECT_EQ(ErrorOf("", "stl"), "mesh 'x.stl': unknown format 'stl' (obj or ply)");
+}
+
+}  // namespace
+}  // namespace yarf
