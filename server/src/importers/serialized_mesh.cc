@@ -2,8 +2,10 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace yarf::importers {
 namespace {
@@ -11,9 +13,18 @@ namespace {
 constexpr uint16_t kMagic = 0x041C;
 constexpr uint32_t kHasNormals = 0x0001, kHasTexcoords = 0x0002, kHasColors = 0x0008,
                    kDoublePrecision = 0x2000;
-// Larger shapes than this are refused rather than inflated (a zip bomb
-// would otherwise exhaust memory).
-constexpr uint64_t kMaxInflatedBytes = uint64_t(1) << 32;
+// How far one shape's zlib stream may inflate. Only the bytes the shape's
+// own counts call for are inflated, so this bounds both the memory and
+// the time a small file can cost; a shape needing more is refused before
+// any of it is inflated. 1 GiB holds 40 million vertices and 50 million
+// triangles at single precision.
+constexpr uint64_t kMaxInflatedBytes = uint64_t(1) << 30;
+// Deflate never inflates more than 1032 to 1 (a run of 258 bytes per
+// two-bit code): counts that need more than that from the bytes present
+// cannot be true, and fail without inflating anything.
+constexpr uint64_t kMaxDeflateRatio = 1032;
+// Version 4 names each shape; longer names are refused.
+constexpr size_t kMaxNameBytes = 64 << 10;
 
 template <typename T>
 T Load(std::string_view bytes, size_t offset) {
@@ -48,7 +59,9 @@ class Reader {
   const SourceLocation& where_;
 };
 
-std::string Inflate(std::string_view compressed, const SourceLocation& where) {
+// The first `limit` bytes the zlib stream `compressed` inflates to (all of
+// them when it holds fewer); fails on a damaged stream.
+std::string Inflate(std::string_view compressed, uint64_t limit, const SourceLocation& where) {
   z_stream stream{};
   if (inflateInit(&stream) != Z_OK) Fail(where, "serialized mesh: cannot start zlib");
   std::string out;
@@ -56,17 +69,43 @@ std::string Inflate(std::string_view compressed, const SourceLocation& where) {
   stream.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data()));
   stream.avail_in = uInt(std::min<size_t>(compressed.size(), UINT32_MAX));
   int status = Z_OK;
-  while (status == Z_OK) {
+  while (status == Z_OK && out.size() < limit) {
     stream.next_out = reinterpret_cast<Bytef*>(buffer);
-    stream.avail_out = sizeof(buffer);
+    stream.avail_out = uInt(std::min<uint64_t>(sizeof(buffer), limit - out.size()));
+    const uInt asked = stream.avail_out;
     status = inflate(&stream, Z_NO_FLUSH);
-    out.append(buffer, sizeof(buffer) - stream.avail_out);
-    if (out.size() > kMaxInflatedBytes) status = Z_MEM_ERROR;
+    out.append(buffer, asked - stream.avail_out);
+    // No input left and no output made: the stream is cut short.
     if (status == Z_OK && stream.avail_in == 0 && stream.avail_out != 0) status = Z_BUF_ERROR;
   }
   inflateEnd(&stream);
-  if (status != Z_STREAM_END) Fail(where, "serialized mesh: corrupt or truncated zlib data");
+  if (status != Z_STREAM_END && out.size() < limit)
+    Fail(where, "serialized mesh: corrupt or truncated zlib data");
   return out;
+}
+
+// What a shape's data starts with.
+struct ShapeHeader {
+  uint32_t flags = 0;
+  std::string name;
+  uint64_t vertices = 0, triangles = 0;
+  uint64_t size = 0;  // of the header's bytes
+};
+
+ShapeHeader ReadShapeHeader(std::string_view data, uint16_t version, const SourceLocation& where) {
+  Reader in(data, where);
+  ShapeHeader header;
+  header.flags = in.Read<uint32_t>();
+  if (version == 4)
+    for (char c = in.Read<char>(); c != '\0'; c = in.Read<char>()) {
+      if (header.name.size() == kMaxNameBytes)
+        Fail(where, "serialized mesh: a shape name longer than " + std::to_string(kMaxNameBytes) + " bytes");
+      header.name += c;
+    }
+  header.vertices = in.Read<uint64_t>();
+  header.triangles = in.Read<uint64_t>();
+  header.size = 4 + (version == 4 ? header.name.size() + 1 : 0) + 16;
+  return header;
 }
 
 }  // namespace
@@ -96,28 +135,44 @@ SerializedMesh DecodeSerializedMesh(std::string_view bytes, uint64_t shape_index
       Fail(where, "serialized mesh: bad offset of shape " + std::to_string(shape_index));
   }
 
-  const std::string data = Inflate(bytes.substr(offset + 4), where);
+  const std::string_view compressed = bytes.substr(offset + 4);
+  const ShapeHeader header =
+      ReadShapeHeader(Inflate(compressed, 4 + kMaxNameBytes + 1 + 16, where), version, where);
+  const uint64_t vertices = header.vertices, triangles = header.triangles;
+  const uint64_t real = header.flags & kDoublePrecision ? 8 : 4;
+  // Check the counts against the limits and the bytes present before
+  // inflating or allocating anything for them.
+  if (vertices > UINT32_MAX || triangles > kMaxInflatedBytes)
+    Fail(where, "serialized mesh: " + std::to_string(vertices) + " vertices and " + std::to_string(triangles) +
+                    " triangles are more than a shape may hold");
+  const uint64_t reals_per_vertex = 3 + (header.flags & kHasNormals ? 3 : 0) +
+                                    (header.flags & kHasTexcoords ? 2 : 0) + (header.flags & kHasColors ? 3 : 0);
+  const uint64_t size = header.size + vertices * reals_per_vertex * real + triangles * 3 * 4;
+  if (size > kMaxInflatedBytes)
+    Fail(where, "serialized mesh: the shape's " + std::to_string(vertices) + " vertices and " +
+                    std::to_string(triangles) + " triangles need " + std::to_string(size) +
+                    " bytes, more than the limit of " + std::to_string(kMaxInflatedBytes));
+  if (size > compressed.size() * kMaxDeflateRatio + 64)
+    Fail(where, "serialized mesh: the shape declares " + std::to_string(vertices) + " vertices and " +
+                    std::to_string(triangles) + " triangles, but its " + std::to_string(compressed.size()) +
+                    " bytes of zlib data cannot hold them");
+  const std::string data = Inflate(compressed, size, where);
+  if (data.size() < size)
+    Fail(where, "serialized mesh: data ends early (" + std::to_string(data.size()) + " of " +
+                    std::to_string(size) + " bytes)");
   Reader in(data, where);
+  in.Skip(header.size);
   SerializedMesh mesh;
-  const uint32_t flags = in.Read<uint32_t>();
-  if (version == 4)
-    for (char c = in.Read<char>(); c != '\0'; c = in.Read<char>()) mesh.name += c;
-  const uint64_t vertices = in.Read<uint64_t>(), triangles = in.Read<uint64_t>();
-  const uint64_t real = flags & kDoublePrecision ? 8 : 4;
-  // Check sizes against what is there before allocating anything.
-  if (vertices > data.size() || triangles > data.size() || vertices > UINT32_MAX)
-    Fail(where, "serialized mesh: vertex or triangle count larger than the data");
-  in.Need(vertices * 3 * real);
+  mesh.name = header.name;
   mesh.positions.reserve(vertices * 3);
   for (uint64_t i = 0; i < vertices * 3; ++i) {
     const double v = real == 8 ? in.Read<double>() : in.Read<float>();
-    if (!std::isfinite(v)) Fail(where, "serialized mesh: a vertex position is not finite");
+    // Converting a double beyond float's range is undefined.
+    if (!(std::abs(v) <= std::numeric_limits<float>::max()))
+      Fail(where, "serialized mesh: a vertex position is not finite");
     mesh.positions.push_back(float(v));
   }
-  if (flags & kHasNormals) in.Skip(vertices * 3 * real);
-  if (flags & kHasTexcoords) in.Skip(vertices * 2 * real);
-  if (flags & kHasColors) in.Skip(vertices * 3 * real);
-  in.Need(triangles * 3 * 4);
+  in.Skip((reals_per_vertex - 3) * vertices * real);
   mesh.indices.reserve(triangles * 3);
   for (uint64_t i = 0; i < triangles * 3; ++i) {
     const uint32_t index = in.Read<uint32_t>();
