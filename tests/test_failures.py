@@ -253,7 +253,10 @@ def test_broken_plugin_is_reported_and_the_server_still_serves(
     # classes whether or not a --plugin-path replaces the default folder.
     build_plugins = server.binary.resolve().parent.parent / "plugins"
     plugin_paths = [build_plugins, plugins] if build_plugins.is_dir() else [plugins]
-    with LocalServer(plugin_paths=plugin_paths) as other, other.client() as client:
+    with (
+        LocalServer(plugin_paths=plugin_paths, extra_args=["--allow-load-plugin"]) as other,
+        other.client() as client,
+    ):
         listing = client.list_classes()
         errors = [error for error in listing.plugin_errors if "libbroken.so" in error.path]
         assert errors, f"plugin_errors does not name libbroken.so: {listing.plugin_errors}"

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from yarf import Client, RenderError, RenderResult, component, rgb
+from yarf import Client, LocalServer, RenderError, RenderResult, component, rgb
 from yarf.scene import PropertyValue
 from yarf.v1 import scene_pb2
 
@@ -74,6 +74,12 @@ def rms(errors: np.ndarray) -> float:
     return float(np.sqrt((errors**2).mean()))
 
 
+@pytest.fixture
+def cache_folder(server: LocalServer) -> Path:
+    """Where the server keeps the local user's component files: cache_file names lie there."""
+    return server.state_path / "files" / "local"
+
+
 @pytest.fixture(scope="module")
 def reference(client: Client, cornell_box: scene_pb2.Scene) -> RenderResult:
     """Emission, direct light and one indirect bounce, path traced."""
@@ -103,14 +109,15 @@ def test_tight_accuracy_matches_the_path_tracer_and_loose_accuracy_errs_more(
     cornell_box: scene_pb2.Scene,
     reference: RenderResult,
     unlit_blocks: np.ndarray,
-    tmp_path: Path,
+    cache_folder: Path,
 ) -> None:
     scene = small(cornell_box)
     errors: dict[float, np.ndarray] = {}
     records: dict[float, int] = {}
     for accuracy in (0.1, 1.0):
-        cache_file = tmp_path / f"a{accuracy}.irc"
-        transport = irradiance_cache(accuracy=accuracy, cache_file=str(cache_file))
+        name = f"accuracy-{accuracy}.irc"
+        cache_file = cache_folder / name
+        transport = irradiance_cache(accuracy=accuracy, cache_file=name)
         result = render(client, scene, transport, CACHE_SPP, 2)
         records[accuracy] = record_count(cache_file)
         errors[accuracy] = block_errors(result.pixels, reference.pixels, unlit_blocks)
@@ -131,11 +138,12 @@ def test_tight_accuracy_matches_the_path_tracer_and_loose_accuracy_errs_more(
 
 
 def test_a_cache_file_is_reused_by_the_next_job(
-    client: Client, cornell_box: scene_pb2.Scene, tmp_path: Path
+    client: Client, cornell_box: scene_pb2.Scene, cache_folder: Path
 ) -> None:
     scene = small(cornell_box)
-    cache_file = tmp_path / "cornell.irc"
-    transport = irradiance_cache(accuracy=0.15, cache_file=str(cache_file))
+    cache_file = cache_folder / "cornell.irc"
+    cache_file.unlink(missing_ok=True)
+    transport = irradiance_cache(accuracy=0.15, cache_file=cache_file.name)
     first = render(client, scene, transport, 4, 3)
     written = cache_file.read_bytes()
     written_at = cache_file.stat().st_mtime_ns
@@ -170,7 +178,9 @@ def test_a_cache_file_is_reused_by_the_next_job(
         ({"min_spacing": 0.2, "max_spacing": 0.1}, "max_spacing"),
         ({"max_depth": 0}, "max_depth"),
         ({"prepare_grid": 0}, "prepare_grid"),
-        ({"cache_file": "/nonexistent-directory/records.irc"}, "cache_file"),
+        ({"cache_file": "/nonexistent-directory/records.irc"}, "plain file name"),
+        ({"cache_file": "../tokens"}, "plain file name"),
+        ({"cache_file": ".hidden"}, "plain file name"),
         ({"acuracy": 0.1}, "does not understand property 'acuracy'"),
     ],
 )

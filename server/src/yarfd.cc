@@ -5,6 +5,8 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <tbb/global_control.h>
 
+#include <unistd.h>
+
 #include <csignal>
 #include <fstream>
 #include <iostream>
@@ -21,6 +23,12 @@
 namespace {
 
 int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
+  // Every job, plugin and component call would run with every right.
+  if (geteuid() == 0 && !options.allow_root) {
+    std::cerr << "yarfd: refusing to run as root: run it as a user of its own (deploy/systemd does), or pass "
+                 "--allow-root (YARF_ALLOW_ROOT=1) where root is all there is, as in a container\n";
+    return 2;
+  }
   // First: a refused address or a bad tokens file stops yarfd before any work.
   const auto credentials = yarf::ListenCredentials(options);
   std::optional<tbb::global_control> threads;
@@ -46,7 +54,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   // Locked before anything touches the folder: a second yarfd on it stops here.
   yarf::StateFolder state_folder(options.state_dir);
   yarf::AssetStore assets(options.state_dir / "assets");
-  yarf::JobManager jobs({registry, remote_classes, device, options.asset_root, job_scenes, &assets},
+  yarf::JobManager jobs({registry, remote_classes, device, options.asset_root, job_scenes, &assets,
+                         options.state_dir / "files"},
                         {.max_running_jobs = uint32_t(options.max_running_jobs),
                          .checkpoint_seconds = options.checkpoint_seconds,
                          .keep_finished_hours = options.keep_finished_hours,
@@ -54,7 +63,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
                         state_folder);
   yarf::AssetServiceImpl asset_service(assets);
   yarf::RenderServiceImpl render(jobs);
-  yarf::RegistryServiceImpl registry_service(registry, remote_classes);
+  yarf::RegistryServiceImpl registry_service(registry, remote_classes,
+                                             {options.allow_load_plugin, options.plugin_paths});
   yarf::ComponentServiceImpl component(registry, remote_classes, instances);
   yarf::FactoryServiceImpl factory(registry, remote_classes, instances);
   yarf::IntersectServiceImpl intersect(job_scenes);

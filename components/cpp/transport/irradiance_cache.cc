@@ -54,7 +54,9 @@
 //   int prepare_grid   camera rays per pixel and axis visited by Prepare (2).
 //   int max_depth      longest specular chain from the camera, in
 //                      segments (8).
-//   string cache_file  where records are kept between jobs ("": none).
+//   string cache_file  where records are kept between jobs ("": none): a
+//                      file name in the submitting user's folder on the
+//                      server (<state-dir>/files/<user>/), never a path.
 
 #include <algorithm>
 #include <bit>
@@ -90,29 +92,20 @@ struct Settings {
   float min_spacing, max_spacing;
   uint32_t prepare_grid;
   int max_depth;
-  std::string cache_file;
+  std::string cache_file;  // a path inside the user's file folder
 
   explicit Settings(const Properties& props)
       : accuracy(float(props.Float("accuracy", 0.2))),
-        gather_rays(uint32_t(Within(props, "gather_rays", 512, 16, 1 << 20))),
+        gather_rays(uint32_t(props.Int("gather_rays", 512, 16, 1 << 20))),
         min_spacing(float(props.Float("min_spacing", 0.01))),
         max_spacing(float(props.Float("max_spacing", 0.25))),
-        prepare_grid(uint32_t(Within(props, "prepare_grid", 2, 1, 64))),
-        max_depth(int(Within(props, "max_depth", 8, 1, 64))),
-        cache_file(props.String("cache_file", "")) {
+        prepare_grid(uint32_t(props.Int("prepare_grid", 2, 1, 64))),
+        max_depth(int(props.Int("max_depth", 8, 1, 64))),
+        cache_file(props.File("cache_file").string()) {
     if (!(accuracy > 0 && accuracy <= 2)) throw Error("property 'accuracy' must lie in (0, 2]");
     if (!(min_spacing > 0)) throw Error("property 'min_spacing' must be > 0");
     if (!(max_spacing >= min_spacing))
       throw Error("property 'max_spacing' must be >= min_spacing");
-  }
-
- private:
-  static int64_t Within(const Properties& props, const std::string& key, int64_t fallback, int64_t lo, int64_t hi) {
-    const int64_t value = props.Int(key, fallback);
-    if (value < lo || value > hi)
-      throw Error("property '" + key + "' must lie in [" + std::to_string(lo) + ", " +
-                  std::to_string(hi) + "]");
-    return value;
   }
 };
 

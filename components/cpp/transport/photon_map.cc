@@ -51,18 +51,18 @@ namespace yarf {
 namespace {
 
 constexpr int kUnboundedSpecularBounces = 16;
+// Photon paths per map: each may store several photons of ~40 bytes.
+constexpr int64_t kMaxPhotons = 50'000'000;
 
 class PhotonMapper final : public Transport {
  public:
   explicit PhotonMapper(const Properties& props)
       : length_(props),
-        photons_(props.Int("photons", 200000)),
-        caustic_photons_(props.Int("caustic_photons", 200000)),
+        photons_(props.Int("photons", 200000, 0, kMaxPhotons)),
+        caustic_photons_(props.Int("caustic_photons", 200000, 0, kMaxPhotons)),
         nearest_(props.Int("nearest", 64)),
         final_gather_(props.Bool("final_gather", true)),
         seed_(props.Int("seed", 0)) {
-    if (photons_ < 0) throw Error("property 'photons' must be >= 0");
-    if (caustic_photons_ < 0) throw Error("property 'caustic_photons' must be >= 0");
     if (nearest_ < 1) throw Error("property 'nearest' must be >= 1");
   }
 

@@ -96,20 +96,18 @@ class Radiosity final : public Transport {
   explicit Radiosity(const Properties& props)
       : max_patch_area_(props.Float("max_patch_area", -1)),
         subdivision_(int(props.Int("subdivision", -1))),
-        shooter_levels_(int(props.Int("shooter_levels", 2))),
+        shooter_levels_(int(props.Int("shooter_levels", 2, 0, 10))),
         ambient_(props.Bool("ambient", true)),
         gouraud_(Shading(props.String("shading", "gouraud"))),
         final_gather_(props.Bool("final_gather", false)),
         report_(props.Bool("report", false)) {
     settings_.tolerance = props.Float("tolerance", 1e-3);
-    const int64_t max_shots = props.Int("max_shots", 100000);
+    const int64_t max_shots = props.Int("max_shots", 100000, 0, 100'000'000);
     settings_.sample_level = uint32_t(PointsLevel(props.Int("shooter_points", 4)));
     if (props.Has("max_patch_area") && !(max_patch_area_ > 0))
       throw Error("property 'max_patch_area' must be > 0");
     if (subdivision_ < -1 || subdivision_ > 10) throw Error("property 'subdivision' must be -1 or 0 to 10");
-    if (shooter_levels_ < 0) throw Error("property 'shooter_levels' must be >= 0");
     if (!(settings_.tolerance >= 0)) throw Error("property 'tolerance' must be >= 0");
-    if (max_shots < 0) throw Error("property 'max_shots' must be >= 0");
     settings_.max_shots = uint64_t(max_shots);
   }
 

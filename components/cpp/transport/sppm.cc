@@ -59,11 +59,10 @@ class StochasticProgressivePhotonMapper final : public Transport {
  public:
   explicit StochasticProgressivePhotonMapper(const Properties& props)
       : length_(props),
-        photons_per_pass_(props.Int("photons_per_pass", 50000)),
+        photons_per_pass_(props.Int("photons_per_pass", 50000, 1, 50'000'000)),
         initial_radius_(float(props.Float("initial_radius", 0))),
         alpha_(float(props.Float("alpha", 2.0 / 3.0))),
         seed_(props.Int("seed", 0)) {
-    if (photons_per_pass_ < 1) throw Error("property 'photons_per_pass' must be >= 1");
     if (!(initial_radius_ >= 0) || !std::isfinite(initial_radius_))
       throw Error("property 'initial_radius' must be > 0 (or 0 for the default)");
     if (!(alpha_ > 0 && alpha_ < 1)) throw Error("property 'alpha' must be in (0, 1)");

@@ -3,6 +3,8 @@
 // reported instead of ignored.
 #pragma once
 
+#include <algorithm>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <string>
@@ -40,6 +42,15 @@ class Properties {
   int64_t Int(const std::string& key, int64_t fallback) const {
     return Has(key) ? Get<int64_t>(key, Find(key), "int") : fallback;
   }
+  // An int that must lie in [lo, hi]: counts that size what a job
+  // allocates (photons, records) are bounded here, not by the memory left.
+  int64_t Int(const std::string& key, int64_t fallback, int64_t lo, int64_t hi) const {
+    const int64_t value = Int(key, fallback);
+    if (value < lo || value > hi)
+      throw Error("property '" + key + "' must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                  "], got " + std::to_string(value));
+    return value;
+  }
   bool Bool(const std::string& key, bool fallback) const {
     return Has(key) ? Get<bool>(key, Find(key), "bool") : fallback;
   }
@@ -69,6 +80,27 @@ class Properties {
     return Has(key) ? Get<Transform>(key, Find(key), "transform") : fallback;
   }
 
+  // The folder where components may keep files between jobs (caches): the
+  // host gives each user one of their own. Empty: no files at all.
+  void SetFileFolder(std::filesystem::path folder) { file_folder_ = std::move(folder); }
+  // The file a string property names, inside the file folder; empty when
+  // the key is absent or "". The value is a plain file name (letters,
+  // digits, '.', '_', '-'; not starting with '.'), never a path: a job
+  // cannot read or replace a file outside its user's folder.
+  std::filesystem::path File(const std::string& key) const {
+    const std::string name = String(key, "");
+    if (name.empty()) return {};
+    const auto plain = [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' ||
+             c == '-';
+    };
+    if (name.size() > 255 || name[0] == '.' || !std::all_of(name.begin(), name.end(), plain))
+      throw Error("property '" + key + "' must be a plain file name (letters, digits, '.', '_', '-'; not a path): " +
+                  "files live in your folder on the server");
+    if (file_folder_.empty()) throw Error("property '" + key + "': this server keeps no files for components here");
+    return file_folder_ / name;
+  }
+
   // Keys set but never read: a misspelt or unsupported parameter.
   std::vector<std::string> Unread() const {
     std::vector<std::string> out;
@@ -93,6 +125,7 @@ class Properties {
 
   std::map<std::string, Value> values_;
   mutable std::set<std::string> read_;
+  std::filesystem::path file_folder_;
 };
 
 }  // namespace yarf

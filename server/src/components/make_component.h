@@ -3,6 +3,7 @@
 // registered remote class) behind Remote<I>. Callers cannot tell them apart.
 #pragma once
 
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -19,13 +20,18 @@ namespace yarf {
 
 struct ComponentSources {
   ComponentSources(const Registry& registry, const RemoteClasses* remote_classes = nullptr,
-                   RemoteOptions remote_options = {})
-      : registry(registry), remote_classes(remote_classes), remote_options(remote_options) {}
+                   RemoteOptions remote_options = {}, std::filesystem::path file_folder = {})
+      : registry(registry),
+        remote_classes(remote_classes),
+        remote_options(remote_options),
+        file_folder(std::move(file_folder)) {}
 
   const Registry& registry;
   // Classes of component processes; nullptr: none.
   const RemoteClasses* remote_classes;
   RemoteOptions remote_options;
+  // Where in-process components may keep files (Properties::File); empty: nowhere.
+  std::filesystem::path file_folder;
 };
 
 // The interfaces with a Remote<I>.
@@ -40,7 +46,11 @@ std::unique_ptr<I> MakeComponent(const ComponentSources& sources, const std::str
   std::string where = address;
   if (where.empty() && sources.remote_classes && !sources.registry.Has(class_name))
     where = sources.remote_classes->AddressOf(class_name).value_or("");
-  if (where.empty()) return sources.registry.CreateAs<I>(class_name, FromProto(properties));
+  if (where.empty()) {
+    Properties local = FromProto(properties);
+    local.SetFileFolder(sources.file_folder);
+    return sources.registry.CreateAs<I>(class_name, local);
+  }
   if constexpr (kHasRemote<I>) {
     return std::make_unique<Remote<I>>(
         std::make_unique<RemoteInstance>(where, class_name, properties, I::kInterface, sources.remote_options));

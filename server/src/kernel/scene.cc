@@ -347,8 +347,35 @@ namespace {
 // fastest on incoherent rays here (bench/embree_ceiling measures them all).
 constexpr size_t kPacket = 8;
 
+// Embree asserts (and so aborts the server) on a ray outside its valid
+// range: coordinates beyond ~1.8e18, NaNs, a NaN interval.
+bool Traceable(const Ray& r) {
+  constexpr float kLargest = 1e18f;
+  const auto in_range = [](Vec3 v) {
+    return std::abs(v.x) <= kLargest && std::abs(v.y) <= kLargest && std::abs(v.z) <= kLargest;
+  };
+  return in_range(r.origin) && in_range(r.direction) && r.tnear >= 0 && r.tnear <= kInfinity &&
+         !std::isnan(r.tfar) && r.time >= 0 && r.time <= 1;
+}
+
+// Rays a component made are untrusted: one that Embree cannot trace fails
+// the job, never the server.
+void CheckTraceable(std::span<const Ray> rays, size_t first, size_t count) {
+  for (size_t k = first; k < first + count; ++k)
+    if (!Traceable(rays[k])) [[unlikely]] {
+      const Ray& r = rays[k];
+      throw Error("a ray Embree cannot trace (origin " + std::to_string(r.origin.x) + ", " +
+                  std::to_string(r.origin.y) + ", " + std::to_string(r.origin.z) + "; direction " +
+                  std::to_string(r.direction.x) + ", " + std::to_string(r.direction.y) + ", " +
+                  std::to_string(r.direction.z) + "; interval [" + std::to_string(r.tnear) + ", " +
+                  std::to_string(r.tfar) + "]; time " + std::to_string(r.time) +
+                  "): a component computed a non-finite or out-of-range ray");
+    }
+}
+
 template <typename Packet>
 void LoadPacket(std::span<const Ray> rays, size_t first, size_t count, Packet& ray, int* valid) {
+  CheckTraceable(rays, first, count);
   for (size_t k = 0; k < kPacket; ++k) {
     const Ray& r = rays[first + std::min(k, count - 1)];
     valid[k] = k < count ? -1 : 0;
@@ -376,7 +403,12 @@ RTCIntersectContext IncoherentContext() {
 
 }  // namespace
 
+void KernelScene::ThrowIfStopped() const {
+  if (stop_ && stop_->load(std::memory_order_relaxed)) throw Error("the job was stopped");
+}
+
 void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  ThrowIfStopped();
   RTCIntersectContext context = IncoherentContext();
   const RTCScene world = groups_[kWorld].scene;
   for (size_t first = 0; first < rays.size(); first += kPacket) {
@@ -410,6 +442,7 @@ void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) cons
 }
 
 void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  ThrowIfStopped();
   RTCIntersectContext context = IncoherentContext();
   const RTCScene world = groups_[kWorld].scene;
   for (size_t first = 0; first < rays.size(); first += kPacket) {

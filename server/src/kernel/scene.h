@@ -58,6 +58,11 @@ class KernelScene final : public SceneView {
   void AddEnvironment(const Emitter* emitter);
   void Commit();
 
+  // Every later Intersect and Occluded throws Error once `stop` is set:
+  // whatever loop a transport runs (photon shooting, cache building, a
+  // render pass) traces rays, so a cancelled job ends within one batch.
+  void StopWhen(const std::atomic<bool>& stop) { stop_ = &stop; }
+
   // SceneView
   void Intersect(std::span<const Ray> rays, std::span<Hit> hits) const override;
   void Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
@@ -91,6 +96,8 @@ class KernelScene final : public SceneView {
   uint64_t ShadowRays() const { return shadow_rays_.load(std::memory_order_relaxed); }
 
  private:
+  void ThrowIfStopped() const;
+
   enum class Kind { kTriangles, kSphere };
   struct ShapeRecord {
     Kind kind = Kind::kTriangles;
@@ -162,6 +169,7 @@ class KernelScene final : public SceneView {
   // SampleLight's area density on each shape (0 when it does not emit).
   std::vector<float> shape_light_pdf_;
   mutable std::atomic<uint64_t> closest_hit_rays_{0}, shadow_rays_{0};
+  const std::atomic<bool>* stop_ = nullptr;
 };
 
 }  // namespace yarf

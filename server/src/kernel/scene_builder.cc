@@ -23,6 +23,33 @@ std::string LightName(const v1::Light& light, size_t index) {
   return "light " + std::to_string(index) + (light.name().empty() ? "" : " ('" + light.name() + "')");
 }
 
+// A placement the kernel can invert in float precision: its linear part
+// neither collapses nor blows up space (singular values within
+// [1e-12, 1e12], Frobenius condition number at most 1e8), its translation
+// is a sane position. Embree inverts instance transforms; a singular one
+// gives rays of NaNs.
+void CheckPlacement(const Transform& t, const std::string& what) {
+  const auto& m = t.m;
+  for (int i : {3, 7, 11})
+    if (!(std::abs(m[i]) <= 1e12)) throw Error(what + ": translation beyond 1e12 scene units");
+  double linear = 0;
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) linear += m[row * 4 + col] * m[row * 4 + col];
+  // The inverse is the cofactor matrix, transposed, over the determinant.
+  double cofactors = 0;
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) {
+      const int r0 = (row + 1) % 3, r1 = (row + 2) % 3, c0 = (col + 1) % 3, c1 = (col + 2) % 3;
+      const double c = m[r0 * 4 + c0] * m[r1 * 4 + c1] - m[r0 * 4 + c1] * m[r1 * 4 + c0];
+      cofactors += c * c;
+    }
+  const double norm = std::sqrt(linear), det = std::abs(t.Determinant3());
+  const double inverse_norm = det > 0 ? std::sqrt(cofactors) / det : INFINITY;
+  if (!(norm <= 1e12 && inverse_norm <= 1e12 && norm * inverse_norm <= 1e8))
+    throw Error(what + ": degenerate to_world (it collapses or stretches space too far to be inverted; scale "
+                "factors must lie within [1e-12, 1e12] and within a ratio of 1e8 of each other)");
+}
+
 Transform ShapeTransform(const v1::SceneShape& shape, const std::string& what) {
   return shape.has_to_world() ? FromProto(shape.to_world(), what + " to_world") : Transform{};
 }
@@ -61,15 +88,11 @@ void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& sh
       throw Error(what + " has an emitter without a class");
     if (s.has_sphere() && !(s.sphere().radius() > 0 && std::isfinite(s.sphere().radius())))
       throw Error(what + ": sphere radius must be positive");
-    if (s.has_to_world()) {
-      const Transform t = FromProto(s.to_world(), what + " to_world");
-      if (std::abs(t.Determinant3()) < 1e-30) throw Error(what + ": degenerate to_world");
-    }
+    if (s.has_to_world()) CheckPlacement(FromProto(s.to_world(), what + " to_world"), what);
     if (s.has_to_world_end()) {
       if (!where.empty()) throw Error(what + ": only shapes placed in the world may move (to_world_end)");
       if (s.has_emitter()) throw Error(what + " moves and emits: moving lights are not supported");
-      const Transform t = FromProto(s.to_world_end(), what + " to_world_end");
-      if (std::abs(t.Determinant3()) < 1e-30) throw Error(what + ": degenerate to_world_end");
+      CheckPlacement(FromProto(s.to_world_end(), what + " to_world_end"), what + " to_world_end");
     }
     if (s.has_mesh() && s.mesh().has_asset()) ValidateMeshAsset(s.mesh(), what);
     if (s.has_mesh() && s.mesh().source_case() == v1::Mesh::SOURCE_NOT_SET) {
@@ -230,10 +253,11 @@ class Builder {
   // into world placements with composed transforms.
   void Place(const v1::Instance& instance, const Transform& parent, int depth) {
     const auto& [group, index] = groups_.at(instance.group());
+    const std::string what = "instance of '" + instance.group() + "'";
     const Transform to_world =
-        parent * (instance.has_to_world()
-                      ? FromProto(instance.to_world(), "instance of '" + instance.group() + "'")
-                      : Transform{});
+        parent * (instance.has_to_world() ? FromProto(instance.to_world(), what) : Transform{});
+    // Each level is sound (ValidateScene); their product may not be.
+    CheckPlacement(to_world, what + " (composed with the instances around it)");
     if (group->shapes_size() > 0) kernel_->AddPlacement(index, to_world);
     for (const v1::Instance& child : group->instances()) Place(child, to_world, depth + 1);
   }
@@ -244,6 +268,11 @@ class Builder {
   std::map<std::string, uint32_t> materials_;
   std::map<std::string, std::pair<const v1::Group*, uint32_t>> groups_;
 };
+
+void CheckInstance(const v1::Instance& instance) {
+  const std::string what = "instance of '" + instance.group() + "'";
+  if (instance.has_to_world()) CheckPlacement(FromProto(instance.to_world(), what), what);
+}
 
 // Counts the world placements nested instancing expands to, rejecting
 // cycles, missing groups and explosive nesting before anything is built.
@@ -264,14 +293,18 @@ uint64_t CountPlacements(const v1::Scene& scene) {
     if (memo.count(name)) return memo[name];
     visiting.insert(name);
     uint64_t n = 1;
-    for (const v1::Instance& child : it->second->instances())
+    for (const v1::Instance& child : it->second->instances()) {
+      CheckInstance(child);
       n = std::min<uint64_t>(n + count(child.group(), depth + 1), SceneLimits::kMaxPlacements + 1);
+    }
     visiting.erase(name);
     return memo[name] = n;
   };
   uint64_t total = 0;
-  for (const v1::Instance& instance : scene.instances())
+  for (const v1::Instance& instance : scene.instances()) {
+    CheckInstance(instance);
     total = std::min<uint64_t>(total + count(instance.group(), 1), SceneLimits::kMaxPlacements + 1);
+  }
   return total;
 }
 
@@ -309,9 +342,8 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
     // Each environment is a sphere around the scene: two would hide each other.
     if (light.kind() == v1::Light::ENVIRONMENT && ++environments > 1)
       throw Error(LightName(light, i) + ": a scene has at most one ENVIRONMENT light");
-    if (light.has_to_world() &&
-        std::abs(FromProto(light.to_world(), LightName(light, i) + " to_world").Determinant3()) < 1e-30)
-      throw Error(LightName(light, i) + ": degenerate to_world");
+    if (light.has_to_world())
+      CheckPlacement(FromProto(light.to_world(), LightName(light, i) + " to_world"), LightName(light, i));
   }
   for (const v1::Group& g : scene.groups()) ValidateShapes(g.shapes(), materials, "group '" + g.name() + "' ");
   if (CountPlacements(scene) > SceneLimits::kMaxPlacements)

@@ -3,6 +3,7 @@
 // treats every caller as the local admin.
 #pragma once
 
+#include <google/protobuf/message.h>
 #include <grpcpp/server_context.h>
 
 #include <string>
@@ -33,7 +34,12 @@ std::string_view RoleName(Role role);
 // call's auth context, else the local admin.
 Caller CallerOf(const grpc::ServerContext& context);
 
-// Whether `caller` may see and act on a job submitted by `owner`.
+// Whether `caller` may see and act on a job (or an instance) of `owner`.
 bool MayActOn(const Caller& caller, const std::string& owner);
+
+// PERMISSION_DENIED unless `caller` is an admin or `request` names no
+// component process: no field `address` or `*_address` set anywhere in it.
+// yarfd would dial that address, as itself, and hand the process data.
+grpc::Status MayNameAddresses(const Caller& caller, const google::protobuf::Message& request);
 
 }  // namespace yarf

@@ -6,29 +6,37 @@
 
 namespace yarf {
 
-uint64_t FirstHandle() {
-  std::random_device entropy;
+uint64_t RandomHandle() {
+  std::random_device entropy;  // the kernel's CSPRNG (getrandom)
   return ((uint64_t(entropy()) << 32 | entropy()) >> 2) + 1;
 }
 
-InstanceTable::InstanceTable() : next_(FirstHandle()) {}
-
-uint64_t InstanceTable::Add(std::unique_ptr<Component> instance) {
+uint64_t InstanceTable::Add(std::unique_ptr<Component> instance, const std::string& owner) {
   std::lock_guard lock(mutex_);
-  const uint64_t handle = next_++;
-  instances_[handle] = std::move(instance);
+  uint64_t handle = RandomHandle();
+  while (instances_.contains(handle)) handle = RandomHandle();
+  instances_[handle] = {std::move(instance), owner};
   return handle;
 }
 
-bool InstanceTable::Release(uint64_t handle) {
-  std::lock_guard lock(mutex_);
-  return instances_.erase(handle) != 0;
-}
-
-std::shared_ptr<Component> InstanceTable::Find(uint64_t handle) const {
+bool InstanceTable::Release(uint64_t handle, const Caller& caller) {
   std::lock_guard lock(mutex_);
   auto it = instances_.find(handle);
-  return it == instances_.end() ? nullptr : it->second;
+  if (it == instances_.end() || !MayActOn(caller, it->second.owner)) return false;
+  instances_.erase(it);
+  return true;
+}
+
+void InstanceTable::Release(uint64_t handle) {
+  std::lock_guard lock(mutex_);
+  instances_.erase(handle);
+}
+
+std::shared_ptr<Component> InstanceTable::Find(uint64_t handle, const Caller& caller) const {
+  std::lock_guard lock(mutex_);
+  auto it = instances_.find(handle);
+  if (it == instances_.end() || !MayActOn(caller, it->second.owner)) return nullptr;
+  return it->second.instance;
 }
 
 grpc::Status RegistryServiceImpl::ListClasses(grpc::ServerContext*, const v1::ListClassesRequest*,
@@ -43,10 +51,31 @@ grpc::Status RegistryServiceImpl::ListClasses(grpc::ServerContext*, const v1::Li
   return grpc::Status::OK;
 }
 
+namespace {
+
+// The plugin file `path` names, resolved, if the policy lets it load;
+// else Error saying why.
+std::filesystem::path AllowedPlugin(const PluginPolicy& policy, const std::string& path) {
+  namespace fs = std::filesystem;
+  if (!policy.allowed)
+    throw Error("plugin '" + path + "': this server loads no plugins on request (start yarfd with "
+                "--allow-load-plugin, or put the plugin in a --plugin-path folder and restart it)");
+  std::error_code error;
+  const fs::path file = fs::canonical(path, error);
+  if (error) throw Error("plugin '" + path + "': " + error.message());
+  for (const fs::path& folder : policy.folders) {
+    const fs::path allowed = fs::canonical(folder, error);
+    if (!error && file.parent_path() == allowed && fs::is_regular_file(file)) return file;
+  }
+  throw Error("plugin '" + path + "' is not a file directly inside a --plugin-path folder of this server");
+}
+
+}  // namespace
+
 grpc::Status RegistryServiceImpl::LoadPlugin(grpc::ServerContext*, const v1::LoadPluginRequest* request,
                                              v1::LoadPluginReply* reply) {
   try {
-    for (const ComponentInfo& info : registry_.LoadPlugin(request->path()))
+    for (const ComponentInfo& info : registry_.LoadPlugin(AllowedPlugin(plugins_, request->path())))
       *reply->add_classes() = ToProto(info);
     return grpc::Status::OK;
   } catch (const Error& e) {
@@ -76,10 +105,10 @@ grpc::Status RegistryServiceImpl::Unregister(grpc::ServerContext*, const v1::Unr
   return grpc::Status::OK;
 }
 
-grpc::Status ComponentServiceImpl::Describe(grpc::ServerContext*, const v1::DescribeRequest* request,
+grpc::Status ComponentServiceImpl::Describe(grpc::ServerContext* context, const v1::DescribeRequest* request,
                                             v1::ComponentInfo* reply) {
   if (request->handle() != 0) {
-    auto instance = instances_.Find(request->handle());
+    auto instance = instances_.Find(request->handle(), CallerOf(*context));
     if (!instance) return {grpc::StatusCode::NOT_FOUND, "no instance " + std::to_string(request->handle())};
     *reply = ToProto(instance->Describe());
     return grpc::Status::OK;
@@ -93,7 +122,7 @@ grpc::Status ComponentServiceImpl::Describe(grpc::ServerContext*, const v1::Desc
   return {grpc::StatusCode::NOT_FOUND, "unknown component class '" + request->class_name() + "'"};
 }
 
-grpc::Status FactoryServiceImpl::Create(grpc::ServerContext*, const v1::CreateRequest* request,
+grpc::Status FactoryServiceImpl::Create(grpc::ServerContext* context, const v1::CreateRequest* request,
                                         v1::CreateReply* reply) {
   if (!registry_.Has(request->class_name()))
     if (const auto address = remote_.AddressOf(request->class_name()))
@@ -102,7 +131,7 @@ grpc::Status FactoryServiceImpl::Create(grpc::ServerContext*, const v1::CreateRe
   try {
     auto instance = registry_.Create(request->class_name(), FromProto(request->properties()));
     *reply->mutable_info() = ToProto(instance->Describe());
-    reply->set_handle(instances_.Add(std::move(instance)));
+    reply->set_handle(instances_.Add(std::move(instance), CallerOf(*context).user));
     return grpc::Status::OK;
   } catch (const Error& e) {
     const bool unknown = !registry_.Has(request->class_name());
@@ -110,9 +139,9 @@ grpc::Status FactoryServiceImpl::Create(grpc::ServerContext*, const v1::CreateRe
   }
 }
 
-grpc::Status FactoryServiceImpl::Release(grpc::ServerContext*, const v1::ReleaseRequest* request,
+grpc::Status FactoryServiceImpl::Release(grpc::ServerContext* context, const v1::ReleaseRequest* request,
                                          v1::ReleaseReply*) {
-  if (!instances_.Release(request->handle()))
+  if (!instances_.Release(request->handle(), CallerOf(*context)))
     return {grpc::StatusCode::NOT_FOUND, "no instance " + std::to_string(request->handle())};
   return grpc::Status::OK;
 }

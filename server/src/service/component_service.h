@@ -2,40 +2,58 @@
 // instances made on request, by handle.
 #pragma once
 
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "components/remote_classes.h"
+#include "service/access.h"
 #include "yarf/v1/component.grpc.pb.h"
 
 namespace yarf {
 
-// Where a table of handles starts counting: a random number below 2^62,
-// so that a restarted server never gives out a handle a caller may still
-// hold from before (and handles stay exact in a double).
-uint64_t FirstHandle();
+// A fresh random handle below 2^62 (exact in a double), never 0: a
+// restarted server never gives out a handle a caller may still hold from
+// before, and no caller can guess another's.
+uint64_t RandomHandle();
 
-// Instances made through Factory.Create, by handle.
+// Instances made through Factory.Create, by handle, each bound to the user
+// who made it: another user's handle is unknown to a caller, as if it did
+// not exist (admins reach every instance).
 class InstanceTable {
  public:
-  InstanceTable();
-  uint64_t Add(std::unique_ptr<Component> instance);
-  bool Release(uint64_t handle);
-  // nullptr when unknown; the instance lives while the pointer is held.
-  std::shared_ptr<Component> Find(uint64_t handle) const;
+  // `owner` empty: the server's own (a running job's materials), for admins only.
+  uint64_t Add(std::unique_ptr<Component> instance, const std::string& owner = "");
+  bool Release(uint64_t handle, const Caller& caller);
+  // nullptr when unknown or not the caller's; the instance lives while the
+  // pointer is held.
+  std::shared_ptr<Component> Find(uint64_t handle, const Caller& caller) const;
+  // The server's own use (withdrawing a job's materials).
+  void Release(uint64_t handle);
 
  private:
+  struct Entry {
+    std::shared_ptr<Component> instance;
+    std::string owner;
+  };
   mutable std::mutex mutex_;
-  // Starts at a random number: a restarted server never gives out a
-  // handle a client may still hold from before.
-  uint64_t next_;
-  std::map<uint64_t, std::shared_ptr<Component>> instances_;
+  std::map<uint64_t, Entry> instances_;
+};
+
+// Which plugins Registry.LoadPlugin may load: none unless `allowed`, and
+// then only files directly inside one of `folders` (the --plugin-path
+// folders, which the server's administrator controls).
+struct PluginPolicy {
+  bool allowed = false;
+  std::vector<std::filesystem::path> folders;
 };
 
 class RegistryServiceImpl final : public v1::Registry::Service {
  public:
-  RegistryServiceImpl(Registry& registry, RemoteClasses& remote) : registry_(registry), remote_(remote) {}
+  RegistryServiceImpl(Registry& registry, RemoteClasses& remote, PluginPolicy plugins = {})
+      : registry_(registry), remote_(remote), plugins_(std::move(plugins)) {}
   grpc::Status ListClasses(grpc::ServerContext*, const v1::ListClassesRequest*,
                            v1::ListClassesReply*) override;
   grpc::Status LoadPlugin(grpc::ServerContext*, const v1::LoadPluginRequest*,
@@ -46,6 +64,7 @@ class RegistryServiceImpl final : public v1::Registry::Service {
  private:
   Registry& registry_;
   RemoteClasses& remote_;
+  PluginPolicy plugins_;
 };
 
 class ComponentServiceImpl final : public v1::Component::Service {

@@ -14,8 +14,8 @@ constexpr uint64_t kMaxValues = uint64_t(1) << 26;
 // Runs `call` on the instance `handle` as interface I; maps a missing
 // instance, a wrong interface and bad input to gRPC statuses.
 template <typename I, typename Call>
-grpc::Status WithInstance(const InstanceTable& instances, uint64_t handle, Call&& call) {
-  std::shared_ptr<Component> instance = instances.Find(handle);
+grpc::Status WithInstance(const InstanceTable& instances, const Caller& caller, uint64_t handle, Call&& call) {
+  std::shared_ptr<Component> instance = instances.Find(handle, caller);
   if (!instance) return {grpc::StatusCode::NOT_FOUND, "no instance " + std::to_string(handle)};
   auto* typed = dynamic_cast<I*>(instance.get());
   if (!typed)
@@ -58,7 +58,8 @@ struct FunctionArgument {
   Function* function = nullptr;
 };
 
-FunctionArgument ResolveFunction(const InstanceTable& instances, uint64_t handle, const std::string& address) {
+FunctionArgument ResolveFunction(const InstanceTable& instances, const Caller& caller, uint64_t handle,
+                                 const std::string& address) {
   FunctionArgument argument;
   if (!address.empty()) {
     argument.remote = std::make_unique<Remote<Function>>(
@@ -66,7 +67,7 @@ FunctionArgument ResolveFunction(const InstanceTable& instances, uint64_t handle
     argument.function = argument.remote.get();
     return argument;
   }
-  argument.local = instances.Find(handle);
+  argument.local = instances.Find(handle, caller);
   argument.function = dynamic_cast<Function*>(argument.local.get());
   if (!argument.function) throw Error("no Function instance " + std::to_string(handle));
   return argument;
@@ -74,17 +75,18 @@ FunctionArgument ResolveFunction(const InstanceTable& instances, uint64_t handle
 
 }  // namespace
 
-grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext*, const v1::IntegrateRequest* request,
+grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext* context, const v1::IntegrateRequest* request,
                                               v1::IntegrateReply* reply) {
   // The integrand and the sampler live as long as this call.
   FunctionArgument argument;
   std::shared_ptr<Component> sampler_instance;
   std::unique_ptr<Component> default_sampler;
   const Sampler* sampler = nullptr;
+  if (grpc::Status allowed = MayNameAddresses(CallerOf(*context), *request); !allowed.ok()) return allowed;
   try {
-    argument = ResolveFunction(instances_, request->function_handle(), request->function_address());
+    argument = ResolveFunction(instances_, CallerOf(*context), request->function_handle(), request->function_address());
     if (request->sampler_handle() != 0) {
-      sampler_instance = instances_.Find(request->sampler_handle());
+      sampler_instance = instances_.Find(request->sampler_handle(), CallerOf(*context));
       sampler = dynamic_cast<const Sampler*>(sampler_instance.get());
       if (!sampler) throw Error("no Sampler instance " + std::to_string(request->sampler_handle()));
     } else {
@@ -95,7 +97,7 @@ grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext*, const v1::In
     return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
   }
   Function* function = argument.function;
-  return WithInstance<Integrator>(instances_, request->handle(), [&](Integrator& integrator) {
+  return WithInstance<Integrator>(instances_, CallerOf(*context), request->handle(), [&](Integrator& integrator) {
     if (request->lower_size() != int(function->InputDimensions()) || request->upper_size() != request->lower_size())
       throw Error("the box needs " + std::to_string(function->InputDimensions()) + " lower and upper bounds");
     if (request->evaluations() == 0 || request->evaluations() > (uint64_t(1) << 36))
@@ -110,15 +112,16 @@ grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext*, const v1::In
   });
 }
 
-grpc::Status RootFinderServiceImpl::FindRoot(grpc::ServerContext*, const v1::FindRootRequest* request,
+grpc::Status RootFinderServiceImpl::FindRoot(grpc::ServerContext* context, const v1::FindRootRequest* request,
                                              v1::FindRootReply* reply) {
+  if (grpc::Status allowed = MayNameAddresses(CallerOf(*context), *request); !allowed.ok()) return allowed;
   FunctionArgument argument;
   try {
-    argument = ResolveFunction(instances_, request->function_handle(), request->function_address());
+    argument = ResolveFunction(instances_, CallerOf(*context), request->function_handle(), request->function_address());
   } catch (const Error& e) {
     return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
   }
-  return WithInstance<RootFinder>(instances_, request->handle(), [&](RootFinder& finder) {
+  return WithInstance<RootFinder>(instances_, CallerOf(*context), request->handle(), [&](RootFinder& finder) {
     const RootResult result = finder.FindRoot(*argument.function, request->lower(), request->upper(),
                                               request->tolerance(), request->max_iterations());
     reply->set_root(result.root);
@@ -126,9 +129,9 @@ grpc::Status RootFinderServiceImpl::FindRoot(grpc::ServerContext*, const v1::Fin
   });
 }
 
-grpc::Status SamplerServiceImpl::Generate(grpc::ServerContext*, const v1::GenerateSamplesRequest* request,
+grpc::Status SamplerServiceImpl::Generate(grpc::ServerContext* context, const v1::GenerateSamplesRequest* request,
                                           v1::GenerateSamplesReply* reply) {
-  return WithInstance<Sampler>(instances_, request->handle(), [&](const Sampler& sampler) {
+  return WithInstance<Sampler>(instances_, CallerOf(*context), request->handle(), [&](const Sampler& sampler) {
     CheckSize(uint64_t(request->count()) * request->dimensions());
     std::vector<float> points(size_t(request->count()) * request->dimensions());
     sampler.Generate(request->first_index(), request->count(), request->dimensions(), request->seed(), points);
@@ -136,9 +139,9 @@ grpc::Status SamplerServiceImpl::Generate(grpc::ServerContext*, const v1::Genera
   });
 }
 
-grpc::Status GeneratorServiceImpl::Next(grpc::ServerContext*, const v1::GeneratorRequest* request,
+grpc::Status GeneratorServiceImpl::Next(grpc::ServerContext* context, const v1::GeneratorRequest* request,
                                         v1::GeneratorReply* reply) {
-  return WithInstance<Generator>(instances_, request->handle(), [&](Generator& generator) {
+  return WithInstance<Generator>(instances_, CallerOf(*context), request->handle(), [&](Generator& generator) {
     CheckSize(request->count());
     std::vector<float> values(request->count());
     generator.Next(request->seed(), request->stream(), request->offset(), values);
@@ -146,32 +149,32 @@ grpc::Status GeneratorServiceImpl::Next(grpc::ServerContext*, const v1::Generato
   });
 }
 
-grpc::Status WarpServiceImpl::Signature(grpc::ServerContext*, const v1::WarpSignatureRequest* request,
+grpc::Status WarpServiceImpl::Signature(grpc::ServerContext* context, const v1::WarpSignatureRequest* request,
                                         v1::WarpSignature* reply) {
-  return WithInstance<Warp>(instances_, request->handle(), [&](const Warp& warp) {
+  return WithInstance<Warp>(instances_, CallerOf(*context), request->handle(), [&](const Warp& warp) {
     reply->set_domain_dimensions(warp.DomainDimensions());
     reply->set_image_dimensions(warp.ImageDimensions());
   });
 }
 
-grpc::Status WarpServiceImpl::Forward(grpc::ServerContext*, const v1::WarpRequest* request, v1::WarpReply* reply) {
-  return WithInstance<Warp>(instances_, request->handle(),
+grpc::Status WarpServiceImpl::Forward(grpc::ServerContext* context, const v1::WarpRequest* request, v1::WarpReply* reply) {
+  return WithInstance<Warp>(instances_, CallerOf(*context), request->handle(),
                             [&](const Warp& warp) { WarpCall(warp, *request, true, false, reply); });
 }
 
-grpc::Status WarpServiceImpl::Inverse(grpc::ServerContext*, const v1::WarpRequest* request, v1::WarpReply* reply) {
-  return WithInstance<Warp>(instances_, request->handle(),
+grpc::Status WarpServiceImpl::Inverse(grpc::ServerContext* context, const v1::WarpRequest* request, v1::WarpReply* reply) {
+  return WithInstance<Warp>(instances_, CallerOf(*context), request->handle(),
                             [&](const Warp& warp) { WarpCall(warp, *request, false, true, reply); });
 }
 
-grpc::Status WarpServiceImpl::Pdf(grpc::ServerContext*, const v1::WarpRequest* request, v1::WarpReply* reply) {
-  return WithInstance<Warp>(instances_, request->handle(),
+grpc::Status WarpServiceImpl::Pdf(grpc::ServerContext* context, const v1::WarpRequest* request, v1::WarpReply* reply) {
+  return WithInstance<Warp>(instances_, CallerOf(*context), request->handle(),
                             [&](const Warp& warp) { WarpCall(warp, *request, false, false, reply); });
 }
 
-grpc::Status SurfaceModelServiceImpl::Evaluate(grpc::ServerContext*, const v1::SurfaceQuery* request,
+grpc::Status SurfaceModelServiceImpl::Evaluate(grpc::ServerContext* context, const v1::SurfaceQuery* request,
                                                v1::EvaluateSurfaceReply* reply) {
-  return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
+  return WithInstance<SurfaceModel>(instances_, CallerOf(*context), request->handle(), [&](const SurfaceModel& model) {
     BatchDecoder batch;
     const auto wi = batch.Floats(request->wi(), {3}, "wi");
     const auto wo = batch.Floats(request->wo(), {3}, "wo");
@@ -183,9 +186,9 @@ grpc::Status SurfaceModelServiceImpl::Evaluate(grpc::ServerContext*, const v1::S
   });
 }
 
-grpc::Status SurfaceModelServiceImpl::Sample(grpc::ServerContext*, const v1::SampleSurfaceRequest* request,
+grpc::Status SurfaceModelServiceImpl::Sample(grpc::ServerContext* context, const v1::SampleSurfaceRequest* request,
                                              v1::SampleSurfaceReply* reply) {
-  return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
+  return WithInstance<SurfaceModel>(instances_, CallerOf(*context), request->handle(), [&](const SurfaceModel& model) {
     BatchDecoder batch;
     const auto wi = batch.Floats(request->wi(), {3}, "wi");
     const auto uv = batch.Floats(request->uv(), {2}, "uv");
@@ -201,9 +204,9 @@ grpc::Status SurfaceModelServiceImpl::Sample(grpc::ServerContext*, const v1::Sam
   });
 }
 
-grpc::Status SurfaceModelServiceImpl::Pdf(grpc::ServerContext*, const v1::SurfaceQuery* request,
+grpc::Status SurfaceModelServiceImpl::Pdf(grpc::ServerContext* context, const v1::SurfaceQuery* request,
                                           v1::PdfSurfaceReply* reply) {
-  return WithInstance<SurfaceModel>(instances_, request->handle(), [&](const SurfaceModel& model) {
+  return WithInstance<SurfaceModel>(instances_, CallerOf(*context), request->handle(), [&](const SurfaceModel& model) {
     BatchDecoder batch;
     const auto wi = batch.Floats(request->wi(), {3}, "wi");
     const auto wo = batch.Floats(request->wo(), {3}, "wo");
@@ -215,15 +218,15 @@ grpc::Status SurfaceModelServiceImpl::Pdf(grpc::ServerContext*, const v1::Surfac
   });
 }
 
-grpc::Status SurfaceModelServiceImpl::Lobes(grpc::ServerContext*, const v1::LobesRequest* request,
+grpc::Status SurfaceModelServiceImpl::Lobes(grpc::ServerContext* context, const v1::LobesRequest* request,
                                             v1::LobesReply* reply) {
-  return WithInstance<SurfaceModel>(instances_, request->handle(),
+  return WithInstance<SurfaceModel>(instances_, CallerOf(*context), request->handle(),
                                     [&](const SurfaceModel& model) { reply->set_flags(model.Lobes()); });
 }
 
-grpc::Status EmitterServiceImpl::Radiance(grpc::ServerContext*, const v1::RadianceRequest* request,
+grpc::Status EmitterServiceImpl::Radiance(grpc::ServerContext* context, const v1::RadianceRequest* request,
                                           v1::RadianceReply* reply) {
-  return WithInstance<Emitter>(instances_, request->handle(), [&](const Emitter& emitter) {
+  return WithInstance<Emitter>(instances_, CallerOf(*context), request->handle(), [&](const Emitter& emitter) {
     BatchDecoder batch;
     const auto w = batch.Floats(request->w(), {3}, "w");
     const auto uv = batch.Floats(request->uv(), {2}, "uv");
@@ -234,10 +237,10 @@ grpc::Status EmitterServiceImpl::Radiance(grpc::ServerContext*, const v1::Radian
   });
 }
 
-grpc::Status EmitterServiceImpl::SampleDirection(grpc::ServerContext*,
+grpc::Status EmitterServiceImpl::SampleDirection(grpc::ServerContext* context,
                                                  const v1::SampleDirectionRequest* request,
                                                  v1::SampleDirectionReply* reply) {
-  return WithInstance<Emitter>(instances_, request->handle(), [&](const Emitter& emitter) {
+  return WithInstance<Emitter>(instances_, CallerOf(*context), request->handle(), [&](const Emitter& emitter) {
     BatchDecoder batch;
     const auto u = batch.Floats(request->uniform(), {2}, "uniform");
     const uint32_t n = batch.rows();
@@ -248,9 +251,9 @@ grpc::Status EmitterServiceImpl::SampleDirection(grpc::ServerContext*,
   });
 }
 
-grpc::Status EmitterServiceImpl::PdfDirection(grpc::ServerContext*, const v1::PdfDirectionRequest* request,
+grpc::Status EmitterServiceImpl::PdfDirection(grpc::ServerContext* context, const v1::PdfDirectionRequest* request,
                                               v1::PdfDirectionReply* reply) {
-  return WithInstance<Emitter>(instances_, request->handle(), [&](const Emitter& emitter) {
+  return WithInstance<Emitter>(instances_, CallerOf(*context), request->handle(), [&](const Emitter& emitter) {
     BatchDecoder batch;
     const auto w = batch.Floats(request->w(), {3}, "w");
     const uint32_t n = batch.rows();

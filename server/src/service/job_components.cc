@@ -3,6 +3,7 @@
 #include <string>
 
 #include "components/make_component.h"
+#include "service/user_files.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -66,12 +67,13 @@ std::unique_ptr<I> Make(const ComponentSources& sources, const v1::ComponentSpec
 
 }  // namespace
 
-JobComponents MakeJobComponents(const v1::SubmitRequest& request, const JobResources& resources,
-                                std::shared_ptr<RemoteCalls> calls) {
+JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::string& owner,
+                                const JobResources& resources, std::shared_ptr<RemoteCalls> calls) {
   const v1::Scene& scene = request.scene();
   const v1::RenderOptions& options = request.options();
-  const ComponentSources components{resources.registry, &resources.remote_classes,
-                                    RemoteOptionsOf(options, std::move(calls))};
+  const ComponentSources components{
+      resources.registry, &resources.remote_classes, RemoteOptionsOf(options, std::move(calls)),
+      resources.user_files.empty() ? std::filesystem::path() : UserFileFolder(resources.user_files, owner)};
   JobComponents parts;
   parts.scene = BuildScene(scene, SceneSources{components, resources.device, resources.asset_root, resources.assets});
   parts.transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");

@@ -27,6 +27,8 @@ struct JobResources {
   std::filesystem::path asset_root;
   JobScenes& scenes;
   const AssetSource* assets = nullptr;
+  // Where each user's folder of component files lies; empty: none.
+  std::filesystem::path user_files;
 };
 
 struct JobComponents {
@@ -41,10 +43,11 @@ struct JobComponents {
   bool resumable = false;
 };
 
-// Builds the scene and makes the components; throws Error naming the
-// part that failed. Calls to other processes are tracked in `calls`.
-JobComponents MakeJobComponents(const v1::SubmitRequest& request, const JobResources& resources,
-                                std::shared_ptr<RemoteCalls> calls);
+// Builds the scene and makes the components of a job of `owner`; throws
+// Error naming the part that failed. Calls to other processes are
+// tracked in `calls`.
+JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::string& owner,
+                                const JobResources& resources, std::shared_ptr<RemoteCalls> calls);
 
 // The samples and pixels the request asks for (RenderOptions.first_sample, crop).
 FilmTarget::Share ShareOf(const v1::RenderOptions& options);

@@ -33,8 +33,7 @@ class ServedMaterial final : public SurfaceModel {
 
 }  // namespace
 
-JobScenes::JobScenes(InstanceTable& instances)
-    : instances_(instances), next_(FirstHandle()) {}
+JobScenes::JobScenes(InstanceTable& instances) : instances_(instances) {}
 
 bool ServedScene::Splat(const FilmSamples& samples) const {
   std::lock_guard lock(mutex_);
@@ -53,7 +52,8 @@ std::unique_ptr<JobScenes::Lease> JobScenes::Serve(const std::shared_ptr<KernelS
   for (uint32_t m = 0; m < scene->MaterialCount(); ++m)
     materials.push_back(instances_.Add(std::make_unique<ServedMaterial>(scene, m)));
   std::lock_guard lock(mutex_);
-  const uint64_t handle = next_++;
+  uint64_t handle = RandomHandle();
+  while (scenes_.contains(handle)) handle = RandomHandle();
   scene->SetServiceHandle(handle);
   scenes_[handle] = std::make_shared<ServedScene>(scene, target, std::move(materials));
   return std::make_unique<Lease>(*this, handle);

@@ -61,8 +61,6 @@ class JobScenes {
 
   InstanceTable& instances_;
   mutable std::mutex mutex_;
-  // Random start, as instance handles: never one a caller held before a restart.
-  uint64_t next_;
   std::map<uint64_t, std::shared_ptr<ServedScene>> scenes_;
 };
 

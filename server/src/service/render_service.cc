@@ -12,28 +12,6 @@
 namespace yarf {
 namespace {
 
-// Whether a message names a component process anywhere (a Material's or
-// a ComponentSpec's `address`): yarfd would dial that address and hand
-// the process the job's scene.
-bool NamesAddress(const google::protobuf::Message& message) {
-  const google::protobuf::Reflection& reflection = *message.GetReflection();
-  std::vector<const google::protobuf::FieldDescriptor*> fields;
-  reflection.ListFields(message, &fields);
-  for (const google::protobuf::FieldDescriptor* field : fields) {
-    if (field->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_STRING && field->name() == "address" &&
-        !field->is_repeated() && !reflection.GetString(message, field).empty())
-      return true;
-    if (field->cpp_type() != google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE) continue;
-    if (field->is_repeated()) {
-      for (int i = 0; i < reflection.FieldSize(message, field); ++i)
-        if (NamesAddress(reflection.GetRepeatedMessage(message, field, i))) return true;
-    } else if (NamesAddress(reflection.GetMessage(message, field))) {
-      return true;
-    }
-  }
-  return false;
-}
-
 // Whether a RAW reply of a width x height image stays within what a reply
 // may carry; else RESOURCE_EXHAUSTED pointing to the smaller formats.
 grpc::Status RawFits(const std::string& job_id, uint32_t width, uint32_t height) {
@@ -62,10 +40,7 @@ grpc::Status RenderServiceImpl::Reach(const grpc::ServerContext& context, const 
 grpc::Status RenderServiceImpl::Submit(grpc::ServerContext* context, const v1::SubmitRequest* request,
                                        v1::SubmitReply* reply) {
   const Caller caller = CallerOf(*context);
-  // Other users' processes are reached through classes an admin registered.
-  if (caller.role != Role::kAdmin && NamesAddress(*request))
-    return {grpc::StatusCode::PERMISSION_DENIED,
-            "naming a component process by address needs the admin role; use a class an admin registered"};
+  if (grpc::Status allowed = MayNameAddresses(caller, *request); !allowed.ok()) return allowed;
   try {
     reply->set_job_id(jobs_.Submit(*request, caller.user));
     return grpc::Status::OK;

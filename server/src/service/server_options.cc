@@ -24,11 +24,20 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--asset-root DIR] [--state-dir DIR] [--threads N] [--component ADDRESS]...\n"
       "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
       "             [--max-finished-jobs N]\n"
-      "             [--tls-cert FILE --tls-key FILE] [--tokens FILE]";
+      "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
+      "             [--allow-root]";
   ServerOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     if (flag == "--help" || flag == "-h") throw Error(kUsage);
+    if (flag == "--allow-load-plugin") {
+      options.allow_load_plugin = true;
+      continue;
+    }
+    if (flag == "--allow-root") {
+      options.allow_root = true;
+      continue;
+    }
     if (i + 1 >= argc) throw Error("missing value for " + flag + "\n" + kUsage);
     const std::string value = argv[++i];
     if (flag == "--listen") options.listen = value;
@@ -54,6 +63,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
   }
   if (options.plugin_paths.empty()) options.plugin_paths.emplace_back(YARF_PLUGIN_DIR);
   if (options.state_dir.empty()) options.state_dir = DefaultStateDir();
+  if (const char* env = std::getenv("YARF_ALLOW_ROOT"); env && std::string(env) == "1") options.allow_root = true;
   if (options.max_running_jobs < 1) throw Error("--max-running-jobs must be at least 1");
   if (!(options.checkpoint_seconds >= 0)) throw Error("--checkpoint-seconds must be 0 or more");
   if (!(options.keep_finished_hours >= 0)) throw Error("--keep-finished-hours must be 0 or more");

@@ -34,6 +34,12 @@ struct ServerOptions {
   std::filesystem::path tls_cert;
   std::filesystem::path tls_key;
   std::filesystem::path tokens_file;
+  // Registry.LoadPlugin: off unless asked for, and then only for files
+  // directly inside a --plugin-path folder (loading runs the library's
+  // code as yarfd's user).
+  bool allow_load_plugin = false;
+  // yarfd refuses to run as root unless --allow-root (or YARF_ALLOW_ROOT=1).
+  bool allow_root = false;
 };
 
 // Throws Error with usage for an unknown or incomplete flag.

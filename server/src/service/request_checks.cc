@@ -1,0 +1,155 @@
+#include "service/request_checks.h"
+
+#include <google/protobuf/descriptor.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "yarf/error.h"
+
+namespace yarf {
+namespace {
+
+using google::protobuf::FieldDescriptor;
+using google::protobuf::Message;
+using google::protobuf::Reflection;
+
+// The length of the well-formed UTF-8 character at text[at], 0 if none.
+size_t CharacterLength(std::string_view text, size_t at) {
+  const auto byte = [&](size_t i) { return static_cast<unsigned char>(text[i]); };
+  const unsigned char lead = byte(at);
+  if (lead < 0x80) return 1;
+  size_t length;
+  uint32_t code, least;
+  if ((lead & 0xE0) == 0xC0) length = 2, code = lead & 0x1F, least = 0x80;
+  else if ((lead & 0xF0) == 0xE0) length = 3, code = lead & 0x0F, least = 0x800;
+  else if ((lead & 0xF8) == 0xF0) length = 4, code = lead & 0x07, least = 0x10000;
+  else return 0;
+  if (at + length > text.size()) return 0;
+  for (size_t i = 1; i < length; ++i) {
+    if ((byte(at + i) & 0xC0) != 0x80) return 0;
+    code = code << 6 | (byte(at + i) & 0x3F);
+  }
+  // Overlong forms, UTF-16 surrogates and code points past Unicode's end.
+  if (code < least || (code >= 0xD800 && code <= 0xDFFF) || code > 0x10FFFF) return 0;
+  return length;
+}
+
+std::string Join(const std::string& path, const FieldDescriptor& field) {
+  return path.empty() ? field.name() : path + "." + field.name();
+}
+
+// A string property's value may be long; every other text is a name.
+size_t TextLimit(const Message& message, const FieldDescriptor& field) {
+  return message.GetDescriptor()->full_name() == "yarf.v1.Property" && field.name() == "string_value"
+             ? RequestLimits::kMaxTextValueBytes
+             : RequestLimits::kMaxNameBytes;
+}
+
+std::string Format(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", value);
+  return text;
+}
+
+void CheckNumber(double value, const std::string& path) {
+  if (!std::isfinite(value)) throw Error(path + " is " + Format(value) + "; every number must be finite");
+  if (std::abs(value) > RequestLimits::kMaxMagnitude)
+    throw Error(path + " is " + Format(value) + ", beyond the largest magnitude a scene may use (1e12)");
+}
+
+void CheckText(const std::string& text, size_t limit, const std::string& path) {
+  if (text.size() > limit)
+    throw Error(path + " is " + std::to_string(text.size()) + " bytes long, more than the " + std::to_string(limit) +
+                " it may be");
+  if (!IsValidUtf8(text)) throw Error(path + " is not valid UTF-8");
+}
+
+void CheckFields(const Message& message, const std::string& path) {
+  const Reflection& reflection = *message.GetReflection();
+  std::vector<const FieldDescriptor*> fields;
+  reflection.ListFields(message, &fields);
+  for (const FieldDescriptor* field : fields) {
+    const std::string where = Join(path, *field);
+    const int count = field->is_repeated() ? reflection.FieldSize(message, field) : 1;
+    for (int i = 0; i < count; ++i) {
+      std::string at = field->is_repeated() ? where + "[" + std::to_string(i) + "]" : where;
+      // A map entry is named by its key (a property's name).
+      if (field->is_map()) {
+        const Message& entry = reflection.GetRepeatedMessage(message, field, i);
+        const FieldDescriptor* key = entry.GetDescriptor()->map_key();
+        if (key->cpp_type() == FieldDescriptor::CPPTYPE_STRING)
+          at = where + "['" + SafeText(entry.GetReflection()->GetString(entry, key), 64) + "']";
+      }
+      switch (field->cpp_type()) {
+        case FieldDescriptor::CPPTYPE_DOUBLE:
+          CheckNumber(field->is_repeated() ? reflection.GetRepeatedDouble(message, field, i)
+                                           : reflection.GetDouble(message, field),
+                      at);
+          break;
+        case FieldDescriptor::CPPTYPE_FLOAT:
+          CheckNumber(field->is_repeated() ? reflection.GetRepeatedFloat(message, field, i)
+                                           : reflection.GetFloat(message, field),
+                      at);
+          break;
+        case FieldDescriptor::CPPTYPE_STRING:
+          // Bytes (a mesh file's contents) are the parsers' to check.
+          if (field->type() == FieldDescriptor::TYPE_STRING)
+            CheckText(field->is_repeated() ? reflection.GetRepeatedString(message, field, i)
+                                           : reflection.GetString(message, field),
+                      TextLimit(message, *field), at);
+          break;
+        case FieldDescriptor::CPPTYPE_MESSAGE:
+          CheckFields(field->is_repeated() ? reflection.GetRepeatedMessage(message, field, i)
+                                           : reflection.GetMessage(message, field),
+                      at);
+          break;
+        default:
+          break;  // integers, bools and enums: their fields' own ranges apply
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void CheckRequestFields(const Message& message) {
+  const size_t bytes = message.ByteSizeLong();
+  if (bytes > RequestLimits::kMaxSubmitBytes)
+    throw Error("the request takes " + std::to_string(bytes) + " bytes, more than the " +
+                std::to_string(RequestLimits::kMaxSubmitBytes) +
+                " (64 MiB) a job may; upload large meshes with AssetService and name them by hash");
+  CheckFields(message, "");
+}
+
+bool IsValidUtf8(std::string_view text) {
+  for (size_t at = 0; at < text.size();) {
+    const size_t length = CharacterLength(text, at);
+    if (length == 0) return false;
+    at += length;
+  }
+  return true;
+}
+
+std::string SafeText(std::string_view text, size_t max_bytes) {
+  constexpr std::string_view kReplacement = "\xEF\xBF\xBD";  // U+FFFD
+  constexpr std::string_view kEllipsis = "\xE2\x80\xA6";     // U+2026
+  std::string out;
+  std::vector<size_t> boundaries;  // where each character of `out` starts
+  for (size_t at = 0; at < text.size();) {
+    const size_t length = CharacterLength(text, at);
+    boundaries.push_back(out.size());
+    out += length ? text.substr(at, length) : kReplacement;
+    at += length ? length : 1;
+  }
+  if (out.size() <= max_bytes) return out;
+  if (max_bytes < kEllipsis.size()) return {};
+  // The longest run of whole characters that leaves room for the ellipsis.
+  const auto cut = std::upper_bound(boundaries.begin(), boundaries.end(), max_bytes - kEllipsis.size());
+  out.resize(*(cut - 1));
+  return out += kEllipsis;
+}
+
+}  // namespace yarf

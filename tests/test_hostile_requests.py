@@ -1,0 +1,296 @@
+"""Requests made to crash, stall or overreach yarfd, against the session's real server.
+
+Each is refused at Submit with an error naming the field, or fails its own
+job with a clear error; the server stays up and renders the next job. These
+are the requests that once aborted yarfd (Embree's ray assertion on NaN
+cameras, singular instances, huge lights) or stalled it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import grpc
+import numpy as np
+import pytest
+from conftest import small_scene
+
+from yarf import Client, LocalServer, component, properties, rgb, transform, vec3
+from yarf.server import find_yarfd
+from yarf.v1 import render_pb2, scene_pb2
+
+
+def refusal(client: Client, request: render_pb2.SubmitRequest) -> grpc.RpcError:
+    with pytest.raises(grpc.RpcError) as caught:
+        client.render_service.Submit(request, timeout=30)
+    return caught.value
+
+
+def submit_request(scene: scene_pb2.Scene, **fields: object) -> render_pb2.SubmitRequest:
+    return render_pb2.SubmitRequest(scene=scene, options=render_pb2.RenderOptions(spp=2), **fields)
+
+
+def camera_with(field: str, axis: str, value: float) -> scene_pb2.Scene:
+    scene = small_scene()
+    setattr(getattr(scene.camera, field), axis, value)
+    return scene
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf, 1e39, 1e300])
+@pytest.mark.parametrize("field", ["origin", "target", "up"])
+def test_a_camera_of_non_finite_or_huge_numbers_is_refused_at_submit(
+    client: Client, assert_still_renders: Callable[[], None], field: str, value: float
+) -> None:
+    error = refusal(client, submit_request(camera_with(field, "x", value)))
+    assert error.code() == grpc.StatusCode.INVALID_ARGUMENT, error
+    assert f"scene.camera.{field}.x" in error.details(), error.details()
+    assert_still_renders()
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        (lambda s: setattr(s.camera, "near_clip", math.nan), "scene.camera.near_clip"),
+        (lambda s: setattr(s.camera, "fov", math.inf), "scene.camera.fov"),
+        (lambda s: setattr(s.camera, "lens_radius", 1e30), "scene.camera.lens_radius"),
+        (lambda s: setattr(s.shapes[1].sphere, "radius", 1e300), "scene.shapes[1].sphere.radius"),
+        (
+            lambda s: s.shapes[0].to_world.m.__setitem__(3, math.nan),
+            "scene.shapes[0].to_world.m[3]",
+        ),
+        (
+            lambda s: (
+                s.materials[0].properties.values["reflectance"].rgb_value.__setattr__("g", math.nan)
+            ),
+            "reflectance",
+        ),
+    ],
+)
+def test_a_non_finite_or_huge_number_anywhere_is_refused_naming_its_field(
+    client: Client,
+    assert_still_renders: Callable[[], None],
+    change: Callable[[scene_pb2.Scene], None],
+    field: str,
+) -> None:
+    scene = small_scene()
+    change(scene)
+    error = refusal(client, submit_request(scene))
+    assert error.code() == grpc.StatusCode.INVALID_ARGUMENT, error
+    assert field in error.details(), error.details()
+    assert_still_renders()
+
+
+@pytest.mark.parametrize("position", [1e300, 1e39, math.nan])
+def test_a_point_light_infinitely_far_is_refused(client: Client, position: float) -> None:
+    scene = small_scene()
+    light = scene.lights.add(name="far", emitter=component("point", intensity=rgb(1.0)))
+    light.to_world.CopyFrom(
+        transform(np.array([[1, 0, 0, position], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]))
+    )
+    error = refusal(client, submit_request(scene))
+    assert error.code() == grpc.StatusCode.INVALID_ARGUMENT, error
+    assert "scene.lights[0].to_world.m[3]" in error.details(), error.details()
+
+
+def instanced_scene(*scales: float) -> scene_pb2.Scene:
+    """The small scene with its ball in a group placed by nested instances of these scales."""
+    scene = small_scene()
+    ball = scene.shapes.pop()
+    names = [f"level{i}" for i in range(len(scales))]
+    for i, name in enumerate(names):
+        group = scene.groups.add(name=name)
+        if i + 1 < len(names):
+            placed = group.instances.add(group=names[i + 1])
+            placed.to_world.CopyFrom(transform(np.diag([scales[i + 1]] * 3 + [1.0])))
+        else:
+            group.shapes.add().CopyFrom(ball)
+    top = scene.instances.add(group=names[0])
+    top.to_world.CopyFrom(transform(np.diag([scales[0]] * 3 + [1.0])))
+    return scene
+
+
+@pytest.mark.parametrize("scale", [0.0, 1e-30, 1e30])
+def test_a_singular_instance_transform_is_refused_at_submit(
+    client: Client, assert_still_renders: Callable[[], None], scale: float
+) -> None:
+    error = refusal(client, submit_request(instanced_scene(scale)))
+    assert error.code() == grpc.StatusCode.INVALID_ARGUMENT, error
+    assert "instance" in error.details() and "to_world" in error.details(), error.details()
+    assert_still_renders()
+
+
+def test_a_stretched_instance_transform_is_refused(client: Client) -> None:
+    scene = instanced_scene(1.0)
+    scene.instances[0].to_world.CopyFrom(transform(np.diag([1e5, 1.0, 1e-5, 1.0])))
+    error = refusal(client, submit_request(scene))
+    assert "degenerate to_world" in error.details(), error.details()
+
+
+def test_nested_instances_whose_product_is_singular_fail_their_job_and_not_the_server(
+    client: Client, assert_still_renders: Callable[[], None]
+) -> None:
+    # Each level's scale is fine on its own; together they shrink space by 1e-15.
+    job = client.submit(instanced_scene(1e-5, 1e-5, 1e-5), spp=2, name="nested singular")
+    status = client.wait(job, timeout=60)
+    assert status.state == render_pb2.FAILED, status
+    assert "composed" in status.error and "degenerate to_world" in status.error, status.error
+    assert_still_renders()
+
+
+def test_a_sound_but_extreme_scene_renders(client: Client) -> None:
+    """A large thin lens and a distant light are within range: they render, finite."""
+    scene = small_scene()
+    scene.camera.model = scene_pb2.Camera.THIN_LENS
+    scene.camera.lens_radius = 1e6
+    scene.camera.focus_distance = 4.0
+    light = scene.lights.add(name="distant", emitter=component("point", intensity=rgb(1e10)))
+    light.to_world.CopyFrom(
+        transform(np.array([[1, 0, 0, 1e5], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]))
+    )
+    result = client.render(scene, spp=4, seed=1, timeout=60)
+    assert np.isfinite(result.pixels).all()
+
+
+def test_a_job_name_over_a_kibibyte_is_refused_and_list_still_works(client: Client) -> None:
+    error = refusal(client, submit_request(small_scene(), name="n" * (5 << 20)))
+    assert error.code() == grpc.StatusCode.INVALID_ARGUMENT, error
+    assert "name" in error.details() and "1024" in error.details(), error.details()
+    assert all(len(status.name) <= 1024 for status in client.list())
+
+
+def test_a_request_over_the_size_limit_is_refused_without_taking_memory(
+    client: Client, server: LocalServer, assert_still_renders: Callable[[], None]
+) -> None:
+    scene = small_scene()
+    mesh = scene.shapes.add(name="huge", material="grey").mesh
+    mesh.data = b"\0" * (80 << 20)
+    mesh.format = "ply"
+    error = refusal(client, submit_request(scene))
+    assert error.code() in (grpc.StatusCode.RESOURCE_EXHAUSTED, grpc.StatusCode.INVALID_ARGUMENT), (
+        error
+    )
+    assert server.is_running()
+    assert_still_renders()
+
+
+def test_text_that_is_not_utf8_is_refused_and_list_still_decodes(client: Client) -> None:
+    marker = "MARKERNAME"
+    wire = submit_request(small_scene(), name=marker).SerializeToString()
+    wire = wire.replace(marker.encode(), b"\xff\xfeBAD\xc3\x28\xed\xa0\x80")
+    submit = client.channel.unary_unary(
+        "/yarf.v1.RenderService/Submit",
+        request_serializer=lambda raw: raw,
+        response_deserializer=render_pb2.SubmitReply.FromString,
+    )
+    with pytest.raises(grpc.RpcError):
+        submit(wire, timeout=30)
+    for status in client.list():
+        status.name.encode("utf-8")
+        status.error.encode("utf-8")
+
+
+def test_photon_counts_beyond_their_range_fail_the_job_at_once(client: Client) -> None:
+    job = client.submit(
+        small_scene(),
+        spp=1,
+        transport=component("photon_map", photons=10**10),
+        name="too many photons",
+    )
+    status = client.wait(job, timeout=30)
+    assert status.state == render_pb2.FAILED, status
+    assert "photons" in status.error and "must lie in" in status.error, status.error
+
+
+def test_a_job_cancelled_while_shooting_photons_ends_within_a_second(
+    client: Client, cornell_box: scene_pb2.Scene, assert_still_renders: Callable[[], None]
+) -> None:
+    transport = component("photon_map", photons=40_000_000, caustic_photons=0)
+    job = client.submit(cornell_box, spp=1, transport=transport, name="photons to cancel")
+    deadline = time.monotonic() + 30
+    while client.status(job).state != render_pb2.RUNNING:
+        assert time.monotonic() < deadline, "the photon job did not start"
+        time.sleep(0.02)
+    time.sleep(0.5)  # inside Prepare: photon shooting takes far longer
+    cancelled_at = time.monotonic()
+    client.cancel(job)
+    while client.status(job).state == render_pb2.RUNNING:
+        assert time.monotonic() - cancelled_at < 1.0, (
+            "the photon job ran on for a second after Cancel"
+        )
+        time.sleep(0.01)
+    assert client.status(job).state == render_pb2.CANCELLED
+    assert_still_renders()
+
+
+def test_yarfd_refuses_to_run_as_root_unless_told(tmp_path: Path) -> None:
+    if os.geteuid() != 0:
+        pytest.skip("only root can be refused for being root")
+    environment = {key: value for key, value in os.environ.items() if key != "YARF_ALLOW_ROOT"}
+    refused = subprocess.run(
+        [str(find_yarfd()), "--listen", "127.0.0.1:0", "--state-dir", str(tmp_path / "state")],
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert refused.returncode != 0
+    assert "refusing to run as root" in refused.stderr and "--allow-root" in refused.stderr
+    assert not (tmp_path / "state").exists()
+
+
+def test_load_plugin_is_off_by_default(client: Client, server: LocalServer) -> None:
+    plugin = next((server.binary.resolve().parent.parent / "plugins").glob("*.so"))
+    with pytest.raises(grpc.RpcError) as caught:
+        client.load_plugin(str(plugin))
+    assert caught.value.code() == grpc.StatusCode.FAILED_PRECONDITION
+    assert "--allow-load-plugin" in caught.value.details()
+
+
+def test_load_plugin_takes_only_files_of_the_plugin_path(tmp_path: Path) -> None:
+    """A library elsewhere is refused before it is opened: its constructor never runs."""
+    marker = tmp_path / "constructor-ran"
+    source = tmp_path / "evil.cc"
+    source.write_text(
+        "#include <fstream>\n"
+        f'__attribute__((constructor)) static void Run() {{ std::ofstream("{marker}") << 1; }}\n'
+    )
+    library = tmp_path / "libevil.so"
+    subprocess.run(["g++", "-shared", "-fPIC", "-o", str(library), str(source)], check=True)
+    plugins = tmp_path / "plugins"
+    plugins.mkdir()
+    with (
+        LocalServer(plugin_paths=[plugins], extra_args=["--allow-load-plugin"]) as local,
+        local.client() as client,
+    ):
+        # Made after the start, which loads the folder's files as the admin's.
+        (plugins / "libescape.so").symlink_to(library)
+        for path in (library, plugins / "libescape.so", plugins / ".." / "libevil.so"):
+            with pytest.raises(grpc.RpcError) as caught:
+                client.load_plugin(str(path))
+            assert caught.value.code() == grpc.StatusCode.FAILED_PRECONDITION
+            assert "--plugin-path" in caught.value.details(), caught.value.details()
+        assert not marker.exists(), "the refused library's constructor ran"
+        assert local.is_running()
+
+
+def test_properties_of_a_material_are_checked_like_every_field(client: Client) -> None:
+    scene = small_scene()
+    scene.materials.add(
+        name="bad",
+        class_name="lambertian",
+        properties=properties(reflectance=rgb(0.5), scale=math.inf),
+    )
+    error = refusal(client, submit_request(scene))
+    assert "scene.materials[1].properties.values" in error.details(), error.details()
+
+
+def test_the_camera_frame_must_not_be_degenerate(client: Client) -> None:
+    scene = small_scene()
+    scene.camera.up.CopyFrom(vec3(0, 0, -1))  # along the view direction
+    error = refusal(client, submit_request(scene))
+    assert "up is parallel" in error.details(), error.details()
