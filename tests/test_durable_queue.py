@@ -78,7 +78,7 @@ def checkpoint_samples(state_dir: Path, job_id: str) -> int:
         head = (state_dir / "checkpoints" / f"{job_id}.film").read_bytes()[:12]
     except OSError:
         return 0
-    assert head[:8] == b"YARFCKP1", head
+    assert head[:8] == b"YARFCKP2", head
     return int(struct.unpack("<I", head[8:12])[0])
 
 

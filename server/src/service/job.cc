@@ -90,6 +90,16 @@ uint32_t Job::Priority() const {
 }
 
 void Job::WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const {
+bool Job::RunsAlone() const {
+  std::lock_guard lock(mutex_);
+  return row_.run_alone;
+}
+
+JobFileOwner Job::FileOwner() const {
+  std::lock_guard lock(mutex_);
+  return {number_, row_.attempts};
+}
+
   std::unique_lock lock(mutex_);
   changed_.wait_for(lock, timeout, [&] { return version_ != seen; });
 }
@@ -209,9 +219,10 @@ bool Job::Snapshot(std::vector<float>& pixels, std::vector<float>& variances, ui
   if (!Finished()) return false;
   std::optional<JobImage> image;
   try {
-    image = ReadJobImage(files_.result);
+    image = ReadJobImage(files_.result, FileOwner());
   } catch (const Error& e) {
-    std::cerr << "yarfd: job " << id_ << ": " << e.what() << "\n";
+    // Kept for whoever looks into it, but never served as this job's.
+    std::cerr << "yarfd: job " << id_ << ": result discarded, not served: " << e.what() << "\n";
   }
   if (!image) return false;
   pixels = std::move(image->pixels);
@@ -232,12 +243,12 @@ bool Job::ImageSize(uint32_t& width, uint32_t& height) const {
   }
   if (!Finished()) return false;
   try {
-    if (const auto size = ReadJobImageSize(files_.result)) {
+    if (const auto size = ReadJobImageSize(files_.result, FileOwner())) {
       std::tie(width, height) = *size;
       return true;
     }
   } catch (const Error& e) {
-    std::cerr << "yarfd: job " << id_ << ": " << e.what() << "\n";
+    std::cerr << "yarfd: job " << id_ << ": result discarded, not served: " << e.what() << "\n";
   }
   return false;
 }
@@ -312,7 +323,7 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
 
 std::optional<FilmCheckpoint> Job::UsableCheckpoint(const v1::Film& film, uint32_t spp) const {
   try {
-    std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(files_.checkpoint);
+    std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(files_.checkpoint, FileOwner());
     if (checkpoint && (checkpoint->film.width() != film.width() || checkpoint->film.height() != film.height()))
       throw Error("the checkpoint is not of this job's film size");
     // Resuming past spp would report more samples than the job has.
@@ -321,7 +332,8 @@ std::optional<FilmCheckpoint> Job::UsableCheckpoint(const v1::Film& film, uint32
                   std::to_string(spp));
     return checkpoint;
   } catch (const Error& e) {
-    std::cerr << "yarfd: job " << id_ << ": starting anew: " << e.what() << "\n";
+    std::cerr << "yarfd: job " << id_ << ": checkpoint " << files_.checkpoint.string()
+              << " discarded, starting anew: " << e.what() << "\n";
     return std::nullopt;
   }
 }
@@ -333,13 +345,14 @@ void Job::WriteCheckpoint(uint32_t samples_done) {
       std::lock_guard lock(film_mutex_);
       film = film_->Save();
     }
-    ::yarf::WriteCheckpoint(files_.checkpoint, samples_done, film);
+    ::yarf::WriteCheckpoint(files_.checkpoint, FileOwner(), samples_done, film);
     Commit([&](JobRecord& row) {
       row.samples_done = samples_done;
       // The job gets on: crashes before this one need not be its doing.
       row.crashes = 0;
       return true;
     });
+      row.run_alone = false;
   } catch (const std::exception& e) {
     // The render goes on; only its resumability suffers.
     if (!std::exchange(checkpoint_failed_, true))
@@ -363,7 +376,9 @@ bool Job::StoreEndOfRun(const RunResult& result) {
       // checkpoint (row_.samples_done says where).
       CommitRetrying([](JobRecord& row) {
         row.state = v1::QUEUED;
-        row.crashes = 0;  // a clean stop ends a run of crashes
+        // A clean stop ends a run of crashes, and clears the job of them.
+        row.crashes = 0;
+        row.run_alone = false;
         return true;
       });
       return false;
@@ -376,7 +391,9 @@ bool Job::StoreEndOfRun(const RunResult& result) {
             ++row.failures;
             row.crashes = 0;
             row.state = v1::QUEUED;
+            // The run ended without taking the server down.
             row.samples_done = 0;
+            row.run_alone = false;
             row.error = result.error;  // why it runs again
             return true;
           })) {
@@ -410,7 +427,7 @@ void Job::Finish(v1::JobState state, const std::string& error) {
   }
   if (!image.pixels.empty()) {
     try {
-      WriteJobImage(files_.result, image);
+      WriteJobImage(files_.result, FileOwner(), image);
     } catch (const Error& e) {
       std::cerr << "yarfd: job " << id_ << ": image not kept: " << e.what() << "\n";
     }
@@ -422,6 +439,7 @@ void Job::Finish(v1::JobState state, const std::string& error) {
     row.crashes = 0;
     row.finished_at = Now();
     row.elapsed_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+    row.run_alone = false;
     row.samples_done = samples_done_;
     row.closest_hit_rays = closest_hit_rays_;
     row.shadow_rays = shadow_rays_;

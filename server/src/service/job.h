@@ -56,6 +56,9 @@ class Job {
   void WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const;
   bool Finished() const;
   uint32_t Priority() const;
+  // The server died while this job ran beside others: the scheduler runs
+  // it alone until it gets on or a run of it ends.
+  bool RunsAlone() const;
   // Only the scheduler calls this, under its lock: the priority places
   // the job in its queue.
   void SetPriority(uint32_t priority);
@@ -105,6 +108,8 @@ class Job {
   // (of at most `spp` samples per pixel).
   std::optional<FilmCheckpoint> UsableCheckpoint(const v1::Film& film, uint32_t spp) const;
   void WriteCheckpoint(uint32_t samples_done);
+  // Who the job's files belong to: this job, as of its current attempt.
+  JobFileOwner FileOwner() const;
 
   const std::string id_;
   const uint64_t number_;

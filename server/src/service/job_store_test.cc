@@ -1,6 +1,7 @@
 #include "service/job_store.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -26,6 +27,22 @@ class TempFolder {
  private:
   std::filesystem::path path_;
 };
+
+std::string Bytes(const std::filesystem::path& file) { return ReadWholeFile(file).value(); }
+void Overwrite(const std::filesystem::path& file, const std::string& bytes) {
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+}
+// The message of the Error `read` throws, or "" if it throws none.
+template <typename Read>
+std::string RefusalOf(Read read) {
+  try {
+    read();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+bool Says(const std::string& message, const std::string& part) { return message.find(part) != std::string::npos; }
 
 JobRecord Ended(double finished_at) {
   JobRecord r;
@@ -105,6 +122,179 @@ TEST(JobStore, AFileThatIsNotADatabaseIsRefusedNamingIt) {
   }
 }
 
+// Runs `sql` on `file` with SQLite itself, as an older yarfd would have.
+void RunSql(const std::filesystem::path& file, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(file.c_str(), &db), SQLITE_OK);
+  char* message = nullptr;
+  EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message), SQLITE_OK) << (message ? message : "");
+  sqlite3_free(message);
+  sqlite3_close(db);
+}
+
+constexpr char kVersion1Table[] = R"sql(
+CREATE TABLE jobs (
+  number INTEGER PRIMARY KEY AUTOINCREMENT, request BLOB NOT NULL, name TEXT NOT NULL, owner TEXT NOT NULL,
+  state INTEGER NOT NULL, priority INTEGER NOT NULL, max_retries INTEGER NOT NULL, attempts INTEGER NOT NULL,
+  failures INTEGER NOT NULL, crashes INTEGER NOT NULL, samples_done INTEGER NOT NULL,
+  samples_total INTEGER NOT NULL, error TEXT NOT NULL, submitted_at REAL NOT NULL, finished_at REAL NOT NULL,
+  elapsed_seconds REAL NOT NULL, closest_hit_rays INTEGER NOT NULL, shadow_rays INTEGER NOT NULL)
+)sql";
+
+TEST(JobStore, DatabasesOfEarlierSchemasAreUpgradedKeepingTheirRows) {
+  for (const int version : {1, 2}) {
+    TempFolder folder;
+    const auto file = folder.path() / "jobs.sqlite";
+    std::string sql = std::string(kVersion1Table) + ";";
+    if (version == 2) sql += "ALTER TABLE jobs ADD COLUMN cancel_requested INTEGER NOT NULL DEFAULT 0;";
+    sql += "INSERT INTO jobs (number, request, name, owner, state, priority, max_retries, attempts, failures,"
+           " crashes, samples_done, samples_total, error, submitted_at, finished_at, elapsed_seconds,"
+           " closest_hit_rays, shadow_rays) VALUES (7, x'01', 'old', 'ann', 2, 50, 0, 1, 0, 2, 8, 16, '', 1, 0, 0,"
+           " 0, 0); PRAGMA user_version = " +
+           std::to_string(version) + ";";
+    RunSql(file, sql);
+    {
+      JobStore store(file);
+      EXPECT_EQ(store.OpenedVersion(), version);
+      const std::vector<JobRecord> rows = store.LoadAll();
+      ASSERT_EQ(rows.size(), 1u);
+      EXPECT_EQ(rows[0].number, 7u);
+      EXPECT_EQ(rows[0].state, v1::RUNNING);
+      EXPECT_EQ(rows[0].crashes, 2u);
+      EXPECT_FALSE(rows[0].cancel_requested);
+      EXPECT_FALSE(rows[0].run_alone);
+      JobRecord row = rows[0];
+      row.run_alone = true;
+      store.Update(row);
+      EXPECT_EQ(store.HighestNumber(), 7u);
+    }
+    JobStore store(file);
+    EXPECT_EQ(store.OpenedVersion(), 3);
+    EXPECT_TRUE(store.LoadAll()[0].run_alone) << "version " << version;
+    EXPECT_EQ(store.Insert(JobRecord{}), 8u);
+  }
+}
+
+TEST(JobStore, TheHighestNumberOutlivesTheRowsItNumbered) {
+  TempFolder folder;
+  JobStore store(folder.path() / "jobs.sqlite");
+  EXPECT_EQ(store.HighestNumber(), 0u);
+  store.Insert(Ended(100));
+  const uint64_t last = store.Insert(Ended(200));
+  store.DeleteEnded(1e18, 0);
+  EXPECT_TRUE(store.LoadAll().empty());
+  EXPECT_EQ(store.HighestNumber(), last);
+}
+
+// A copy of the state of an open store, as a crash (kill -9) leaves it.
+struct CrashedStore {
+  std::filesystem::path file;
+  std::string wal;
+};
+
+CrashedStore CrashWithRows(const std::filesystem::path& folder, int rows) {
+  const auto live = folder / "live" / "jobs.sqlite";
+  std::filesystem::create_directories(live.parent_path());
+  std::filesystem::create_directories(folder / "crashed");
+  const auto file = folder / "crashed" / "jobs.sqlite";
+  JobStore store(live);
+  for (int i = 0; i < rows; ++i) store.Insert(Ended(100 + i));
+  for (const char* suffix : {"", "-wal", "-open"})
+    std::filesystem::copy_file(live.string() + suffix, file.string() + suffix);
+  return {file, Bytes(file.string() + "-wal")};
+}
+
+std::string RefusalToOpen(const std::filesystem::path& file, const std::string& job_files = "") {
+  try {
+    JobStore store(file, job_files);
+  } catch (const StorageError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(JobStore, ACrashedStoreOpensWithEveryRowItCommitted) {
+  TempFolder folder;
+  const CrashedStore crashed = CrashWithRows(folder.path(), 3);
+  EXPECT_EQ(RefusalToOpen(crashed.file), "");
+  EXPECT_EQ(JobStore(crashed.file).LoadAll().size(), 3u);
+}
+
+TEST(JobStore, AMissingOrEmptyDatabaseIsRefusedWhenTheFolderHoldsFilesOfJobs) {
+  TempFolder folder;
+  const auto file = folder.path() / "jobs.sqlite";
+  EXPECT_TRUE(Says(RefusalToOpen(file, "2 files in results"), "jobs.sqlite is missing, but the state folder holds 2 files in results"));
+  EXPECT_FALSE(std::filesystem::exists(file)) << "the refusal created the database";
+  Overwrite(file, "");
+  EXPECT_TRUE(Says(RefusalToOpen(file, "2 files in results"), "jobs.sqlite is empty"));
+  EXPECT_EQ(std::filesystem::file_size(file), 0u);
+  EXPECT_EQ(RefusalToOpen(file), "") << "a fresh folder";
+}
+
+TEST(JobStore, ADamagedDatabaseIsRefusedSayingWhatToDo) {
+  TempFolder folder;
+  const auto file = folder.path() / "jobs.sqlite";
+  Overwrite(file, std::string(8192, 'x'));
+  const std::string refusal = RefusalToOpen(file, "1 file in results");
+  EXPECT_TRUE(Says(refusal, "not a database")) << refusal;
+  EXPECT_TRUE(Says(refusal, "nothing was changed")) << refusal;
+  EXPECT_TRUE(Says(refusal, "1 file in results")) << refusal;
+}
+
+TEST(JobStore, AWalDamagedBeforeItsLastCommitIsRefused) {
+  TempFolder folder;
+  const CrashedStore crashed = CrashWithRows(folder.path(), 3);
+  const auto wal = crashed.file.string() + "-wal";
+  // A byte of the first frame's page: every commit after it would be dropped.
+  std::string damaged = crashed.wal;
+  damaged[32 + 24 + 100] ^= 1;
+  Overwrite(wal, damaged);
+  std::string refusal = RefusalToOpen(crashed.file);
+  EXPECT_TRUE(Says(refusal, "jobs.sqlite-wal is damaged at frame 1")) << refusal;
+  EXPECT_EQ(Bytes(wal), damaged) << "the refusal changed the log";
+  // A damaged header: SQLite would ignore the whole log.
+  damaged = crashed.wal;
+  damaged[16] ^= 1;
+  Overwrite(wal, damaged);
+  refusal = RefusalToOpen(crashed.file);
+  EXPECT_TRUE(Says(refusal, "damaged header")) << refusal;
+}
+
+TEST(JobStore, AWalCutOffInItsLastTransactionIsWhatACrashLeavesAndOpens) {
+  TempFolder folder;
+  const CrashedStore crashed = CrashWithRows(folder.path(), 3);
+  // Torn in its last frame, as when the server died while writing it.
+  Overwrite(crashed.file.string() + "-wal", crashed.wal.substr(0, crashed.wal.size() - 100));
+  EXPECT_EQ(RefusalToOpen(crashed.file), "");
+  // The last transaction is gone: no check of the log can tell a torn
+  // transaction that was never acknowledged from a damaged one that was.
+  EXPECT_EQ(JobStore(crashed.file).LoadAll().size(), 2u);
+}
+
+TEST(JobStore, AWalLostAfterACrashIsRefusedUntilTheMarkerIsRemoved) {
+  TempFolder folder;
+  const CrashedStore crashed = CrashWithRows(folder.path(), 3);
+  std::filesystem::remove(crashed.file.string() + "-wal");
+  const std::string refusal = RefusalToOpen(crashed.file);
+  EXPECT_TRUE(Says(refusal, "was not closed by the last yarfd")) << refusal;
+  EXPECT_TRUE(Says(refusal, "jobs.sqlite-wal is missing")) << refusal;
+  std::filesystem::remove(JobStore::OpenMarker(crashed.file));
+  EXPECT_EQ(RefusalToOpen(crashed.file), "") << "told to go on with what the database holds";
+}
+
+TEST(JobStore, AStoreClosedCleanlyLeavesNeitherLogNorMarker) {
+  TempFolder folder;
+  const auto file = folder.path() / "jobs.sqlite";
+  {
+    JobStore store(file);
+    store.Insert(Ended(100));
+    EXPECT_TRUE(std::filesystem::exists(JobStore::OpenMarker(file)));
+  }
+  EXPECT_FALSE(std::filesystem::exists(file.string() + "-wal"));
+  EXPECT_FALSE(std::filesystem::exists(JobStore::OpenMarker(file)));
+  EXPECT_EQ(JobStore(file).LoadAll().size(), 1u);
+}
+
 TEST(StateFolder, ASecondHolderOfTheSameFolderIsRefused) {
   TempFolder folder;
   StateFolder first(folder.path() / "state");
@@ -123,22 +313,82 @@ TEST(JobFiles, CheckpointsAndImagesRoundTrip) {
   Film film(2, 2, filter);
   film.Add(0.5f, 0.5f, {1, 2, 3});
   film.EndPass();
-  WriteCheckpoint(folder.path() / "a.film", 12, film.Save());
-  const auto checkpoint = ReadCheckpoint(folder.path() / "a.film");
+  const JobFileOwner owner{7, 2};
+  WriteCheckpoint(folder.path() / "a.film", owner, 12, film.Save());
+  const auto checkpoint = ReadCheckpoint(folder.path() / "a.film", owner);
   ASSERT_TRUE(checkpoint);
   EXPECT_EQ(checkpoint->samples_done, 12u);
+  EXPECT_EQ(checkpoint->attempt, 2u);
   EXPECT_EQ(checkpoint->film.Pixels(), film.Pixels());
-  EXPECT_FALSE(ReadCheckpoint(folder.path() / "missing.film"));
+  EXPECT_FALSE(ReadCheckpoint(folder.path() / "missing.film", owner));
 
   const JobImage image{2, 1, {1, 2, 3, 4, 5, 6}, {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f}};
-  WriteJobImage(folder.path() / "a.image", image);
-  const auto read = ReadJobImage(folder.path() / "a.image");
+  WriteJobImage(folder.path() / "a.image", owner, image);
+  const auto read = ReadJobImage(folder.path() / "a.image", owner);
   ASSERT_TRUE(read);
   EXPECT_EQ(read->width, 2u);
   EXPECT_EQ(read->pixels, image.pixels);
   EXPECT_EQ(read->variances, image.variances);
-  std::ofstream(folder.path() / "b.image") << "YARFIMG1 truncated";
-  EXPECT_THROW(ReadJobImage(folder.path() / "b.image"), Error);
+  EXPECT_EQ(ReadJobImageSize(folder.path() / "a.image", owner), std::pair(2u, 1u));
+  std::ofstream(folder.path() / "b.image") << "YARFIMG2 truncated";
+  EXPECT_THROW(ReadJobImage(folder.path() / "b.image", owner), Error);
+}
+
+TEST(JobFiles, ACheckpointOfAnotherJobALaterAttemptOrChangedBytesIsRefused) {
+  TempFolder folder;
+  v1::ReconstructionFilter filter;
+  Film film(2, 2, filter);
+  film.Add(0.5f, 0.5f, {1, 2, 3});
+  film.EndPass();
+  const auto path = folder.path() / "a.film";
+  WriteCheckpoint(path, {7, 2}, 12, film.Save());
+  // An earlier attempt's checkpoint is what a run after a crash resumes.
+  EXPECT_TRUE(ReadCheckpoint(path, {7, 3}));
+  EXPECT_TRUE(Says(RefusalOf([&] { ReadCheckpoint(path, {8, 2}); }), "belongs to job number 7"));
+  EXPECT_TRUE(Says(RefusalOf([&] { ReadCheckpoint(path, {7, 1}); }), "attempt 2"));
+  const std::string good = Bytes(path);
+  // samples_done, then a byte of the film, then the checksum itself.
+  for (size_t offset : {size_t(8), good.size() / 2, good.size() - 1}) {
+    std::string changed = good;
+    changed[offset] ^= 1;
+    Overwrite(path, changed);
+    EXPECT_TRUE(Says(RefusalOf([&] { ReadCheckpoint(path, {7, 2}); }), "fails its checksum")) << offset;
+  }
+  Overwrite(path, "YARFCKP1" + good.substr(8));
+  EXPECT_TRUE(Says(RefusalOf([&] { ReadCheckpoint(path, {7, 2}); }), "older yarfd"));
+}
+
+TEST(JobFiles, AnImageOfAnotherJobOrAttemptOrWithChangedBytesIsRefused) {
+  TempFolder folder;
+  const auto path = folder.path() / "a.image";
+  const JobImage image{2, 1, {1, 2, 3, 4, 5, 6}, {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f}};
+  WriteJobImage(path, {7, 2}, image);
+  for (const JobFileOwner other : {JobFileOwner{8, 2}, JobFileOwner{7, 1}, JobFileOwner{7, 3}}) {
+    EXPECT_FALSE(RefusalOf([&] { ReadJobImage(path, other); }).empty());
+    EXPECT_FALSE(RefusalOf([&] { ReadJobImageSize(path, other); }).empty());
+  }
+  const std::string good = Bytes(path);
+  std::string changed = good;
+  changed[40] ^= 0x40;  // a pixel
+  Overwrite(path, changed);
+  EXPECT_TRUE(Says(RefusalOf([&] { ReadJobImage(path, {7, 2}); }), "fails its checksum"));
+}
+
+TEST(JobFiles, AnImageOfAnOlderYarfdIsRefusedUntilItIsAdopted) {
+  TempFolder folder;
+  const auto path = folder.path() / "a.image";
+  std::string legacy = "YARFIMG1";
+  for (uint32_t value : {2u, 1u}) legacy.append(reinterpret_cast<const char*>(&value), 4);
+  for (float value : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f, .1f, .2f, .3f, .4f, .5f, .6f})
+    legacy.append(reinterpret_cast<const char*>(&value), 4);
+  Overwrite(path, legacy);
+  EXPECT_TRUE(Says(RefusalOf([&] { ReadJobImage(path, {7, 2}); }), "older yarfd"));
+  EXPECT_TRUE(UpgradeLegacyJobImage(path, {7, 2}));
+  EXPECT_FALSE(UpgradeLegacyJobImage(path, {7, 2}));  // already bound
+  const auto read = ReadJobImage(path, {7, 2});
+  ASSERT_TRUE(read);
+  EXPECT_EQ(read->pixels, (std::vector<float>{1, 2, 3, 4, 5, 6}));
+  EXPECT_THROW(ReadJobImage(path, {8, 2}), Error);
 }
 
 // A job whose stored rows are recorded with whether its checkpoint file
@@ -209,6 +459,24 @@ TEST(Job, ACleanStopEndsTheRunOfCrashes) {
   EXPECT_FALSE(job->EndRun({Job::Outcome::kStopped, ""}));
   EXPECT_EQ(job.rows.back().state, v1::QUEUED);
   EXPECT_EQ(job.rows.back().crashes, 0u);
+}
+
+TEST(Job, AJobToRunAloneRunsBesideOthersAgainOnceARunOfItEnds) {
+  TempFolder folder;
+  JobRecord retried;
+  retried.max_retries = 1;
+  for (const auto& [outcome, row] :
+       {std::pair(Job::Outcome::kStopped, JobRecord{}), std::pair(Job::Outcome::kFailed, retried),
+        std::pair(Job::Outcome::kFailed, JobRecord{}), std::pair(Job::Outcome::kSucceeded, JobRecord{})}) {
+    JobRecord alone = row;
+    alone.run_alone = true;
+    RecordedJob job(folder.path(), alone);
+    EXPECT_TRUE(job->RunsAlone());
+    ASSERT_TRUE(job->Begin());
+    job->EndRun({outcome, "broken"});
+    EXPECT_FALSE(job.rows.back().run_alone);
+    EXPECT_FALSE(job->RunsAlone());
+  }
 }
 
 TEST(Job, ACancelOfARunningJobIsStoredAtOnce) {

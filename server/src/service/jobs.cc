@@ -1,5 +1,6 @@
 #include "service/jobs.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -20,8 +21,8 @@ constexpr double kMaxComponentTimeout = 24 * 3600;
 constexpr uint32_t kDefaultPriority = 50;
 constexpr uint32_t kMaxPriority = 100;
 constexpr uint32_t kMaxRetries = 10;
-// A job the server died under this many times in a row is not run again:
-// it may be what kills the server.
+// A job the server died under this many times in a row, each time while it
+// ran alone, is not run again: it may be what kills the server.
 constexpr uint32_t kMaxCrashes = 3;
 
 double Now() {
@@ -106,7 +107,9 @@ JobManager::JobManager(JobResources resources, JobQueueOptions options, const St
     : resources_(std::move(resources)),
       options_(std::move(options)),
       folder_(folder),
-      store_(folder_.Database()),
+      // Told what files of jobs there are, so that it refuses to replace a
+      // lost database with an empty one (the sweep below would delete them).
+      store_(folder_.Database(), folder_.DescribeJobFiles()),
       scheduler_([this](const std::shared_ptr<Job>& job) { RunJob(job); }) {
   Restore();
   ApplyRetention();
@@ -137,9 +140,10 @@ void JobManager::EndCancelled(JobRecord& row) const {
   // cancelled run would have left it.
   const std::string id = IdOf(row.number);
   try {
-    if (std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(folder_.Checkpoint(id))) {
+    if (std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(folder_.Checkpoint(id), owner)) {
+  const JobFileOwner owner{row.number, row.attempts};
       const Film& film = checkpoint->film;
-      WriteJobImage(folder_.Result(id), {film.width(), film.height(), film.Pixels(), film.Variances()});
+      WriteJobImage(folder_.Result(id), owner, {film.width(), film.height(), film.Pixels(), film.Variances()});
       row.samples_done = checkpoint->samples_done;
     }
   } catch (const Error& e) {
@@ -148,7 +152,31 @@ void JobManager::EndCancelled(JobRecord& row) const {
 }
 
 void JobManager::Restore() {
-  for (JobRecord& row : store_.LoadAll()) {
+  std::vector<JobRecord> rows = store_.LoadAll();
+  // The jobs the server died under. With one, the crash may have been its
+  // doing; with several, nothing tells whose it was, so none is blamed.
+  // Either way each runs alone until it gets on, so that a crash that
+  // comes again with it is told apart from its neighbours'.
+  const auto running = std::count_if(rows.begin(), rows.end(), [](const JobRecord& row) {
+    return row.state == v1::RUNNING;
+  });
+  // Older stores came with results that name no job: the first start on
+  // such a store binds them to the jobs that hold them.
+  constexpr int kFirstStoreOfBoundFiles = 3;
+  const bool adopt_legacy_results =
+      store_.OpenedVersion() > 0 && store_.OpenedVersion() < kFirstStoreOfBoundFiles;
+  for (JobRecord& row : rows) {
+void JobManager::AdoptLegacyResult(const JobRecord& row) const {
+  const std::filesystem::path result = folder_.Result(IdOf(row.number));
+  try {
+    if (UpgradeLegacyJobImage(result, {row.number, row.attempts}))
+      std::cerr << "yarfd: job " << IdOf(row.number) << ": result " << result.string()
+                << " of an older yarfd bound to its job" << std::endl;
+  } catch (const Error& e) {
+    std::cerr << "yarfd: job " << IdOf(row.number) << ": " << e.what() << std::endl;
+  }
+}
+
     std::shared_ptr<v1::SubmitRequest> request;
     bool changed = false;
     if (!Ended(row.state)) {
@@ -168,12 +196,13 @@ void JobManager::Restore() {
       changed = true;
     }
     if (row.state == v1::RUNNING) {
-      // The server died under it: it runs again from its checkpoint, unless
-      // that happened too often in a row.
-      if (++row.crashes >= kMaxCrashes) {
+      // It runs again from its checkpoint, unless the server died under it,
+      // alone, too often in a row.
+      row.run_alone = true;
+      if (running == 1 && ++row.crashes >= kMaxCrashes) {
         row.state = v1::FAILED;
         row.error = "the server stopped " + std::to_string(row.crashes) +
-                    " times in a row while this job ran; it is not run again";
+                    " times in a row while this job ran alone; it is not run again";
         row.finished_at = Now();
         request.reset();
       } else {
@@ -184,6 +213,7 @@ void JobManager::Restore() {
     if (changed) store_.Update(row);
     auto job = MakeJob(std::move(row), std::move(request));
     jobs_[job->number()] = job;
+    if (adopt_legacy_results && Ended(row.state)) AdoptLegacyResult(row);
     if (!job->Finished()) scheduler_.Enqueue(job);
   }
 }
@@ -285,17 +315,27 @@ void JobManager::ApplyRetention() {
 }
 
 // Files a crash left behind: half-written temporaries, and the files of
-// jobs that were deleted or have ended.
+// jobs that were deleted or have ended. Only of jobs the store numbered: a
+// file of a job it never handed out is not its to delete (the database may
+// have been replaced by an older or another one), and stays.
 void JobManager::RemoveStrayFiles() const {
   std::set<std::string> live, kept;
   for (const auto& job : List()) {
     (job->Finished() ? kept : live).insert(job->id());
   }
-  auto sweep = [](const std::filesystem::path& folder, const std::set<std::string>& wanted) {
+  const uint64_t highest = store_.HighestNumber();
+  auto sweep = [&](const std::filesystem::path& folder, const std::set<std::string>& wanted) {
     std::error_code error;
     for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
       const std::filesystem::path& path = entry.path();
-      if (path.extension() == ".tmp" || !wanted.contains(path.stem().string())) RemoveFile(path);
+      const std::string id = path.stem().string();
+      if (path.extension() != ".tmp" && wanted.contains(id)) continue;
+      const uint64_t number = NumberOf(id);
+      if (path.extension() == ".tmp" || (number != 0 && number <= highest))
+        RemoveFile(path);
+      else
+        std::cerr << "yarfd: " << path.string() << " is not of a job " << folder_.Database().string()
+                  << " ever held; left as it is" << std::endl;
     }
   };
   sweep(folder_.Checkpoints(), live);

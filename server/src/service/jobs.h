@@ -65,6 +65,8 @@ class JobManager {
   void Restore();
   // Ends the row of a job cancelled before a crash.
   void EndCancelled(JobRecord& row) const;
+  // Binds the image an older yarfd left for an ended job to that job.
+  void AdoptLegacyResult(const JobRecord& row) const;
   void RunJob(const std::shared_ptr<Job>& job);
   // Deletes ended jobs past the retention limits, with their files.
   void ApplyRetention();

@@ -22,11 +22,14 @@ void Scheduler::Enqueue(std::shared_ptr<Job> job) {
     const Place place = PlaceOf(job->Priority(), job->number());
     queue_[place] = std::move(job);
   }
-  queued_.notify_one();
+  // All: a worker may wait for a job to run alone that this one now precedes.
+  queued_.notify_all();
 }
 
 void Scheduler::SetPriority(Job& job, uint32_t priority) {
   std::lock_guard lock(mutex_);
+  // The head may change.
+  queued_.notify_all();
   // The place is taken under this lock, so it matches the priority the
   // job had when it was queued.
   auto it = queue_.find(PlaceOf(job.Priority(), job.number()));
@@ -38,8 +41,12 @@ void Scheduler::SetPriority(Job& job, uint32_t priority) {
 }
 
 void Scheduler::Remove(const Job& job) {
-  std::lock_guard lock(mutex_);
-  queue_.erase(PlaceOf(job.Priority(), job.number()));
+  {
+    std::lock_guard lock(mutex_);
+    queue_.erase(PlaceOf(job.Priority(), job.number()));
+  }
+  // The head may have been a job to run alone that the others waited for.
+  queued_.notify_all();
 }
 
 void Scheduler::Stop() {
@@ -57,18 +64,35 @@ void Scheduler::Join() {
     if (worker.joinable()) worker.join();
 }
 
+bool Scheduler::HeadMayStart() const {
+  if (queue_.empty() || alone_running_) return false;
+  return running_ == 0 || !queue_.begin()->second->RunsAlone();
+}
+
 void Scheduler::Work(std::stop_token stop) {
   for (;;) {
     std::shared_ptr<Job> job;
+    // Taken when the run starts: a job that gets on stops being one to run
+    // alone, but the run it is in stays alone.
+    bool alone = false;
     {
       std::unique_lock lock(mutex_);
-      queued_.wait(lock, stop, [&] { return stopped_ || !queue_.empty(); });
+      queued_.wait(lock, stop, [&] { return stopped_ || HeadMayStart(); });
       if (stopped_ || stop.stop_requested()) return;
       auto next = queue_.begin();
       job = std::move(next->second);
       queue_.erase(next);
+      alone = job->RunsAlone();
+      ++running_;
+      alone_running_ = alone;
     }
     run_(job);
+    {
+      std::lock_guard lock(mutex_);
+      --running_;
+      if (alone) alone_running_ = false;
+    }
+    queued_.notify_all();
   }
 }
 

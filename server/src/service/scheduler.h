@@ -1,6 +1,9 @@
 // Which queued job runs next, and the workers that run them: at most
 // `workers` jobs at once; the highest priority first, first come first
-// served within a priority.
+// served within a priority. A job to run alone (Job::RunsAlone: the server
+// died while it ran beside others) starts only when no other runs, and no
+// other starts while it runs; until it can start, the jobs behind it wait
+// too, so that it is not put off for ever.
 #pragma once
 
 #include <condition_variable>
@@ -47,12 +50,17 @@ class Scheduler {
   using Place = std::pair<int64_t, uint64_t>;
   static Place PlaceOf(uint32_t priority, uint64_t number) { return {-int64_t(priority), number}; }
   void Work(std::stop_token stop);
+  // Whether the job at the head of the queue may start now; under mutex_.
+  bool HeadMayStart() const;
 
   const RunJob run_;
   std::mutex mutex_;
   std::condition_variable_any queued_;
   bool stopped_ = false;
   std::map<Place, std::shared_ptr<Job>> queue_;
+  // Jobs being run, and whether one of them runs alone.
+  uint32_t running_ = 0;
+  bool alone_running_ = false;
   // Last: the workers use the members above.
   std::vector<std::jthread> workers_;
 };

@@ -70,6 +70,21 @@ StateFolder::~StateFolder() {
   if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
+std::string StateFolder::DescribeJobFiles() const {
+  auto count = [](const std::filesystem::path& folder) {
+    size_t files = 0;
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(folder, error))
+      if (entry.path().extension() != ".tmp") ++files;
+    return files;
+  };
+  const size_t results = count(Results()), checkpoints = count(Checkpoints());
+  if (results + checkpoints == 0) return "";
+  auto files = [](size_t n) { return std::to_string(n) + (n == 1 ? " file" : " files"); };
+  return files(results) + " in " + Results().string() + " and " + files(checkpoints) + " in " +
+         Checkpoints().string();
+}
+
 void WriteFileAtomically(const std::filesystem::path& path, std::string_view bytes) {
   const std::filesystem::path temporary = path.string() + ".tmp";
   {

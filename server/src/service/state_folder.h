@@ -26,6 +26,10 @@ class StateFolder {
   std::filesystem::path Results() const { return root_ / "results"; }
   std::filesystem::path Checkpoint(const std::string& job_id) const { return Checkpoints() / (job_id + ".film"); }
   std::filesystem::path Result(const std::string& job_id) const { return Results() / (job_id + ".image"); }
+  // What files of jobs (results and checkpoints, not temporaries) the
+  // folder holds, for a message: "3 files in <results> and 1 in
+  // <checkpoints>"; empty when there are none.
+  std::string DescribeJobFiles() const;
 
  private:
   std::filesystem::path root_;
