@@ -1,6 +1,7 @@
 #include "service/scheduler.h"
 
 #include <algorithm>
+#include <chrono>
 
 namespace yarf {
 
@@ -65,32 +66,31 @@ void Scheduler::Join() {
 }
 
 bool Scheduler::HeadMayStart() const {
-  if (queue_.empty() || alone_running_) return false;
+  if (queue_.empty() || (alone_ && alone_->RunsAlone())) return false;
   return running_ == 0 || !queue_.begin()->second->RunsAlone();
 }
 
 void Scheduler::Work(std::stop_token stop) {
   for (;;) {
     std::shared_ptr<Job> job;
-    // Taken when the run starts: a job that gets on stops being one to run
-    // alone, but the run it is in stays alone.
-    bool alone = false;
     {
       std::unique_lock lock(mutex_);
-      queued_.wait(lock, stop, [&] { return stopped_ || HeadMayStart(); });
+      // A job running alone that gets on tells no one: looked at again
+      // every second.
+      while (!queued_.wait_for(lock, stop, std::chrono::seconds(1), [&] { return stopped_ || HeadMayStart(); }))
+        if (stop.stop_requested()) return;
       if (stopped_ || stop.stop_requested()) return;
       auto next = queue_.begin();
       job = std::move(next->second);
       queue_.erase(next);
-      alone = job->RunsAlone();
       ++running_;
-      alone_running_ = alone;
+      if (job->RunsAlone()) alone_ = job;
     }
     run_(job);
     {
       std::lock_guard lock(mutex_);
       --running_;
-      if (alone) alone_running_ = false;
+      if (alone_ == job) alone_.reset();
     }
     queued_.notify_all();
   }

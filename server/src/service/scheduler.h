@@ -2,8 +2,9 @@
 // `workers` jobs at once; the highest priority first, first come first
 // served within a priority. A job to run alone (Job::RunsAlone: the server
 // died while it ran beside others) starts only when no other runs, and no
-// other starts while it runs; until it can start, the jobs behind it wait
-// too, so that it is not put off for ever.
+// other starts while it runs, until it gets on (a checkpoint clears it);
+// until it can start, the jobs behind it wait too, so that it is not put
+// off for ever.
 #pragma once
 
 #include <condition_variable>
@@ -58,9 +59,9 @@ class Scheduler {
   std::condition_variable_any queued_;
   bool stopped_ = false;
   std::map<Place, std::shared_ptr<Job>> queue_;
-  // Jobs being run, and whether one of them runs alone.
+  // Jobs being run, and the one among them that runs alone, if any.
   uint32_t running_ = 0;
-  bool alone_running_ = false;
+  std::shared_ptr<Job> alone_;
   // Last: the workers use the members above.
   std::vector<std::jthread> workers_;
 };

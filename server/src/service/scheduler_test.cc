@@ -99,6 +99,24 @@ TEST(Scheduler, AJobToRunAloneStartsWhenNoneRunsAndNoneStartsBesideIt) {
   gate.Open();
 }
 
+TEST(Scheduler, AJobRunningAloneThatGetsOnLetsOthersStartBesideIt) {
+  Gate gate;
+  Scheduler scheduler([&](const std::shared_ptr<Job>& job) {
+    if (job->RunsAlone()) {
+      // Its run gets on (here: a stop, which clears it as a checkpoint does).
+      job->Begin();
+      job->EndRun({Job::Outcome::kStopped, ""});
+    }
+    gate.Run(job);
+  });
+  const auto alone = QueuedJob(1, 50, true);
+  scheduler.Enqueue(alone);
+  scheduler.Start(2);
+  scheduler.Enqueue(QueuedJob(2, 50));
+  EXPECT_EQ(gate.Running({1, 2}), (std::set<uint64_t>{1, 2}));
+  gate.Open();
+}
+
 TEST(Scheduler, AJobToRunAloneDoesNotHoldBackTheJobsAheadOfIt) {
   Gate gate;
   Scheduler scheduler([&](const std::shared_ptr<Job>& job) { gate.Run(job); });
