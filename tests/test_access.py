@@ -5,6 +5,8 @@ loopback without TLS and tokens."""
 
 from __future__ import annotations
 
+import itertools
+import os
 import subprocess
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -18,7 +20,7 @@ from conftest import REPO, small_scene
 from yarf import Client, LocalServer
 from yarf.cli import main as yarf_main
 from yarf.server import find_yarfd
-from yarf.v1 import component_pb2, render_pb2, render_pb2_grpc, scene_pb2
+from yarf.v1 import component_pb2, math_pb2, math_pb2_grpc, render_pb2, render_pb2_grpc, scene_pb2
 
 HALTON = f"{REPO / 'components' / 'python' / 'examples' / 'halton.py'}:Halton"
 AMBIENT_OCCLUSION = (
@@ -429,3 +431,59 @@ def test_yarfd_refuses_an_empty_tokens_file(secrets: Secrets, tmp_path: Path) ->
     tokens.write_text("# nobody yet\n")
     message = yarfd_refuses(["--listen", "127.0.0.1:0", *secrets.args(tokens)], tmp_path)
     assert "holds no token" in message
+
+
+# Ownership of what a user makes and uploads.
+
+
+def test_an_instance_is_its_creators_alone(as_user: dict[str, Client]) -> None:
+    alice, bob = as_user["alice"], as_user["bob"]
+    handles = [alice.create("independent").handle for _ in range(3)]
+    # Random, not counted: no user can guess the next handle from their own.
+    assert all(abs(a - b) > 1 for a, b in itertools.pairwise(handles)), handles
+    for handle in handles:
+        with pytest.raises(grpc.RpcError) as described:
+            bob.describe(handle=handle)
+        with pytest.raises(grpc.RpcError) as released:
+            bob.release(handle)
+        assert code_of(described) == code_of(released) == grpc.StatusCode.NOT_FOUND
+        assert alice.describe(handle=handle).class_name == "independent"
+        alice.release(handle)
+
+
+def test_a_submitter_may_not_make_yarfd_dial_an_address(as_user: dict[str, Client]) -> None:
+    alice = as_user["alice"]
+    integrator = alice.create("mean_sample").handle
+    request = math_pb2.IntegrateRequest(
+        handle=integrator, function_handle=1, function_address="127.0.0.1:1", evaluations=16
+    )
+    for call in (
+        lambda: math_pb2_grpc.IntegratorStub(alice.channel).Integrate(request, timeout=30),
+        lambda: math_pb2_grpc.RootFinderStub(alice.channel).FindRoot(
+            math_pb2.FindRootRequest(function_handle=1, function_address="127.0.0.1:1"), timeout=30
+        ),
+    ):
+        with pytest.raises(grpc.RpcError) as error:
+            call()
+        assert code_of(error) == grpc.StatusCode.PERMISSION_DENIED
+        assert "address" in error.value.details()  # type: ignore[attr-defined]
+
+
+def test_an_asset_is_missing_to_users_who_did_not_upload_it(as_user: dict[str, Client]) -> None:
+    alice, bob = as_user["alice"], as_user["bob"]
+    mesh = b"v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n# " + os.urandom(8).hex().encode() + b"\n"
+    digest = alice.upload_asset(mesh)
+    assert alice.missing_assets([digest]) == []
+    assert bob.missing_assets([digest]) == [digest]
+    scene = small_scene()
+    shape = scene.shapes.add(name="alice's mesh", material="grey")
+    shape.mesh.asset = digest
+    shape.mesh.format = "obj"
+    with pytest.raises(grpc.RpcError) as error:
+        bob.submit(scene, spp=1)
+    assert code_of(error) == grpc.StatusCode.INVALID_ARGUMENT
+    assert digest in error.value.details()  # type: ignore[attr-defined]
+    # Sending every byte proves bob has them: then it is his too.
+    assert bob.upload_asset(mesh) == digest
+    assert bob.missing_assets([digest]) == []
+    assert bob.wait(bob.submit(scene, spp=1), timeout=60).state == render_pb2.SUCCEEDED

@@ -1,5 +1,6 @@
 #include "service/asset_service.h"
 
+#include "service/access.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -9,7 +10,7 @@ grpc::Status Invalid(const std::string& message) { return {grpc::StatusCode::INV
 
 }  // namespace
 
-grpc::Status AssetServiceImpl::Missing(grpc::ServerContext*, const v1::MissingAssetsRequest* request,
+grpc::Status AssetServiceImpl::Missing(grpc::ServerContext* context, const v1::MissingAssetsRequest* request,
                                        v1::MissingAssetsReply* reply) {
   if (request->sha256_size() > kMaxHashes)
     return Invalid("at most " + std::to_string(kMaxHashes) + " hashes per call, got " +
@@ -19,7 +20,7 @@ grpc::Status AssetServiceImpl::Missing(grpc::ServerContext*, const v1::MissingAs
       const std::string shown = hash.substr(0, 80);
       return Invalid("'" + shown + "' is not a SHA-256 (64 lowercase hex digits)");
     }
-    if (!store_.Has(hash)) reply->add_sha256(hash);
+    if (!store_.Owns(hash, CallerOf(*context).user)) reply->add_sha256(hash);
   }
   return grpc::Status::OK;
 }
@@ -42,6 +43,8 @@ grpc::Status AssetServiceImpl::Upload(grpc::ServerContext* context, grpc::Server
     // A client that gave up mid-stream ends the stream too: keep nothing.
     if (context->IsCancelled()) return grpc::Status::CANCELLED;
     reply->set_stored(upload.Commit());
+    // The caller sent every byte of it: it is theirs too from now on.
+    store_.AddOwner(reply->sha256(), CallerOf(*context).user);
     return grpc::Status::OK;
   } catch (const Error& e) {
     return Invalid(e.what());

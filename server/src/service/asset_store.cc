@@ -8,8 +8,10 @@
 #include <fstream>
 #include <sstream>
 #include <system_error>
+#include <vector>
 
 #include "service/state_folder.h"
+#include "service/user_files.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -55,6 +57,29 @@ std::string AssetStore::Read(const std::string& sha256) const {
   std::ostringstream bytes;
   bytes << in.rdbuf();
   return std::move(bytes).str();
+}
+
+bool AssetStore::Owns(const std::string& sha256, const std::string& user) const {
+  std::error_code ec;
+  return Has(sha256) && fs::exists(root_ / "owners" / sha256 / UserFolderName(user), ec);
+}
+
+void AssetStore::AddOwner(const std::string& sha256, const std::string& user) const {
+  const fs::path folder = root_ / "owners" / sha256;
+  const bool new_folder = fs::create_directories(folder);
+  const fs::path marker = folder / UserFolderName(user);
+  if (fs::exists(marker)) return;
+  std::ofstream(marker).close();
+  if (!fs::exists(marker)) throw Error("cannot record the owner of asset " + sha256 + " in " + folder.string());
+  // Synced as the asset itself is: an upload reported done stays the user's.
+  for (const fs::path& synced : new_folder ? std::vector{folder, folder.parent_path()} : std::vector{folder})
+    if (const std::error_code error = SyncFolder(synced))
+      throw Error("cannot sync " + synced.string() + ": " + error.message());
+}
+
+std::string UserAssets::Read(const std::string& sha256) const {
+  if (!Has(sha256)) throw Error("asset " + sha256 + " is not on this server; upload it first");
+  return store_.Read(sha256);
 }
 
 void AssetUpload::DigestFree::operator()(evp_md_ctx_st* context) const { EVP_MD_CTX_free(context); }

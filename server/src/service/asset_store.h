@@ -4,6 +4,10 @@
 // and size it announced, and only then appears under its name: a reader
 // never sees part of an asset, and uploads of the same bytes, even at the
 // same time, keep one file.
+//
+// Each asset is held for the users who uploaded it (<root>/owners/<sha256>/
+// has a file per user): to anyone else it is missing, so that Missing
+// cannot tell who uploaded what and no job uses bytes its user never had.
 #pragma once
 
 #include <cstdint>
@@ -30,6 +34,11 @@ class AssetStore final : public AssetSource {
   bool Has(const std::string& sha256) const override;
   std::string Read(const std::string& sha256) const override;
 
+  // Whether `user` uploaded the asset (and it is held).
+  bool Owns(const std::string& sha256, const std::string& user) const;
+  // Records that `user` uploaded the asset, durably.
+  void AddOwner(const std::string& sha256, const std::string& user) const;
+
   const std::filesystem::path& root() const { return root_; }
   // Where the asset named `sha256` (already checked) lives.
   std::filesystem::path PathOf(const std::string& sha256) const;
@@ -37,6 +46,18 @@ class AssetStore final : public AssetSource {
 
  private:
   const std::filesystem::path root_;
+};
+
+// The assets of one user, as the kernel reads them for that user's jobs.
+class UserAssets final : public AssetSource {
+ public:
+  UserAssets(const AssetStore& store, std::string user) : store_(store), user_(std::move(user)) {}
+  bool Has(const std::string& sha256) const override { return store_.Owns(sha256, user_); }
+  std::string Read(const std::string& sha256) const override;
+
+ private:
+  const AssetStore& store_;
+  std::string user_;
 };
 
 // One asset arriving in pieces. Destroyed without a successful Commit, it

@@ -1,5 +1,6 @@
 #include "service/job_components.h"
 
+#include <optional>
 #include <string>
 
 #include "components/make_component.h"
@@ -75,7 +76,11 @@ JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::str
       resources.registry, &resources.remote_classes, RemoteOptionsOf(options, std::move(calls)),
       resources.user_files.empty() ? std::filesystem::path() : UserFileFolder(resources.user_files, owner)};
   JobComponents parts;
-  parts.scene = BuildScene(scene, SceneSources{components, resources.device, resources.asset_root, resources.assets});
+  // A job reads the assets its owner uploaded, and no others.
+  std::optional<UserAssets> assets;
+  if (resources.assets) assets.emplace(*resources.assets, owner);
+  parts.scene = BuildScene(scene, SceneSources{components, resources.device, resources.asset_root,
+                                               assets ? &*assets : nullptr});
   parts.transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
   const v1::ComponentSpec integrator =
       IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources));

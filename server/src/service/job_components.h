@@ -10,6 +10,7 @@
 #include "kernel/embree_device.h"
 #include "kernel/film_target.h"
 #include "kernel/scene_builder.h"
+#include "service/asset_store.h"
 #include "service/job_scenes.h"
 #include "yarf/transport.h"
 #include "yarf/v1/render.pb.h"
@@ -26,7 +27,7 @@ struct JobResources {
   const EmbreeDevice& device;
   std::filesystem::path asset_root;
   JobScenes& scenes;
-  const AssetSource* assets = nullptr;
+  const AssetStore* assets = nullptr;
   // Where each user's folder of component files lies; empty: none.
   std::filesystem::path user_files;
 };

@@ -28,9 +28,11 @@ std::string HexSha256(const std::string& text) {
 
 }  // namespace
 
+std::string UserFolderName(const std::string& user) { return IsPlainName(user) ? user : "~" + HexSha256(user); }
+
 std::filesystem::path UserFileFolder(const std::filesystem::path& root, const std::string& user) {
   namespace fs = std::filesystem;
-  const fs::path folder = root / (IsPlainName(user) ? user : "~" + HexSha256(user));
+  const fs::path folder = root / UserFolderName(user);
   std::error_code error;
   fs::create_directories(folder, error);
   if (!error) fs::permissions(folder, fs::perms::owner_all, fs::perm_options::replace, error);

@@ -7,10 +7,13 @@
 
 namespace yarf {
 
-// The folder of `user` under `root`, made (mode 0700) if missing. A user
-// name that is not a plain name (letters, digits, '_', '-'; at most 64)
-// gets "~" and the hex SHA-256 of the name instead, so that no name can
-// reach outside `root` or into another user's folder.
+// The name that stands for `user` in the file system: the name itself when
+// it is plain (letters, digits, '_', '-'; at most 64), else "~" and the hex
+// SHA-256 of the name, so that no name can reach outside a folder or into
+// another user's.
+std::string UserFolderName(const std::string& user);
+
+// The folder of `user` under `root`, made (mode 0700) if missing.
 std::filesystem::path UserFileFolder(const std::filesystem::path& root, const std::string& user);
 
 }  // namespace yarf
