@@ -8,6 +8,7 @@
 
 #include "kernel/film_target.h"
 #include "service/job_files.h"
+#include "service/request_checks.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -89,7 +90,6 @@ uint32_t Job::Priority() const {
   return row_.priority;
 }
 
-void Job::WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const {
 bool Job::RunsAlone() const {
   std::lock_guard lock(mutex_);
   return row_.run_alone;
@@ -100,6 +100,7 @@ JobFileOwner Job::FileOwner() const {
   return {number_, row_.attempts};
 }
 
+void Job::WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const {
   std::unique_lock lock(mutex_);
   changed_.wait_for(lock, timeout, [&] { return version_ != seen; });
 }
@@ -271,8 +272,9 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
   try {
     const v1::Scene& scene = request_->scene();
     const v1::RenderOptions& options = request_->options();
-    JobComponents parts = MakeJobComponents(*request_, resources, remote_calls_);
+    JobComponents parts = MakeJobComponents(*request_, owner(), resources, remote_calls_);
     const std::shared_ptr<KernelScene> kernel = parts.scene;
+    kernel->StopWhen(halt_);
     const bool resumable = parts.resumable;
     std::optional<FilmCheckpoint> checkpoint =
         resumable ? UsableCheckpoint(scene.film(), options.spp()) : std::nullopt;
@@ -314,7 +316,7 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
     return {outcome(Outcome::kSucceeded), ""};
   } catch (const std::exception& e) {
     // A halt that cut a remote call short is a cancel or a stop, not a failure.
-    return {outcome(Outcome::kFailed), e.what()};
+    return {outcome(Outcome::kFailed), SafeText(e.what(), RequestLimits::kMaxErrorBytes)};
   } catch (...) {
     // A plugin may throw anything; it fails the job, not the server.
     return {outcome(Outcome::kFailed), "a component threw an exception that is not a std::exception"};
@@ -350,9 +352,9 @@ void Job::WriteCheckpoint(uint32_t samples_done) {
       row.samples_done = samples_done;
       // The job gets on: crashes before this one need not be its doing.
       row.crashes = 0;
+      row.run_alone = false;
       return true;
     });
-      row.run_alone = false;
   } catch (const std::exception& e) {
     // The render goes on; only its resumability suffers.
     if (!std::exchange(checkpoint_failed_, true))
@@ -389,11 +391,11 @@ bool Job::StoreEndOfRun(const RunResult& result) {
       if (CommitRetrying([&](JobRecord& row) {
             if (row.failures + 1 > row.max_retries) return false;
             ++row.failures;
-            row.crashes = 0;
-            row.state = v1::QUEUED;
             // The run ended without taking the server down.
-            row.samples_done = 0;
+            row.crashes = 0;
             row.run_alone = false;
+            row.state = v1::QUEUED;
+            row.samples_done = 0;
             row.error = result.error;  // why it runs again
             return true;
           })) {
@@ -437,9 +439,9 @@ void Job::Finish(v1::JobState state, const std::string& error) {
     row.state = state;
     row.error = error;
     row.crashes = 0;
+    row.run_alone = false;
     row.finished_at = Now();
     row.elapsed_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
-    row.run_alone = false;
     row.samples_done = samples_done_;
     row.closest_hit_rays = closest_hit_rays_;
     row.shadow_rays = shadow_rays_;

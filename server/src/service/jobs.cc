@@ -9,6 +9,7 @@
 
 #include "kernel/scene_builder.h"
 #include "service/job_files.h"
+#include "service/request_checks.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -71,6 +72,7 @@ void ValidateShare(const v1::SubmitRequest& request) {
 // The request as the job will run it, its defaults filled in; throws Error
 // for what is refused.
 v1::SubmitRequest Accept(const v1::SubmitRequest& request, const AssetSource* assets) {
+  CheckRequestFields(request);
   v1::SubmitRequest accepted = request;
   uint32_t spp = request.options().spp();
   if (spp == 0) spp = kDefaultSpp;
@@ -139,15 +141,26 @@ void JobManager::EndCancelled(JobRecord& row) const {
   // The image of the last checkpoint, if there is a sound one, as a
   // cancelled run would have left it.
   const std::string id = IdOf(row.number);
+  const JobFileOwner owner{row.number, row.attempts};
   try {
     if (std::optional<FilmCheckpoint> checkpoint = ReadCheckpoint(folder_.Checkpoint(id), owner)) {
-  const JobFileOwner owner{row.number, row.attempts};
       const Film& film = checkpoint->film;
       WriteJobImage(folder_.Result(id), owner, {film.width(), film.height(), film.Pixels(), film.Variances()});
       row.samples_done = checkpoint->samples_done;
     }
   } catch (const Error& e) {
     std::cerr << "yarfd: job " << id << ": cancelled without an image: " << e.what() << "\n";
+  }
+}
+
+void JobManager::AdoptLegacyResult(const JobRecord& row) const {
+  const std::filesystem::path result = folder_.Result(IdOf(row.number));
+  try {
+    if (UpgradeLegacyJobImage(result, {row.number, row.attempts}))
+      std::cerr << "yarfd: job " << IdOf(row.number) << ": result " << result.string()
+                << " of an older yarfd bound to its job" << std::endl;
+  } catch (const Error& e) {
+    std::cerr << "yarfd: job " << IdOf(row.number) << ": " << e.what() << std::endl;
   }
 }
 
@@ -166,17 +179,6 @@ void JobManager::Restore() {
   const bool adopt_legacy_results =
       store_.OpenedVersion() > 0 && store_.OpenedVersion() < kFirstStoreOfBoundFiles;
   for (JobRecord& row : rows) {
-void JobManager::AdoptLegacyResult(const JobRecord& row) const {
-  const std::filesystem::path result = folder_.Result(IdOf(row.number));
-  try {
-    if (UpgradeLegacyJobImage(result, {row.number, row.attempts}))
-      std::cerr << "yarfd: job " << IdOf(row.number) << ": result " << result.string()
-                << " of an older yarfd bound to its job" << std::endl;
-  } catch (const Error& e) {
-    std::cerr << "yarfd: job " << IdOf(row.number) << ": " << e.what() << std::endl;
-  }
-}
-
     std::shared_ptr<v1::SubmitRequest> request;
     bool changed = false;
     if (!Ended(row.state)) {
@@ -211,15 +213,17 @@ void JobManager::AdoptLegacyResult(const JobRecord& row) const {
       changed = true;
     }
     if (changed) store_.Update(row);
+    if (adopt_legacy_results && Ended(row.state)) AdoptLegacyResult(row);
     auto job = MakeJob(std::move(row), std::move(request));
     jobs_[job->number()] = job;
-    if (adopt_legacy_results && Ended(row.state)) AdoptLegacyResult(row);
     if (!job->Finished()) scheduler_.Enqueue(job);
   }
 }
 
 std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
-  auto accepted = std::make_shared<const v1::SubmitRequest>(Accept(request, resources_.assets));
+  std::optional<UserAssets> assets;
+  if (resources_.assets) assets.emplace(*resources_.assets, owner);
+  auto accepted = std::make_shared<const v1::SubmitRequest>(Accept(request, assets ? &*assets : nullptr));
   JobRecord row;
   row.request = accepted->SerializeAsString();
   row.name = accepted->name();
