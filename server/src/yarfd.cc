@@ -17,6 +17,7 @@
 #include "service/instance_services.h"
 #include "service/job_scene_service.h"
 #include "service/render_service.h"
+#include "service/request_checks.h"
 #include "service/server_credentials.h"
 #include "service/server_options.h"
 
@@ -122,7 +123,10 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   try {
-    return Serve(yarf::ParseServerOptions(argc, argv), signals);
+    const yarf::ServerOptions options = yarf::ParseServerOptions(argc, argv);
+    // Touches no state, loads no plugin, listens nowhere.
+    if (options.check_requests) return yarf::ServeRequestChecks(std::cin, std::cout);
+    return Serve(options, signals);
   } catch (const std::exception& e) {
     std::cerr << "yarfd: " << e.what() << "\n";
     return 2;

@@ -8,8 +8,14 @@
 namespace yarf {
 namespace {
 
-// Whether a message names a component process anywhere (a Material's or
-// a ComponentSpec's `address`, an integrand's `function_address`).
+std::string Property(const grpc::AuthContext& context, const char* name) {
+  const auto values = context.FindPropertyValues(name);
+  return values.empty() ? std::string() : std::string(values.front().data(), values.front().size());
+}
+
+}  // namespace
+
+// A Material's or a ComponentSpec's `address`, an integrand's `function_address`.
 bool NamesAddress(const google::protobuf::Message& message) {
   const google::protobuf::Reflection& reflection = *message.GetReflection();
   std::vector<const google::protobuf::FieldDescriptor*> fields;
@@ -29,13 +35,6 @@ bool NamesAddress(const google::protobuf::Message& message) {
   }
   return false;
 }
-
-std::string Property(const grpc::AuthContext& context, const char* name) {
-  const auto values = context.FindPropertyValues(name);
-  return values.empty() ? std::string() : std::string(values.front().data(), values.front().size());
-}
-
-}  // namespace
 
 std::string_view RoleName(Role role) { return role == Role::kAdmin ? "admin" : "submit"; }
 

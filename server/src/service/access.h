@@ -37,9 +37,12 @@ Caller CallerOf(const grpc::ServerContext& context);
 // Whether `caller` may see and act on a job (or an instance) of `owner`.
 bool MayActOn(const Caller& caller, const std::string& owner);
 
-// PERMISSION_DENIED unless `caller` is an admin or `request` names no
-// component process: no field `address` or `*_address` set anywhere in it.
+// Whether `request` sets a field `address` or `*_address` anywhere in it:
 // yarfd would dial that address, as itself, and hand the process data.
+bool NamesAddress(const google::protobuf::Message& request);
+
+// PERMISSION_DENIED unless `caller` is an admin or `request` names no
+// component process (NamesAddress).
 grpc::Status MayNameAddresses(const Caller& caller, const google::protobuf::Message& request);
 
 }  // namespace yarf

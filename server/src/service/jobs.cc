@@ -15,13 +15,6 @@
 namespace yarf {
 namespace {
 
-constexpr uint32_t kDefaultSpp = 16;
-constexpr uint32_t kMaxSpp = 1u << 20;
-constexpr uint32_t kMaxComponentRetries = 100;
-constexpr double kMaxComponentTimeout = 24 * 3600;
-constexpr uint32_t kDefaultPriority = 50;
-constexpr uint32_t kMaxPriority = 100;
-constexpr uint32_t kMaxRetries = 10;
 // A job the server died under this many times in a row, each time while it
 // ran alone, is not run again: it may be what kills the server.
 constexpr uint32_t kMaxCrashes = 3;
@@ -45,57 +38,6 @@ uint64_t NumberOf(const std::string& id) {
     number = number * 10 + uint64_t(id[i] - '0');
   }
   return IdOf(number) == id ? number : 0;
-}
-
-// A share of a job (first_sample, crop) needs an integrator that renders
-// sample passes of its own: mean_sample.
-void ValidateShare(const v1::SubmitRequest& request) {
-  const v1::RenderOptions& options = request.options();
-  if (options.first_sample() == 0 && !options.has_crop()) return;
-  if (options.first_sample() >= options.spp())
-    throw Error("first_sample " + std::to_string(options.first_sample()) + " must be below spp " +
-                std::to_string(options.spp()));
-  if (options.has_crop()) {
-    const v1::PixelWindow& c = options.crop();
-    const v1::Film& film = request.scene().film();
-    if (!(c.x0() < c.x1() && c.y0() < c.y1() && c.x1() <= film.width() && c.y1() <= film.height()))
-      throw Error("crop [" + std::to_string(c.x0()) + ", " + std::to_string(c.x1()) + ") x [" +
-                  std::to_string(c.y0()) + ", " + std::to_string(c.y1()) + ") is not a window of the " +
-                  std::to_string(film.width()) + "x" + std::to_string(film.height()) + " film");
-  }
-  std::string integrator = options.integrator().class_name();
-  if (integrator.empty()) integrator = request.scene().integrator().class_name();
-  if (!integrator.empty() && integrator != "mean_sample")
-    throw Error("first_sample and crop need the mean_sample integrator, not '" + integrator + "'");
-}
-
-// The request as the job will run it, its defaults filled in; throws Error
-// for what is refused.
-v1::SubmitRequest Accept(const v1::SubmitRequest& request, const AssetSource* assets) {
-  CheckRequestFields(request);
-  v1::SubmitRequest accepted = request;
-  uint32_t spp = request.options().spp();
-  if (spp == 0) spp = kDefaultSpp;
-  if (spp > kMaxSpp)
-    throw Error("spp " + std::to_string(spp) + " is out of range (1 to " + std::to_string(kMaxSpp) + ")");
-  accepted.mutable_options()->set_spp(spp);
-  const double timeout = request.options().component_timeout_seconds();
-  if (!(timeout >= 0 && timeout <= kMaxComponentTimeout))
-    throw Error("component_timeout_seconds " + std::to_string(timeout) + " is out of range (0 to " +
-                std::to_string(kMaxComponentTimeout) + ")");
-  if (request.options().component_retries() > kMaxComponentRetries)
-    throw Error("component_retries " + std::to_string(request.options().component_retries()) +
-                " is out of range (0 to " + std::to_string(kMaxComponentRetries) + ")");
-  if (request.priority() > kMaxPriority)
-    throw Error("priority " + std::to_string(request.priority()) + " is out of range (1 to " +
-                std::to_string(kMaxPriority) + "; 0 means " + std::to_string(kDefaultPriority) + ")");
-  if (request.priority() == 0) accepted.set_priority(kDefaultPriority);
-  if (request.max_retries() > kMaxRetries)
-    throw Error("max_retries " + std::to_string(request.max_retries()) + " is out of range (0 to " +
-                std::to_string(kMaxRetries) + ")");
-  ValidateScene(accepted.scene(), assets);
-  ValidateShare(accepted);
-  return accepted;
 }
 
 void RemoveFile(const std::filesystem::path& path) {
@@ -223,7 +165,7 @@ void JobManager::Restore() {
 std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
   std::optional<UserAssets> assets;
   if (resources_.assets) assets.emplace(*resources_.assets, owner);
-  auto accepted = std::make_shared<const v1::SubmitRequest>(Accept(request, assets ? &*assets : nullptr));
+  auto accepted = std::make_shared<const v1::SubmitRequest>(AcceptSubmit(request, assets ? &*assets : nullptr));
   JobRecord row;
   row.request = accepted->SerializeAsString();
   row.name = accepted->name();
@@ -264,8 +206,8 @@ void JobManager::Cancel(Job& job) {
 }
 
 bool JobManager::SetPriority(Job& job, uint32_t priority) {
-  if (priority < 1 || priority > kMaxPriority)
-    throw Error("priority " + std::to_string(priority) + " is out of range (1 to " + std::to_string(kMaxPriority) +
+  if (priority < 1 || priority > SubmitLimits::kMaxPriority)
+    throw Error("priority " + std::to_string(priority) + " is out of range (1 to " + std::to_string(SubmitLimits::kMaxPriority) +
                 ")");
   if (job.Finished()) return false;
   scheduler_.SetPriority(job, priority);

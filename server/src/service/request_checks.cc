@@ -3,10 +3,15 @@
 #include <google/protobuf/descriptor.h>
 
 #include <algorithm>
+#include <bit>
+#include <istream>
+#include <ostream>
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
+#include "kernel/scene_builder.h"
+#include "service/access.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -113,7 +118,87 @@ void CheckFields(const Message& message, const std::string& path) {
   }
 }
 
+// A share of a job (first_sample, crop) needs an integrator that renders
+// sample passes of its own: mean_sample.
+void ValidateShare(const v1::SubmitRequest& request) {
+  const v1::RenderOptions& options = request.options();
+  if (options.first_sample() == 0 && !options.has_crop()) return;
+  if (options.first_sample() >= options.spp())
+    throw Error("first_sample " + std::to_string(options.first_sample()) + " must be below spp " +
+                std::to_string(options.spp()));
+  if (options.has_crop()) {
+    const v1::PixelWindow& c = options.crop();
+    const v1::Film& film = request.scene().film();
+    if (!(c.x0() < c.x1() && c.y0() < c.y1() && c.x1() <= film.width() && c.y1() <= film.height()))
+      throw Error("crop [" + std::to_string(c.x0()) + ", " + std::to_string(c.x1()) + ") x [" +
+                  std::to_string(c.y0()) + ", " + std::to_string(c.y1()) + ") is not a window of the " +
+                  std::to_string(film.width()) + "x" + std::to_string(film.height()) + " film");
+  }
+  std::string integrator = options.integrator().class_name();
+  if (integrator.empty()) integrator = request.scene().integrator().class_name();
+  if (!integrator.empty() && integrator != "mean_sample")
+    throw Error("first_sample and crop need the mean_sample integrator, not '" + integrator + "'");
+}
+
 }  // namespace
+
+v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSource* assets) {
+  CheckRequestFields(request);
+  v1::SubmitRequest accepted = request;
+  uint32_t spp = request.options().spp();
+  if (spp == 0) spp = SubmitLimits::kDefaultSpp;
+  if (spp > SubmitLimits::kMaxSpp)
+    throw Error("spp " + std::to_string(spp) + " is out of range (1 to " + std::to_string(SubmitLimits::kMaxSpp) + ")");
+  accepted.mutable_options()->set_spp(spp);
+  const double timeout = request.options().component_timeout_seconds();
+  if (!(timeout >= 0 && timeout <= SubmitLimits::kMaxComponentTimeout))
+    throw Error("component_timeout_seconds " + std::to_string(timeout) + " is out of range (0 to " +
+                std::to_string(SubmitLimits::kMaxComponentTimeout) + ")");
+  if (request.options().component_retries() > SubmitLimits::kMaxComponentRetries)
+    throw Error("component_retries " + std::to_string(request.options().component_retries()) +
+                " is out of range (0 to " + std::to_string(SubmitLimits::kMaxComponentRetries) + ")");
+  if (request.priority() > SubmitLimits::kMaxPriority)
+    throw Error("priority " + std::to_string(request.priority()) + " is out of range (1 to " +
+                std::to_string(SubmitLimits::kMaxPriority) + "; 0 means " + std::to_string(SubmitLimits::kDefaultPriority) + ")");
+  if (request.priority() == 0) accepted.set_priority(SubmitLimits::kDefaultPriority);
+  if (request.max_retries() > SubmitLimits::kMaxRetries)
+    throw Error("max_retries " + std::to_string(request.max_retries()) + " is out of range (0 to " +
+                std::to_string(SubmitLimits::kMaxRetries) + ")");
+  ValidateScene(accepted.scene(), assets);
+  ValidateShare(accepted);
+  return accepted;
+}
+
+
+int ServeRequestChecks(std::istream& in, std::ostream& out) {
+  static_assert(std::endian::native == std::endian::little, "lengths are little-endian");
+  for (;;) {
+    uint32_t length = 0;
+    if (!in.read(reinterpret_cast<char*>(&length), sizeof length)) return in.eof() && in.gcount() == 0 ? 0 : 1;
+    v1::SubmitCheck check;
+    if (length > RequestLimits::kMaxSubmitBytes) {
+      in.ignore(length);
+      check.set_error("the request takes " + std::to_string(length) + " bytes, more than the " +
+                      std::to_string(RequestLimits::kMaxSubmitBytes) + " (64 MiB) a job may");
+    } else {
+      std::string bytes(length, '\0');
+      if (!in.read(bytes.data(), length)) return 1;
+      v1::SubmitRequest request;
+      try {
+        if (!request.ParseFromString(bytes)) throw Error("the request is not a SubmitRequest");
+        check.set_names_address(NamesAddress(request));
+        *check.mutable_accepted() = AcceptSubmit(request, nullptr);
+      } catch (const Error& e) {
+        check.set_error(SafeText(e.what(), RequestLimits::kMaxErrorBytes));
+      }
+    }
+    const std::string reply = check.SerializeAsString();
+    const uint32_t reply_length = uint32_t(reply.size());
+    out.write(reinterpret_cast<const char*>(&reply_length), sizeof reply_length);
+    out.write(reply.data(), std::streamsize(reply.size()));
+    if (!out.flush()) return 1;
+  }
+}
 
 void CheckRequestFields(const Message& message) {
   const size_t bytes = message.ByteSizeLong();

@@ -1,17 +1,32 @@
-// The checks every field of a request gets before the request is looked
-// at as a scene: numbers finite and of sane magnitude, text valid UTF-8 of
-// bounded length, the whole message of bounded size. One rule for every
+// The checks a Submit gets before its job is stored, in one place for
+// yarfd and for the farm's coordinator (which asks `yarfd --check-requests`):
+// first every field (numbers finite and of sane magnitude, text valid UTF-8
+// of bounded length, the whole message of bounded size; one rule for every
 // field, walked by reflection, so a field added to the IDL is covered
-// without a line here.
+// without a line here), then the options and the scene.
 #pragma once
 
 #include <google/protobuf/message.h>
 
 #include <cstddef>
+#include <iosfwd>
 #include <string>
 #include <string_view>
 
+#include "kernel/scene_builder.h"
+#include "yarf/v1/render.pb.h"
+
 namespace yarf {
+
+struct SubmitLimits {
+  static constexpr uint32_t kDefaultSpp = 16;
+  static constexpr uint32_t kMaxSpp = 1u << 20;
+  static constexpr uint32_t kMaxComponentRetries = 100;
+  static constexpr double kMaxComponentTimeout = 24 * 3600;
+  static constexpr uint32_t kDefaultPriority = 50;
+  static constexpr uint32_t kMaxPriority = 100;
+  static constexpr uint32_t kMaxRetries = 10;
+};
 
 struct RequestLimits {
   // Largest |x| of any float or double: positions, radii, intensities.
@@ -26,6 +41,16 @@ struct RequestLimits {
   // Longest error kept and shown for a job.
   static constexpr size_t kMaxErrorBytes = 64 << 10;
 };
+
+// The request as its job will run, its defaults filled in; throws Error
+// for what is refused. With `assets`, every mesh asset the scene names
+// must be one of them.
+v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSource* assets);
+
+// `yarfd --check-requests`: answers each length-prefixed SubmitRequest
+// read from `in` with a length-prefixed SubmitCheck on `out`, until `in`
+// ends; returns the process's exit status.
+int ServeRequestChecks(std::istream& in, std::ostream& out);
 
 // Throws Error naming the field path (e.g. "scene.camera.origin.x") of the
 // first number or text that breaks the limits above.

@@ -25,7 +25,8 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
       "             [--max-finished-jobs N]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
-      "             [--allow-root]";
+      "             [--allow-root]\n"
+      "       yarfd --check-requests   (SubmitRequests on stdin, SubmitChecks on stdout)";
   ServerOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
@@ -36,6 +37,10 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     }
     if (flag == "--allow-root") {
       options.allow_root = true;
+      continue;
+    }
+    if (flag == "--check-requests") {
+      options.check_requests = true;
       continue;
     }
     if (i + 1 >= argc) throw Error("missing value for " + flag + "\n" + kUsage);

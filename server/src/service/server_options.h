@@ -40,6 +40,9 @@ struct ServerOptions {
   bool allow_load_plugin = false;
   // yarfd refuses to run as root unless --allow-root (or YARF_ALLOW_ROOT=1).
   bool allow_root = false;
+  // --check-requests: serve no port, only answer SubmitRequests on stdin
+  // with the checks Submit makes (ServeRequestChecks).
+  bool check_requests = false;
 };
 
 // Throws Error with usage for an unknown or incomplete flag.

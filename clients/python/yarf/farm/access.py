@@ -13,8 +13,6 @@ from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 
-from google.protobuf.message import Message
-
 
 class AccessError(Exception):
     """A tokens file, certificate or listen address the coordinator cannot start with."""
@@ -68,21 +66,3 @@ def read_token_file(path: Path) -> TokenTable:
 def may_act_on(caller: Caller, owner: str) -> bool:
     """Whether ``caller`` may see and act on a job submitted by ``owner``."""
     return caller.role is Role.ADMIN or caller.user == owner
-
-
-def names_address(message: Message) -> bool:
-    """Whether a request names a component process anywhere (a Material's or a
-    ComponentSpec's ``address``): only admins may, as on yarfd, since the
-    render nodes would dial it and hand it the job's scene."""
-    for field, value in message.ListFields():
-        if field.name == "address" and isinstance(value, str) and value:
-            return True
-        if field.message_type is None:
-            continue
-        if field.message_type.GetOptions().map_entry:
-            values = list(value.values())
-        else:
-            values = value if field.is_repeated else [value]
-        if any(isinstance(item, Message) and names_address(item) for item in values):
-            return True
-    return False

@@ -29,14 +29,13 @@ from yarf.farm import streams
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
 from yarf.farm.store import JobRecord, JobStore
-from yarf.farm.tasks import DEFAULT_SPP, SplitPolicy, Task, split, task_options
-from yarf.farm.validation import check_submit
+from yarf.farm.tasks import SplitPolicy, Task, split, task_options
+from yarf.farm.validation import SubmitChecker
 from yarf.v1 import render_pb2
 
 log = logging.getLogger("yarf.farm.coordinator")
 
 FINAL_STATES = frozenset({render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CANCELLED})
-DEFAULT_PRIORITY = 50
 # Merged images of finished jobs kept in memory (the others are rebuilt
 # from the job table when asked for).
 FINISHED_IMAGES_KEPT = 16
@@ -104,8 +103,10 @@ class Coordinator:
         buckets: streams.Buckets,
         policy: SplitPolicy,
         retention: Retention | None = None,
+        checker: SubmitChecker | None = None,
     ) -> None:
         self._nc = nc
+        self._checker = checker or SubmitChecker()
         self._js: JetStreamContext = nc.jetstream()
         self._store = store
         self._buckets = buckets
@@ -190,18 +191,16 @@ class Coordinator:
         for task in self._background:
             with contextlib.suppress(asyncio.CancelledError):
                 await task
+        self._checker.close()
 
     # RenderService.
 
-    async def submit(self, request: render_pb2.SubmitRequest, owner: str) -> str:
-        check_submit(request)
-        options = render_pb2.RenderOptions()
-        options.CopyFrom(request.options)
-        options.spp = options.spp or DEFAULT_SPP
-        normalized = render_pb2.SubmitRequest()
-        normalized.CopyFrom(request)
-        normalized.options.CopyFrom(options)
-        tasks = split(normalized, self._policy)
+    async def submit(self, request: render_pb2.SubmitRequest, owner: str, *, admin: bool) -> str:
+        """Stores and queues a job of ``owner``; raises InvalidRequest or AddressNotAllowed."""
+        # yarfd's checks, which also fill in its defaults (spp, priority).
+        accepted = await asyncio.to_thread(self._checker.check, request, admin=admin)
+        options = accepted.options
+        tasks = split(accepted, self._policy)
         scene_bytes = request.scene.SerializeToString(deterministic=True)
         scene_hash = hashlib.sha256(scene_bytes).hexdigest()
         await self._store_scene(scene_hash, scene_bytes)
@@ -210,9 +209,9 @@ class Coordinator:
         record = JobRecord(
             seq=seq,
             id=f"job-{seq:06d}",
-            name=request.name,
+            name=accepted.name,
             owner=owner,
-            priority=request.priority or DEFAULT_PRIORITY,
+            priority=accepted.priority,
             generation=0,
             state=render_pb2.QUEUED,
             error="",
@@ -221,7 +220,7 @@ class Coordinator:
             finished_at=None,
             attempts=0,
             failures=0,
-            max_retries=request.max_retries,
+            max_retries=accepted.max_retries,
             scene_hash=scene_hash,
             options=options.SerializeToString(),
             width=request.scene.film.width,

@@ -8,12 +8,12 @@ from collections.abc import AsyncIterator
 import grpc
 
 from yarf.client import MAX_MESSAGE_BYTES, numpy_to_array
-from yarf.farm.access import Caller, Role, may_act_on, names_address
+from yarf.farm.access import Caller, Role, may_act_on
 from yarf.farm.auth import TokenCheck, TokenInterceptor, Unauthenticated
 from yarf.farm.coordinator import FINAL_STATES, Coordinator, Job, UnknownJob
 from yarf.farm.images import encode_exr, encode_png
 from yarf.farm.listen import ListenSecurity
-from yarf.farm.validation import InvalidRequest
+from yarf.farm.validation import AddressNotAllowed, InvalidRequest
 from yarf.v1 import render_pb2, render_pb2_grpc
 
 # A serialized grpc.health.v1.HealthCheckResponse{status: SERVING}: the
@@ -56,14 +56,13 @@ class FarmRenderService(render_pb2_grpc.RenderServiceServicer):
         self, request: render_pb2.SubmitRequest, context: grpc.aio.ServicerContext
     ) -> render_pb2.SubmitReply:
         caller = await self._caller(context)
-        if caller.role is not Role.ADMIN and names_address(request):
-            await context.abort(
-                grpc.StatusCode.PERMISSION_DENIED,
-                "naming a component process by address needs the admin role; "
-                "use a class an admin registered",
-            )
         try:
-            job_id = await self._coordinator.submit(request, caller.user)
+            job_id = await self._coordinator.submit(
+                request, caller.user, admin=caller.role is Role.ADMIN
+            )
+        except AddressNotAllowed as error:
+            await context.abort(grpc.StatusCode.PERMISSION_DENIED, str(error))
+            raise
         except InvalidRequest as error:
             await context.abort(grpc.StatusCode.INVALID_ARGUMENT, str(error))
             raise

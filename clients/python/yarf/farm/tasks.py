@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 from yarf.v1 import render_pb2, scene_pb2
 
-DEFAULT_SPP = 16
 # Transports that start paths at the lights splat onto any pixel of the
 # film: a crop window would miss their contributions from other tiles.
 SPLATTING_TRANSPORTS = frozenset({"light_tracer", "bdpt"})
