@@ -12,7 +12,7 @@ import math
 import os
 import subprocess
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import grpc
@@ -294,3 +294,103 @@ def test_the_camera_frame_must_not_be_degenerate(client: Client) -> None:
     scene.camera.up.CopyFrom(vec3(0, 0, -1))  # along the view direction
     error = refusal(client, submit_request(scene))
     assert "up is parallel" in error.details(), error.details()
+
+
+def threads_of(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("Threads:"):
+            return int(line.split()[1])
+    raise AssertionError(f"no thread count for process {pid}")
+
+
+@pytest.fixture(scope="module")
+def limited() -> Iterator[LocalServer]:
+    """A yarfd whose per-user limits are small enough to reach in a test."""
+    args = ["--max-queued-jobs-per-user", "2", "--max-instances-per-user", "3"]
+    args += ["--max-running-jobs", "1"]
+    with LocalServer(extra_args=args) as local:
+        yield local
+        assert local.is_running(), local.log[-4000:]
+
+
+def test_a_user_may_queue_only_so_many_jobs(
+    limited: LocalServer, cornell_box: scene_pb2.Scene
+) -> None:
+    with limited.client() as client:
+        first = client.submit(cornell_box, spp=1 << 20, name="long one")
+        second = client.submit(cornell_box, spp=1 << 20, name="long two")
+        with pytest.raises(grpc.RpcError) as caught:
+            client.submit(small_scene(), spp=1, name="one too many")
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+        assert "--max-queued-jobs-per-user" in caught.value.details()
+        client.cancel(first)
+        client.wait(first, timeout=30)
+        third = client.submit(small_scene(), spp=1, name="room again")
+        client.cancel(second)
+        assert client.wait(third, timeout=60).state == render_pb2.SUCCEEDED
+
+
+def test_a_user_may_hold_only_so_many_instances(limited: LocalServer) -> None:
+    with limited.client() as client:
+        handles = [client.create("independent").handle for _ in range(3)]
+        with pytest.raises(grpc.RpcError) as caught:
+            client.create("independent")
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+        client.release(handles.pop())
+        handles.append(client.create("independent").handle)
+        for handle in handles:
+            client.release(handle)
+
+
+def test_a_thousand_open_watches_do_not_cost_a_thousand_threads(limited: LocalServer) -> None:
+    with limited.client() as client:
+        job = client.submit(small_scene(), spp=1, name="watched by many")
+        client.wait(job, timeout=60)
+        long_job = client.submit(small_scene(64), spp=1 << 20, name="watched while it runs")
+        before = threads_of(limited.pid)
+        streams = [
+            client.render_service.Watch(render_pb2.WatchRequest(job_id=long_job), timeout=120)
+            for _ in range(1000)
+        ]
+        first = [next(stream) for stream in streams]  # every stream is open and answered
+        assert all(status.job_id == long_job for status in first)
+        during = threads_of(limited.pid)
+        assert during - before < 50, (
+            f"{before} threads before 1000 Watch streams, {during} with them"
+        )
+        for stream in streams:
+            stream.cancel()
+        client.cancel(long_job)
+
+
+def test_a_user_may_open_only_so_many_watches() -> None:
+    with (
+        LocalServer(extra_args=["--max-watches-per-user", "20"]) as local,
+        local.client() as client,
+    ):
+        job = client.submit(small_scene(64), spp=1 << 20, name="watched too often")
+        streams = [
+            client.render_service.Watch(render_pb2.WatchRequest(job_id=job), timeout=60)
+            for _ in range(20)
+        ]
+        for stream in streams:
+            next(stream)
+        with pytest.raises(grpc.RpcError) as caught:
+            next(client.render_service.Watch(render_pb2.WatchRequest(job_id=job), timeout=60))
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+        assert "--max-watches-per-user" in caught.value.details()
+        streams.pop().cancel()
+        deadline = time.monotonic() + 10
+        while True:  # the cancelled stream's place comes free once the server has seen it end
+            try:
+                next(client.render_service.Watch(render_pb2.WatchRequest(job_id=job), timeout=60))
+                break
+            except grpc.RpcError as error:
+                assert (
+                    error.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+                    and time.monotonic() < deadline
+                )
+                time.sleep(0.05)
+        for stream in streams:
+            stream.cancel()
+        client.cancel(job)

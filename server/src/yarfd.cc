@@ -50,7 +50,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
     }
   }
 
-  yarf::InstanceTable instances;
+  yarf::InstanceTable instances(uint64_t(options.max_instances_per_user));
   yarf::JobScenes job_scenes(instances);
   // Locked before anything touches the folder: a second yarfd on it stops here.
   yarf::StateFolder state_folder(options.state_dir);
@@ -60,10 +60,11 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
                         {.max_running_jobs = uint32_t(options.max_running_jobs),
                          .checkpoint_seconds = options.checkpoint_seconds,
                          .keep_finished_hours = options.keep_finished_hours,
-                         .max_finished_jobs = uint64_t(options.max_finished_jobs)},
+                         .max_finished_jobs = uint64_t(options.max_finished_jobs),
+                         .max_queued_jobs_per_user = uint64_t(options.max_queued_jobs_per_user)},
                         state_folder);
   yarf::AssetServiceImpl asset_service(assets);
-  yarf::RenderServiceImpl render(jobs);
+  yarf::RenderServiceImpl render(jobs, uint32_t(options.max_watches_per_user));
   yarf::RegistryServiceImpl registry_service(registry, remote_classes,
                                              {options.allow_load_plugin, options.plugin_paths});
   yarf::ComponentServiceImpl component(registry, remote_classes, instances);

@@ -38,7 +38,7 @@ bool NamesAddress(const google::protobuf::Message& message) {
 
 std::string_view RoleName(Role role) { return role == Role::kAdmin ? "admin" : "submit"; }
 
-Caller CallerOf(const grpc::ServerContext& context) {
+Caller CallerOf(const grpc::ServerContextBase& context) {
   const auto auth = context.auth_context();
   const std::string user = auth ? Property(*auth, kUserProperty) : std::string();
   if (user.empty()) return {"local", Role::kAdmin};

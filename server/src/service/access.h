@@ -32,7 +32,7 @@ std::string_view RoleName(Role role);
 
 // The caller of this call: from the properties the token check put in the
 // call's auth context, else the local admin.
-Caller CallerOf(const grpc::ServerContext& context);
+Caller CallerOf(const grpc::ServerContextBase& context);
 
 // Whether `caller` may see and act on a job (or an instance) of `owner`.
 bool MayActOn(const Caller& caller, const std::string& owner);

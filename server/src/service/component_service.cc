@@ -13,23 +13,32 @@ uint64_t RandomHandle() {
 
 uint64_t InstanceTable::Add(std::unique_ptr<Component> instance, const std::string& owner) {
   std::lock_guard lock(mutex_);
+  if (!owner.empty() && per_owner_[owner] >= max_per_user_)
+    throw InstanceLimit(owner + " holds " + std::to_string(per_owner_[owner]) +
+                        " instances, the most one user may (yarfd --max-instances-per-user); release some first");
   uint64_t handle = RandomHandle();
   while (instances_.contains(handle)) handle = RandomHandle();
   instances_[handle] = {std::move(instance), owner};
+  if (!owner.empty()) ++per_owner_[owner];
   return handle;
+}
+
+void InstanceTable::Erase(std::map<uint64_t, Entry>::iterator it) {
+  if (const std::string& owner = it->second.owner; !owner.empty() && --per_owner_[owner] == 0) per_owner_.erase(owner);
+  instances_.erase(it);
 }
 
 bool InstanceTable::Release(uint64_t handle, const Caller& caller) {
   std::lock_guard lock(mutex_);
   auto it = instances_.find(handle);
   if (it == instances_.end() || !MayActOn(caller, it->second.owner)) return false;
-  instances_.erase(it);
+  Erase(it);
   return true;
 }
 
 void InstanceTable::Release(uint64_t handle) {
   std::lock_guard lock(mutex_);
-  instances_.erase(handle);
+  if (auto it = instances_.find(handle); it != instances_.end()) Erase(it);
 }
 
 std::shared_ptr<Component> InstanceTable::Find(uint64_t handle, const Caller& caller) const {
@@ -133,6 +142,8 @@ grpc::Status FactoryServiceImpl::Create(grpc::ServerContext* context, const v1::
     *reply->mutable_info() = ToProto(instance->Describe());
     reply->set_handle(instances_.Add(std::move(instance), CallerOf(*context).user));
     return grpc::Status::OK;
+  } catch (const InstanceLimit& e) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
   } catch (const Error& e) {
     const bool unknown = !registry_.Has(request->class_name());
     return {unknown ? grpc::StatusCode::NOT_FOUND : grpc::StatusCode::INVALID_ARGUMENT, e.what()};

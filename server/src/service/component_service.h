@@ -24,7 +24,10 @@ uint64_t RandomHandle();
 // not exist (admins reach every instance).
 class InstanceTable {
  public:
-  // `owner` empty: the server's own (a running job's materials), for admins only.
+  // A user holds at most `max_per_user` instances (the server's own are not counted).
+  explicit InstanceTable(uint64_t max_per_user = 1000) : max_per_user_(max_per_user) {}
+  // `owner` empty: the server's own (a running job's materials), for admins
+  // only. Throws InstanceLimit when the owner holds the most they may.
   uint64_t Add(std::unique_ptr<Component> instance, const std::string& owner = "");
   bool Release(uint64_t handle, const Caller& caller);
   // nullptr when unknown or not the caller's; the instance lives while the
@@ -38,8 +41,18 @@ class InstanceTable {
     std::shared_ptr<Component> instance;
     std::string owner;
   };
+  void Erase(std::map<uint64_t, Entry>::iterator it);
+
+  const uint64_t max_per_user_;
   mutable std::mutex mutex_;
   std::map<uint64_t, Entry> instances_;
+  std::map<std::string, uint64_t> per_owner_;
+};
+
+// A user's instances fill their share of the table.
+class InstanceLimit : public Error {
+ public:
+  using Error::Error;
 };
 
 // Which plugins Registry.LoadPlugin may load: none unless `allowed`, and

@@ -163,6 +163,15 @@ void JobManager::Restore() {
 }
 
 std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
+  {
+    std::lock_guard lock(mutex_);
+    const auto pending = std::count_if(jobs_.begin(), jobs_.end(), [&](const auto& entry) {
+      return entry.second->owner() == owner && !entry.second->Finished();
+    });
+    if (uint64_t(pending) >= options_.max_queued_jobs_per_user)
+      throw QueueLimit(owner + " has " + std::to_string(pending) +
+                       " jobs queued or running, the most one user may (yarfd --max-queued-jobs-per-user)");
+  }
   std::optional<UserAssets> assets;
   if (resources_.assets) assets.emplace(*resources_.assets, owner);
   auto accepted = std::make_shared<const v1::SubmitRequest>(AcceptSubmit(request, assets ? &*assets : nullptr));

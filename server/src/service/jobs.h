@@ -28,6 +28,14 @@ struct JobQueueOptions {
   double keep_finished_hours = 168;
   // ...and beyond this many, the oldest first.
   uint64_t max_finished_jobs = 1000;
+  // Jobs not ended one user may have.
+  uint64_t max_queued_jobs_per_user = 1000;
+};
+
+// A user has as many jobs queued or running as they may.
+class QueueLimit : public Error {
+ public:
+  using Error::Error;
 };
 
 class JobManager {

@@ -6,6 +6,7 @@
 #include "components/array_codec.h"
 #include "kernel/image_io.h"
 #include "service/access.h"
+#include "service/request_checks.h"
 #include "service/server_options.h"
 #include "yarf/error.h"
 
@@ -27,7 +28,7 @@ grpc::Status RawFits(const std::string& job_id, uint32_t width, uint32_t height)
 
 }  // namespace
 
-grpc::Status RenderServiceImpl::Reach(const grpc::ServerContext& context, const std::string& id,
+grpc::Status RenderServiceImpl::Reach(const grpc::ServerContextBase& context, const std::string& id,
                                       std::shared_ptr<Job>& job) const {
   job = jobs_.Find(id);
   if (!job) return {grpc::StatusCode::NOT_FOUND, "no job '" + id + "'"};
@@ -44,29 +45,22 @@ grpc::Status RenderServiceImpl::Submit(grpc::ServerContext* context, const v1::S
   try {
     reply->set_job_id(jobs_.Submit(*request, caller.user));
     return grpc::Status::OK;
+  } catch (const QueueLimit& e) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
   } catch (const Error& e) {
-    return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};
+    // Errors may quote the request: cut and mended as every error shown.
+    return {grpc::StatusCode::INVALID_ARGUMENT, SafeText(e.what(), RequestLimits::kMaxErrorBytes)};
   } catch (const StorageError& e) {
     return {grpc::StatusCode::INTERNAL, std::string("the job could not be stored: ") + e.what()};
   }
 }
 
-grpc::Status RenderServiceImpl::Watch(grpc::ServerContext* context, const v1::WatchRequest* request,
-                                      grpc::ServerWriter<v1::JobStatus>* writer) {
+grpc::ServerWriteReactor<v1::JobStatus>* RenderServiceImpl::Watch(grpc::CallbackServerContext* context,
+                                                                  const v1::WatchRequest* request) {
   std::shared_ptr<Job> job;
-  if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok()) return reached;
-  uint64_t seen = job->Version();
-  for (;;) {
-    const v1::JobStatus status = job->Status();
-    if (!writer->Write(status)) return grpc::Status::OK;  // the client left
-    if (Ended(status.state())) return grpc::Status::OK;
-    // Short waits so a client that left is noticed promptly.
-    while (job->Version() == seen) {
-      if (context->IsCancelled()) return grpc::Status::CANCELLED;
-      job->WaitForChange(seen, std::chrono::milliseconds(200));
-    }
-    seen = job->Version();
-  }
+  if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok())
+    return JobWatches::Refuse(reached);
+  return watches_.Watch(std::move(job), CallerOf(*context).user);
 }
 
 grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1::GetResultRequest* request,

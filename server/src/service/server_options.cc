@@ -23,7 +23,8 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "usage: yarfd [--listen HOST:PORT|unix:PATH] [--port-file FILE] [--plugin-path DIR]...\n"
       "             [--asset-root DIR] [--state-dir DIR] [--threads N] [--component ADDRESS]...\n"
       "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
-      "             [--max-finished-jobs N]\n"
+      "             [--max-finished-jobs N] [--max-queued-jobs-per-user N]\n"
+      "             [--max-instances-per-user N] [--max-watches-per-user N]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
       "             [--allow-root]\n"
       "       yarfd --check-requests   (SubmitRequests on stdin, SubmitChecks on stdout)";
@@ -54,6 +55,9 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--checkpoint-seconds") options.checkpoint_seconds = std::atof(value.c_str());
     else if (flag == "--keep-finished-hours") options.keep_finished_hours = std::atof(value.c_str());
     else if (flag == "--max-finished-jobs") options.max_finished_jobs = std::atoll(value.c_str());
+    else if (flag == "--max-queued-jobs-per-user") options.max_queued_jobs_per_user = std::atoll(value.c_str());
+    else if (flag == "--max-instances-per-user") options.max_instances_per_user = std::atoll(value.c_str());
+    else if (flag == "--max-watches-per-user") options.max_watches_per_user = std::atoll(value.c_str());
     else if (flag == "--threads") options.threads = std::atoi(value.c_str());
     else if (flag == "--component") options.components.push_back(value);
     else if (flag == "--tls-cert") options.tls_cert = value;
@@ -73,6 +77,10 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
   if (!(options.checkpoint_seconds >= 0)) throw Error("--checkpoint-seconds must be 0 or more");
   if (!(options.keep_finished_hours >= 0)) throw Error("--keep-finished-hours must be 0 or more");
   if (options.max_finished_jobs < 0) throw Error("--max-finished-jobs must be 0 or more");
+  for (const auto& [flag, value] : {std::pair{"--max-queued-jobs-per-user", options.max_queued_jobs_per_user},
+                                    std::pair{"--max-instances-per-user", options.max_instances_per_user},
+                                    std::pair{"--max-watches-per-user", options.max_watches_per_user}})
+    if (value < 1 || value > (1ll << 30)) throw Error(std::string(flag) + " must lie in [1, 2^30]");
   return options;
 }
 

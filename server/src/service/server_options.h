@@ -34,6 +34,11 @@ struct ServerOptions {
   std::filesystem::path tls_cert;
   std::filesystem::path tls_key;
   std::filesystem::path tokens_file;
+  // What one user may hold at once: jobs not ended, Factory instances and
+  // open Watch streams.
+  long long max_queued_jobs_per_user = 1000;
+  long long max_instances_per_user = 1000;
+  long long max_watches_per_user = 1000;
   // Registry.LoadPlugin: off unless asked for, and then only for files
   // directly inside a --plugin-path folder (loading runs the library's
   // code as yarfd's user).
