@@ -1,6 +1,7 @@
 #include "service/request_checks.h"
 
 #include <google/protobuf/descriptor.h>
+#include <google/protobuf/stubs/logging.h>
 
 #include <algorithm>
 #include <bit>
@@ -172,6 +173,9 @@ v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSour
 
 int ServeRequestChecks(std::istream& in, std::ostream& out) {
   static_assert(std::endian::native == std::endian::little, "lengths are little-endian");
+  // A request that does not parse is answered in its SubmitCheck; the
+  // library's log line about it would only be noise on stderr.
+  google::protobuf::SetLogHandler(nullptr);
   for (;;) {
     uint32_t length = 0;
     if (!in.read(reinterpret_cast<char*>(&length), sizeof length)) return in.eof() && in.gcount() == 0 ? 0 : 1;

@@ -43,7 +43,10 @@ class SubmitChecker:
 
     def check(self, request: render_pb2.SubmitRequest, *, admin: bool) -> render_pb2.SubmitRequest:
         """The request as its job would run; raises InvalidRequest or AddressNotAllowed."""
-        wire = request.SerializeToString()
+        return self.check_wire(request.SerializeToString(), admin=admin)
+
+    def check_wire(self, wire: bytes, *, admin: bool = True) -> render_pb2.SubmitRequest:
+        """``check`` of a request's wire bytes, as a client may send any bytes."""
         with self._lock:
             try:
                 reply = self._ask(wire)
