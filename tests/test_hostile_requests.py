@@ -307,7 +307,7 @@ def threads_of(pid: int) -> int:
 def limited() -> Iterator[LocalServer]:
     """A yarfd whose per-user limits are small enough to reach in a test."""
     args = ["--max-queued-jobs-per-user", "2", "--max-instances-per-user", "3"]
-    args += ["--max-running-jobs", "1"]
+    args += ["--max-running-jobs", "1", "--max-job-memory", "64M"]
     with LocalServer(extra_args=args) as local:
         yield local
         assert local.is_running(), local.log[-4000:]
@@ -328,6 +328,20 @@ def test_a_user_may_queue_only_so_many_jobs(
         third = client.submit(small_scene(), spp=1, name="room again")
         client.cancel(second)
         assert client.wait(third, timeout=60).state == render_pb2.SUCCEEDED
+
+
+def test_a_job_that_would_need_more_memory_than_the_server_allows_is_refused(
+    limited: LocalServer,
+) -> None:
+    with limited.client() as client:
+        scene = small_scene()
+        scene.film.width = scene.film.height = 1024  # about 320 MiB of film accumulators
+        with pytest.raises(grpc.RpcError) as caught:
+            client.submit(scene, spp=1, name="too large for this server")
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+        assert "--max-job-memory" in caught.value.details() and "MiB" in caught.value.details()
+        scene.film.width = scene.film.height = 64
+        assert client.wait(client.submit(scene, spp=1), timeout=60).state == render_pb2.SUCCEEDED
 
 
 def test_a_user_may_hold_only_so_many_instances(limited: LocalServer) -> None:

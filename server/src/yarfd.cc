@@ -14,6 +14,7 @@
 
 #include "service/asset_service.h"
 #include "service/component_service.h"
+#include "service/job_memory.h"
 #include "service/instance_services.h"
 #include "service/job_scene_service.h"
 #include "service/render_service.h"
@@ -61,7 +62,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
                          .checkpoint_seconds = options.checkpoint_seconds,
                          .keep_finished_hours = options.keep_finished_hours,
                          .max_finished_jobs = uint64_t(options.max_finished_jobs),
-                         .max_queued_jobs_per_user = uint64_t(options.max_queued_jobs_per_user)},
+                         .max_queued_jobs_per_user = uint64_t(options.max_queued_jobs_per_user),
+                         .max_job_bytes = options.max_job_memory ? options.max_job_memory : yarf::DefaultMaxJobBytes()},
                         state_folder);
   yarf::AssetServiceImpl asset_service(assets);
   yarf::RenderServiceImpl render(jobs, uint32_t(options.max_watches_per_user));

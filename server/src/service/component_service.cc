@@ -14,7 +14,7 @@ uint64_t RandomHandle() {
 uint64_t InstanceTable::Add(std::unique_ptr<Component> instance, const std::string& owner) {
   std::lock_guard lock(mutex_);
   if (!owner.empty() && per_owner_[owner] >= max_per_user_)
-    throw InstanceLimit(owner + " holds " + std::to_string(per_owner_[owner]) +
+    throw LimitReached(owner + " holds " + std::to_string(per_owner_[owner]) +
                         " instances, the most one user may (yarfd --max-instances-per-user); release some first");
   uint64_t handle = RandomHandle();
   while (instances_.contains(handle)) handle = RandomHandle();
@@ -142,7 +142,7 @@ grpc::Status FactoryServiceImpl::Create(grpc::ServerContext* context, const v1::
     *reply->mutable_info() = ToProto(instance->Describe());
     reply->set_handle(instances_.Add(std::move(instance), CallerOf(*context).user));
     return grpc::Status::OK;
-  } catch (const InstanceLimit& e) {
+  } catch (const LimitReached& e) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
   } catch (const Error& e) {
     const bool unknown = !registry_.Has(request->class_name());

@@ -10,6 +10,7 @@
 
 #include "components/remote_classes.h"
 #include "service/access.h"
+#include "service/limits.h"
 #include "yarf/v1/component.grpc.pb.h"
 
 namespace yarf {
@@ -27,7 +28,7 @@ class InstanceTable {
   // A user holds at most `max_per_user` instances (the server's own are not counted).
   explicit InstanceTable(uint64_t max_per_user = 1000) : max_per_user_(max_per_user) {}
   // `owner` empty: the server's own (a running job's materials), for admins
-  // only. Throws InstanceLimit when the owner holds the most they may.
+  // only. Throws LimitReached when the owner holds the most they may.
   uint64_t Add(std::unique_ptr<Component> instance, const std::string& owner = "");
   bool Release(uint64_t handle, const Caller& caller);
   // nullptr when unknown or not the caller's; the instance lives while the
@@ -49,11 +50,6 @@ class InstanceTable {
   std::map<std::string, uint64_t> per_owner_;
 };
 
-// A user's instances fill their share of the table.
-class InstanceLimit : public Error {
- public:
-  using Error::Error;
-};
 
 // Which plugins Registry.LoadPlugin may load: none unless `allowed`, and
 // then only files directly inside one of `folders` (the --plugin-path

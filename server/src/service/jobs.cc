@@ -9,6 +9,7 @@
 
 #include "kernel/scene_builder.h"
 #include "service/job_files.h"
+#include "service/job_memory.h"
 #include "service/request_checks.h"
 #include "yarf/error.h"
 
@@ -169,12 +170,17 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
       return entry.second->owner() == owner && !entry.second->Finished();
     });
     if (uint64_t(pending) >= options_.max_queued_jobs_per_user)
-      throw QueueLimit(owner + " has " + std::to_string(pending) +
+      throw LimitReached(owner + " has " + std::to_string(pending) +
                        " jobs queued or running, the most one user may (yarfd --max-queued-jobs-per-user)");
   }
   std::optional<UserAssets> assets;
   if (resources_.assets) assets.emplace(*resources_.assets, owner);
   auto accepted = std::make_shared<const v1::SubmitRequest>(AcceptSubmit(request, assets ? &*assets : nullptr));
+  if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root);
+      bytes > options_.max_job_bytes)
+    throw LimitReached("the job would need about " + std::to_string(bytes >> 20) + " MiB (its film, meshes and " +
+                       "placements), more than the " + std::to_string(options_.max_job_bytes >> 20) +
+                       " MiB a job may on this server (yarfd --max-job-memory)");
   JobRecord row;
   row.request = accepted->SerializeAsString();
   row.name = accepted->name();

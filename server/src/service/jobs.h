@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "service/job.h"
+#include "service/limits.h"
 #include "service/job_store.h"
 #include "service/scheduler.h"
 #include "service/state_folder.h"
@@ -30,13 +31,10 @@ struct JobQueueOptions {
   uint64_t max_finished_jobs = 1000;
   // Jobs not ended one user may have.
   uint64_t max_queued_jobs_per_user = 1000;
+  // The most memory one job may be estimated to need (job_memory.h).
+  uint64_t max_job_bytes = uint64_t(8) << 30;
 };
 
-// A user has as many jobs queued or running as they may.
-class QueueLimit : public Error {
- public:
-  using Error::Error;
-};
 
 class JobManager {
  public:

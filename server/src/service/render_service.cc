@@ -45,7 +45,7 @@ grpc::Status RenderServiceImpl::Submit(grpc::ServerContext* context, const v1::S
   try {
     reply->set_job_id(jobs_.Submit(*request, caller.user));
     return grpc::Status::OK;
-  } catch (const QueueLimit& e) {
+  } catch (const LimitReached& e) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
   } catch (const Error& e) {
     // Errors may quote the request: cut and mended as every error shown.

@@ -16,6 +16,22 @@ std::filesystem::path DefaultStateDir() {
   throw Error("no state folder: set --state-dir, YARF_STATE_DIR or HOME");
 }
 
+// "1073741824", "1048576K", "1024M" or "1G".
+uint64_t ParseBytes(const std::string& flag, const std::string& value) {
+  size_t end = 0;
+  unsigned long long number = 0;
+  try {
+    number = std::stoull(value, &end);
+  } catch (const std::exception&) {
+    end = 0;
+  }
+  const std::string suffix = value.substr(end);
+  const int shift = suffix.empty() ? 0 : suffix == "K" ? 10 : suffix == "M" ? 20 : suffix == "G" ? 30 : -1;
+  if (end == 0 || shift < 0 || number == 0 || number > (uint64_t(1) << (50 - shift)))
+    throw Error(flag + " takes a size in bytes, with K, M or G (e.g. 8G), not '" + value + "'");
+  return uint64_t(number) << shift;
+}
+
 }  // namespace
 
 ServerOptions ParseServerOptions(int argc, char** argv) {
@@ -24,7 +40,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--asset-root DIR] [--state-dir DIR] [--threads N] [--component ADDRESS]...\n"
       "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
       "             [--max-finished-jobs N] [--max-queued-jobs-per-user N]\n"
-      "             [--max-instances-per-user N] [--max-watches-per-user N]\n"
+      "             [--max-instances-per-user N] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
       "             [--allow-root]\n"
       "       yarfd --check-requests   (SubmitRequests on stdin, SubmitChecks on stdout)";
@@ -58,6 +74,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--max-queued-jobs-per-user") options.max_queued_jobs_per_user = std::atoll(value.c_str());
     else if (flag == "--max-instances-per-user") options.max_instances_per_user = std::atoll(value.c_str());
     else if (flag == "--max-watches-per-user") options.max_watches_per_user = std::atoll(value.c_str());
+    else if (flag == "--max-job-memory") options.max_job_memory = ParseBytes(flag, value);
     else if (flag == "--threads") options.threads = std::atoi(value.c_str());
     else if (flag == "--component") options.components.push_back(value);
     else if (flag == "--tls-cert") options.tls_cert = value;

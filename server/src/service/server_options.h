@@ -39,6 +39,9 @@ struct ServerOptions {
   long long max_queued_jobs_per_user = 1000;
   long long max_instances_per_user = 1000;
   long long max_watches_per_user = 1000;
+  // The most memory a job may be estimated to need (bytes; 0: half the
+  // machine's). --max-job-memory takes a K, M or G suffix.
+  uint64_t max_job_memory = 0;
   // Registry.LoadPlugin: off unless asked for, and then only for files
   // directly inside a --plugin-path folder (loading runs the library's
   // code as yarfd's user).

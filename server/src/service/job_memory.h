@@ -1,0 +1,26 @@
+// What a job will take in memory, estimated before it is accepted, so that
+// a request for a film or a mesh larger than the server can hold is
+// refused at Submit (yarfd --max-job-memory) instead of failing, or taking
+// the server down, when it runs.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+
+#include "service/asset_store.h"
+#include "yarf/v1/render.pb.h"
+
+namespace yarf {
+
+// Bytes the film (its accumulators, splats, snapshots and checkpoint
+// buffers), the meshes (parsed, and Embree's BVH over them) and the
+// placements of `request` will need; asset meshes are sized from `assets`
+// and mesh files from `asset_root`, where they are. Components' own
+// memory (a photon map) is theirs to bound through their parameters.
+uint64_t EstimateJobBytes(const v1::SubmitRequest& request, const AssetStore* assets,
+                          const std::filesystem::path& asset_root);
+
+// A default for --max-job-memory: half the machine's memory.
+uint64_t DefaultMaxJobBytes();
+
+}  // namespace yarf
