@@ -408,3 +408,45 @@ def test_a_user_may_open_only_so_many_watches() -> None:
         for stream in streams:
             stream.cancel()
         client.cancel(job)
+
+
+def test_a_user_may_hold_only_so_many_asset_bytes() -> None:
+    with (
+        LocalServer(extra_args=["--max-asset-bytes-per-user", "1K"]) as local,
+        local.client() as client,
+    ):
+        first = client.upload_asset(os.urandom(600))
+        with pytest.raises(grpc.RpcError) as caught:
+            client.upload_asset(os.urandom(600))
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+        assert "--max-asset-bytes-per-user" in caught.value.details()
+        assert client.missing_assets([first]) == []
+
+
+def asset_scene(digest: str) -> scene_pb2.Scene:
+    scene = small_scene(32)
+    shape = scene.shapes.add(name="uploaded", material="grey")
+    shape.mesh.asset = digest
+    shape.mesh.format = "obj"
+    return scene
+
+
+def test_assets_no_job_needs_are_collected_after_their_grace_period() -> None:
+    mesh = b"v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n"
+    with (
+        LocalServer(extra_args=["--asset-grace-hours", "0"]) as local,
+        local.client() as client,
+    ):
+        unused = client.upload_asset(mesh + b"# unused\n")
+        needed = client.upload_asset(mesh + b"# needed\n")
+        running = client.submit(asset_scene(needed), spp=1 << 20, name="needs its asset")
+        # A job's end is when the server collects.
+        assert (
+            client.wait(client.submit(small_scene(), spp=1), timeout=60).state
+            == render_pb2.SUCCEEDED
+        )
+        assert client.missing_assets([unused, needed]) == [unused]
+        client.cancel(running)
+        client.wait(running, timeout=30)
+        assert client.missing_assets([needed]) == [needed]
+        assert not list((local.state_path / "assets").glob(f"*/{needed}"))

@@ -55,7 +55,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   yarf::JobScenes job_scenes(instances);
   // Locked before anything touches the folder: a second yarfd on it stops here.
   yarf::StateFolder state_folder(options.state_dir);
-  yarf::AssetStore assets(options.state_dir / "assets");
+  yarf::AssetStore assets(options.state_dir / "assets", options.max_asset_bytes_per_user);
   yarf::JobManager jobs({registry, remote_classes, device, options.asset_root, job_scenes, &assets,
                          options.state_dir / "files"},
                         {.max_running_jobs = uint32_t(options.max_running_jobs),
@@ -63,7 +63,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
                          .keep_finished_hours = options.keep_finished_hours,
                          .max_finished_jobs = uint64_t(options.max_finished_jobs),
                          .max_queued_jobs_per_user = uint64_t(options.max_queued_jobs_per_user),
-                         .max_job_bytes = options.max_job_memory ? options.max_job_memory : yarf::DefaultMaxJobBytes()},
+                         .max_job_bytes = options.max_job_memory ? options.max_job_memory : yarf::DefaultMaxJobBytes(),
+                         .asset_grace_hours = options.asset_grace_hours},
                         state_folder);
   yarf::AssetServiceImpl asset_service(assets);
   yarf::RenderServiceImpl render(jobs, uint32_t(options.max_watches_per_user));

@@ -1,6 +1,7 @@
 #include "service/asset_service.h"
 
 #include "service/access.h"
+#include "service/limits.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -20,7 +21,9 @@ grpc::Status AssetServiceImpl::Missing(grpc::ServerContext* context, const v1::M
       const std::string shown = hash.substr(0, 80);
       return Invalid("'" + shown + "' is not a SHA-256 (64 lowercase hex digits)");
     }
-    if (!store_.Owns(hash, CallerOf(*context).user)) reply->add_sha256(hash);
+    const std::string user = CallerOf(*context).user;
+    if (store_.Owns(hash, user)) store_.Touch(hash, user);  // about to be used
+    else reply->add_sha256(hash);
   }
   return grpc::Status::OK;
 }
@@ -30,6 +33,7 @@ grpc::Status AssetServiceImpl::Upload(grpc::ServerContext* context, grpc::Server
   v1::AssetChunk chunk;
   if (!reader->Read(&chunk)) return Invalid("an upload starts with a message naming the asset's sha256 and size");
   try {
+    store_.CheckRoom(chunk.sha256(), CallerOf(*context).user, chunk.size());
     AssetUpload upload(store_, chunk.sha256(), chunk.size());
     reply->set_sha256(chunk.sha256());
     do {
@@ -46,6 +50,8 @@ grpc::Status AssetServiceImpl::Upload(grpc::ServerContext* context, grpc::Server
     // The caller sent every byte of it: it is theirs too from now on.
     store_.AddOwner(reply->sha256(), CallerOf(*context).user);
     return grpc::Status::OK;
+  } catch (const LimitReached& e) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
   } catch (const Error& e) {
     return Invalid(e.what());
   } catch (const std::exception& e) {

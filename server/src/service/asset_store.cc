@@ -3,6 +3,7 @@
 #include <openssl/evp.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <system_error>
 #include <vector>
 
+#include "service/limits.h"
 #include "service/state_folder.h"
 #include "service/user_files.h"
 #include "yarf/error.h"
@@ -37,7 +39,8 @@ void RemoveStaleTemps(const fs::path& folder) {
 
 }  // namespace
 
-AssetStore::AssetStore(fs::path root) : root_(std::move(root)) {
+AssetStore::AssetStore(fs::path root, uint64_t max_bytes_per_user)
+    : root_(std::move(root)), max_bytes_per_user_(max_bytes_per_user) {
   fs::create_directories(TempFolder());
   RemoveStaleTemps(TempFolder());
 }
@@ -61,14 +64,58 @@ std::string AssetStore::Read(const std::string& sha256) const {
 
 bool AssetStore::Owns(const std::string& sha256, const std::string& user) const {
   std::error_code ec;
-  return Has(sha256) && fs::exists(root_ / "owners" / sha256 / UserFolderName(user), ec);
+  return Has(sha256) && fs::exists(OwnersOf(sha256) / UserFolderName(user), ec);
+}
+
+void AssetStore::Touch(const std::string& sha256, const std::string& user) const {
+  std::error_code ignored;  // a mark of use only
+  fs::last_write_time(OwnersOf(sha256) / UserFolderName(user), fs::file_time_type::clock::now(), ignored);
+}
+
+void AssetStore::CheckRoom(const std::string& sha256, const std::string& user, uint64_t size) const {
+  if (Owns(sha256, user)) return;
+  const std::string name = UserFolderName(user);
+  uint64_t held = 0;
+  std::error_code ec;
+  for (const fs::directory_entry& owners : fs::directory_iterator(root_ / "owners", ec))
+    if (fs::exists(owners.path() / name, ec))
+      if (const uintmax_t size = fs::file_size(PathOf(owners.path().filename().string()), ec); !ec) held += size;
+  if (held + size > max_bytes_per_user_)
+    throw LimitReached(user + " holds " + std::to_string(held >> 20) + " MiB of assets; " +
+                       std::to_string(size >> 20) + " MiB more is past the " +
+                       std::to_string(max_bytes_per_user_ >> 20) +
+                       " MiB one user may (yarfd --max-asset-bytes-per-user); unused ones go after "
+                       "--asset-grace-hours");
+}
+
+size_t AssetStore::CollectGarbage(const std::set<std::string>& in_use, std::chrono::seconds grace) const {
+  const auto cutoff = fs::file_time_type::clock::now() - grace;
+  size_t removed = 0;
+  std::error_code ec;
+  for (const fs::directory_entry& prefix : fs::directory_iterator(root_, ec)) {
+    const std::string folder = prefix.path().filename().string();
+    if (folder.size() != 2 || !prefix.is_directory(ec)) continue;  // tmp/, owners/
+    for (const fs::directory_entry& asset : fs::directory_iterator(prefix.path(), ec)) {
+      const std::string hash = asset.path().filename().string();
+      if (!IsSha256(hash) || in_use.contains(hash)) continue;
+      // Last used: the newest mark of an owner, else the file itself.
+      auto used = asset.last_write_time(ec);
+      for (const fs::directory_entry& owner : fs::directory_iterator(OwnersOf(hash), ec))
+        used = std::max(used, owner.last_write_time(ec));
+      if (used > cutoff) continue;
+      fs::remove(asset.path(), ec);
+      fs::remove_all(OwnersOf(hash), ec);
+      ++removed;
+    }
+  }
+  return removed;
 }
 
 void AssetStore::AddOwner(const std::string& sha256, const std::string& user) const {
-  const fs::path folder = root_ / "owners" / sha256;
+  const fs::path folder = OwnersOf(sha256);
   const bool new_folder = fs::create_directories(folder);
   const fs::path marker = folder / UserFolderName(user);
-  if (fs::exists(marker)) return;
+  if (fs::exists(marker)) return Touch(sha256, user);
   std::ofstream(marker).close();
   if (!fs::exists(marker)) throw Error("cannot record the owner of asset " + sha256 + " in " + folder.string());
   // Synced as the asset itself is: an upload reported done stays the user's.

@@ -13,7 +13,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <chrono>
 #include <memory>
+#include <set>
 #include <string>
 #include <string_view>
 
@@ -29,23 +31,35 @@ class AssetStore final : public AssetSource {
 
   // Creates the folders (throws std::filesystem::filesystem_error when it
   // cannot) and drops temporary files that crashed uploads left behind.
-  explicit AssetStore(std::filesystem::path root);
+  // A user holds at most `max_bytes_per_user` of assets.
+  explicit AssetStore(std::filesystem::path root, uint64_t max_bytes_per_user = uint64_t(20) << 30);
 
   bool Has(const std::string& sha256) const override;
   std::string Read(const std::string& sha256) const override;
 
   // Whether `user` uploaded the asset (and it is held).
   bool Owns(const std::string& sha256, const std::string& user) const;
-  // Records that `user` uploaded the asset, durably.
+  // Records that `user` uploaded the asset, durably; a mark of use, which
+  // keeps it from collection for a while (CollectGarbage).
   void AddOwner(const std::string& sha256, const std::string& user) const;
+  // Marks the asset as used by `user` now (when they ask for it in Missing).
+  void Touch(const std::string& sha256, const std::string& user) const;
+  // Throws LimitReached when `user` uploading `size` more bytes of an asset
+  // not theirs yet would hold more than their share.
+  void CheckRoom(const std::string& sha256, const std::string& user, uint64_t size) const;
+  // Removes the assets that no hash of `in_use` names and nobody has
+  // uploaded or asked for in the last `grace`; returns how many went.
+  size_t CollectGarbage(const std::set<std::string>& in_use, std::chrono::seconds grace) const;
 
   const std::filesystem::path& root() const { return root_; }
+  std::filesystem::path OwnersOf(const std::string& sha256) const { return root_ / "owners" / sha256; }
   // Where the asset named `sha256` (already checked) lives.
   std::filesystem::path PathOf(const std::string& sha256) const;
   std::filesystem::path TempFolder() const { return root_ / "tmp"; }
 
  private:
   const std::filesystem::path root_;
+  const uint64_t max_bytes_per_user_;
 };
 
 // The assets of one user, as the kernel reads them for that user's jobs.

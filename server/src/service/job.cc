@@ -100,9 +100,17 @@ JobFileOwner Job::FileOwner() const {
   return {number_, row_.attempts};
 }
 
-void Job::WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const {
-  std::unique_lock lock(mutex_);
-  changed_.wait_for(lock, timeout, [&] { return version_ != seen; });
+std::vector<std::string> Job::Assets() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::string> hashes;
+  if (!request_) return hashes;
+  const auto collect = [&](const auto& shapes) {
+    for (const v1::SceneShape& shape : shapes)
+      if (shape.has_mesh() && shape.mesh().has_asset()) hashes.push_back(shape.mesh().asset());
+  };
+  collect(request_->scene().shapes());
+  for (const v1::Group& group : request_->scene().groups()) collect(group.shapes());
+  return hashes;
 }
 
 bool Job::Commit(const std::function<bool(JobRecord&)>& change) {

@@ -52,9 +52,9 @@ class Job {
   v1::JobStatus Status() const;
   // Bumped on every change, for watchers.
   uint64_t Version() const;
-  // Waits until the version differs from `seen` or `timeout` passes.
-  void WaitForChange(uint64_t seen, std::chrono::milliseconds timeout) const;
   bool Finished() const;
+  // The mesh assets the job's request names, while it has not ended.
+  std::vector<std::string> Assets() const;
   uint32_t Priority() const;
   // The server died while this job ran beside others: the scheduler runs
   // it alone until it gets on or a run of it ends.

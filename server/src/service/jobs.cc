@@ -273,6 +273,20 @@ void JobManager::ApplyRetention() {
     RemoveFile(folder_.Result(IdOf(number)));
     RemoveFile(folder_.Checkpoint(IdOf(number)));
   }
+  CollectAssets();
+}
+
+// Assets are kept while a job still to run names them, and for a grace
+// period after anyone last uploaded or asked for them.
+void JobManager::CollectAssets() const {
+  if (!resources_.assets) return;
+  std::set<std::string> in_use;
+  for (const auto& job : List())
+    for (std::string& hash : job->Assets()) in_use.insert(std::move(hash));
+  const auto grace = std::chrono::seconds(int64_t(options_.asset_grace_hours * 3600));
+  if (const size_t removed = resources_.assets->CollectGarbage(in_use, grace))
+    std::cerr << "yarfd: " << removed << " assets no job needs, unused for " << options_.asset_grace_hours
+              << " hours, deleted" << std::endl;
 }
 
 // Files a crash left behind: half-written temporaries, and the files of

@@ -33,6 +33,8 @@ struct JobQueueOptions {
   uint64_t max_queued_jobs_per_user = 1000;
   // The most memory one job may be estimated to need (job_memory.h).
   uint64_t max_job_bytes = uint64_t(8) << 30;
+  // Uploaded assets no job still to run names, unused this long, are deleted.
+  double asset_grace_hours = 24;
 };
 
 
@@ -76,6 +78,7 @@ class JobManager {
   void RunJob(const std::shared_ptr<Job>& job);
   // Deletes ended jobs past the retention limits, with their files.
   void ApplyRetention();
+  void CollectAssets() const;
   void RemoveStrayFiles() const;
   std::shared_ptr<Job> MakeJob(JobRecord record, std::shared_ptr<const v1::SubmitRequest> request);
 

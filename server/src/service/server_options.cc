@@ -41,6 +41,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
       "             [--max-finished-jobs N] [--max-queued-jobs-per-user N]\n"
       "             [--max-instances-per-user N] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
+      "             [--max-asset-bytes-per-user BYTES[K|M|G]] [--asset-grace-hours H]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
       "             [--allow-root]\n"
       "       yarfd --check-requests   (SubmitRequests on stdin, SubmitChecks on stdout)";
@@ -75,6 +76,8 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--max-instances-per-user") options.max_instances_per_user = std::atoll(value.c_str());
     else if (flag == "--max-watches-per-user") options.max_watches_per_user = std::atoll(value.c_str());
     else if (flag == "--max-job-memory") options.max_job_memory = ParseBytes(flag, value);
+    else if (flag == "--max-asset-bytes-per-user") options.max_asset_bytes_per_user = ParseBytes(flag, value);
+    else if (flag == "--asset-grace-hours") options.asset_grace_hours = std::atof(value.c_str());
     else if (flag == "--threads") options.threads = std::atoi(value.c_str());
     else if (flag == "--component") options.components.push_back(value);
     else if (flag == "--tls-cert") options.tls_cert = value;
@@ -93,6 +96,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
   if (options.max_running_jobs < 1) throw Error("--max-running-jobs must be at least 1");
   if (!(options.checkpoint_seconds >= 0)) throw Error("--checkpoint-seconds must be 0 or more");
   if (!(options.keep_finished_hours >= 0)) throw Error("--keep-finished-hours must be 0 or more");
+  if (!(options.asset_grace_hours >= 0)) throw Error("--asset-grace-hours must be 0 or more");
   if (options.max_finished_jobs < 0) throw Error("--max-finished-jobs must be 0 or more");
   for (const auto& [flag, value] : {std::pair{"--max-queued-jobs-per-user", options.max_queued_jobs_per_user},
                                     std::pair{"--max-instances-per-user", options.max_instances_per_user},

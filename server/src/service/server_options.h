@@ -42,6 +42,10 @@ struct ServerOptions {
   // The most memory a job may be estimated to need (bytes; 0: half the
   // machine's). --max-job-memory takes a K, M or G suffix.
   uint64_t max_job_memory = 0;
+  // Uploaded assets: at most this many bytes per user, and those no job
+  // still to run names are deleted when unused for the grace period.
+  uint64_t max_asset_bytes_per_user = uint64_t(20) << 30;
+  double asset_grace_hours = 24;
   // Registry.LoadPlugin: off unless asked for, and then only for files
   // directly inside a --plugin-path folder (loading runs the library's
   // code as yarfd's user).
