@@ -450,3 +450,26 @@ def test_assets_no_job_needs_are_collected_after_their_grace_period() -> None:
         client.wait(running, timeout=30)
         assert client.missing_assets([needed]) == [needed]
         assert not list((local.state_path / "assets").glob(f"*/{needed}"))
+
+
+def test_sigterm_stops_yarfd_within_five_seconds_while_it_shoots_photons(
+    cornell_box: scene_pb2.Scene,
+) -> None:
+    local = LocalServer()
+    local.start()
+    try:
+        with local.client() as client:
+            transport = component("photon_map", photons=40_000_000, caustic_photons=0)
+            job = client.submit(cornell_box, spp=1, transport=transport, name="photons at shutdown")
+            deadline = time.monotonic() + 30
+            while client.status(job).state != render_pb2.RUNNING:
+                assert time.monotonic() < deadline, "the photon job did not start"
+                time.sleep(0.02)
+            time.sleep(0.5)
+        asked = time.monotonic()
+        code = local.stop(timeout=5.0)
+        took = time.monotonic() - asked
+        assert code == 0 and took < 5.0, (code, took, local.log[-2000:])
+    finally:
+        if local.is_running():
+            local.kill()
