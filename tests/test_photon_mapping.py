@@ -159,13 +159,14 @@ def test_sppm_renders_the_caustic(client: Client, caustic_reference: np.ndarray)
 @pytest.mark.parametrize(
     ("transport", "message"),
     [
-        (component("photon_map", photons=-1), "'photons' must be >= 0"),
-        (component("photon_map", caustic_photons=-5), "'caustic_photons' must be >= 0"),
+        (component("photon_map", photons=-1), "'photons' must lie in [0, 50000000]"),
+        (component("photon_map", photons=10**10), "'photons' must lie in [0, 50000000]"),
+        (component("photon_map", caustic_photons=-5), "'caustic_photons' must lie in [0, 50000000]"),
         (component("photon_map", nearest=0), "'nearest' must be >= 1"),
-        (component("sppm", photons_per_pass=-1), "'photons_per_pass' must be >= 1"),
+        (component("sppm", photons_per_pass=-1), "'photons_per_pass' must lie in [1, 50000000]"),
         (component("sppm", alpha=1.5), "'alpha' must be in (0, 1)"),
     ],
-    ids=["photons", "caustic_photons", "nearest", "photons_per_pass", "alpha"],
+    ids=["photons", "too_many_photons", "caustic_photons", "nearest", "photons_per_pass", "alpha"],
 )
 def test_bad_properties_fail_the_job_with_a_clear_error(
     client: Client, transport: scene_pb2.ComponentSpec, message: str
