@@ -60,17 +60,22 @@ std::string Format(double value) {
   return text;
 }
 
-void CheckNumber(double value, const std::string& path) {
-  if (!std::isfinite(value)) throw Error(path + " is " + Format(value) + "; every number must be finite");
-  if (std::abs(value) > RequestLimits::kMaxMagnitude)
-    throw Error(path + " is " + Format(value) + ", beyond the largest magnitude a scene may use (1e12)");
+// `path` makes the field's name, only for an error: an inline mesh has
+// millions of numbers.
+template <typename Path>
+void CheckNumber(double value, const Path& path) {
+  if (!std::isfinite(value)) [[unlikely]]
+    throw Error(path() + " is " + Format(value) + "; every number must be finite");
+  if (std::abs(value) > RequestLimits::kMaxMagnitude) [[unlikely]]
+    throw Error(path() + " is " + Format(value) + ", beyond the largest magnitude a scene may use (1e12)");
 }
 
-void CheckText(const std::string& text, size_t limit, const std::string& path) {
+template <typename Path>
+void CheckText(const std::string& text, size_t limit, const Path& path) {
   if (text.size() > limit)
-    throw Error(path + " is " + std::to_string(text.size()) + " bytes long, more than the " + std::to_string(limit) +
-                " it may be");
-  if (!IsValidUtf8(text)) throw Error(path + " is not valid UTF-8");
+    throw Error(path() + " is " + std::to_string(text.size()) + " bytes long, more than the " +
+                std::to_string(limit) + " it may be");
+  if (!IsValidUtf8(text)) throw Error(path() + " is not valid UTF-8");
 }
 
 void CheckFields(const Message& message, const std::string& path) {
@@ -79,38 +84,35 @@ void CheckFields(const Message& message, const std::string& path) {
   reflection.ListFields(message, &fields);
   for (const FieldDescriptor* field : fields) {
     const std::string where = Join(path, *field);
-    const int count = field->is_repeated() ? reflection.FieldSize(message, field) : 1;
+    const bool repeated = field->is_repeated();
+    const int count = repeated ? reflection.FieldSize(message, field) : 1;
     for (int i = 0; i < count; ++i) {
-      std::string at = field->is_repeated() ? where + "[" + std::to_string(i) + "]" : where;
-      // A map entry is named by its key (a property's name).
-      if (field->is_map()) {
+      const auto at = [&] {
+        if (!field->is_map()) return repeated ? where + "[" + std::to_string(i) + "]" : where;
+        // A map entry is named by its key (a property's name).
         const Message& entry = reflection.GetRepeatedMessage(message, field, i);
         const FieldDescriptor* key = entry.GetDescriptor()->map_key();
-        if (key->cpp_type() == FieldDescriptor::CPPTYPE_STRING)
-          at = where + "['" + SafeText(entry.GetReflection()->GetString(entry, key), 64) + "']";
-      }
+        if (key->cpp_type() != FieldDescriptor::CPPTYPE_STRING) return where + "[" + std::to_string(i) + "]";
+        return where + "['" + SafeText(entry.GetReflection()->GetString(entry, key), 64) + "']";
+      };
       switch (field->cpp_type()) {
         case FieldDescriptor::CPPTYPE_DOUBLE:
-          CheckNumber(field->is_repeated() ? reflection.GetRepeatedDouble(message, field, i)
-                                           : reflection.GetDouble(message, field),
+          CheckNumber(repeated ? reflection.GetRepeatedDouble(message, field, i) : reflection.GetDouble(message, field),
                       at);
           break;
         case FieldDescriptor::CPPTYPE_FLOAT:
-          CheckNumber(field->is_repeated() ? reflection.GetRepeatedFloat(message, field, i)
-                                           : reflection.GetFloat(message, field),
+          CheckNumber(repeated ? reflection.GetRepeatedFloat(message, field, i) : reflection.GetFloat(message, field),
                       at);
           break;
         case FieldDescriptor::CPPTYPE_STRING:
           // Bytes (a mesh file's contents) are the parsers' to check.
           if (field->type() == FieldDescriptor::TYPE_STRING)
-            CheckText(field->is_repeated() ? reflection.GetRepeatedString(message, field, i)
-                                           : reflection.GetString(message, field),
+            CheckText(repeated ? reflection.GetRepeatedString(message, field, i) : reflection.GetString(message, field),
                       TextLimit(message, *field), at);
           break;
         case FieldDescriptor::CPPTYPE_MESSAGE:
-          CheckFields(field->is_repeated() ? reflection.GetRepeatedMessage(message, field, i)
-                                           : reflection.GetMessage(message, field),
-                      at);
+          CheckFields(repeated ? reflection.GetRepeatedMessage(message, field, i) : reflection.GetMessage(message, field),
+                      at());
           break;
         default:
           break;  // integers, bools and enums: their fields' own ranges apply
