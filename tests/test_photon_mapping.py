@@ -161,7 +161,10 @@ def test_sppm_renders_the_caustic(client: Client, caustic_reference: np.ndarray)
     [
         (component("photon_map", photons=-1), "'photons' must lie in [0, 50000000]"),
         (component("photon_map", photons=10**10), "'photons' must lie in [0, 50000000]"),
-        (component("photon_map", caustic_photons=-5), "'caustic_photons' must lie in [0, 50000000]"),
+        (
+            component("photon_map", caustic_photons=-5),
+            "'caustic_photons' must lie in [0, 50000000]",
+        ),
         (component("photon_map", nearest=0), "'nearest' must be >= 1"),
         (component("sppm", photons_per_pass=-1), "'photons_per_pass' must lie in [1, 50000000]"),
         (component("sppm", alpha=1.5), "'alpha' must be in (0, 1)"),
