@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import sqlite3
 import subprocess
 import time
 from collections.abc import Callable, Iterator
@@ -472,3 +473,24 @@ def test_sigterm_stops_yarfd_within_five_seconds_while_it_shoots_photons(
     finally:
         if local.is_running():
             local.kill()
+
+
+def test_names_and_errors_stored_unbounded_or_not_utf8_are_mended_at_restart(
+    tmp_path: Path,
+) -> None:
+    """A state folder of an older server, whose job name is 5 MiB with bytes that are not UTF-8."""
+    state = tmp_path / "state"
+    with LocalServer(state_dir=state) as local, local.client() as client:
+        job = client.submit(small_scene(), spp=1, name="to be damaged")
+        client.wait(job, timeout=60)
+    with sqlite3.connect(state / "jobs.sqlite") as database:
+        database.execute(
+            "UPDATE jobs SET name = ?, error = ?",
+            (b"\xff\xfe" + b"n" * (5 << 20), b"\xc3\x28" * (1 << 20)),
+        )
+    database.close()
+    with LocalServer(state_dir=state) as local, local.client() as client:
+        (status,) = client.list()
+        assert len(status.name.encode()) <= 1024 and status.name.endswith("\u2026")
+        assert len(status.error.encode()) <= 1024
+        assert len(client.status(job).error.encode()) <= 64 << 10

@@ -123,7 +123,13 @@ void JobManager::Restore() {
       store_.OpenedVersion() > 0 && store_.OpenedVersion() < kFirstStoreOfBoundFiles;
   for (JobRecord& row : rows) {
     std::shared_ptr<v1::SubmitRequest> request;
-    bool changed = false;
+    // Names and errors stored before they were bounded, or not UTF-8,
+    // would break List for every client: mended once, here.
+    const std::string name = SafeText(row.name, RequestLimits::kMaxNameBytes);
+    const std::string error = SafeText(row.error, RequestLimits::kMaxErrorBytes);
+    bool changed = name != row.name || error != row.error;
+    row.name = name;
+    row.error = error;
     if (!Ended(row.state)) {
       request = std::make_shared<v1::SubmitRequest>();
       if (!request->ParseFromString(row.request)) {

@@ -26,6 +26,9 @@ grpc::Status RawFits(const std::string& job_id, uint32_t width, uint32_t height)
               " (256 MiB) a reply may carry; ask for EXR or PNG (about 6 or 3 bytes a pixel at most)"};
 }
 
+// How much of each job's error List shows.
+constexpr size_t kListedErrorBytes = 1 << 10;
+
 }  // namespace
 
 grpc::Status RenderServiceImpl::Reach(const grpc::ServerContextBase& context, const std::string& id,
@@ -123,8 +126,14 @@ grpc::Status RenderServiceImpl::Cancel(grpc::ServerContext* context, const v1::C
 grpc::Status RenderServiceImpl::List(grpc::ServerContext* context, const v1::ListJobsRequest*,
                                      v1::ListJobsReply* reply) {
   const Caller caller = CallerOf(*context);
-  for (const auto& job : jobs_.List())
-    if (MayActOn(caller, job->owner())) *reply->add_jobs() = job->Status();
+  for (const auto& job : jobs_.List()) {
+    if (!MayActOn(caller, job->owner())) continue;
+    v1::JobStatus* status = reply->add_jobs();
+    *status = job->Status();
+    // A listing of every job stays within any client's 4 MiB: the whole
+    // error is the job's own status (Watch, GetResult).
+    status->set_error(SafeText(status->error(), kListedErrorBytes));
+  }
   return grpc::Status::OK;
 }
 
