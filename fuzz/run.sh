@@ -60,6 +60,7 @@ seeds() {
         index=$((index + 1))
       done ;;
     job_files) "$build/fuzz_job_files" --write-seeds="$dest" > /dev/null 2>&1 ;;
+    irradiance_cache) cp "$root/fuzz/seeds/irradiance_cache/"* "$dest" ;;
   esac
   return 0
 }
@@ -92,7 +93,7 @@ run() {
   fi
 }
 
-fuzzers=(mitsuba pbrt ply obj serialized texture tokens job_files)
+fuzzers=(mitsuba pbrt ply obj serialized texture tokens job_files irradiance_cache)
 failed=0
 for ((i = 0; i < ${#fuzzers[@]}; i += 2)); do
   pids=()

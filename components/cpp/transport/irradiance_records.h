@@ -166,11 +166,26 @@ inline IrradianceRecord Unpack(const std::array<float, kFloatsPerRecord>& f) {
   return r;
 }
 
+// Whether a record read from a file can be used: finite numbers a scene
+// may hold, a positive radius, a unit normal. The file is untrusted: a NaN
+// would poison every estimate, a huge position the cell arithmetic.
+inline bool Sound(const IrradianceRecord& r) {
+  const auto bounded = [](Vec3 v) {
+    return std::abs(v.x) <= 1e12f && std::abs(v.y) <= 1e12f && std::abs(v.z) <= 1e12f;
+  };
+  bool all = bounded(r.position) && bounded(r.irradiance) && r.radius > 0 && r.radius <= 1e12f &&
+             std::abs(Length(r.normal) - 1) < 1e-3f;
+  for (int c = 0; c < 3; ++c) all = all && bounded(r.rotational[c]) && bounded(r.translational[c]);
+  return all;
+}
+
 // The records stored at `path` for `key`; false when the file is missing,
-// unreadable or made for another scene or settings.
+// unreadable, damaged or made for another scene or settings.
 inline bool Read(const std::string& path, uint64_t key, std::vector<IrradianceRecord>& out) {
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) return false;
+  const uint64_t file_size = uint64_t(in.tellg());
+  in.seekg(0);
   char magic[8];
   uint32_t version = 0, floats = 0;
   uint64_t stored_key = 0, count = 0;
@@ -182,11 +197,16 @@ inline bool Read(const std::string& path, uint64_t key, std::vector<IrradianceRe
   if (!in || std::memcmp(magic, kMagic, 8) != 0 || version != kVersion || floats != kFloatsPerRecord ||
       stored_key != key)
     return false;
+  // The count the bytes can hold, before anything is allocated.
+  constexpr uint64_t kHeader = 32, kRecordBytes = kFloatsPerRecord * sizeof(float);
+  if (count != (file_size - kHeader) / kRecordBytes) return false;
   std::vector<IrradianceRecord> records;
+  records.reserve(count);
   for (uint64_t k = 0; k < count; ++k) {
     std::array<float, kFloatsPerRecord> f;
     if (!in.read(reinterpret_cast<char*>(f.data()), sizeof f)) return false;
     records.push_back(Unpack(f));
+    if (!Sound(records.back())) return false;
   }
   out = std::move(records);
   return true;
