@@ -199,7 +199,17 @@ void KernelScene::AddInfiniteLights() {
     geometry_base_.push_back(uint32_t(shapes_.size()));
     shapes_.push_back(record);
   }
-  rtcCommitScene(groups_[kWorld].scene);
+  Build(groups_[kWorld].scene);
+}
+
+void KernelScene::Build(RTCScene scene) const {
+  // Embree asks between steps of a build whether to go on: a stopped job
+  // does not wait for the BVH of a huge mesh.
+  rtcSetSceneProgressMonitorFunction(
+      scene, [](void* self, double) { return !static_cast<const KernelScene*>(self)->Stopped(); },
+      const_cast<KernelScene*>(this));
+  rtcCommitScene(scene);
+  ThrowIfStopped();
   device_.Check("scene build");
 }
 
@@ -221,7 +231,7 @@ void KernelScene::Commit() {
   }
   for (size_t g = 1; g < groups_.size(); ++g) {
     rtcSetSceneBuildQuality(groups_[g].scene, RTC_BUILD_QUALITY_HIGH);
-    rtcCommitScene(groups_[g].scene);
+    Build(groups_[g].scene);
   }
   for (const Placement& placement : placements_) {
     RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
@@ -250,8 +260,7 @@ void KernelScene::Commit() {
     }
   }
   rtcSetSceneBuildQuality(groups_[kWorld].scene, RTC_BUILD_QUALITY_HIGH);
-  rtcCommitScene(groups_[kWorld].scene);
-  device_.Check("scene build");
+  Build(groups_[kWorld].scene);
   AddInfiniteLights();
 
   // Surface lights follow the point lights already added, one per
@@ -403,8 +412,10 @@ RTCIntersectContext IncoherentContext() {
 
 }  // namespace
 
+bool KernelScene::Stopped() const { return stop_ && stop_->load(std::memory_order_relaxed); }
+
 void KernelScene::ThrowIfStopped() const {
-  if (stop_ && stop_->load(std::memory_order_relaxed)) throw Error("the job was stopped");
+  if (Stopped()) throw Error("the job was stopped");
 }
 
 void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) const {

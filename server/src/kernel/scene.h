@@ -58,10 +58,14 @@ class KernelScene final : public SceneView {
   void AddEnvironment(const Emitter* emitter);
   void Commit();
 
-  // Every later Intersect and Occluded throws Error once `stop` is set:
-  // whatever loop a transport runs (photon shooting, cache building, a
-  // render pass) traces rays, so a cancelled job ends within one batch.
+  // Commit (the BVH builds) and every later Intersect and Occluded throw
+  // Error once `stop` is set: whatever loop a transport runs (photon
+  // shooting, cache building, a render pass) traces rays, so a cancelled
+  // job ends within one batch.
   void StopWhen(const std::atomic<bool>& stop) { stop_ = &stop; }
+  bool Stopped() const;
+  // Throws Error("the job was stopped") once it is.
+  void ThrowIfStopped() const;
 
   // SceneView
   void Intersect(std::span<const Ray> rays, std::span<Hit> hits) const override;
@@ -96,7 +100,8 @@ class KernelScene final : public SceneView {
   uint64_t ShadowRays() const { return shadow_rays_.load(std::memory_order_relaxed); }
 
  private:
-  void ThrowIfStopped() const;
+  // Commits `scene`, stopping early when the job stops.
+  void Build(RTCScene scene) const;
 
   enum class Kind { kTriangles, kSphere };
   struct ShapeRecord {

@@ -131,6 +131,7 @@ class Builder {
   std::unique_ptr<KernelScene> Build() {
     const uint32_t w = scene_.film().width(), h = scene_.film().height();
     kernel_ = std::make_unique<KernelScene>(sources_.device, Camera(scene_.camera(), w, h), w, h);
+    if (sources_.stop) kernel_->StopWhen(*sources_.stop);
     for (const v1::Material& m : scene_.materials()) {
       const std::string what = "material '" + m.name() + "' (" + m.class_name() + ")";
       materials_[m.name()] = kernel_->AddMaterial(
@@ -178,6 +179,7 @@ class Builder {
   void AddShapes(uint32_t group, const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
                  const std::string& where) {
     for (int i = 0; i < shapes.size(); ++i) {
+      kernel_->ThrowIfStopped();  // between meshes, which may take a while to parse
       const v1::SceneShape& s = shapes[i];
       const std::string what = where + ShapeName(s, i);
       ShapeLook look;

@@ -2,6 +2,7 @@
 // component creation, flattening of nested instancing.
 #pragma once
 
+#include <atomic>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -45,6 +46,9 @@ struct SceneSources {
   std::filesystem::path asset_root;
   // Where mesh `asset` references are read; null: none allowed.
   const AssetSource* assets = nullptr;
+  // Set when the job stops: building ends early with Error, and the
+  // scene's Intersect throws once it is set (KernelScene::StopWhen).
+  const std::atomic<bool>* stop = nullptr;
 };
 
 std::unique_ptr<KernelScene> BuildScene(const v1::Scene& scene, const SceneSources& sources);

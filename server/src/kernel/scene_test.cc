@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
+#include <array>
+#include <atomic>
 
 #include "components/registry.h"
 #include "kernel/scene_builder.h"
@@ -192,6 +195,53 @@ TEST_F(SceneTest, MalformedMeshFilesAreNamedInTheError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("broken"), std::string::npos) << e.what();
   }
+}
+
+TEST_F(SceneTest, RaysEmbreeCannotTraceFailWithAnErrorInsteadOfAborting) {
+  v1::Scene scene = BaseScene();
+  AddTriangle(scene.mutable_shapes())->mutable_to_world()->CopyFrom(Translation(0, 0, 5));
+  const auto kernel = Build(scene);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const Ray& bad : {Ray{{nan, 0, 0}, 0, {0, 0, 1}, kInfinity}, Ray{{0, 0, 0}, 0, {0, 0, 1e30f}, kInfinity},
+                         Ray{{0, 0, 0}, nan, {0, 0, 1}, kInfinity}, Ray{{0, 0, 0}, -1, {0, 0, 1}, kInfinity},
+                         Ray{{0, 0, 0}, 0, {0, 0, 1}, nan}}) {
+    std::vector<Ray> rays(9, Ray{{0, 0, 0}, 0, {0, 0, 1}, kInfinity});
+    rays[5] = bad;  // in the second packet of eight
+    std::vector<Hit> hits(rays.size());
+    std::vector<uint8_t> occluded(rays.size());
+    EXPECT_THROW(kernel->Intersect(rays, hits), Error);
+    EXPECT_THROW(kernel->Occluded(rays, occluded), Error);
+  }
+  EXPECT_EQ(Trace(*kernel, {0, 0, 0}, {0, 0, 1}).t, 5.0f);
+}
+
+TEST_F(SceneTest, AStoppedJobStopsBuildingAndTracing) {
+  v1::Scene scene = BaseScene();
+  for (int i = 0; i < 4; ++i) AddTriangle(scene.mutable_shapes())->mutable_to_world()->CopyFrom(Translation(0, 0, 5 + i));
+  std::atomic<bool> stop{true};
+  SceneSources stopped{{registry_}, device_, {}};
+  stopped.stop = &stop;
+  EXPECT_THROW(BuildScene(scene, stopped), Error);
+  stop = false;
+  const auto kernel = BuildScene(scene, stopped);
+  EXPECT_EQ(Trace(*kernel, {0, 0, 0}, {0, 0, 1}).t, 5.0f);
+  stop = true;
+  EXPECT_THROW(Trace(*kernel, {0, 0, 0}, {0, 0, 1}), Error);
+}
+
+TEST_F(SceneTest, PlacementsThatCannotBeInvertedInFloatAreRefused) {
+  for (const std::array<double, 3> scale : {std::array{0.0, 1.0, 1.0}, std::array{1e-30, 1e-30, 1e-30},
+                                            std::array{1e5, 1.0, 1e-5}, std::array{1e13, 1e13, 1e13}}) {
+    v1::Scene scene = BaseScene();
+    v1::Transform* t = AddTriangle(scene.mutable_shapes())->mutable_to_world();
+    for (double v : {scale[0], 0.0, 0.0, 0.0, 0.0, scale[1], 0.0, 0.0, 0.0, 0.0, scale[2], 5.0, 0.0, 0.0, 0.0, 1.0})
+      t->add_m(v);
+    EXPECT_THROW(ValidateScene(scene), Error) << scale[0] << " " << scale[1] << " " << scale[2];
+  }
+  v1::Scene thin = BaseScene();
+  v1::Transform* t = AddTriangle(thin.mutable_shapes())->mutable_to_world();
+  for (double v : {1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1e-4, 5.0, 0.0, 0.0, 0.0, 1.0}) t->add_m(v);
+  EXPECT_NO_THROW(ValidateScene(thin));
 }
 
 }  // namespace

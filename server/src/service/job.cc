@@ -280,9 +280,8 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
   try {
     const v1::Scene& scene = request_->scene();
     const v1::RenderOptions& options = request_->options();
-    JobComponents parts = MakeJobComponents(*request_, owner(), resources, remote_calls_);
+    JobComponents parts = MakeJobComponents(*request_, owner(), resources, remote_calls_, halt_);
     const std::shared_ptr<KernelScene> kernel = parts.scene;
-    kernel->StopWhen(halt_);
     const bool resumable = parts.resumable;
     std::optional<FilmCheckpoint> checkpoint =
         resumable ? UsableCheckpoint(scene.film(), options.spp()) : std::nullopt;

@@ -69,7 +69,8 @@ std::unique_ptr<I> Make(const ComponentSources& sources, const v1::ComponentSpec
 }  // namespace
 
 JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::string& owner,
-                                const JobResources& resources, std::shared_ptr<RemoteCalls> calls) {
+                                const JobResources& resources, std::shared_ptr<RemoteCalls> calls,
+                                const std::atomic<bool>& stop) {
   const v1::Scene& scene = request.scene();
   const v1::RenderOptions& options = request.options();
   const ComponentSources components{
@@ -80,7 +81,7 @@ JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::str
   std::optional<UserAssets> assets;
   if (resources.assets) assets.emplace(*resources.assets, owner);
   parts.scene = BuildScene(scene, SceneSources{components, resources.device, resources.asset_root,
-                                               assets ? &*assets : nullptr});
+                                               assets ? &*assets : nullptr, &stop});
   parts.transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
   const v1::ComponentSpec integrator =
       IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources));

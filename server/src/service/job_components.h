@@ -46,9 +46,10 @@ struct JobComponents {
 
 // Builds the scene and makes the components of a job of `owner`; throws
 // Error naming the part that failed. Calls to other processes are
-// tracked in `calls`.
+// tracked in `calls`; once `stop` is set, building and tracing stop.
 JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::string& owner,
-                                const JobResources& resources, std::shared_ptr<RemoteCalls> calls);
+                                const JobResources& resources, std::shared_ptr<RemoteCalls> calls,
+                                const std::atomic<bool>& stop);
 
 // The samples and pixels the request asks for (RenderOptions.first_sample, crop).
 FilmTarget::Share ShareOf(const v1::RenderOptions& options);
