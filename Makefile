@@ -69,8 +69,8 @@ render: build
 
 # Python style: formatted and lint-clean (ruff).
 lint: venv
-	$(VENV)/bin/ruff format --check bench tests clients/python components/python deploy
-	$(VENV)/bin/ruff check bench tests clients/python components/python deploy
+	$(VENV)/bin/ruff format --check bench tests clients/python components/python deploy fuzz
+	$(VENV)/bin/ruff check bench tests clients/python components/python deploy fuzz
 
 test: build lint
 	cd $(BUILD) && ctest --output-on-failure -j2
@@ -78,14 +78,20 @@ test: build lint
 	$(PY) -m pytest -q
 	$(MAKE) --no-print-directory fuzz
 
-# The scene importers under libFuzzer (clang, apart from the main build):
-# FUZZ_RUNS inputs per importer, seeded with the test scenes.
+# The parsers of untrusted bytes under libFuzzer (clang, apart from the
+# main build): FUZZ_RUNS inputs each, seeded with the test scenes (see
+# fuzz/run.sh for runs of hours). Then Submit, mutated over its proto
+# descriptors: SUBMIT_MUTANTS checked by yarfd's own checks, SUBMIT_RENDERS
+# of the accepted ones rendered by a real yarfd.
 FUZZ_RUNS ?= 20000
-fuzz: deps
+SUBMIT_MUTANTS ?= 3000
+SUBMIT_RENDERS ?= 40
+fuzz: build
 	@test -f $(BUILD)/fuzz/build.ninja || cmake -S fuzz -B $(BUILD)/fuzz -G Ninja \
 	  -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo
 	cmake --build $(BUILD)/fuzz -j2
 	fuzz/run.sh $(BUILD)/fuzz $(FUZZ_RUNS)
+	$(PY) fuzz/submit_fuzz.py --mutants $(SUBMIT_MUTANTS) --renders $(SUBMIT_RENDERS)
 
 bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
@@ -96,6 +102,8 @@ bench: build
 	$(PY) bench/light_transport.py
 	$(PY) bench/remote_components.py
 	$(PY) bench/farm.py
+	$(PY) bench/soak.py
+	$(PY) bench/kill_loop.py
 
 clean:
 	rm -rf $(BUILD) $(STAMPS) out

@@ -157,12 +157,14 @@ grpc::Status WarpServiceImpl::Signature(grpc::ServerContext* context, const v1::
   });
 }
 
-grpc::Status WarpServiceImpl::Forward(grpc::ServerContext* context, const v1::WarpRequest* request, v1::WarpReply* reply) {
+grpc::Status WarpServiceImpl::Forward(grpc::ServerContext* context, const v1::WarpRequest* request,
+                                      v1::WarpReply* reply) {
   return WithInstance<Warp>(instances_, CallerOf(*context), request->handle(),
                             [&](const Warp& warp) { WarpCall(warp, *request, true, false, reply); });
 }
 
-grpc::Status WarpServiceImpl::Inverse(grpc::ServerContext* context, const v1::WarpRequest* request, v1::WarpReply* reply) {
+grpc::Status WarpServiceImpl::Inverse(grpc::ServerContext* context, const v1::WarpRequest* request,
+                                      v1::WarpReply* reply) {
   return WithInstance<Warp>(instances_, CallerOf(*context), request->handle(),
                             [&](const Warp& warp) { WarpCall(warp, *request, false, true, reply); });
 }

@@ -101,15 +101,19 @@ JobFileOwner Job::FileOwner() const {
 }
 
 std::vector<std::string> Job::Assets() const {
-  std::lock_guard lock(mutex_);
+  std::shared_ptr<const v1::SubmitRequest> request;
+  {
+    std::lock_guard lock(mutex_);
+    request = request_;  // held while it is read, whoever ends the job meanwhile
+  }
   std::vector<std::string> hashes;
-  if (!request_) return hashes;
+  if (!request) return hashes;
   const auto collect = [&](const auto& shapes) {
     for (const v1::SceneShape& shape : shapes)
       if (shape.has_mesh() && shape.mesh().has_asset()) hashes.push_back(shape.mesh().asset());
   };
-  collect(request_->scene().shapes());
-  for (const v1::Group& group : request_->scene().groups()) collect(group.shapes());
+  collect(request->scene().shapes());
+  for (const v1::Group& group : request->scene().groups()) collect(group.shapes());
   return hashes;
 }
 
@@ -157,9 +161,9 @@ void Job::EndUnstored(const StorageError& error) {
     row_.finished_at = Now();
     row_.elapsed_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
     ++version_;
+    request_.reset();
   }
   changed_.notify_all();
-  request_.reset();
 }
 
 void Job::Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays) {
@@ -461,6 +465,8 @@ void Job::Finish(v1::JobState state, const std::string& error) {
     std::lock_guard lock(film_mutex_);
     film_.reset();
   }
+  // Other threads read it (Assets) under the lock.
+  std::lock_guard lock(mutex_);
   request_.reset();
 }
 

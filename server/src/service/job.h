@@ -116,7 +116,8 @@ class Job {
   const std::string owner_;
   const Files files_;
   const Persist persist_;
-  // Read and dropped by the worker thread only (dropped once the job ends).
+  // Read by the worker thread; dropped, under mutex_, once the job ends.
+  // Other threads copy the pointer under mutex_ before they read (Assets).
   std::shared_ptr<const v1::SubmitRequest> request_;
   // halt_ stops the render; cancel_ and stop_ say why.
   std::atomic<bool> halt_{false}, cancel_{false}, stop_{false};

@@ -228,8 +228,8 @@ void JobManager::Cancel(Job& job) {
 
 bool JobManager::SetPriority(Job& job, uint32_t priority) {
   if (priority < 1 || priority > SubmitLimits::kMaxPriority)
-    throw Error("priority " + std::to_string(priority) + " is out of range (1 to " + std::to_string(SubmitLimits::kMaxPriority) +
-                ")");
+    throw Error("priority " + std::to_string(priority) + " is out of range (1 to " +
+                std::to_string(SubmitLimits::kMaxPriority) + ")");
   if (job.Finished()) return false;
   scheduler_.SetPriority(job, priority);
   return true;

@@ -5,10 +5,10 @@
 
 #include <algorithm>
 #include <bit>
-#include <istream>
-#include <ostream>
 #include <cmath>
 #include <cstdio>
+#include <istream>
+#include <ostream>
 #include <vector>
 
 #include "kernel/scene_builder.h"
@@ -111,8 +111,8 @@ void CheckFields(const Message& message, const std::string& path) {
                       TextLimit(message, *field), at);
           break;
         case FieldDescriptor::CPPTYPE_MESSAGE:
-          CheckFields(repeated ? reflection.GetRepeatedMessage(message, field, i) : reflection.GetMessage(message, field),
-                      at());
+          CheckFields(
+              repeated ? reflection.GetRepeatedMessage(message, field, i) : reflection.GetMessage(message, field), at());
           break;
         default:
           break;  // integers, bools and enums: their fields' own ranges apply
@@ -151,7 +151,8 @@ v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSour
   uint32_t spp = request.options().spp();
   if (spp == 0) spp = SubmitLimits::kDefaultSpp;
   if (spp > SubmitLimits::kMaxSpp)
-    throw Error("spp " + std::to_string(spp) + " is out of range (1 to " + std::to_string(SubmitLimits::kMaxSpp) + ")");
+    throw Error("spp " + std::to_string(spp) + " is out of range (1 to " + std::to_string(SubmitLimits::kMaxSpp) +
+                ")");
   accepted.mutable_options()->set_spp(spp);
   const double timeout = request.options().component_timeout_seconds();
   if (!(timeout >= 0 && timeout <= SubmitLimits::kMaxComponentTimeout))
@@ -162,7 +163,8 @@ v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSour
                 " is out of range (0 to " + std::to_string(SubmitLimits::kMaxComponentRetries) + ")");
   if (request.priority() > SubmitLimits::kMaxPriority)
     throw Error("priority " + std::to_string(request.priority()) + " is out of range (1 to " +
-                std::to_string(SubmitLimits::kMaxPriority) + "; 0 means " + std::to_string(SubmitLimits::kDefaultPriority) + ")");
+                std::to_string(SubmitLimits::kMaxPriority) + "; 0 means " +
+                std::to_string(SubmitLimits::kDefaultPriority) + ")");
   if (request.priority() == 0) accepted.set_priority(SubmitLimits::kDefaultPriority);
   if (request.max_retries() > SubmitLimits::kMaxRetries)
     throw Error("max_retries " + std::to_string(request.max_retries()) + " is out of range (0 to " +
@@ -171,7 +173,6 @@ v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSour
   ValidateShare(accepted);
   return accepted;
 }
-
 
 int ServeRequestChecks(std::istream& in, std::ostream& out) {
   static_assert(std::endian::native == std::endian::little, "lengths are little-endian");
