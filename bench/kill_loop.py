@@ -31,6 +31,7 @@ import json
 import os
 import random
 import secrets
+import sys
 import tempfile
 import threading
 import time
@@ -40,9 +41,13 @@ from pathlib import Path
 import grpc
 import numpy as np
 
-from yarf import Client, LocalServer, component, properties, rgb, transform, vec3
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from conftest import small_scene
+from machine import cpu_model
+
+from yarf import Client, LocalServer
 from yarf.client import FINAL_STATES
-from yarf.v1 import render_pb2, scene_pb2
+from yarf.v1 import render_pb2
 
 ROOT = Path(__file__).resolve().parent.parent
 SIZE = 16
@@ -55,38 +60,6 @@ KILL_AFTER = (0.2, 3.0)
 # Seconds a submitter waits between two Submits.
 SUBMIT_EVERY = (0.3, 1.5)
 CRASH_RULE = "times in a row"
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
-
-
-def small_scene(size: int = SIZE) -> scene_pb2.Scene:
-    """A lit sphere in front of a square emitter facing the camera."""
-    scene = scene_pb2.Scene()
-    scene.camera.origin.CopyFrom(vec3(0, 0, 4))
-    scene.camera.target.CopyFrom(vec3(0, 0, 0))
-    scene.camera.up.CopyFrom(vec3(0, 1, 0))
-    scene.camera.fov = 40.0
-    scene.film.width = size
-    scene.film.height = size
-    scene.materials.add(
-        name="grey", class_name="lambertian", properties=properties(reflectance=rgb(0.5))
-    )
-    light = scene.shapes.add(name="light", material="grey")
-    light.rectangle.SetInParent()
-    light.to_world.CopyFrom(transform(np.diag([1.5, 1.5, 1.0, 1.0])))
-    light.emitter.CopyFrom(component("diffuse_area", radiance=rgb(1.0)))
-    ball = scene.shapes.add(name="ball", material="grey")
-    ball.sphere.center.CopyFrom(vec3(0, 0, 1))
-    ball.sphere.radius = 0.5
-    return scene
 
 
 @dataclass(frozen=True)
@@ -133,7 +106,7 @@ class Submitter(threading.Thread):
         self.acknowledged = acknowledged
         self.unacknowledged = unacknowledged
         self.stop = stop
-        self.scene = small_scene()
+        self.scene = small_scene(SIZE)
 
     def run(self) -> None:
         client: Client | None = None
@@ -311,7 +284,7 @@ def run(args: argparse.Namespace, state_dir: Path) -> None:
     }
     combos = sorted({(submission.spp, submission.seed) for submission in succeeded.values()})
     with LocalServer() as clean, clean.client() as client:
-        scene = small_scene()
+        scene = small_scene(SIZE)
         references = {
             (spp, seed): client.render(scene, spp, seed, name="reference", timeout=600).pixels
             for spp, seed in combos

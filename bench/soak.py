@@ -34,6 +34,7 @@ import json
 import math
 import os
 import random
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -44,7 +45,11 @@ from pathlib import Path
 import grpc
 import numpy as np
 
-from yarf import Client, LocalServer, component, properties, rgb, transform, vec3
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from conftest import small_scene
+from machine import cpu_model
+
+from yarf import Client, LocalServer, component, transform
 from yarf.client import FINAL_STATES
 from yarf.v1 import render_pb2, scene_pb2
 
@@ -57,38 +62,6 @@ JOB_TIMEOUT = 120.0
 SAMPLE_SECONDS = 0.5
 QUIET_SECONDS = 10.0
 LATENCY_KINDS = ("submit", "status", "get_result", "list")
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
-
-
-def small_scene(size: int = SIZE) -> scene_pb2.Scene:
-    """A lit sphere in front of a square emitter facing the camera."""
-    scene = scene_pb2.Scene()
-    scene.camera.origin.CopyFrom(vec3(0, 0, 4))
-    scene.camera.target.CopyFrom(vec3(0, 0, 0))
-    scene.camera.up.CopyFrom(vec3(0, 1, 0))
-    scene.camera.fov = 40.0
-    scene.film.width = size
-    scene.film.height = size
-    scene.materials.add(
-        name="grey", class_name="lambertian", properties=properties(reflectance=rgb(0.5))
-    )
-    light = scene.shapes.add(name="light", material="grey")
-    light.rectangle.SetInParent()
-    light.to_world.CopyFrom(transform(np.diag([1.5, 1.5, 1.0, 1.0])))
-    light.emitter.CopyFrom(component("diffuse_area", radiance=rgb(1.0)))
-    ball = scene.shapes.add(name="ball", material="grey")
-    ball.sphere.center.CopyFrom(vec3(0, 0, 1))
-    ball.sphere.radius = 0.5
-    return scene
 
 
 def request(scene: scene_pb2.Scene, name: str = "soak") -> render_pb2.SubmitRequest:
@@ -223,13 +196,13 @@ def submitted_bytes(client: Client, wire: bytes) -> Outcome:
 
 
 def bad_camera(client: Client) -> Outcome:
-    scene = small_scene()
+    scene = small_scene(SIZE)
     scene.camera.origin.x = random.choice([math.nan, math.inf, -math.inf, 1e39])
     return submitted(client, request(scene))
 
 
 def singular_instance(client: Client) -> Outcome:
-    scene = small_scene()
+    scene = small_scene(SIZE)
     ball = scene.shapes.pop()
     group = scene.groups.add(name="balls")
     group.shapes.add().CopyFrom(ball)
@@ -239,7 +212,7 @@ def singular_instance(client: Client) -> Outcome:
 
 
 def mesh_scene(data: bytes) -> scene_pb2.Scene:
-    scene = small_scene()
+    scene = small_scene(SIZE)
     mesh = scene.shapes.add(name="hostile", material="grey").mesh
     mesh.data = data
     mesh.format = "ply"
@@ -265,13 +238,13 @@ def huge_ply(client: Client) -> Outcome:
 
 
 def many_photons(client: Client) -> Outcome:
-    submit_request = request(small_scene())
+    submit_request = request(small_scene(SIZE))
     submit_request.options.transport.CopyFrom(component("photon_map", photons=10**10))
     return submitted(client, submit_request)
 
 
 def cache_file_outside(client: Client) -> Outcome:
-    submit_request = request(small_scene())
+    submit_request = request(small_scene(SIZE))
     transport = component("irradiance_cache", cache_file="../../tokens")
     submit_request.options.transport.CopyFrom(transport)
     return submitted(client, submit_request)
@@ -282,7 +255,7 @@ NOT_UTF8 = b"\xff\xfeBAD\xc3\x28\xed\xa0\x80"
 
 
 def not_utf8_name(client: Client) -> Outcome:
-    wire = request(small_scene(), name=MARKER).SerializeToString()
+    wire = request(small_scene(SIZE), name=MARKER).SerializeToString()
     return submitted_bytes(client, wire.replace(MARKER.encode(), NOT_UTF8))
 
 
@@ -299,7 +272,7 @@ def big_request(kind: str, make: Callable[[], render_pb2.SubmitRequest]) -> byte
 
 
 def long_name(client: Client) -> Outcome:
-    wire = big_request("name", lambda: request(small_scene(), name="n" * (5 << 20)))
+    wire = big_request("name", lambda: request(small_scene(SIZE), name="n" * (5 << 20)))
     return submitted_bytes(client, wire)
 
 
@@ -381,7 +354,7 @@ class Soaker:
             self.timed(
                 client,
                 "submit",
-                lambda: client.submit(small_scene(), spp, random.randrange(1000), name="soak"),
+                lambda: client.submit(small_scene(SIZE), spp, random.randrange(1000), name="soak"),
             )
         )
         if random.random() < 0.5:
@@ -424,11 +397,13 @@ def main() -> None:
     )
     args = parser.parse_args()
 
-    server = LocalServer()
+    # Every job's result stays fetchable: 500 clients end thousands of jobs
+    # a minute, beyond the default retention of 1000 ended jobs.
+    server = LocalServer(extra_args=["--max-finished-jobs", "1000000"])
     server.start()
     try:
         with server.client() as client:  # warm-up: plugins, caches
-            client.wait(client.submit(small_scene(), 1, 0, name="warm-up"), timeout=60)
+            client.wait(client.submit(small_scene(SIZE), 1, 0, name="warm-up"), timeout=60)
         # Clients, made after the server, run below it.
         os.nice(10)
         time.sleep(1.0)
