@@ -494,3 +494,24 @@ def test_names_and_errors_stored_unbounded_or_not_utf8_are_mended_at_restart(
         assert len(status.name.encode()) <= 1024 and status.name.endswith("\u2026")
         assert len(status.error.encode()) <= 1024
         assert len(client.status(job).error.encode()) <= 64 << 10
+
+
+def test_instancing_a_million_copies_of_many_shapes_is_refused_before_it_takes_the_memory(
+    client: Client, assert_still_renders: Callable[[], None]
+) -> None:
+    """999 × 1000 placements (under the limit of 10^6) of a group of 1000 spheres: 10^9 shapes."""
+    scene = small_scene()
+    many = scene.groups.add(name="many")
+    for i in range(1000):
+        ball = many.shapes.add(name=f"ball{i}", material="grey")
+        ball.sphere.center.CopyFrom(vec3(i * 0.01, 0, 0))
+        ball.sphere.radius = 0.001
+    copies = scene.groups.add(name="copies")
+    for _ in range(1000):
+        copies.instances.add(group="many")
+    for _ in range(999):
+        scene.instances.add(group="copies")
+    error = refusal(client, submit_request(scene))
+    assert error.code() == grpc.StatusCode.RESOURCE_EXHAUSTED, error
+    assert "--max-job-memory" in error.details(), error.details()
+    assert_still_renders()

@@ -2,6 +2,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <string>
 #include <system_error>
 
 namespace yarf {
@@ -17,7 +21,50 @@ constexpr uint64_t kMeshExpansion = 4;
 // Inline positions and indices: 4 bytes each, copied into the kernel and
 // the BVH.
 constexpr uint64_t kInlineExpansion = 4;
+// Each placement of a group copies the records of the group's shapes
+// (two transforms, a name, a look) and adds an Embree instance.
 constexpr uint64_t kBytesPerPlacement = 512;
+constexpr uint64_t kBytesPerPlacedShape = 400;
+// Counts stop growing here: far past any limit, and never overflowing.
+constexpr uint64_t kSaturated = uint64_t(1) << 50;
+
+uint64_t Saturating(uint64_t a, uint64_t b) { return std::min(a + b, kSaturated); }
+uint64_t Saturating(uint64_t a, uint64_t b, uint64_t factor) {
+  a = std::min(a, kSaturated);
+  return factor != 0 && b > (kSaturated - a) / factor ? kSaturated : a + b * factor;
+}
+
+// Placements and placed shape records nested instancing expands to (the
+// scene is checked already: groups exist, no cycles, bounded depth).
+struct Expansion {
+  uint64_t placements = 0, shapes = 0;
+};
+
+Expansion Expand(const v1::Scene& scene) {
+  std::map<std::string, const v1::Group*> groups;
+  for (const v1::Group& group : scene.groups()) groups.emplace(group.name(), &group);
+  std::map<std::string, Expansion> memo;
+  std::function<Expansion(const std::string&)> expand = [&](const std::string& name) {
+    if (auto it = memo.find(name); it != memo.end()) return it->second;
+    const auto group = groups.find(name);
+    Expansion out{1, 0};
+    if (group == groups.end()) return out;
+    out.shapes = uint64_t(group->second->shapes_size());
+    for (const v1::Instance& child : group->second->instances()) {
+      const Expansion inner = expand(child.group());
+      out.placements = Saturating(out.placements, inner.placements);
+      out.shapes = Saturating(out.shapes, inner.shapes);
+    }
+    return memo[name] = out;
+  };
+  Expansion total;
+  for (const v1::Instance& instance : scene.instances()) {
+    const Expansion placed = expand(instance.group());
+    total.placements = Saturating(total.placements, placed.placements);
+    total.shapes = Saturating(total.shapes, placed.shapes);
+  }
+  return total;
+}
 
 uint64_t FileSize(const std::filesystem::path& path) {
   std::error_code error;
@@ -55,7 +102,9 @@ uint64_t EstimateJobBytes(const v1::SubmitRequest& request, const AssetStore* as
   uint64_t bytes = uint64_t(scene.film().width()) * scene.film().height() * kBytesPerPixel;
   bytes += ShapesBytes(scene.shapes(), assets, asset_root);
   for (const v1::Group& group : scene.groups()) bytes += ShapesBytes(group.shapes(), assets, asset_root);
-  bytes += uint64_t(scene.instances_size()) * kBytesPerPlacement;
+  const Expansion placed = Expand(scene);
+  bytes = Saturating(bytes, placed.placements, kBytesPerPlacement);
+  bytes = Saturating(bytes, placed.shapes, kBytesPerPlacedShape);
   // The request itself, kept with the job.
   return bytes + request.ByteSizeLong();
 }
