@@ -75,7 +75,8 @@ std::vector<double> CoarseWeights(uint64_t n) {
 
 class SimpsonIntegrator final : public Integrator {
  public:
-  explicit SimpsonIntegrator(const Properties& props) : intervals_(props.Int("intervals", 0)) {
+  // The weights are a vector of intervals + 1: bounded before they are made.
+  explicit SimpsonIntegrator(const Properties& props) : intervals_(props.Int("intervals", 0, 0, 1 << 24)) {
     if (intervals_ != 0 && (intervals_ < 2 || intervals_ % 2 != 0))
       throw Error("property 'intervals' must be 0 (from the budget) or an even number ≥ 2");
   }
