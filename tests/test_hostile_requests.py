@@ -8,10 +8,12 @@ cameras, singular instances, huge lights) or stalled it.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import sqlite3
 import subprocess
+import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -23,7 +25,7 @@ from conftest import small_scene
 
 from yarf import Client, LocalServer, component, properties, rgb, transform, vec3
 from yarf.server import find_yarfd
-from yarf.v1 import render_pb2, scene_pb2
+from yarf.v1 import asset_pb2, render_pb2, scene_pb2
 
 
 def refusal(client: Client, request: render_pb2.SubmitRequest) -> grpc.RpcError:
@@ -515,3 +517,28 @@ def test_instancing_a_million_copies_of_many_shapes_is_refused_before_it_takes_t
     assert error.code() == grpc.StatusCode.RESOURCE_EXHAUSTED, error
     assert "--max-job-memory" in error.details(), error.details()
     assert_still_renders()
+
+
+def test_uploads_running_at_once_count_against_the_asset_share() -> None:
+    """Two 800 KiB uploads under a 1 MiB share: the second is refused while the first runs."""
+    first, second = os.urandom(800 << 10), os.urandom(800 << 10)
+    go_on = threading.Event()
+
+    def slow_chunks() -> Iterator[asset_pb2.AssetChunk]:
+        digest = hashlib.sha256(first).hexdigest()
+        yield asset_pb2.AssetChunk(sha256=digest, size=len(first), data=first[:1024])
+        go_on.wait(30)
+        yield asset_pb2.AssetChunk(data=first[1024:])
+
+    with (
+        LocalServer(extra_args=["--max-asset-bytes-per-user", "1M"]) as local,
+        local.client() as client,
+    ):
+        running = client.asset_service.Upload.future(slow_chunks(), timeout=60)
+        time.sleep(0.5)  # the first chunk has arrived: its room is held
+        with pytest.raises(grpc.RpcError) as caught:
+            client.upload_asset(second)
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+        assert "uploads" in caught.value.details()
+        go_on.set()
+        assert running.result().stored

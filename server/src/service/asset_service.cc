@@ -33,7 +33,7 @@ grpc::Status AssetServiceImpl::Upload(grpc::ServerContext* context, grpc::Server
   v1::AssetChunk chunk;
   if (!reader->Read(&chunk)) return Invalid("an upload starts with a message naming the asset's sha256 and size");
   try {
-    store_.CheckRoom(chunk.sha256(), CallerOf(*context).user, chunk.size());
+    const auto room = store_.Reserve(chunk.sha256(), CallerOf(*context).user, chunk.size());
     AssetUpload upload(store_, chunk.sha256(), chunk.size());
     reply->set_sha256(chunk.sha256());
     do {

@@ -72,20 +72,34 @@ void AssetStore::Touch(const std::string& sha256, const std::string& user) const
   fs::last_write_time(OwnersOf(sha256) / UserFolderName(user), fs::file_time_type::clock::now(), ignored);
 }
 
-void AssetStore::CheckRoom(const std::string& sha256, const std::string& user, uint64_t size) const {
-  if (Owns(sha256, user)) return;
+uint64_t AssetStore::HeldBy(const std::string& user) const {
   const std::string name = UserFolderName(user);
   uint64_t held = 0;
   std::error_code ec;
   for (const fs::directory_entry& owners : fs::directory_iterator(root_ / "owners", ec))
     if (fs::exists(owners.path() / name, ec))
       if (const uintmax_t size = fs::file_size(PathOf(owners.path().filename().string()), ec); !ec) held += size;
-  if (held + size > max_bytes_per_user_)
-    throw LimitReached(user + " holds " + std::to_string(held >> 20) + " MiB of assets; " +
-                       std::to_string(size >> 20) + " MiB more is past the " +
-                       std::to_string(max_bytes_per_user_ >> 20) +
+  return held;
+}
+
+std::unique_ptr<AssetStore::Reservation> AssetStore::Reserve(const std::string& sha256, const std::string& user,
+                                                             uint64_t size) const {
+  if (Owns(sha256, user)) size = 0;  // theirs already: nothing more held
+  std::lock_guard lock(mutex_);
+  const uint64_t held = HeldBy(user), uploading = uploading_[user];
+  if (held + uploading + size > max_bytes_per_user_)
+    throw LimitReached(user + " holds " + std::to_string(held >> 20) + " MiB of assets and uploads " +
+                       std::to_string(uploading >> 20) + " MiB; " + std::to_string(size >> 20) +
+                       " MiB more is past the " + std::to_string(max_bytes_per_user_ >> 20) +
                        " MiB one user may (yarfd --max-asset-bytes-per-user); unused ones go after "
                        "--asset-grace-hours");
+  uploading_[user] += size;
+  return std::make_unique<Reservation>(*this, user, size);
+}
+
+AssetStore::Reservation::~Reservation() {
+  std::lock_guard lock(store_.mutex_);
+  if ((store_.uploading_[user_] -= bytes_) == 0) store_.uploading_.erase(user_);
 }
 
 size_t AssetStore::CollectGarbage(const std::set<std::string>& in_use, std::chrono::seconds grace) const {

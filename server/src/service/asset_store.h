@@ -14,7 +14,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <chrono>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <string>
 #include <string_view>
@@ -44,9 +46,25 @@ class AssetStore final : public AssetSource {
   void AddOwner(const std::string& sha256, const std::string& user) const;
   // Marks the asset as used by `user` now (when they ask for it in Missing).
   void Touch(const std::string& sha256, const std::string& user) const;
+  // Room for an upload in `user`'s share, held while the upload runs, so
+  // that uploads at once cannot pass it together.
+  class Reservation {
+   public:
+    Reservation(const AssetStore& store, std::string user, uint64_t bytes)
+        : store_(store), user_(std::move(user)), bytes_(bytes) {}
+    ~Reservation();
+    Reservation(const Reservation&) = delete;
+    Reservation& operator=(const Reservation&) = delete;
+
+   private:
+    const AssetStore& store_;
+    const std::string user_;
+    const uint64_t bytes_;
+  };
   // Throws LimitReached when `user` uploading `size` more bytes of an asset
-  // not theirs yet would hold more than their share.
-  void CheckRoom(const std::string& sha256, const std::string& user, uint64_t size) const;
+  // not theirs yet would, with their uploads running, hold more than
+  // their share.
+  std::unique_ptr<Reservation> Reserve(const std::string& sha256, const std::string& user, uint64_t size) const;
   // Removes the assets that no hash of `in_use` names and nobody has
   // uploaded or asked for in the last `grace`; returns how many went.
   size_t CollectGarbage(const std::set<std::string>& in_use, std::chrono::seconds grace) const;
@@ -58,8 +76,14 @@ class AssetStore final : public AssetSource {
   std::filesystem::path TempFolder() const { return root_ / "tmp"; }
 
  private:
+  // Bytes of the assets `user` holds.
+  uint64_t HeldBy(const std::string& user) const;
+
   const std::filesystem::path root_;
   const uint64_t max_bytes_per_user_;
+  mutable std::mutex mutex_;
+  // Bytes of uploads running, by user.
+  mutable std::map<std::string, uint64_t> uploading_;
 };
 
 // The assets of one user, as the kernel reads them for that user's jobs.

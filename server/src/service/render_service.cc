@@ -26,6 +26,19 @@ grpc::Status RawFits(const std::string& job_id, uint32_t width, uint32_t height)
               " (256 MiB) a reply may carry; ask for EXR or PNG (about 6 or 3 bytes a pixel at most)"};
 }
 
+// One of a semaphore's places, held for a scope.
+template <typename Semaphore>
+class HeldPlace {
+ public:
+  explicit HeldPlace(Semaphore& places) : places_(places) { places_.acquire(); }
+  ~HeldPlace() { places_.release(); }
+  HeldPlace(const HeldPlace&) = delete;
+  HeldPlace& operator=(const HeldPlace&) = delete;
+
+ private:
+  Semaphore& places_;
+};
+
 // How much of each job's error List shows.
 constexpr size_t kListedErrorBytes = 1 << 10;
 
@@ -77,6 +90,7 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1
   // at once, not after several copies of a film that may take gigabytes.
   if (raw && job->ImageSize(width, height))
     if (grpc::Status fits = RawFits(request->job_id(), width, height); !fits.ok()) return fits;
+  const HeldPlace copying(image_copies_);
   std::vector<float> pixels, variances;
   if (!job->Snapshot(pixels, variances, width, height))
     return {grpc::StatusCode::FAILED_PRECONDITION,

@@ -2,6 +2,8 @@
 // jobs access.h lets them: their own, or everyone's for the admin role.
 #pragma once
 
+#include <semaphore>
+
 #include "service/job_watches.h"
 #include "service/jobs.h"
 #include "yarf/v1/render.grpc.pb.h"
@@ -27,6 +29,10 @@ class RenderServiceImpl final : public v1::RenderService::WithCallbackMethod_Wat
 
   JobManager& jobs_;
   JobWatches watches_;
+  // GetResult copies a film (and encodes it) at most this many at a time:
+  // each copy of a large film takes gigabytes, and clients may ask at once.
+  static constexpr int kImageCopies = 2;
+  std::counting_semaphore<kImageCopies> image_copies_{kImageCopies};
 };
 
 }  // namespace yarf
