@@ -542,3 +542,18 @@ def test_uploads_running_at_once_count_against_the_asset_share() -> None:
         assert "uploads" in caught.value.details()
         go_on.set()
         assert running.result().stored
+
+
+def test_a_second_yarfd_on_a_port_in_use_refuses_to_start(
+    server: LocalServer, tmp_path: Path
+) -> None:
+    """Not two servers sharing one port by SO_REUSEPORT, clients alternating between them."""
+    second = subprocess.run(
+        [str(find_yarfd()), "--listen", server.address, "--state-dir", str(tmp_path / "state")],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert second.returncode != 0, second.stdout
+    assert "cannot listen" in second.stderr, second.stderr
+    assert server.is_running()

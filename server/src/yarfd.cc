@@ -87,6 +87,9 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   grpc::ServerBuilder builder;
   int port = 0;
   builder.AddListeningPort(options.listen, credentials, &port);
+  // gRPC sets SO_REUSEPORT by default: a second server on a port in use
+  // would start, and clients would alternate between the two.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   // Batches and images are large.
   builder.SetMaxReceiveMessageSize(yarf::kMaxMessageBytes);
   builder.SetMaxSendMessageSize(yarf::kMaxMessageBytes);
@@ -96,7 +99,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
     builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server) {
-    std::cerr << "yarfd: cannot listen on " << options.listen << "\n";
+    std::cerr << "yarfd: cannot listen on " << options.listen << " (is another server using it?)\n";
     return 1;
   }
   // Jobs start once the server listens: their components may call it back.
