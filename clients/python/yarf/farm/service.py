@@ -149,6 +149,9 @@ async def start_server(
         options=[
             ("grpc.max_send_message_length", MAX_MESSAGE_BYTES),
             ("grpc.max_receive_message_length", MAX_MESSAGE_BYTES),
+            # As yarfd: a second coordinator on a port in use fails to
+            # start rather than sharing its clients.
+            ("grpc.so_reuseport", 0),
         ],
     )
     render_pb2_grpc.add_RenderServiceServicer_to_server(
