@@ -557,3 +557,18 @@ def test_a_second_yarfd_on_a_port_in_use_refuses_to_start(
     assert second.returncode != 0, second.stdout
     assert "cannot listen" in second.stderr, second.stderr
     assert server.is_running()
+
+
+def test_instances_left_idle_make_room_when_their_user_needs_it() -> None:
+    """A client that died holding its instances does not lock its user out for good."""
+    args = ["--max-instances-per-user", "3", "--instance-idle-seconds", "1"]
+    with LocalServer(extra_args=args) as local, local.client() as client:
+        abandoned, _, used = (client.create("independent").handle for _ in range(3))
+        time.sleep(1.5)
+        client.describe(handle=used)  # in use: kept
+        fresh = client.create("independent").handle
+        with pytest.raises(grpc.RpcError) as caught:
+            client.describe(handle=abandoned)
+        assert caught.value.code() == grpc.StatusCode.NOT_FOUND
+        assert client.describe(handle=used).class_name == "independent"
+        assert client.describe(handle=fresh).class_name == "independent"

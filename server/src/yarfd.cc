@@ -51,7 +51,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
     }
   }
 
-  yarf::InstanceTable instances(uint64_t(options.max_instances_per_user));
+  yarf::InstanceTable instances(uint64_t(options.max_instances_per_user),
+                                std::chrono::seconds(options.instance_idle_seconds));
   yarf::JobScenes job_scenes(instances);
   // Locked before anything touches the folder: a second yarfd on it stops here.
   yarf::StateFolder state_folder(options.state_dir);

@@ -13,14 +13,24 @@ uint64_t RandomHandle() {
 
 uint64_t InstanceTable::Add(std::unique_ptr<Component> instance, const std::string& owner) {
   std::lock_guard lock(mutex_);
+  if (!owner.empty() && per_owner_[owner] >= max_per_user_) ReleaseIdle(owner);
   if (!owner.empty() && per_owner_[owner] >= max_per_user_)
     throw LimitReached(owner + " holds " + std::to_string(per_owner_[owner]) +
                         " instances, the most one user may (yarfd --max-instances-per-user); release some first");
   uint64_t handle = RandomHandle();
   while (instances_.contains(handle)) handle = RandomHandle();
-  instances_[handle] = {std::move(instance), owner};
+  instances_[handle] = {std::move(instance), owner, std::chrono::steady_clock::now()};
   if (!owner.empty()) ++per_owner_[owner];
   return handle;
+}
+
+void InstanceTable::ReleaseIdle(const std::string& owner) {
+  const auto cutoff = std::chrono::steady_clock::now() - idle_;
+  for (auto it = instances_.begin(); it != instances_.end();) {
+    const auto next = std::next(it);
+    if (it->second.owner == owner && it->second.used < cutoff) Erase(it);
+    it = next;
+  }
 }
 
 void InstanceTable::Erase(std::map<uint64_t, Entry>::iterator it) {
@@ -45,6 +55,7 @@ std::shared_ptr<Component> InstanceTable::Find(uint64_t handle, const Caller& ca
   std::lock_guard lock(mutex_);
   auto it = instances_.find(handle);
   if (it == instances_.end() || !MayActOn(caller, it->second.owner)) return nullptr;
+  it->second.used = std::chrono::steady_clock::now();
   return it->second.instance;
 }
 

@@ -2,6 +2,7 @@
 // instances made on request, by handle.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -25,8 +26,11 @@ uint64_t RandomHandle();
 // not exist (admins reach every instance).
 class InstanceTable {
  public:
-  // A user holds at most `max_per_user` instances (the server's own are not counted).
-  explicit InstanceTable(uint64_t max_per_user = 1000) : max_per_user_(max_per_user) {}
+  // A user holds at most `max_per_user` instances (the server's own are not
+  // counted); to make room, their instances unused for `idle` are released
+  // (a client that died holding them would otherwise lock its user out).
+  explicit InstanceTable(uint64_t max_per_user = 1000, std::chrono::seconds idle = std::chrono::hours(1))
+      : max_per_user_(max_per_user), idle_(idle) {}
   // `owner` empty: the server's own (a running job's materials), for admins
   // only. Throws LimitReached when the owner holds the most they may.
   uint64_t Add(std::unique_ptr<Component> instance, const std::string& owner = "");
@@ -41,10 +45,15 @@ class InstanceTable {
   struct Entry {
     std::shared_ptr<Component> instance;
     std::string owner;
+    // Of the last Add or Find (which is const); guarded by mutex_.
+    mutable std::chrono::steady_clock::time_point used;
   };
   void Erase(std::map<uint64_t, Entry>::iterator it);
+  // Releases `owner`'s instances unused for idle_; under mutex_.
+  void ReleaseIdle(const std::string& owner);
 
   const uint64_t max_per_user_;
+  const std::chrono::seconds idle_;
   mutable std::mutex mutex_;
   std::map<uint64_t, Entry> instances_;
   std::map<std::string, uint64_t> per_owner_;

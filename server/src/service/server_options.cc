@@ -40,7 +40,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--asset-root DIR] [--state-dir DIR] [--threads N] [--component ADDRESS]...\n"
       "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
       "             [--max-finished-jobs N] [--max-queued-jobs-per-user N]\n"
-      "             [--max-instances-per-user N] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
+      "             [--max-instances-per-user N] [--instance-idle-seconds S] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
       "             [--max-asset-bytes-per-user BYTES[K|M|G]] [--asset-grace-hours H]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
       "             [--allow-root]\n"
@@ -74,6 +74,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--max-finished-jobs") options.max_finished_jobs = std::atoll(value.c_str());
     else if (flag == "--max-queued-jobs-per-user") options.max_queued_jobs_per_user = std::atoll(value.c_str());
     else if (flag == "--max-instances-per-user") options.max_instances_per_user = std::atoll(value.c_str());
+    else if (flag == "--instance-idle-seconds") options.instance_idle_seconds = std::atoll(value.c_str());
     else if (flag == "--max-watches-per-user") options.max_watches_per_user = std::atoll(value.c_str());
     else if (flag == "--max-job-memory") options.max_job_memory = ParseBytes(flag, value);
     else if (flag == "--max-asset-bytes-per-user") options.max_asset_bytes_per_user = ParseBytes(flag, value);
@@ -97,6 +98,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
   if (!(options.checkpoint_seconds >= 0)) throw Error("--checkpoint-seconds must be 0 or more");
   if (!(options.keep_finished_hours >= 0)) throw Error("--keep-finished-hours must be 0 or more");
   if (!(options.asset_grace_hours >= 0)) throw Error("--asset-grace-hours must be 0 or more");
+  if (options.instance_idle_seconds < 0) throw Error("--instance-idle-seconds must be 0 or more");
   if (options.max_finished_jobs < 0) throw Error("--max-finished-jobs must be 0 or more");
   for (const auto& [flag, value] : {std::pair{"--max-queued-jobs-per-user", options.max_queued_jobs_per_user},
                                     std::pair{"--max-instances-per-user", options.max_instances_per_user},

@@ -38,6 +38,8 @@ struct ServerOptions {
   // open Watch streams.
   long long max_queued_jobs_per_user = 1000;
   long long max_instances_per_user = 1000;
+  // A user's instances unused this long are released when they need room.
+  long long instance_idle_seconds = 3600;
   long long max_watches_per_user = 1000;
   // The most memory a job may be estimated to need (bytes; 0: half the
   // machine's). --max-job-memory takes a K, M or G suffix.
