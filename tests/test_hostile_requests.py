@@ -24,8 +24,9 @@ import pytest
 from conftest import small_scene
 
 from yarf import Client, LocalServer, component, properties, rgb, transform, vec3
+from yarf.integrate import serve_function
 from yarf.server import find_yarfd
-from yarf.v1 import asset_pb2, render_pb2, scene_pb2
+from yarf.v1 import asset_pb2, math_pb2, math_pb2_grpc, render_pb2, scene_pb2
 
 
 def refusal(client: Client, request: render_pb2.SubmitRequest) -> grpc.RpcError:
@@ -572,3 +573,31 @@ def test_instances_left_idle_make_room_when_their_user_needs_it() -> None:
         assert caught.value.code() == grpc.StatusCode.NOT_FOUND
         assert client.describe(handle=used).class_name == "independent"
         assert client.describe(handle=fresh).class_name == "independent"
+
+
+def test_an_integration_stops_calling_its_integrand_once_the_caller_has_gone(
+    client: Client,
+) -> None:
+    calls: list[float] = []
+
+    def integrand(points: np.ndarray) -> np.ndarray:
+        calls.append(time.monotonic())
+        return points.sum(axis=1)
+
+    with serve_function(integrand, 2) as address:
+        integrator = client.create("mean_sample").handle
+        request = math_pb2.IntegrateRequest(
+            handle=integrator,
+            function_address=address,
+            lower=[0.0, 0.0],
+            upper=[1.0, 1.0],
+            evaluations=1 << 36,
+        )
+        with pytest.raises(grpc.RpcError) as caught:
+            math_pb2_grpc.IntegratorStub(client.channel).Integrate(request, timeout=1.0)
+        assert caught.value.code() == grpc.StatusCode.DEADLINE_EXCEEDED
+        gone = time.monotonic()
+        time.sleep(2.0)
+        late = [t for t in calls if t > gone + 1.0]
+        assert calls and not late, f"{len(late)} calls of the integrand after its caller left"
+        client.release(integrator)

@@ -73,6 +73,26 @@ FunctionArgument ResolveFunction(const InstanceTable& instances, const Caller& c
   return argument;
 }
 
+// The integrand while its caller waits: once the caller has gone (it
+// cancelled, or its deadline passed), the next batch throws, so a call of
+// 2^36 evaluations does not run on for nobody.
+class WhileCallerWaits final : public Function {
+ public:
+  WhileCallerWaits(Function& function, const grpc::ServerContext& context) : function_(function), context_(context) {
+    SetInfo(function.Describe());
+  }
+  uint32_t InputDimensions() const override { return function_.InputDimensions(); }
+  uint32_t OutputDimensions() const override { return function_.OutputDimensions(); }
+  void Evaluate(std::span<const float> points, std::span<float> values) override {
+    if (context_.IsCancelled()) throw Error("the caller has gone (cancelled, or past its deadline)");
+    function_.Evaluate(points, values);
+  }
+
+ private:
+  Function& function_;
+  const grpc::ServerContext& context_;
+};
+
 }  // namespace
 
 grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext* context, const v1::IntegrateRequest* request,
@@ -96,7 +116,8 @@ grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext* context, cons
   } catch (const Error& e) {
     return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
   }
-  Function* function = argument.function;
+  WhileCallerWaits waited(*argument.function, *context);
+  Function* function = &waited;
   return WithInstance<Integrator>(instances_, CallerOf(*context), request->handle(), [&](Integrator& integrator) {
     if (request->lower_size() != int(function->InputDimensions()) || request->upper_size() != request->lower_size())
       throw Error("the box needs " + std::to_string(function->InputDimensions()) + " lower and upper bounds");
@@ -121,8 +142,9 @@ grpc::Status RootFinderServiceImpl::FindRoot(grpc::ServerContext* context, const
   } catch (const Error& e) {
     return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
   }
+  WhileCallerWaits waited(*argument.function, *context);
   return WithInstance<RootFinder>(instances_, CallerOf(*context), request->handle(), [&](RootFinder& finder) {
-    const RootResult result = finder.FindRoot(*argument.function, request->lower(), request->upper(),
+    const RootResult result = finder.FindRoot(waited, request->lower(), request->upper(),
                                               request->tolerance(), request->max_iterations());
     reply->set_root(result.root);
     reply->set_iterations(result.iterations);
