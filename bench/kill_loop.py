@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import json
 import os
 import random
 import secrets
@@ -42,14 +41,13 @@ import grpc
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from bench_report import cpu_model, write_result
 from conftest import small_scene
-from machine import cpu_model
 
 from yarf import Client, LocalServer
 from yarf.client import FINAL_STATES
 from yarf.v1 import render_pb2
 
-ROOT = Path(__file__).resolve().parent.parent
 SIZE = 16
 # Samples per pixel of the jobs, drawn uniformly: most kills find jobs running.
 SPPS = (1, 16, 256, 2048, 2048, 8192, 8192)
@@ -370,10 +368,7 @@ def run(args: argparse.Namespace, state_dir: Path) -> None:
         print("  yarfd log (tail):")
         for line in log_tail:
             print(f"    {line}")
-    output = ROOT / "out" / "bench"
-    output.mkdir(parents=True, exist_ok=True)
-    (output / "kill_loop.json").write_text(json.dumps(report, indent=2))
-    print("RESULT " + json.dumps(report))
+    write_result("kill_loop", report)
 
 
 if __name__ == "__main__":

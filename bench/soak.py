@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import json
 import math
 import os
 import random
@@ -46,14 +45,13 @@ import grpc
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from bench_report import cpu_model, write_result
 from conftest import small_scene
-from machine import cpu_model
 
 from yarf import Client, LocalServer, component, transform
 from yarf.client import FINAL_STATES
 from yarf.v1 import render_pb2, scene_pb2
 
-ROOT = Path(__file__).resolve().parent.parent
 SIZE = 8
 # Seconds between two status polls of a client that polls.
 POLL_SECONDS = 0.1
@@ -516,10 +514,7 @@ def main() -> None:
         print("  yarfd log (tail):")
         for line in log_tail:
             print(f"    {line}")
-    output = ROOT / "out" / "bench"
-    output.mkdir(parents=True, exist_ok=True)
-    (output / "soak.json").write_text(json.dumps(report, indent=2))
-    print("RESULT " + json.dumps(report))
+    write_result("soak", report)
 
 
 if __name__ == "__main__":

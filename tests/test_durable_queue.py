@@ -448,28 +448,6 @@ def test_a_job_cancelled_while_it_runs_stays_cancelled_after_a_crash(
     assert not list((state_dir / "checkpoints").iterdir())
 
 
-def test_a_checkpoint_with_more_samples_than_the_job_has_is_not_resumed(
-    start_server: Callable[..., LocalServer], state_dir: Path
-) -> None:
-    server = start_server("--checkpoint-seconds", "0.1")
-    with server.client() as client:
-        job_id = submit(client, small_scene(), spp=8000, seed=7)
-        wait_until(lambda: checkpoint_samples(state_dir, job_id) > 0, "a checkpoint")
-    server.kill()
-    checkpoint = state_dir / "checkpoints" / f"{job_id}.film"
-    damaged = bytearray(checkpoint.read_bytes())
-    damaged[8:12] = struct.pack("<I", 9000)
-    checkpoint.write_bytes(bytes(damaged))
-
-    again = start_server()
-    with again.client() as client:
-        status = client.wait(job_id, timeout=60)
-        assert status.state == render_pb2.SUCCEEDED, status.error
-        # Rendered anew: every sample traced in this run.
-        assert status.samples_done == 8000
-        assert status.closest_hit_rays >= 16 * 16 * 8000
-
-
 def test_a_job_database_of_the_previous_schema_is_upgraded(
     start_server: Callable[..., LocalServer], state_dir: Path
 ) -> None:

@@ -180,9 +180,13 @@ def test_swapped_or_changed_results_are_not_served(
     assert path_a.read_bytes() == bytes_b and path_c.read_bytes() == bytes(changed)
 
 
+# Fewer samples than the film holds (resumed, it would weigh the film
+# wrongly and add samples twice), or more than the job has.
+@pytest.mark.parametrize("edited_samples", [10, 9000], ids=["fewer", "more than spp"])
 def test_a_checkpoint_with_edited_samples_done_is_discarded_and_the_job_renders_anew(
     start_server: Callable[..., LocalServer],  # noqa: F811
     state_dir: Path,  # noqa: F811
+    edited_samples: int,
 ) -> None:
     server = start_server("--checkpoint-seconds", "0.1")
     with server.client() as client:
@@ -191,9 +195,7 @@ def test_a_checkpoint_with_edited_samples_done_is_discarded_and_the_job_renders_
     server.kill()
     checkpoint = state_dir / "checkpoints" / f"{job_id}.film"
     edited = bytearray(checkpoint.read_bytes())
-    # Fewer samples than the film holds: resumed, it would weigh the film
-    # wrongly and add samples twice.
-    edited[8:12] = struct.pack("<I", 10)
+    edited[8:12] = struct.pack("<I", edited_samples)
     checkpoint.write_bytes(bytes(edited))
 
     again = start_server()
