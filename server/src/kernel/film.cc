@@ -158,6 +158,7 @@ class Reader {
   explicit Reader(std::string_view bytes) : bytes_(bytes) {}
   void Get(void* data, size_t size) {
     if (size > bytes_.size() - offset_) throw Error("saved film is truncated");
+    if (size == 0) return;  // `data` may be an empty vector's null pointer
     std::memcpy(data, bytes_.data() + offset_, size);
     offset_ += size;
   }
