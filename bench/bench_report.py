@@ -19,6 +19,13 @@ def cpu_model() -> str:
     return "unknown"
 
 
+def print_log_tail(lines: list[str]) -> None:
+    """The end of yarfd's log, indented under the figures."""
+    print("  yarfd log (tail):")
+    for line in lines:
+        print(f"    {line}")
+
+
 def write_result(name: str, report: dict[str, object]) -> None:
     """``report`` as out/bench/NAME.json and as one machine-readable ``RESULT`` line."""
     output = ROOT / "out" / "bench"

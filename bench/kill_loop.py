@@ -41,7 +41,7 @@ import grpc
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from bench_report import cpu_model, write_result
+from bench_report import cpu_model, print_log_tail, write_result
 from conftest import small_scene
 
 from yarf import Client, LocalServer
@@ -365,9 +365,7 @@ def run(args: argparse.Namespace, state_dir: Path) -> None:
                 print(f"    {line}")
             print("    --")
     if any(details.values()):
-        print("  yarfd log (tail):")
-        for line in log_tail:
-            print(f"    {line}")
+        print_log_tail(log_tail)
     write_result("kill_loop", report)
 
 

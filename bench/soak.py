@@ -45,7 +45,7 @@ import grpc
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from bench_report import cpu_model, write_result
+from bench_report import cpu_model, print_log_tail, write_result
 from conftest import small_scene
 
 from yarf import Client, LocalServer, component, transform
@@ -511,9 +511,7 @@ def main() -> None:
             f"{sampler.ended_after} s into the load)"
         )
     if not running:
-        print("  yarfd log (tail):")
-        for line in log_tail:
-            print(f"    {line}")
+        print_log_tail(log_tail)
     write_result("soak", report)
 
 

@@ -312,6 +312,17 @@ uint64_t CountPlacements(const v1::Scene& scene) {
 
 }  // namespace
 
+std::vector<std::string> MeshAssets(const v1::Scene& scene) {
+  std::vector<std::string> hashes;
+  const auto collect = [&](const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes) {
+    for (const v1::SceneShape& shape : shapes)
+      if (shape.has_mesh() && shape.mesh().has_asset()) hashes.push_back(shape.mesh().asset());
+  };
+  collect(scene.shapes());
+  for (const v1::Group& group : scene.groups()) collect(group.shapes());
+  return hashes;
+}
+
 bool IsSha256(const std::string& text) {
   const auto hex = [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); };
   return text.size() == 64 && std::all_of(text.begin(), text.end(), hex);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "components/make_component.h"
 #include "kernel/scene.h"
@@ -30,6 +31,9 @@ class AssetSource {
   // The asset's bytes; throws Error when it is not held.
   virtual std::string Read(const std::string& sha256) const = 0;
 };
+
+// The hashes of the mesh assets the scene's shapes and groups name.
+std::vector<std::string> MeshAssets(const v1::Scene& scene);
 
 // Whether `text` is a SHA-256 as assets are named: 64 lowercase hex digits.
 bool IsSha256(const std::string& text);

@@ -106,15 +106,7 @@ std::vector<std::string> Job::Assets() const {
     std::lock_guard lock(mutex_);
     request = request_;  // held while it is read, whoever ends the job meanwhile
   }
-  std::vector<std::string> hashes;
-  if (!request) return hashes;
-  const auto collect = [&](const auto& shapes) {
-    for (const v1::SceneShape& shape : shapes)
-      if (shape.has_mesh() && shape.mesh().has_asset()) hashes.push_back(shape.mesh().asset());
-  };
-  collect(request->scene().shapes());
-  for (const v1::Group& group : request->scene().groups()) collect(group.shapes());
-  return hashes;
+  return request ? MeshAssets(request->scene()) : std::vector<std::string>{};
 }
 
 bool Job::Commit(const std::function<bool(JobRecord&)>& change) {
@@ -126,7 +118,6 @@ bool Job::Commit(const std::function<bool(JobRecord&)>& change) {
     row_ = std::move(next);
     ++version_;
   }
-  changed_.notify_all();
   return true;
 }
 
@@ -163,7 +154,6 @@ void Job::EndUnstored(const StorageError& error) {
     ++version_;
     request_.reset();
   }
-  changed_.notify_all();
 }
 
 void Job::Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays) {
@@ -174,7 +164,6 @@ void Job::Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t sh
     shadow_rays_ = shadow_rays;
     ++version_;
   }
-  changed_.notify_all();
 }
 
 void Job::SetPriority(uint32_t priority) {

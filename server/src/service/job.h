@@ -5,7 +5,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -125,7 +124,6 @@ class Job {
   const std::shared_ptr<RemoteCalls> remote_calls_ = std::make_shared<RemoteCalls>();
 
   mutable std::mutex mutex_;
-  mutable std::condition_variable changed_;
   JobRecord row_;
   uint32_t samples_done_ = 0, run_first_sample_ = 0;
   uint64_t closest_hit_rays_ = 0, shadow_rays_ = 0;

@@ -284,12 +284,21 @@ void JobManager::ApplyRetention() {
 
 // Assets are kept while a job still to run names them, and for a grace
 // period after anyone last uploaded or asked for them.
-void JobManager::CollectAssets() const {
+void JobManager::CollectAssets() {
   if (!resources_.assets) return;
+  const auto grace = std::chrono::seconds(int64_t(options_.asset_grace_hours * 3600));
+  // Nothing becomes collectable sooner than its grace period: a tenth of it
+  // (ten minutes at most) between two sweeps of the store, one at a time,
+  // rather than a sweep at every job's end.
+  const std::unique_lock sweeping(collection_mutex_, std::try_to_lock);
+  if (!sweeping.owns_lock()) return;
+  const auto now = std::chrono::steady_clock::now();
+  const auto every = std::min<std::chrono::steady_clock::duration>(grace / 10, std::chrono::minutes(10));
+  if (last_collection_ && now - *last_collection_ < every) return;
+  last_collection_ = now;
   std::set<std::string> in_use;
   for (const auto& job : List())
     for (std::string& hash : job->Assets()) in_use.insert(std::move(hash));
-  const auto grace = std::chrono::seconds(int64_t(options_.asset_grace_hours * 3600));
   if (const size_t removed = resources_.assets->CollectGarbage(in_use, grace))
     std::cerr << "yarfd: " << removed << " assets no job needs, unused for " << options_.asset_grace_hours
               << " hours, deleted" << std::endl;

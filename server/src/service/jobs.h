@@ -3,17 +3,19 @@
 // a time while the server stays responsive.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "service/job.h"
-#include "service/limits.h"
 #include "service/job_store.h"
+#include "service/limits.h"
 #include "service/scheduler.h"
 #include "service/state_folder.h"
 #include "yarf/v1/render.pb.h"
@@ -78,7 +80,7 @@ class JobManager {
   void RunJob(const std::shared_ptr<Job>& job);
   // Deletes ended jobs past the retention limits, with their files.
   void ApplyRetention();
-  void CollectAssets() const;
+  void CollectAssets();
   void RemoveStrayFiles() const;
   std::shared_ptr<Job> MakeJob(JobRecord record, std::shared_ptr<const v1::SubmitRequest> request);
 
@@ -87,6 +89,9 @@ class JobManager {
   const StateFolder& folder_;
   JobStore store_;
   mutable std::mutex mutex_;
+  // Asset collection: one sweep at a time, and when the last one was.
+  std::mutex collection_mutex_;
+  std::optional<std::chrono::steady_clock::time_point> last_collection_;
   std::map<uint64_t, std::shared_ptr<Job>> jobs_;
   // Last: its workers use the members above.
   Scheduler scheduler_;
