@@ -117,7 +117,8 @@ int64_t PbrtParams::Integer(const std::string& name, int64_t fallback) {
   const PbrtParam& p = Typed(name, {"integer"});
   if (p.numbers.size() != 1) Fail(p.where, "parameter '" + name + "' needs one value");
   const double v = p.numbers[0];
-  if (v != double(int64_t(v)) || std::abs(v) > 9e15) Fail(p.where, "parameter '" + name + "' needs an integer");
+  // The range is checked first: converting an out-of-range double is undefined.
+  if (!(std::abs(v) <= 9e15) || v != std::trunc(v)) Fail(p.where, "parameter '" + name + "' needs an integer");
   return int64_t(v);
 }
 

@@ -251,6 +251,7 @@ TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {
       {"malformed/outside.pbrt", "outside.pbrt:2: file '../assets/quad.ply' lies outside the scene folder"},
       {"malformed/bad_indices.pbrt", "bad_indices.pbrt:2: shape 'trianglemesh': index 7 is not a vertex"},
       {"malformed/unbalanced.pbrt", "unbalanced.pbrt:2: AttributeEnd without AttributeBegin"},
+      {"malformed/huge_integer.pbrt", "huge_integer.pbrt:1: parameter 'xresolution' needs an integer"},
   };
   for (const auto& [file, message] : cases)
     EXPECT_NE(ImportErrorOf(file).find(message), std::string::npos) << file << ": " << ImportErrorOf(file);
