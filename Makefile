@@ -59,6 +59,7 @@ stubs: venv
 	  --grpc_python_out=clients/python --pyi_out=clients/python proto/yarf/v1/*.proto
 
 build: deps stubs
+	@date -u +'%T build'
 	@test -f $(BUILD)/build.ninja || cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
 	cmake --build $(BUILD) -j2
 	components/go/build.sh
@@ -72,11 +73,17 @@ lint: venv
 	$(VENV)/bin/ruff format --check bench tests clients/python components/python deploy fuzz
 	$(VENV)/bin/ruff check bench tests clients/python components/python deploy fuzz
 
+# Each stage prints when it starts, so a slow or stalled run shows where.
 test: build lint
+	@date -u +'%T ctest'
 	cd $(BUILD) && ctest --output-on-failure -j2
+	@date -u +'%T go tests'
 	components/go/test.sh
-	$(PY) -m pytest -q
+	@date -u +'%T pytest'
+	$(PY) -m pytest -q --durations=15
+	@date -u +'%T fuzz'
 	$(MAKE) --no-print-directory fuzz
+	@date -u +'%T done'
 
 # The parsers of untrusted bytes under libFuzzer (clang, apart from the
 # main build): FUZZ_RUNS inputs each, seeded with the test scenes (see

@@ -71,7 +71,10 @@ run() {
   local seed_folders=("$build/seeds/$1")
   # The scene importers read the scene folders' text as it is.
   case $fuzzer in mitsuba | pbrt) seed_folders+=("$root/tests/scenes/import" "${scene_folders[@]:1}") ;; esac
-  local flags=(-runs="$runs" -rss_limit_mb=2048) asan=()
+  # A bounded run uses a fixed seed, so a CI run is repeatable; runs of
+  # hours (RUNS -1) draw a fresh one.
+  local flags=(-runs="$runs" -rss_limit_mb=2048) asan=() seed=()
+  [ "$runs" -ge 0 ] && seed=(-seed=1)
   if [ "$fuzzer" = texture ]; then
     # OpenImageIO runs at some 30 inputs a second (1/20 of the inputs in
     # the same time), and damaged PNG and EXR headers of a few hundred
@@ -84,7 +87,7 @@ run() {
   mkdir -p "$corpus"
   seeds "$fuzzer"
   if env "${asan[@]}" "$build/fuzz_$fuzzer" -max_len=16384 -timeout=10 -print_final_stats=1 \
-      -artifact_prefix="$build/crash-$fuzzer-" "${flags[@]}" "${extra[@]}" "$corpus" "${seed_folders[@]}" 2> "$log"; then
+      -artifact_prefix="$build/crash-$fuzzer-" "${flags[@]}" "${seed[@]}" "${extra[@]}" "$corpus" "${seed_folders[@]}" 2> "$log"; then
     echo "fuzz_$fuzzer: $(grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "$log" | tr '\n' ' ')($((SECONDS - start)) s)"
   else
     echo "fuzz_$fuzzer FAILED ($((SECONDS - start)) s):"
