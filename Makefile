@@ -98,7 +98,7 @@ fuzz: build
 	  -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo
 	cmake --build $(BUILD)/fuzz -j2
 	fuzz/run.sh $(BUILD)/fuzz $(FUZZ_RUNS)
-	$(PY) fuzz/submit_fuzz.py --mutants $(SUBMIT_MUTANTS) --renders $(SUBMIT_RENDERS)
+	$(PY) fuzz/submit_fuzz.py --mutants $(SUBMIT_MUTANTS) --renders $(SUBMIT_RENDERS) --seed 1
 
 bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
