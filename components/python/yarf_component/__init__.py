@@ -26,6 +26,7 @@ from yarf_component.surface import (
     TransportMode,
     lobe_allowed,
 )
+from yarf_component.texture import Texture
 from yarf_component.transport import Transport
 
 __all__ = [
@@ -51,6 +52,7 @@ __all__ = [
     "SceneLayout",
     "SurfaceClient",
     "SurfaceModel",
+    "Texture",
     "Transform",
     "Transport",
     "TransportMode",

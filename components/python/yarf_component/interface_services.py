@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import grpc
 
-from yarf.v1 import math_pb2_grpc, surface_pb2_grpc, transport_pb2_grpc
+from yarf.v1 import math_pb2_grpc, surface_pb2_grpc, texture_pb2_grpc, transport_pb2_grpc
 from yarf_component.host import Host
 from yarf_component.numerical import Function, Integrator, Sampler, Warp
 from yarf_component.numerical_services import (
@@ -17,6 +17,8 @@ from yarf_component.numerical_services import (
 )
 from yarf_component.surface import Emitter, SurfaceModel
 from yarf_component.surface_services import EmitterService, SurfaceModelService
+from yarf_component.texture import Texture
+from yarf_component.texture_service import TextureService
 from yarf_component.transport import Transport
 from yarf_component.transport_service import TransportService
 
@@ -35,6 +37,7 @@ SERVICES: dict[str, tuple[Callable[[object, grpc.Server], None], Callable[[Host]
         transport_pb2_grpc.add_TransportServicer_to_server,
         TransportService,
     ),
+    Texture.interface_name: (texture_pb2_grpc.add_TextureServicer_to_server, TextureService),
 }
 
 

@@ -30,10 +30,21 @@ struct Hit {
   // Index of the shape placement hit (kNoShape for a miss) and its primitive.
   uint32_t shape = kNoShape;
   uint32_t primitive = 0;
-  // Surface parameters (barycentrics for triangles).
+  // Texture coordinates: a mesh's uvs interpolated (its barycentrics b1,
+  // b2 when it has none), a sphere's (φ/2π, θ/π) in its own frame.
   float u = 0, v = 0;
-  // Unit geometric normal, world space, on the shape's outward side.
+  // Barycentric coordinates of the triangle's second and third corners
+  // (0 for spheres).
+  float b1 = 0, b2 = 0;
+  // Unit geometric normal, world space, on the shape's outward side (a
+  // mesh with vertex normals: the side they point to).
   Vec3 normal;
+  // Unit shading normal: the vertex normals interpolated, on `normal`'s
+  // side; `normal` itself where there are none.
+  Vec3 shading_normal;
+  // ∂p/∂u and ∂p/∂v, world space (not unit); for a mesh without uvs, of
+  // its barycentric parameterisation.
+  Vec3 dpdu, dpdv;
 
   bool Found() const { return shape != kNoShape; }
 };

@@ -7,6 +7,7 @@
 #include "yarf/component.h"
 #include "yarf/math.h"
 #include "yarf/surface.h"
+#include "yarf/texture.h"
 #include "yarf/transport.h"
 
 namespace yarf {
@@ -16,7 +17,7 @@ template <typename T>
 void Register(Registrar& registrar, std::string name, std::string version, std::string summary) {
   ComponentInfo info{std::move(name), std::move(version),
                      InterfacesOf<T, Function, Integrator, Sampler, Generator, RootFinder, Warp,
-                                  SurfaceModel, Emitter, Transport>(),
+                                  SurfaceModel, Emitter, Transport, Texture>(),
                      std::move(summary), ""};
   registrar.Add(std::move(info), [](const Properties& p) -> std::unique_ptr<Component> {
     return std::make_unique<T>(p);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <utility>
@@ -23,10 +24,16 @@ struct Rgb {
 struct Reference {
   std::string name;
 };
+class Texture;
 
 class Properties {
  public:
-  using Value = std::variant<double, int64_t, bool, std::string, Vec3, Rgb, Transform, Reference>;
+  // A Reference to a scene's texture reaches the component resolved, as
+  // the texture itself; a file the server resolved (confined to the
+  // scene's folder or the asset store) as a path, which no request can
+  // set directly.
+  using Value = std::variant<double, int64_t, bool, std::string, Vec3, Rgb, Transform, Reference,
+                             std::shared_ptr<const Texture>, std::filesystem::path>;
 
   void Set(const std::string& key, Value value) { values_[key] = std::move(value); }
   bool Has(const std::string& key) const { return values_.count(key) != 0; }
@@ -76,8 +83,25 @@ class Properties {
         throw Error("property '" + key + "' must lie in [0, 1] in every channel");
     return rgb;
   }
+  // The texture property `key` names; null when it is absent or holds a
+  // plain value.
+  std::shared_ptr<const Texture> TextureOf(const std::string& key) const {
+    if (!Has(key)) return nullptr;
+    if (auto* reference = std::get_if<Reference>(&values_.at(key)))
+      throw Error("property '" + key + "' refers to '" + reference->name + "', which is not a texture of the scene");
+    auto* texture = std::get_if<std::shared_ptr<const Texture>>(&values_.at(key));
+    if (!texture) return nullptr;
+    Find(key);
+    return *texture;
+  }
   Transform Matrix(const std::string& key, const Transform& fallback) const {
     return Has(key) ? Get<Transform>(key, Find(key), "transform") : fallback;
+  }
+
+  // The file property `key` names, as the server resolved it: a readable
+  // local path. A plain string is refused: only the server names files.
+  std::filesystem::path ResolvedFile(const std::string& key) const {
+    return Get<std::filesystem::path>(key, Find(key), "file (resolved by the server)");
   }
 
   // The folder where components may keep files between jobs (caches): the

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -14,7 +15,9 @@
 #include "components/remote_function.h"
 #include "components/remote_sampler.h"
 #include "components/remote_surface_model.h"
+#include "components/remote_texture.h"
 #include "components/remote_transport.h"
+#include "yarf/texture.h"
 
 namespace yarf {
 
@@ -34,21 +37,39 @@ struct ComponentSources {
   std::filesystem::path file_folder;
 };
 
+// What the kernel resolves in a component's properties before the
+// component is made: references to the scene's textures, and files the
+// server found for it (a request names files only by relative path or
+// asset hash).
+struct ResolvedProperties {
+  std::map<std::string, std::shared_ptr<const Texture>> textures;  // by texture name
+  std::map<std::string, std::filesystem::path> files;              // by property key
+};
+
 // The interfaces with a Remote<I>.
 template <typename I>
 constexpr bool kHasRemote = std::is_same_v<I, SurfaceModel> || std::is_same_v<I, Sampler> ||
-                            std::is_same_v<I, Transport> || std::is_same_v<I, Function>;
+                            std::is_same_v<I, Transport> || std::is_same_v<I, Function> ||
+                            std::is_same_v<I, Texture>;
 
 // `address` empty: the registry's class, or a registered remote class.
 template <typename I>
 std::unique_ptr<I> MakeComponent(const ComponentSources& sources, const std::string& class_name,
-                                 const v1::Properties& properties, const std::string& address = "") {
+                                 const v1::Properties& properties, const std::string& address = "",
+                                 const ResolvedProperties* resolved = nullptr) {
   std::string where = address;
   if (where.empty() && sources.remote_classes && !sources.registry.Has(class_name))
     where = sources.remote_classes->AddressOf(class_name).value_or("");
   if (where.empty()) {
     Properties local = FromProto(properties);
     local.SetFileFolder(sources.file_folder);
+    if (resolved) {
+      for (const auto& [key, value] : properties.values())
+        if (value.value_case() == v1::Property::kReference)
+          if (auto it = resolved->textures.find(value.reference()); it != resolved->textures.end())
+            local.Set(key, it->second);
+      for (const auto& [key, path] : resolved->files) local.Set(key, path);
+    }
     return sources.registry.CreateAs<I>(class_name, local);
   }
   if constexpr (kHasRemote<I>) {

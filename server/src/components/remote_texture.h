@@ -1,0 +1,28 @@
+// Remote<Texture>: values over a surface served by another process.
+// Channels and Mean are asked once, when the texture is made; Evaluate is
+// one call per batch of points.
+#pragma once
+
+#include "components/remote_instance.h"
+#include "yarf/texture.h"
+#include "yarf/v1/texture.grpc.pb.h"
+
+namespace yarf {
+
+template <>
+class Remote<Texture> final : public Texture {
+ public:
+  explicit Remote(std::unique_ptr<RemoteInstance> instance);
+
+  uint32_t Channels() const override { return channels_; }
+  void Evaluate(const TexturePoints& at, std::span<float> value) const override;
+  std::vector<float> Mean() const override { return mean_; }
+
+ private:
+  std::unique_ptr<RemoteInstance> instance_;
+  std::unique_ptr<v1::Texture::Stub> stub_;
+  uint32_t channels_ = 0;
+  std::vector<float> mean_;
+};
+
+}  // namespace yarf
