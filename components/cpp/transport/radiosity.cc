@@ -240,7 +240,7 @@ class Radiosity final : public Transport {
     PatchPoint point;
   };
   SidePoint Locate(const Ray& ray, const Hit& hit) const {
-    const PatchPoint p = solution_.mesh->Locate(hit.shape, hit.primitive, hit.u, hit.v);
+    const PatchPoint p = solution_.mesh->Locate(hit.shape, hit.primitive, hit.b1, hit.b2);
     const bool back = Dot(solution_.mesh->elements()[p.patch].normal, ray.direction) > 0;
     return {2 * p.patch + (back ? 1 : 0), p};
   }
@@ -292,9 +292,17 @@ class Radiosity final : public Transport {
     std::vector<uint32_t> owners;
     for (uint32_t i = 0; i < hits.size(); ++i) {
       if (!hits[i].Found()) continue;
+      // Radiosity shades flat: its elements carry one normal each.
       const Frame frame(hits[i].normal);
-      LightConnection c{scene.MaterialOf(hits[i].shape), rays[i].origin + rays[i].direction * hits[i].t, frame,
-                        frame.ToLocal(-rays[i].direction), hits[i].u, hits[i].v, rays[i].time, LightSample{}};
+      LightConnection c{scene.MaterialOf(hits[i].shape),
+                        rays[i].origin + rays[i].direction * hits[i].t,
+                        hits[i].normal,
+                        frame,
+                        frame.ToLocal(-rays[i].direction),
+                        hits[i].u,
+                        hits[i].v,
+                        rays[i].time,
+                        LightSample{}};
       if (scene.HasLights())
         c.light = scene.SampleLight(points.Get(i, kLightChoice), points.Get(i, kLightPosition),
                                     points.Get(i, kLightPosition + 1));
@@ -324,7 +332,7 @@ class Radiosity final : public Transport {
       if (!(answers[k].pdf > 0) || !(MaxComponent(answers[k].weight) > 0)) continue;
       const LightConnection& c = connections[k];
       Ray ray = rays[owners[k]];
-      Redirect(ray, c.position, c.frame.n, Normalize(c.frame.ToWorld(answers[k].wo)));
+      Redirect(ray, c.position, c.ng, Normalize(c.frame.ToWorld(answers[k].wo)));
       gather.push_back(ray);
       weights.push_back(answers[k].weight);
       gather_owners.push_back(owners[k]);

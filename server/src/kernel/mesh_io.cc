@@ -9,17 +9,18 @@
 #include <limits>
 #include <span>
 #include <sstream>
+#include <unordered_map>
 
 #include "yarf/error.h"
 
 namespace yarf {
 namespace {
 
-// The lines of an OBJ file that make a mesh: `v` and `f` (tested as
-// tinyobjloader tests them). Everything else is dropped before parsing:
-// tinyobjloader allocates up to 8192 values for a `t` line of twenty
-// bytes, converts out-of-range `vw` weights with undefined behaviour, and
-// keeps normals, texture coordinates and groups yarf does not use.
+// The lines of an OBJ file that make a mesh: `v`, `vt`, `vn` and `f`
+// (tested as tinyobjloader tests them). Everything else is dropped before
+// parsing: tinyobjloader allocates up to 8192 values for a `t` line of
+// twenty bytes, converts out-of-range `vw` weights with undefined
+// behaviour, and keeps groups and materials yarf does not use.
 struct ObjGeometry {
   std::string text;
   uint64_t vertices = 0, faces = 0, face_vertices = 0;
@@ -35,7 +36,9 @@ ObjGeometry ObjGeometryLines(std::string_view bytes) {
     const size_t first = line.find_first_not_of(" \t");
     if (first == std::string_view::npos || line.size() - first < 2) continue;
     line.remove_prefix(first);
-    if ((line[0] != 'v' && line[0] != 'f') || (line[1] != ' ' && line[1] != '\t')) continue;
+    const bool attribute = line.size() > 2 && line[0] == 'v' && (line[1] == 't' || line[1] == 'n') &&
+                           (line[2] == ' ' || line[2] == '\t');
+    if (!attribute && ((line[0] != 'v' && line[0] != 'f') || (line[1] != ' ' && line[1] != '\t'))) continue;
     if (line[0] == 'v') {
       ++geometry.vertices;
     } else {
@@ -48,8 +51,8 @@ ObjGeometry ObjGeometryLines(std::string_view bytes) {
   return geometry;
 }
 
-// tinyobjloader's memory for what it parses, in bytes: a vertex as
-// positions and colours; a face vertex as its parsed triple (twice,
+// tinyobjloader's memory for what it parses, in bytes: a vertex (or
+// texture coordinate, or normal) as positions and colours; a face vertex as its parsed triple (twice,
 // counting vector growth), the copy made when its face is stored and the
 // exported index; a face as its vector and per-face arrays. A small file
 // of many short faces can need forty times its size, so the estimate is
@@ -78,7 +81,20 @@ void AppendFace(std::span<const uint32_t> face, const std::vector<Vec3>& positio
   for (size_t k = 1; k + 1 < face.size(); ++k) out.insert(out.end(), {face[0], face[k], face[k + 1]});
 }
 
-TriangleMesh ParseObj(std::string_view bytes, const std::string& name) {
+// A mesh vertex is an OBJ face corner's (position, uv, normal) triple;
+// corners sharing a triple share the vertex.
+struct ObjCorner {
+  int position, uv, normal;
+  bool operator==(const ObjCorner&) const = default;
+};
+struct ObjCornerHash {
+  size_t operator()(const ObjCorner& c) const {
+    return std::hash<uint64_t>()((uint64_t(uint32_t(c.position)) << 32) ^ (uint64_t(uint32_t(c.uv)) << 16) ^
+                                 uint64_t(uint32_t(c.normal)));
+  }
+};
+
+TriangleMesh ParseObj(std::string_view bytes, const std::string& name, const MeshOptions& options) {
   ObjGeometry geometry = ObjGeometryLines(bytes);
   const uint64_t parse_bytes = geometry.vertices * kObjBytesPerVertex +
                                geometry.face_vertices * kObjBytesPerFaceVertex + geometry.faces * kObjBytesPerFace;
@@ -96,10 +112,45 @@ TriangleMesh ParseObj(std::string_view bytes, const std::string& name) {
   if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warning, &error, &stream, nullptr,
                         /*triangulate=*/false, /*default_vcols_fallback=*/false))
     throw Error("mesh '" + name + "': not a valid OBJ file: " + FirstLine(error));
+  const size_t position_count = attrib.vertices.size() / 3, uv_count = attrib.texcoords.size() / 2,
+               normal_count = attrib.normals.size() / 3;
+
+  // Normals and texture coordinates only when every corner has one (else
+  // the mesh is shaded flat, or parameterised by its barycentrics).
+  bool all_normals = true, all_uvs = true;
+  for (const auto& shape : shapes)
+    for (const tinyobj::index_t& index : shape.mesh.indices) {
+      all_normals = all_normals && index.normal_index >= 0;
+      all_uvs = all_uvs && index.texcoord_index >= 0;
+    }
+  const bool with_normals = all_normals && !options.face_normals && normal_count > 0;
+  const bool with_uvs = all_uvs && uv_count > 0;
+
   TriangleMesh mesh;
-  mesh.positions.reserve(attrib.vertices.size() / 3);
-  for (size_t i = 0; i + 2 < attrib.vertices.size(); i += 3)
-    mesh.positions.emplace_back(attrib.vertices[i], attrib.vertices[i + 1], attrib.vertices[i + 2]);
+  std::unordered_map<ObjCorner, uint32_t, ObjCornerHash> vertex_of;
+  auto vertex = [&](const tinyobj::index_t& index) -> uint32_t {
+    if (index.vertex_index < 0 || size_t(index.vertex_index) >= position_count)
+      throw Error("mesh '" + name + "': face vertex index " + std::to_string(int64_t(index.vertex_index) + 1) +
+                  " out of range (" + std::to_string(position_count) + " vertices)");
+    if (index.texcoord_index >= int64_t(uv_count) || index.normal_index >= int64_t(normal_count))
+      throw Error("mesh '" + name + "': a face's texture coordinate or normal index is out of range");
+    const ObjCorner corner{index.vertex_index, with_uvs ? index.texcoord_index : -1,
+                           with_normals ? index.normal_index : -1};
+    const auto [at, added] = vertex_of.try_emplace(corner, uint32_t(mesh.positions.size()));
+    if (!added) return at->second;
+    const size_t p = size_t(corner.position);
+    mesh.positions.emplace_back(attrib.vertices[3 * p], attrib.vertices[3 * p + 1], attrib.vertices[3 * p + 2]);
+    if (with_normals) {
+      const size_t n = size_t(corner.normal);
+      mesh.normals.emplace_back(attrib.normals[3 * n], attrib.normals[3 * n + 1], attrib.normals[3 * n + 2]);
+    }
+    if (with_uvs) {
+      const float u = attrib.texcoords[2 * size_t(corner.uv)], v = attrib.texcoords[2 * size_t(corner.uv) + 1];
+      mesh.uvs.insert(mesh.uvs.end(), {u, options.flip_tex_coords ? 1 - v : v});
+    }
+    return at->second;
+  };
+
   std::vector<uint32_t> face;
   for (const auto& shape : shapes) {
     const auto& indices = shape.mesh.indices;
@@ -110,13 +161,7 @@ TriangleMesh ParseObj(std::string_view bytes, const std::string& name) {
         throw Error("mesh '" + name + "': a face has more than " + std::to_string(kMaxObjFaceVertices) +
                     " vertices");
       face.clear();
-      for (size_t k = 0; k < count; ++k) {
-        const int index = indices[next + k].vertex_index;
-        if (index < 0 || size_t(index) >= mesh.positions.size())
-          throw Error("mesh '" + name + "': face vertex index " + std::to_string(int64_t(index) + 1) +
-                      " out of range (" + std::to_string(mesh.positions.size()) + " vertices)");
-        face.push_back(uint32_t(index));
-      }
+      for (size_t k = 0; k < count; ++k) face.push_back(vertex(indices[next + k]));
       next += count;
       AppendFace(face, mesh.positions, mesh.indices);
     }
@@ -127,9 +172,13 @@ TriangleMesh ParseObj(std::string_view bytes, const std::string& name) {
   return mesh;
 }
 
-// A PLY reader for the subset meshes use: vertex elements with x, y, z and
-// face elements with a vertex index list; other elements and properties
-// are skipped. ASCII and both binary byte orders.
+// A PLY reader for the subset meshes use: vertex elements with x, y, z
+// (and optionally nx, ny, nz; u, v or s, t; red, green, blue) and face
+// elements with a vertex index list. Other scalar properties of vertices
+// and faces become attributes "vertex_NAME" and "face_NAME" (colours
+// "vertex_color" and "face_color"), as Mitsuba's reader names them; other
+// elements and lists are skipped. ASCII and both binary byte orders, any
+// property order.
 //
 // The header's counts are untrusted: before an element is read, its count
 // is checked against the bytes that follow (every entry takes at least a
@@ -138,7 +187,8 @@ TriangleMesh ParseObj(std::string_view bytes, const std::string& name) {
 // bytes.
 class PlyReader {
  public:
-  PlyReader(std::string_view bytes, const std::string& name) : bytes_(bytes), name_(name) {}
+  PlyReader(std::string_view bytes, const std::string& name, const MeshOptions& options)
+      : bytes_(bytes), name_(name), options_(options) {}
 
   TriangleMesh Read() {
     ReadHeader();
@@ -154,56 +204,59 @@ class PlyReader {
         Fail("element '" + element.name + "' declares " + std::to_string(element.count) +
              " entries but only " + std::to_string(remaining) + " bytes follow");
       const bool is_vertex = element.name == "vertex", is_face = element.name == "face";
-      // Safe after the check: at most one position per `least` bytes.
+      const size_t first_attribute = mesh.attributes.size();
+      for (const auto& [name, channels] : element.attributes) mesh.attributes.push_back({name, channels, {}});
+      // Safe after the check: at most one vertex per `least` bytes.
       if (is_vertex) mesh.positions.reserve(mesh.positions.size() + element.count);
+      std::vector<float> values(element.properties.size());
       for (uint64_t i = 0; i < element.count; ++i) {
-        float xyz[3] = {0, 0, 0};
-        for (const Property& p : element.properties) {
+        size_t triangles = 0;
+        for (size_t k = 0; k < element.properties.size(); ++k) {
+          const Property& p = element.properties[k];
           if (p.is_list) {
-            const double n = ReadNumber(p.count_type);
-            if (!(n >= 0 && n <= kMaxPolygonVertices) || n != std::floor(n))
-              Fail("a list of element '" + element.name + "' has " + FormatNumber(n) + " entries (at most " +
-                   std::to_string(kMaxPolygonVertices) + ")");
-            const bool indices = is_face && p.is_vertex_indices;
-            indices_.clear();
-            for (int k = 0; k < int(n); ++k) {
-              const double v = ReadNumber(p.type);
-              if (!indices) continue;
-              if (!(v >= 0 && v < 4294967296.0) || v != std::floor(v))
-                Fail("face vertex index " + FormatNumber(v) + " is not an index");
-              indices_.push_back(uint32_t(v));
-            }
-            for (size_t k = 1; k + 1 < indices_.size(); ++k)
-              mesh.indices.insert(mesh.indices.end(), {indices_[0], indices_[k], indices_[k + 1]});
-          } else {
-            const double v = ReadNumber(p.type);
-            if (is_vertex && p.axis >= 0) {
-              // Converting a double beyond float's range is undefined.
-              if (!(std::abs(v) <= std::numeric_limits<float>::max())) Fail("non-finite vertex position");
-              xyz[p.axis] = float(v);
-            }
+            triangles += ReadList(p, is_face, mesh);
+            continue;
           }
+          const double v = ReadNumber(p.type);
+          if (p.target == Target::kNone) continue;
+          // Converting a double beyond float's range is undefined.
+          if (!(std::abs(v) <= std::numeric_limits<float>::max()))
+            Fail("non-finite value of property '" + p.name + "'");
+          values[k] = float(v * p.scale);
         }
-        if (is_vertex) mesh.positions.emplace_back(xyz[0], xyz[1], xyz[2]);
+        if (is_vertex) StoreVertex(element, values, mesh);
+        StoreAttributes(element, values, is_vertex ? 1 : triangles, first_attribute, mesh);
       }
     }
     if (mesh.indices.empty()) Fail("no faces");
+    if (options_.face_normals) mesh.normals.clear();
     return mesh;
   }
 
  private:
   enum class Encoding { kAscii, kLittle, kBig };
   static constexpr int kMaxPolygonVertices = 1024;
+  static constexpr size_t kMaxAttributes = 16;
+  // Attribute floats a mesh may hold (1 GiB): a face's values are stored
+  // once per triangle, so a short file could otherwise ask for far more.
+  static constexpr uint64_t kMaxAttributeValues = uint64_t(1) << 28;
+  // What a scalar property's value is.
+  enum class Target { kNone, kPosition, kNormal, kUv, kAttribute };
   struct Property {
     std::string name, type, count_type;
     bool is_list = false;
     bool is_vertex_indices = false;
-    int axis = -1;  // 0, 1, 2 for x, y, z
+    Target target = Target::kNone;
+    int component = 0;     // of the position, normal, uv or attribute
+    size_t attribute = 0;  // index in its element's attributes
+    double scale = 1;      // integer colours become 0–1
   };
   struct Element {
     std::string name;
     uint64_t count = 0;
     std::vector<Property> properties;
+    std::vector<std::pair<std::string, uint32_t>> attributes;  // name, channels
+    bool has_normals = false, has_uvs = false;
   };
 
   [[noreturn]] void Fail(const std::string& why) const {
@@ -214,6 +267,58 @@ class PlyReader {
     std::ostringstream out;
     out << v;
     return out.str();
+  }
+
+  // Reads one list property; a face's vertex indices become triangles (a
+  // fan), whose number it returns. Other lists are read and dropped.
+  size_t ReadList(const Property& p, bool is_face, TriangleMesh& mesh) {
+    const double n = ReadNumber(p.count_type);
+    if (!(n >= 0 && n <= kMaxPolygonVertices) || n != std::floor(n))
+      Fail("a list has " + FormatNumber(n) + " entries (at most " + std::to_string(kMaxPolygonVertices) + ")");
+    const bool indices = is_face && p.is_vertex_indices;
+    indices_.clear();
+    for (int k = 0; k < int(n); ++k) {
+      const double v = ReadNumber(p.type);
+      if (!indices) continue;
+      if (!(v >= 0 && v < 4294967296.0) || v != std::floor(v))
+        Fail("face vertex index " + FormatNumber(v) + " is not an index");
+      indices_.push_back(uint32_t(v));
+    }
+    for (size_t k = 1; k + 1 < indices_.size(); ++k)
+      mesh.indices.insert(mesh.indices.end(), {indices_[0], indices_[k], indices_[k + 1]});
+    return indices_.size() >= 3 ? indices_.size() - 2 : 0;
+  }
+
+  void StoreVertex(const Element& element, const std::vector<float>& values, TriangleMesh& mesh) const {
+    float position[3] = {0, 0, 0}, normal[3] = {0, 0, 0}, uv[2] = {0, 0};
+    for (size_t k = 0; k < element.properties.size(); ++k) {
+      const Property& p = element.properties[k];
+      if (p.target == Target::kPosition) position[p.component] = values[k];
+      else if (p.target == Target::kNormal) normal[p.component] = values[k];
+      else if (p.target == Target::kUv) uv[p.component] = values[k];
+    }
+    mesh.positions.push_back(Vec3::Load(position));
+    if (element.has_normals) mesh.normals.push_back(Vec3::Load(normal));
+    if (element.has_uvs) mesh.uvs.insert(mesh.uvs.end(), {uv[0], uv[1]});
+  }
+
+  // Appends each attribute's value `copies` times (a face's once per
+  // triangle); channels the file lacks are 0.
+  void StoreAttributes(const Element& element, const std::vector<float>& values, size_t copies,
+                       size_t first_attribute, TriangleMesh& mesh) {
+    for (size_t a = 0; a < element.attributes.size(); ++a) {
+      float tuple[3] = {0, 0, 0};
+      for (size_t k = 0; k < element.properties.size(); ++k) {
+        const Property& p = element.properties[k];
+        if (p.target == Target::kAttribute && p.attribute == a) tuple[p.component] = values[k];
+      }
+      const uint32_t channels = element.attributes[a].second;
+      attribute_values_ += uint64_t(copies) * channels;
+      if (attribute_values_ > kMaxAttributeValues)
+        Fail("attributes would hold more than " + std::to_string(kMaxAttributeValues) + " values");
+      std::vector<float>& out = mesh.attributes[first_attribute + a].values;
+      for (size_t c = 0; c < copies; ++c) out.insert(out.end(), tuple, tuple + channels);
+    }
   }
 
   // The fewest bytes one entry of `element` can take.
@@ -271,19 +376,77 @@ class PlyReader {
         p.is_vertex_indices = p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index");
         if (p.is_vertex_indices && !IsInteger(p.type))
           Fail("list property '" + p.name + "' has index type '" + p.type + "' (an integer type is needed)");
-        if (!p.is_list && p.name.size() == 1 && p.name[0] >= 'x' && p.name[0] <= 'z') p.axis = p.name[0] - 'x';
+        for (const Property& q : element.properties)
+          if (q.name == p.name) Fail("element '" + element.name + "' has two properties '" + p.name + "'");
+        if (!p.is_list) Classify(element, p);
         element.properties.push_back(p);
       }
     }
     if (!has_format) Fail("no format line");
-    for (const Element& e : elements_) {
-      if (e.name != "vertex" || e.count == 0) continue;
-      bool axes[3] = {false, false, false};
-      for (const Property& p : e.properties)
-        if (p.axis >= 0) axes[p.axis] = true;
-      if (!axes[0] || !axes[1] || !axes[2]) Fail("element 'vertex' lacks an x, y or z property");
+    for (Element& e : elements_) {
+      if (e.name != "vertex") continue;
+      if (e.count > 0 && Components(e, Target::kPosition) != 3) Fail("element 'vertex' lacks an x, y or z property");
+      // Normals and uvs only when complete.
+      e.has_normals = Components(e, Target::kNormal) == 3;
+      e.has_uvs = Components(e, Target::kUv) == 2;
     }
     pos_ = at;
+  }
+
+  static int Components(const Element& e, Target target) {
+    int count = 0;
+    for (const Property& p : e.properties) count += p.target == target;
+    return count;
+  }
+
+  // What a scalar property's value is, by its name (the spellings
+  // Mitsuba's and pbrt's readers accept); a second spelling of a
+  // component already present is dropped.
+  void Classify(Element& element, Property& p) {
+    const bool is_vertex = element.name == "vertex";
+    if (!is_vertex && element.name != "face") return;
+    struct Name {
+      const char* name;
+      Target target;
+      int component;
+    };
+    static constexpr Name kVertexNames[] = {
+        {"x", Target::kPosition, 0},   {"y", Target::kPosition, 1},  {"z", Target::kPosition, 2},
+        {"nx", Target::kNormal, 0},    {"ny", Target::kNormal, 1},   {"nz", Target::kNormal, 2},
+        {"u", Target::kUv, 0},         {"v", Target::kUv, 1},        {"s", Target::kUv, 0},
+        {"t", Target::kUv, 1},         {"texture_u", Target::kUv, 0}, {"texture_v", Target::kUv, 1},
+        {"texture_s", Target::kUv, 0}, {"texture_t", Target::kUv, 1}};
+    auto taken = [&](Target target, int component, size_t attribute = 0) {
+      for (const Property& q : element.properties)
+        if (q.target == target && q.component == component && q.attribute == attribute) return true;
+      return false;
+    };
+    if (is_vertex)
+      for (const Name& n : kVertexNames)
+        if (p.name == n.name) {
+          if (!taken(n.target, n.component)) p.target = n.target, p.component = n.component;
+          return;
+        }
+    if (p.name == "alpha" || p.name == "a") return;
+    static constexpr std::pair<const char*, int> kColours[] = {{"red", 0}, {"green", 1}, {"blue", 2},
+                                                              {"r", 0},   {"g", 1},     {"b", 2}};
+    std::string attribute = (is_vertex ? "vertex_" : "face_") + p.name;
+    uint32_t channels = 1;
+    for (const auto& [name, component] : kColours)
+      if (p.name == name) {
+        attribute = is_vertex ? "vertex_color" : "face_color", channels = 3, p.component = component;
+        // Integer colours are stored in their type's range.
+        if (IsInteger(p.type)) p.scale = 1.0 / (std::ldexp(1.0, 8 * int(SizeOf(p.type))) - 1);
+      }
+    size_t index = 0;
+    while (index < element.attributes.size() && element.attributes[index].first != attribute) ++index;
+    if (index == element.attributes.size()) {
+      if (index == kMaxAttributes)
+        Fail("element '" + element.name + "' has more than " + std::to_string(kMaxAttributes) + " attributes");
+      element.attributes.emplace_back(attribute, channels);
+    }
+    if (taken(Target::kAttribute, p.component, index)) return;
+    p.target = Target::kAttribute, p.attribute = index;
   }
 
   static size_t SizeOf(const std::string& type) {
@@ -332,33 +495,91 @@ class PlyReader {
 
   std::string_view bytes_;
   std::string name_;
+  MeshOptions options_;
   Encoding encoding_ = Encoding::kAscii;
   std::vector<Element> elements_;
   std::vector<uint32_t> indices_;
+  std::vector<float> entry_;  // the current entry's values, by slot
+  uint64_t attribute_values_ = 0;
   size_t pos_ = 0;
 };
 
 }  // namespace
 
-TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name) {
+TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name,
+                       const MeshOptions& options) {
   TriangleMesh mesh;
-  if (format == "obj") mesh = ParseObj(bytes, name);
-  else if (format == "ply") mesh = PlyReader(bytes, name).Read();
+  if (format == "obj") mesh = ParseObj(bytes, name, options);
+  else if (format == "ply") mesh = PlyReader(bytes, name, options).Read();
   else throw Error("mesh '" + name + "': unknown format '" + std::string(format) + "' (obj or ply)");
   ValidateMesh(mesh, name);
   return mesh;
 }
 
-void ValidateMesh(const TriangleMesh& mesh, const std::string& name) {
-  if (mesh.indices.size() % 3 != 0)
-    throw Error("mesh '" + name + "': index count is not a multiple of 3");
+namespace {
+
+bool IsFinite(std::span<const float> values) {
+  return std::all_of(values.begin(), values.end(), [](float v) { return std::isfinite(v); });
+}
+
+// Unit vertex normals; a zero or non-finite one becomes the area-weighted
+// mean of its faces' normals (zero when they are all degenerate, which
+// the kernel shades flat).
+void RepairNormals(TriangleMesh& mesh) {
+  std::vector<size_t> bad;
+  for (size_t i = 0; i < mesh.normals.size(); ++i) {
+    Vec3& n = mesh.normals[i];
+    const float length = std::sqrt(Dot(n, n));
+    if (std::isfinite(length) && length > 0) n = n * (1 / length);
+    else bad.push_back(i);
+  }
+  if (bad.empty()) return;
+  std::vector<Vec3> face_sum(mesh.positions.size());
+  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
+    const uint32_t* v = &mesh.indices[3 * t];
+    const Vec3 n = Cross(mesh.positions[v[1]] - mesh.positions[v[0]], mesh.positions[v[2]] - mesh.positions[v[0]]);
+    for (int k = 0; k < 3; ++k) face_sum[v[k]] = face_sum[v[k]] + n;
+  }
+  for (size_t i : bad) {
+    const Vec3 n = face_sum[i];
+    const float length = std::sqrt(Dot(n, n));
+    mesh.normals[i] = std::isfinite(length) && length > 0 ? n * (1 / length) : Vec3{};
+  }
+}
+
+}  // namespace
+
+void ValidateMesh(TriangleMesh& mesh, const std::string& name) {
+  const std::string what = "mesh '" + name + "': ";
+  if (mesh.indices.size() % 3 != 0) throw Error(what + "index count is not a multiple of 3");
   for (uint32_t i : mesh.indices)
     if (i >= mesh.positions.size())
-      throw Error("mesh '" + name + "': index " + std::to_string(i) + " out of range (" +
-                  std::to_string(mesh.positions.size()) + " vertices)");
+      throw Error(what + "index " + std::to_string(i) + " out of range (" + std::to_string(mesh.positions.size()) +
+                  " vertices)");
   for (const Vec3& p : mesh.positions)
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw Error("mesh '" + name + "': non-finite vertex position");
+      throw Error(what + "non-finite vertex position");
+  const size_t vertices = mesh.positions.size(), triangles = mesh.TriangleCount();
+  if (!mesh.normals.empty() && mesh.normals.size() != vertices)
+    throw Error(what + std::to_string(mesh.normals.size()) + " normals for " + std::to_string(vertices) +
+                " vertices");
+  if (!mesh.uvs.empty() && mesh.uvs.size() != 2 * vertices)
+    throw Error(what + std::to_string(mesh.uvs.size() / 2) + " texture coordinates for " +
+                std::to_string(vertices) + " vertices");
+  if (!IsFinite(mesh.uvs)) throw Error(what + "non-finite texture coordinate");
+  for (const MeshAttribute& a : mesh.attributes) {
+    if (!a.name.starts_with("vertex_") && !a.name.starts_with("face_"))
+      throw Error(what + "attribute '" + a.name + "' is named neither vertex_* nor face_*");
+    if (a.channels != 1 && a.channels != 3)
+      throw Error(what + "attribute '" + a.name + "' has " + std::to_string(a.channels) + " channels (1 or 3)");
+    const size_t count = a.PerFace() ? triangles : vertices;
+    if (a.values.size() != count * a.channels)
+      throw Error(what + "attribute '" + a.name + "' has " + std::to_string(a.values.size()) + " values, not " +
+                  std::to_string(count * a.channels) + " (" + std::to_string(a.channels) + " per " +
+                  (a.PerFace() ? "face" : "vertex") + ")");
+    if (!IsFinite(a.values)) throw Error(what + "attribute '" + a.name + "' has a non-finite value");
+  }
+  RepairNormals(mesh);
 }
 
 }  // namespace yarf

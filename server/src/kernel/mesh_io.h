@@ -10,19 +10,47 @@
 
 namespace yarf {
 
+// A named value per vertex or per triangle (Mitsuba's mesh attributes):
+// "vertex_NAME" or "face_NAME", 1 or 3 channels.
+struct MeshAttribute {
+  std::string name;
+  uint32_t channels = 1;
+  // channels × (vertex or triangle count) values.
+  std::vector<float> values;
+
+  bool PerFace() const { return name.starts_with("face_"); }
+};
+
 struct TriangleMesh {
   std::vector<Vec3> positions;
   // Three indices per triangle.
   std::vector<uint32_t> indices;
+  // Each empty or one per position: unit vertex normals and texture
+  // coordinates (u, v pairs; v = 0 is an image's top row).
+  std::vector<Vec3> normals;
+  std::vector<float> uvs;
+  std::vector<MeshAttribute> attributes;
 
   size_t TriangleCount() const { return indices.size() / 3; }
 };
 
+// How mesh files are read.
+struct MeshOptions {
+  // OBJ: v becomes 1 − v (Mitsuba's flip_tex_coords).
+  bool flip_tex_coords = true;
+  // Drop vertex normals: shade flat.
+  bool face_normals = false;
+};
+
 // Parses `bytes` as `format` ("obj" or "ply"); throws Error naming `name`
 // on malformed input. Polygons are split into triangles.
-TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name);
+TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name,
+                       const MeshOptions& options = {});
 
-// Throws Error unless every index is in range and every position finite.
-void ValidateMesh(const TriangleMesh& mesh, const std::string& name);
+// Throws Error unless every index is in range, every position finite, and
+// normals, uvs and attributes (finite) have one entry per vertex or face.
+// Zero or non-finite normals are replaced by the face's; the rest are
+// made unit length.
+void ValidateMesh(TriangleMesh& mesh, const std::string& name);
 
 }  // namespace yarf

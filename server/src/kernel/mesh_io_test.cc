@@ -113,7 +113,7 @@ TEST(PlyReader, RefusesBadListsAndIndices) {
   const std::string huge_double =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
       "element face 1\nproperty list uchar int vertex_indices\nend_header\n1e300 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-  EXPECT_NE(ErrorOf(huge_double, "ply").find("non-finite vertex position"), std::string::npos);
+  EXPECT_NE(ErrorOf(huge_double, "ply").find("non-finite value of property 'x'"), std::string::npos);
 }
 
 // --- PLY files that must keep working --------------------------------------
@@ -169,7 +169,7 @@ const std::string kObjVertices = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\n";
 
 TEST(ObjReader, ReadsTrianglesQuadsRelativeIndicesAndPolygons) {
   const TriangleMesh mesh =
-      ParseMesh(kObjVertices + "g a\nusemtl m\nf 1/1/1 2/2/2 3/3/3\nvn 0 0 1\nvt 0 0\ng b\nf -4 -3 -2 -1\n"
+      ParseMesh(kObjVertices + "vn 0 0 1\nvt 0 0\ng a\nusemtl m\nf 1/1/1 2/1/1 3/1/1\ng b\nf -4 -3 -2 -1\n"
                 "f 1 2 3 4 1 2\n",
                 "obj", "x.obj");
   EXPECT_EQ(Flat(mesh), (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 2, 0, 0, 2, 0}));
@@ -178,6 +178,66 @@ TEST(ObjReader, ReadsTrianglesQuadsRelativeIndicesAndPolygons) {
   EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 1, 3, 1, 2, 3, 0, 1, 2, 0, 2, 3, 0, 3, 0, 0, 0, 1}));
   const TriangleMesh skewed = ParseMesh("v 0 0 0\nv 1 0 0\nv 5 1 0\nv 0 1 0\nf 1 2 3 4\n", "obj", "x.obj");
   EXPECT_EQ(skewed.indices, (std::vector<uint32_t>{0, 1, 3, 1, 2, 3}));
+}
+
+TEST(ObjReader, ReadsUvsAndNormalsSplittingVerticesWhereCornersDiffer) {
+  // A quad of two triangles sharing the edge 1-3, with a seam: corner 1 has
+  // different uvs in the two faces.
+  const std::string obj = kObjVertices +
+                          "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\nvn 0 0 2\n"
+                          "f 1/1/1 2/2/1 3/3/1\nf 1/5/1 3/3/1 4/4/1\n";
+  const TriangleMesh flipped = ParseMesh(obj, "obj", "x.obj");
+  ASSERT_EQ(flipped.positions.size(), 5u);  // four corners, one split at the seam
+  EXPECT_EQ(flipped.indices, (std::vector<uint32_t>{0, 1, 2, 3, 2, 4}));
+  // v flipped (Mitsuba's default): an image's top row at v = 0.
+  EXPECT_EQ(flipped.uvs, (std::vector<float>{0, 1, 1, 1, 1, 0, 0.5f, 0.5f, 0, 0}));
+  ASSERT_EQ(flipped.normals.size(), 5u);
+  EXPECT_EQ(flipped.normals[3].z, 1.0f);  // made unit length
+  const TriangleMesh kept = ParseMesh(obj, "obj", "x.obj", {.flip_tex_coords = false});
+  EXPECT_EQ(kept.uvs, (std::vector<float>{0, 0, 1, 0, 1, 1, 0.5f, 0.5f, 0, 1}));
+  EXPECT_TRUE(ParseMesh(obj, "obj", "x.obj", {.face_normals = true}).normals.empty());
+  // A face without uvs: the mesh has none.
+  EXPECT_TRUE(ParseMesh(obj + "f 1 2 3\n", "obj", "x.obj").uvs.empty());
+  EXPECT_NE(ErrorOf(kObjVertices + "vt 0 0\nf 1/1 2/7 3/1\n", "obj").find("out of range"), std::string::npos);
+}
+
+TEST(PlyReader, ReadsNormalsUvsColoursAndAttributesInAnyOrder) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\n"
+      "element vertex 3\nproperty uchar blue\nproperty float s\nproperty float x\nproperty float nz\n"
+      "property float y\nproperty float t\nproperty float z\nproperty uchar red\nproperty float ny\n"
+      "property float nx\nproperty float temperature\nproperty uchar green\n"
+      "element face 1\nproperty float weight\nproperty list uchar int vertex_indices\nend_header\n"
+      "255 0 0 1 0 0.25 0 0 0 0 10 51\n0 1 1 3 0 0.5 0 255 0 0 20 0\n0 0 0 0 1 1 0 0 0 0 30 0\n"
+      "0.75 4 0 1 2 2\n";
+  const TriangleMesh mesh = ParseMesh(ply, "ply", "x.ply");
+  EXPECT_EQ(Flat(mesh), (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0}));
+  EXPECT_EQ(mesh.uvs, (std::vector<float>{0, 0.25f, 1, 0.5f, 0, 1}));  // not flipped
+  ASSERT_EQ(mesh.normals.size(), 3u);
+  EXPECT_EQ(mesh.normals[1].z, 1.0f);  // (0, 0, 3) made unit
+  // The third vertex's normal was zero: the face's own (+z) replaces it.
+  EXPECT_EQ(mesh.normals[2].z, 1.0f);
+  ASSERT_EQ(mesh.attributes.size(), 3u);
+  const auto attribute = [&](const std::string& name) -> const MeshAttribute& {
+    for (const MeshAttribute& a : mesh.attributes)
+      if (a.name == name) return a;
+    throw Error("no attribute " + name);
+  };
+  const MeshAttribute& colour = attribute("vertex_color");
+  EXPECT_EQ(colour.channels, 3u);
+  EXPECT_EQ(colour.values, (std::vector<float>{0, 0.2f, 1, 1, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(attribute("vertex_temperature").values, (std::vector<float>{10, 20, 30}));
+  // A quad (4 0 1 2 2) is two triangles: its value once per triangle.
+  EXPECT_EQ(attribute("face_weight").values, (std::vector<float>{0.75f, 0.75f}));
+  EXPECT_TRUE(attribute("face_weight").PerFace());
+}
+
+TEST(PlyReader, RefusesTooManyAttributesAndRepeatedProperties) {
+  std::string header = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n";
+  std::string many = header;
+  for (int k = 0; k < 17; ++k) many += "property float a" + std::to_string(k) + "\n";
+  EXPECT_NE(ErrorOf(many + "end_header\n", "ply").find("more than 16 attributes"), std::string::npos);
+  EXPECT_NE(ErrorOf(header + "property float x\nend_header\n", "ply").find("two properties 'x'"), std::string::npos);
 }
 
 TEST(ObjReader, RefusesIndicesOutOfRange) {

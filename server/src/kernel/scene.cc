@@ -112,11 +112,15 @@ void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& lo
   record.look = look;
   std::vector<Vec3> normals(mesh.TriangleCount());
   for (size_t t = 0; t < normals.size(); ++t) {
-    const Vec3 p0 = mesh.positions[mesh.indices[3 * t]], p1 = mesh.positions[mesh.indices[3 * t + 1]],
-               p2 = mesh.positions[mesh.indices[3 * t + 2]];
+    const uint32_t* v = &mesh.indices[3 * t];
+    const Vec3 p0 = mesh.positions[v[0]], p1 = mesh.positions[v[1]], p2 = mesh.positions[v[2]];
     const Vec3 n = Cross(p1 - p0, p2 - p0);
     const float length = Length(n);
     normals[t] = length > 0 ? n / length : Vec3(0, 0, 1);
+    // With vertex normals, the face's side is theirs (as pbrt-v4): the
+    // winding of a smooth mesh's triangles need not agree with them.
+    if (!mesh.normals.empty() && Dot(normals[t], mesh.normals[v[0]] + mesh.normals[v[1]] + mesh.normals[v[2]]) < 0)
+      normals[t] = -normals[t];
     if (look.flip_normals) normals[t] = -normals[t];
   }
   face_normals_.push_back(std::move(normals));
@@ -124,7 +128,8 @@ void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& lo
   groups_[group].shapes.push_back(record);
 }
 
-void KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look) {
+void KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look,
+                            const std::array<Vec3, 3>& axes) {
   RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_SPHERE_POINT);
   auto* point = static_cast<float*>(rtcSetNewGeometryBuffer(
       geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
@@ -140,6 +145,7 @@ void KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const Sha
   record.kind = Kind::kSphere;
   record.center = center;
   record.radius = radius;
+  record.axes = axes;
   record.look = look;
   groups_[group].shapes.push_back(record);
 }
@@ -254,6 +260,7 @@ void KernelScene::Commit() {
     for (ShapeRecord s : groups_[placement.group].shapes) {
       s.placed = true;
       s.to_world = placement.to_world;
+      for (Vec3& axis : s.axes) axis = Normalize(placement.to_world.Vector(axis));
       s.moving = placement.to_world_end.has_value();
       if (s.moving) s.to_world_end = *placement.to_world_end;
       shapes_.push_back(s);
@@ -276,7 +283,7 @@ void KernelScene::Commit() {
     light.emitter = s.look.emitter;
     const uint32_t count = s.kind == Kind::kSphere ? 1 : uint32_t(meshes_[s.mesh].TriangleCount());
     for (uint32_t p = 0; p < count; ++p) {
-      EmittingPrimitive e{id, s.kind == Kind::kSphere, {}, {}, {}, 0, {}, 0};
+      EmittingPrimitive e{id, p, s.kind == Kind::kSphere, {}, {}, {}, 0, {}, 0};
       if (e.sphere) {
         e.p0 = s.placed ? s.to_world.Point(s.center) : s.center;
         e.radius = s.radius * (s.placed ? float(std::cbrt(std::abs(s.to_world.Determinant3()))) : 1.0f);
@@ -348,6 +355,79 @@ Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 posi
   const Vec3 center = shape.placed ? to_world.Point(shape.center) : shape.center;
   const Vec3 n = Normalize(position - center);
   return shape.look.flip_normals ? -n : n;
+}
+
+void KernelScene::SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hit& hit) {
+  // Mitsuba's parameterisation in the sphere's own frame: u = φ/2π from
+  // its x axis, v = θ/π from its z axis.
+  const Vec3 local(Dot(d, shape.axes[0]), Dot(d, shape.axes[1]), Dot(d, shape.axes[2]));
+  float phi = std::atan2(local.y, local.x);
+  if (phi < 0) phi += 2 * kPi;
+  const float cos_theta = std::clamp(local.z, -1.0f, 1.0f), sin_theta = std::sqrt(1 - cos_theta * cos_theta);
+  hit.u = phi * (0.5f * kInvPi);
+  hit.v = std::acos(cos_theta) * kInvPi;
+  const Vec3 along_phi = shape.axes[0] * (-local.y) + shape.axes[1] * local.x;
+  const Vec3 along_theta = shape.axes[0] * (cos_theta * std::cos(phi)) + shape.axes[1] * (cos_theta * std::sin(phi)) -
+                           shape.axes[2] * sin_theta;
+  hit.dpdu = along_phi * (2 * kPi * r);
+  hit.dpdv = along_theta * (kPi * r);
+}
+
+void KernelScene::TriangleUv(const ShapeRecord& shape, uint32_t primitive, float b1, float b2, float uv[2]) const {
+  const TriangleMesh& mesh = meshes_[shape.mesh];
+  if (mesh.uvs.empty()) {
+    uv[0] = b1, uv[1] = b2;
+    return;
+  }
+  const uint32_t* v = &mesh.indices[3 * primitive];
+  const float b0 = 1 - b1 - b2;
+  for (int c = 0; c < 2; ++c)
+    uv[c] = b0 * mesh.uvs[2 * v[0] + c] + b1 * mesh.uvs[2 * v[1] + c] + b2 * mesh.uvs[2 * v[2] + c];
+}
+
+void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const {
+  hit.shading_normal = hit.normal;
+  if (shape.kind == Kind::kSphere) {
+    const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
+    const float r = Length(position - center);
+    SphereParameters(shape, r > 0 ? (position - center) / r : shape.axes[2], r, hit);
+    return;
+  }
+  const TriangleMesh& mesh = meshes_[shape.mesh];
+  const uint32_t* v = &mesh.indices[3 * hit.primitive];
+  Transform to_world = shape.to_world;
+  if (shape.moving)
+    for (int i = 0; i < 16; ++i) to_world.m[i] += time * (shape.to_world_end.m[i] - to_world.m[i]);
+  Vec3 p[3];
+  for (int k = 0; k < 3; ++k) p[k] = shape.placed ? to_world.Point(mesh.positions[v[k]]) : mesh.positions[v[k]];
+  // uv of the corners: the mesh's, else the barycentric parameterisation.
+  float uv[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+  if (!mesh.uvs.empty())
+    for (int k = 0; k < 3; ++k) uv[k][0] = mesh.uvs[2 * v[k]], uv[k][1] = mesh.uvs[2 * v[k] + 1];
+  const float b0 = 1 - hit.b1 - hit.b2;
+  hit.u = b0 * uv[0][0] + hit.b1 * uv[1][0] + hit.b2 * uv[2][0];
+  hit.v = b0 * uv[0][1] + hit.b1 * uv[1][1] + hit.b2 * uv[2][1];
+  // ∂p/∂u, ∂p/∂v from p − p2 = (u − u2)·∂p/∂u + (v − v2)·∂p/∂v at the
+  // other two corners.
+  const float du02 = uv[0][0] - uv[2][0], dv02 = uv[0][1] - uv[2][1];
+  const float du12 = uv[1][0] - uv[2][0], dv12 = uv[1][1] - uv[2][1];
+  const Vec3 dp02 = p[0] - p[2], dp12 = p[1] - p[2];
+  const float det = du02 * dv12 - dv02 * du12;
+  const Vec3 dpdu = (dp02 * dv12 - dp12 * dv02) / det, dpdv = (dp12 * du02 - dp02 * du12) / det;
+  if (std::abs(det) > 1e-12f && Length(Cross(dpdu, dpdv)) > 0 && std::isfinite(Dot(dpdu, dpdv))) {
+    hit.dpdu = dpdu, hit.dpdv = dpdv;
+  } else {
+    // Degenerate uvs: any frame of the plane.
+    const Frame frame(hit.normal);
+    hit.dpdu = frame.s, hit.dpdv = frame.t;
+  }
+  if (mesh.normals.empty()) return;
+  Vec3 ns = mesh.normals[v[0]] * b0 + mesh.normals[v[1]] * hit.b1 + mesh.normals[v[2]] * hit.b2;
+  if (shape.placed) ns = to_world.Normal(ns);
+  if (shape.look.flip_normals) ns = -ns;
+  const float length = Length(ns);
+  // Degenerate or opposing interpolated normals shade flat.
+  if (length > 1e-6f && std::isfinite(length) && Dot(ns, hit.normal) > 0) hit.shading_normal = ns / length;
 }
 
 namespace {
@@ -443,10 +523,14 @@ void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) cons
       hit.shape = geometry_base_[placed ? instance : packet.hit.geomID[k]] + (placed ? packet.hit.geomID[k] : 0);
       hit.primitive = packet.hit.primID[k];
       hit.t = packet.ray.tfar[k];
-      hit.u = packet.hit.u[k];
-      hit.v = packet.hit.v[k];
+      const ShapeRecord& shape = shapes_[hit.shape];
+      const bool sphere = shape.kind == Kind::kSphere;
+      hit.b1 = sphere ? 0 : packet.hit.u[k];
+      hit.b2 = sphere ? 0 : packet.hit.v[k];
       const Ray& ray = rays[first + k];
-      hit.normal = Normal(shapes_[hit.shape], hit.primitive, ray.origin + ray.direction * hit.t, ray.time);
+      const Vec3 position = ray.origin + ray.direction * hit.t;
+      hit.normal = Normal(shape, hit.primitive, position, ray.time);
+      Shade(shape, position, ray.time, hit);
     }
   }
   closest_hit_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
@@ -493,12 +577,16 @@ LightSample KernelScene::SampleLight(float u_choice, float u0, float u1) const {
     const Vec3 d = SampleUniformSphere(u0, u1);
     s.position = e.p0 + d * e.radius;
     s.normal = shapes_[e.shape].look.flip_normals ? -d : d;
+    Hit at;
+    SphereParameters(shapes_[e.shape], d, e.radius, at);
+    s.u = at.u, s.v = at.v;
     return s;
   }
   const auto b = SampleUniformTriangle(u0, u1);
   s.position = e.p0 * b[0] + e.p1 * b[1] + e.p2 * (1 - b[0] - b[1]);
-  s.u = b[1];
-  s.v = 1 - b[0] - b[1];
+  float uv[2];
+  TriangleUv(shapes_[e.shape], e.primitive, b[1], 1 - b[0] - b[1], uv);
+  s.u = uv[0], s.v = uv[1];
   s.normal = e.normal;
   return s;
 }

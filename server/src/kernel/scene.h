@@ -4,6 +4,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <array>
 #include <atomic>
 #include <memory>
 #include <optional>
@@ -41,7 +42,9 @@ class KernelScene final : public SceneView {
   uint32_t NewGroup();
   // Geometry in the group's own space.
   void AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look);
-  void AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look);
+  // `axes`: the sphere's own x, y, z axes (unit), which its uv follows.
+  void AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look,
+                 const std::array<Vec3, 3>& axes = {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)});
   // Places a group (not kWorld) in the world; nested placements arrive
   // here already flattened, with composed transforms. With `to_world_end`
   // the placement moves from to_world to it over the shutter interval.
@@ -109,6 +112,8 @@ class KernelScene final : public SceneView {
     uint32_t mesh = 0;  // into meshes_
     Vec3 center;
     float radius = 0;
+    // A sphere's own axes, in its group's space (world once placed).
+    std::array<Vec3, 3> axes{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
     bool placed = false;  // false: world geometry, already in world space
     Transform to_world;
     // Placed shapes that move: where they are when the shutter closes.
@@ -127,6 +132,14 @@ class KernelScene final : public SceneView {
   };
 
   Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position, float time) const;
+  // Fills hit's uv, shading normal and ∂p/∂u, ∂p/∂v (its shape, primitive,
+  // barycentrics and geometric normal set) at `position`.
+  void Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const;
+  // A sphere's uv and ∂p/∂u, ∂p/∂v at unit direction d from its centre
+  // (world), radius r.
+  static void SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hit& hit);
+  // Texture coordinates at barycentrics (b1, b2) of a triangle.
+  void TriangleUv(const ShapeRecord& shape, uint32_t primitive, float b1, float b2, float uv[2]) const;
   // Lights that need the scene's extent, added to the committed world.
   void AddInfiniteLights();
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
@@ -151,6 +164,7 @@ class KernelScene final : public SceneView {
   // the running sum of their areas within their light.
   struct EmittingPrimitive {
     uint32_t shape;
+    uint32_t primitive;
     bool sphere;
     Vec3 p0, p1, p2;  // triangle corners; p0 is a sphere's centre
     float radius;

@@ -1,6 +1,7 @@
 #include "kernel/scene_builder.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -106,22 +107,43 @@ void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& sh
   }
 }
 
-std::string ReadAsset(const std::filesystem::path& root, const std::string& file,
-                      const std::string& what) {
+// The file `file` (a `kind`, e.g. "mesh file") names under the server's
+// asset root, confined to it.
+std::filesystem::path ConfinedPath(const std::filesystem::path& root, const std::string& file,
+                                   const std::string& kind, const std::string& what) {
   namespace fs = std::filesystem;
   if (root.empty())
-    throw Error(what + ": mesh file '" + file +
+    throw Error(what + ": " + kind + " '" + file +
                 "' cannot be read: this server has no asset root; upload the file (AssetService) and "
-                "name its SHA-256 in `asset`, or send its bytes in `data`");
+                "name its SHA-256 in `asset`");
   const fs::path base = fs::weakly_canonical(root);
   const fs::path path = fs::weakly_canonical(base / file);
   const auto [end, _] = std::mismatch(base.begin(), base.end(), path.begin(), path.end());
-  if (end != base.end()) throw Error(what + ": mesh file '" + file + "' lies outside the scene folder");
+  if (end != base.end()) throw Error(what + ": " + kind + " '" + file + "' lies outside the scene folder");
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) throw Error(what + ": " + kind + " '" + file + "' not found");
+  return path;
+}
+
+std::string ReadAsset(const std::filesystem::path& root, const std::string& file,
+                      const std::string& what) {
+  const std::filesystem::path path = ConfinedPath(root, file, "mesh file", what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(what + ": mesh file '" + file + "' not found");
   std::ostringstream bytes;
   bytes << in.rdbuf();
   return bytes.str();
+}
+
+std::string TextureName(const v1::SceneTexture& texture) {
+  return "texture '" + texture.name() + "' (" + texture.texture().class_name() + ")";
+}
+
+// The property of a texture that names its file as an uploaded asset.
+const v1::Property* TextureAsset(const v1::SceneTexture& texture) {
+  const auto& values = texture.texture().properties().values();
+  const auto it = values.find("asset");
+  return it == values.end() ? nullptr : &it->second;
 }
 
 class Builder {
@@ -132,6 +154,11 @@ class Builder {
     const uint32_t w = scene_.film().width(), h = scene_.film().height();
     kernel_ = std::make_unique<KernelScene>(sources_.device, Camera(scene_.camera(), w, h), w, h);
     if (sources_.stop) kernel_->StopWhen(*sources_.stop);
+    // In order: a texture may refer to those before it.
+    for (const v1::SceneTexture& t : scene_.textures()) {
+      kernel_->ThrowIfStopped();
+      resolved_.textures[t.name()] = MakeTexture(t);
+    }
     for (const v1::Material& m : scene_.materials()) {
       const std::string what = "material '" + m.name() + "' (" + m.class_name() + ")";
       materials_[m.name()] = kernel_->AddMaterial(
@@ -168,12 +195,32 @@ class Builder {
  private:
   template <typename I>
   std::unique_ptr<I> Create(const std::string& class_name, const v1::Properties& props, const std::string& address,
-                            const std::string& what) {
+                            const std::string& what, const ResolvedProperties* resolved = nullptr) {
     try {
-      return MakeComponent<I>(sources_.components, class_name, props, address);
+      return MakeComponent<I>(sources_.components, class_name, props, address, resolved ? resolved : &resolved_);
     } catch (const Error& e) {
       throw Error(what + ": " + e.what());
     }
+  }
+
+  // A texture of the scene, its file (`filename` under the asset root, or
+  // an uploaded `asset`) found for it as its `filename`.
+  std::shared_ptr<const Texture> MakeTexture(const v1::SceneTexture& t) {
+    const std::string what = TextureName(t);
+    v1::Properties props = t.texture().properties();
+    ResolvedProperties own{resolved_.textures, {}};
+    auto& values = *props.mutable_values();
+    if (auto it = values.find("filename"); it != values.end()) {
+      if (it->second.value_case() != v1::Property::kStringValue)
+        throw Error(what + ": property 'filename' must be a string");
+      own.files["filename"] = ConfinedPath(sources_.asset_root, it->second.string_value(), "texture file", what);
+      values.erase(it);
+    } else if (auto asset = values.find("asset"); asset != values.end()) {
+      if (!sources_.assets) throw Error(what + ": this server keeps no assets");
+      own.files["filename"] = sources_.assets->FileOf(asset->second.string_value());
+      values.erase(asset);
+    }
+    return Create<Texture>(t.texture().class_name(), props, t.texture().address(), what, &own);
   }
 
   void AddShapes(uint32_t group, const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
@@ -208,16 +255,25 @@ class Builder {
     if (s.has_sphere()) {
       const auto& c = s.sphere().center();
       const float scale = float(std::cbrt(std::abs(to_world.Determinant3())));
+      // Its uv follows its own axes, rotated (and perhaps mirrored) by to_world.
+      std::array<Vec3, 3> axes{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+      for (Vec3& axis : axes) axis = Normalize(to_world.Vector(axis));
       kernel_->AddSphere(group, to_world.Point(Vec3(float(c.x()), float(c.y()), float(c.z()))),
-                         float(s.sphere().radius()) * scale, look);
+                         float(s.sphere().radius()) * scale, look, axes);
       return;
     }
     TriangleMesh mesh = s.has_mesh() ? LoadMesh(s.mesh(), what) : Rectangle();
     for (Vec3& p : mesh.positions) p = to_world.Point(p);
+    for (Vec3& n : mesh.normals) {
+      const Vec3 moved = to_world.Normal(n);
+      const float length = Length(moved);
+      n = length > 0 ? moved / length : Vec3();
+    }
     kernel_->AddMesh(group, std::move(mesh), look);
   }
 
   TriangleMesh LoadMesh(const v1::Mesh& mesh, const std::string& what) {
+    const MeshOptions options{mesh.has_flip_tex_coords() ? mesh.flip_tex_coords() : true, mesh.face_normals()};
     switch (mesh.source_case()) {
       case v1::Mesh::kFile: {
         std::string format = mesh.format();
@@ -225,28 +281,41 @@ class Builder {
           const std::string ext = std::filesystem::path(mesh.file()).extension().string();
           format = ext.empty() ? ext : ext.substr(1);
         }
-        return ParseMesh(ReadAsset(sources_.asset_root, mesh.file(), what), format, mesh.file());
+        return ParseMesh(ReadAsset(sources_.asset_root, mesh.file(), what), format, mesh.file(), options);
       }
       case v1::Mesh::kData:
-        return ParseMesh(mesh.data(), mesh.format(), what);
+        return ParseMesh(mesh.data(), mesh.format(), what, options);
       case v1::Mesh::kAsset:
         if (!sources_.assets)
           throw Error(what + ": mesh asset " + mesh.asset() + ": this server keeps no assets");
-        return ParseMesh(sources_.assets->Read(mesh.asset()), mesh.format(), what);
-      default: {
-        TriangleMesh out;
-        for (int i = 0; i + 2 < mesh.positions_size(); i += 3)
-          out.positions.emplace_back(mesh.positions(i), mesh.positions(i + 1), mesh.positions(i + 2));
-        out.indices.assign(mesh.indices().begin(), mesh.indices().end());
-        ValidateMesh(out, what);
-        return out;
-      }
+        return ParseMesh(sources_.assets->Read(mesh.asset()), mesh.format(), what, options);
+      default:
+        return InlineMesh(mesh, what);
     }
   }
 
+  static TriangleMesh InlineMesh(const v1::Mesh& mesh, const std::string& what) {
+    TriangleMesh out;
+    for (int i = 0; i + 2 < mesh.positions_size(); i += 3)
+      out.positions.emplace_back(mesh.positions(i), mesh.positions(i + 1), mesh.positions(i + 2));
+    out.indices.assign(mesh.indices().begin(), mesh.indices().end());
+    if (mesh.normals_size() % 3 != 0) throw Error(what + ": inline mesh normals need xyz triples");
+    if (!mesh.face_normals())
+      for (int i = 0; i + 2 < mesh.normals_size(); i += 3)
+        out.normals.emplace_back(mesh.normals(i), mesh.normals(i + 1), mesh.normals(i + 2));
+    out.uvs.assign(mesh.uvs().begin(), mesh.uvs().end());
+    for (const v1::MeshAttribute& a : mesh.attributes())
+      out.attributes.push_back({a.name(), a.channels(), {a.values().begin(), a.values().end()}});
+    ValidateMesh(out, what);
+    return out;
+  }
+
+  // Mitsuba's rectangle: [-1, 1]² in z = 0, facing +z, uv from the corner
+  // (-1, -1).
   static TriangleMesh Rectangle() {
     TriangleMesh m;
     m.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+    m.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
     m.indices = {0, 1, 2, 0, 2, 3};
     return m;
   }
@@ -269,6 +338,8 @@ class Builder {
   std::unique_ptr<KernelScene> kernel_;
   std::map<std::string, uint32_t> materials_;
   std::map<std::string, std::pair<const v1::Group*, uint32_t>> groups_;
+  // The scene's textures, for the materials and emitters that refer to them.
+  ResolvedProperties resolved_;
 };
 
 void CheckInstance(const v1::Instance& instance) {
@@ -312,8 +383,11 @@ uint64_t CountPlacements(const v1::Scene& scene) {
 
 }  // namespace
 
-std::vector<std::string> MeshAssets(const v1::Scene& scene) {
+std::vector<std::string> SceneAssets(const v1::Scene& scene) {
   std::vector<std::string> hashes;
+  for (const v1::SceneTexture& t : scene.textures())
+    if (const v1::Property* asset = TextureAsset(t); asset && asset->value_case() == v1::Property::kStringValue)
+      hashes.push_back(asset->string_value());
   const auto collect = [&](const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes) {
     for (const v1::SceneShape& shape : shapes)
       if (shape.has_mesh() && shape.mesh().has_asset()) hashes.push_back(shape.mesh().asset());
@@ -348,6 +422,15 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
     if (!materials.insert(m.name()).second) throw Error("material '" + m.name() + "' defined twice");
   }
   ValidateShapes(scene.shapes(), materials, "");
+  std::set<std::string> textures;
+  for (const v1::SceneTexture& t : scene.textures()) {
+    if (t.name().empty()) throw Error("a texture has no name");
+    if (t.texture().class_name().empty()) throw Error("texture '" + t.name() + "' has no class");
+    if (!textures.insert(t.name()).second) throw Error("texture '" + t.name() + "' defined twice");
+    if (const v1::Property* asset = TextureAsset(t);
+        asset && (asset->value_case() != v1::Property::kStringValue || !IsSha256(asset->string_value())))
+      throw Error(TextureName(t) + ": property 'asset' must be a SHA-256 (64 lowercase hex digits)");
+  }
   int environments = 0;
   for (int i = 0; i < scene.lights_size(); ++i) {
     const v1::Light& light = scene.lights(i);
@@ -362,6 +445,10 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
   if (CountPlacements(scene) > SceneLimits::kMaxPlacements)
     throw Error("instancing expands to more than " + std::to_string(SceneLimits::kMaxPlacements) + " placements");
   if (!assets) return;
+  for (const v1::SceneTexture& t : scene.textures())
+    if (const v1::Property* asset = TextureAsset(t); asset && !assets->Has(asset->string_value()))
+      throw Error(TextureName(t) + ": asset " + asset->string_value() +
+                  " is not on this server; upload it with AssetService.Upload before submitting");
   RequireShapeAssets(scene.shapes(), *assets, "");
   for (const v1::Group& g : scene.groups()) RequireShapeAssets(g.shapes(), *assets, "group '" + g.name() + "' ");
 }

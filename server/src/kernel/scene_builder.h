@@ -30,10 +30,14 @@ class AssetSource {
   virtual bool Has(const std::string& sha256) const = 0;
   // The asset's bytes; throws Error when it is not held.
   virtual std::string Read(const std::string& sha256) const = 0;
+  // The asset's file, for readers that open files themselves (images);
+  // throws Error when it is not held.
+  virtual std::filesystem::path FileOf(const std::string& sha256) const = 0;
 };
 
-// The hashes of the mesh assets the scene's shapes and groups name.
-std::vector<std::string> MeshAssets(const v1::Scene& scene);
+// The hashes of the assets the scene names: its shapes' and groups'
+// meshes, its textures' files.
+std::vector<std::string> SceneAssets(const v1::Scene& scene);
 
 // Whether `text` is a SHA-256 as assets are named: 64 lowercase hex digits.
 bool IsSha256(const std::string& text);

@@ -90,6 +90,144 @@ TEST_F(SceneTest, SphereIsHitFromOutsideAndFromInside) {
   EXPECT_NEAR(inside.normal.x, 1.0f, 1e-5f);
 }
 
+// --- surface parameters ----------------------------------------------------
+
+// A triangle with uvs and vertex normals leaning outward (a smooth patch).
+v1::SceneShape* AddSmoothTriangle(google::protobuf::RepeatedPtrField<v1::SceneShape>* shapes) {
+  v1::SceneShape* s = AddTriangle(shapes);
+  v1::Mesh* mesh = s->mutable_mesh();
+  for (float v : {0.f, 0.f, 1.f, 0.f, 0.5f, 1.f}) mesh->add_uvs(v);
+  const float lean = 0.6f;
+  for (float v : {-lean, 0.f, 1.f, lean, 0.f, 1.f, 0.f, lean, 1.f}) mesh->add_normals(v);
+  return s;
+}
+
+TEST_F(SceneTest, TriangleHitsCarryUvBarycentricsShadingNormalAndDerivatives) {
+  v1::Scene scene = BaseScene();
+  *AddSmoothTriangle(scene.mutable_shapes())->mutable_to_world() = Translation(0, 0, 5);
+  auto kernel = Build(scene);
+  // Hit at (0.25, -0.5): b1 = 0.5 (corner 1), b2 = 0.25 (corner 2).
+  const Hit hit = Trace(*kernel, {0.25f, -0.5f, 0}, {0, 0, 1});
+  ASSERT_TRUE(hit.Found());
+  EXPECT_NEAR(hit.b1, 0.5f, 1e-5f);
+  EXPECT_NEAR(hit.b2, 0.25f, 1e-5f);
+  // uv = 0.5·(1, 0) + 0.25·(0.5, 1).
+  EXPECT_NEAR(hit.u, 0.625f, 1e-5f);
+  EXPECT_NEAR(hit.v, 0.25f, 1e-5f);
+  // u runs along x over 2 units, v from the bottom edge to the apex.
+  EXPECT_NEAR(hit.dpdu.x, 2.0f, 1e-4f);
+  EXPECT_NEAR(hit.dpdu.y, 0.0f, 1e-4f);
+  EXPECT_NEAR(hit.dpdv.y, 2.0f, 1e-4f);
+  EXPECT_NEAR(hit.dpdv.x, 0.0f, 1e-4f);
+  // The interpolated normal, unit, leaning where the corners lean.
+  const Vec3 expected = Normalize(Vec3(-0.6f, 0, 1) * 0.25f + Vec3(0.6f, 0, 1) * 0.5f + Vec3(0, 0.6f, 1) * 0.25f);
+  EXPECT_NEAR(hit.shading_normal.x, expected.x, 1e-5f);
+  EXPECT_NEAR(hit.shading_normal.y, expected.y, 1e-5f);
+  EXPECT_NEAR(hit.shading_normal.z, expected.z, 1e-5f);
+  EXPECT_NEAR(hit.normal.z, 1.0f, 1e-6f);
+}
+
+TEST_F(SceneTest, VertexNormalsDecideTheSideOfAMeshWoundTheOtherWay) {
+  v1::Scene scene = BaseScene();
+  v1::SceneShape* s = AddTriangle(scene.mutable_shapes());
+  *s->mutable_to_world() = Translation(0, 0, 5);
+  for (int k = 0; k < 3; ++k)
+    for (float v : {0.f, 0.f, -1.f}) s->mutable_mesh()->add_normals(v);
+  auto kernel = Build(scene);
+  const Hit hit = Trace(*kernel, {0, 0, 0}, {0, 0, 1});
+  ASSERT_TRUE(hit.Found());
+  EXPECT_NEAR(hit.normal.z, -1.0f, 1e-6f);
+  EXPECT_NEAR(hit.shading_normal.z, -1.0f, 1e-6f);
+  // Without uvs, uv are the barycentrics.
+  EXPECT_EQ(hit.u, hit.b1);
+  EXPECT_EQ(hit.v, hit.b2);
+}
+
+TEST_F(SceneTest, PlacedMeshesTransformTheirShadingNormals) {
+  v1::Scene scene = BaseScene();
+  v1::Group* group = scene.add_groups();
+  group->set_name("g");
+  AddSmoothTriangle(group->mutable_shapes());
+  v1::Instance* instance = scene.add_instances();
+  instance->set_group("g");
+  // Stretched 3× along x: normals lean less (inverse transpose).
+  v1::Transform* t = instance->mutable_to_world();
+  for (double v : {3.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 5.0, 0.0, 0.0, 0.0, 1.0}) t->add_m(v);
+  auto kernel = Build(scene);
+  const Hit hit = Trace(*kernel, {-2.9f, -0.99f, 0}, {0, 0, 1});  // near corner 0
+  ASSERT_TRUE(hit.Found());
+  const Vec3 local = Vec3(-0.6f, 0, 1) * (1 - hit.b1 - hit.b2) + Vec3(0.6f, 0, 1) * hit.b1 + Vec3(0, 0.6f, 1) * hit.b2;
+  const Vec3 expected = Normalize(Vec3(local.x, 3 * local.y, 3 * local.z));
+  EXPECT_NEAR(hit.shading_normal.x, expected.x, 1e-5f);
+  EXPECT_NEAR(hit.shading_normal.y, expected.y, 1e-5f);
+  EXPECT_NEAR(hit.shading_normal.z, expected.z, 1e-5f);
+  EXPECT_NEAR(hit.dpdu.x, 6.0f, 1e-3f);
+}
+
+TEST_F(SceneTest, SphereUvFollowsItsOwnAxes) {
+  v1::Scene scene = BaseScene();
+  v1::SceneShape* s = scene.add_shapes();
+  s->set_material("m");
+  s->mutable_sphere()->set_radius(2);
+  // Rotated 90° about x (its z axis becomes world −y) and moved to z = 10.
+  v1::Transform* t = s->mutable_to_world();
+  for (double v : {1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 10.0, 0.0, 0.0, 0.0, 1.0}) t->add_m(v);
+  auto kernel = Build(scene);
+  // Seen from the origin, the hit point lies along −z from the centre: the
+  // sphere's own −y axis, so φ = 3π/2 (u = 0.75) and θ = π/2 (v = 0.5).
+  const Hit hit = Trace(*kernel, {0, 0, 0}, {0, 0, 1});
+  ASSERT_TRUE(hit.Found());
+  EXPECT_NEAR(hit.u, 0.75f, 1e-4f);
+  EXPECT_NEAR(hit.v, 0.5f, 1e-4f);
+  // ∂p/∂u = 2π·r along increasing φ; ∂p/∂v = π·r toward the sphere's −z.
+  EXPECT_NEAR(Length(hit.dpdu), 4 * kPi, 1e-3f);
+  EXPECT_NEAR(Length(hit.dpdv), 2 * kPi, 1e-3f);
+  EXPECT_NEAR(hit.dpdv.y, 2 * kPi, 1e-3f);  // the sphere's −z is world +y
+  // Its north pole, the sphere's +z = world −y: v = 0.
+  const Hit pole = Trace(*kernel, {0, -5, 10}, {0, 1, 0});
+  ASSERT_TRUE(pole.Found());
+  EXPECT_NEAR(pole.v, 0.0f, 1e-3f);
+}
+
+TEST_F(SceneTest, InlineMeshAttributesAreChecked) {
+  v1::Scene scene = BaseScene();
+  v1::SceneShape* s = AddTriangle(scene.mutable_shapes());
+  s->mutable_mesh()->add_uvs(0.5f);
+  EXPECT_THROW(
+      {
+        try {
+          Build(scene);
+        } catch (const Error& e) {
+          EXPECT_NE(std::string(e.what()).find("texture coordinates for 3 vertices"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      Error);
+  s->mutable_mesh()->clear_uvs();
+  v1::MeshAttribute* colour = s->mutable_mesh()->add_attributes();
+  colour->set_name("vertex_color");
+  colour->set_channels(3);
+  for (int k = 0; k < 8; ++k) colour->add_values(0.5f);
+  EXPECT_THROW(Build(scene), Error);  // 8 values, not 9
+  colour->add_values(0.5f);
+  EXPECT_NO_THROW(Build(scene));
+}
+
+TEST_F(SceneTest, TexturesNeedUniqueNamesAndTheirAssetsAHash) {
+  v1::Scene scene = BaseScene();
+  AddTriangle(scene.mutable_shapes());
+  for (int k = 0; k < 2; ++k) {
+    v1::SceneTexture* t = scene.add_textures();
+    t->set_name("wood");
+    t->mutable_texture()->set_class_name("bitmap");
+  }
+  EXPECT_THROW(ValidateScene(scene, nullptr), Error);
+  scene.mutable_textures()->RemoveLast();
+  (*scene.mutable_textures(0)->mutable_texture()->mutable_properties()->mutable_values())["asset"].set_string_value(
+      "../../etc/passwd");
+  EXPECT_THROW(ValidateScene(scene, nullptr), Error);
+}
+
 TEST_F(SceneTest, NestedInstancesComposeTheirTransforms) {
   v1::Scene scene = BaseScene();
   v1::Group* leaf = scene.add_groups();

@@ -52,6 +52,11 @@ bool AssetStore::Has(const std::string& sha256) const {
   return IsSha256(sha256) && fs::is_regular_file(PathOf(sha256), ec);
 }
 
+fs::path AssetStore::FileOf(const std::string& sha256) const {
+  if (!Has(sha256)) throw Error("asset '" + sha256.substr(0, 80) + "' is not on this server; upload it first");
+  return PathOf(sha256);
+}
+
 std::string AssetStore::Read(const std::string& sha256) const {
   if (!IsSha256(sha256))
     throw Error("asset '" + sha256.substr(0, 80) + "' is not a SHA-256 (64 lowercase hex digits)");
@@ -141,6 +146,11 @@ void AssetStore::AddOwner(const std::string& sha256, const std::string& user) co
 std::string UserAssets::Read(const std::string& sha256) const {
   if (!Has(sha256)) throw Error("asset " + sha256 + " is not on this server; upload it first");
   return store_.Read(sha256);
+}
+
+fs::path UserAssets::FileOf(const std::string& sha256) const {
+  if (!Has(sha256)) throw Error("asset " + sha256 + " is not on this server; upload it first");
+  return store_.FileOf(sha256);
 }
 
 void AssetUpload::DigestFree::operator()(evp_md_ctx_st* context) const { EVP_MD_CTX_free(context); }

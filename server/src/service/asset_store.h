@@ -38,6 +38,7 @@ class AssetStore final : public AssetSource {
 
   bool Has(const std::string& sha256) const override;
   std::string Read(const std::string& sha256) const override;
+  std::filesystem::path FileOf(const std::string& sha256) const override;
 
   // Whether `user` uploaded the asset (and it is held).
   bool Owns(const std::string& sha256, const std::string& user) const;
@@ -92,6 +93,7 @@ class UserAssets final : public AssetSource {
   UserAssets(const AssetStore& store, std::string user) : store_(store), user_(std::move(user)) {}
   bool Has(const std::string& sha256) const override { return store_.Owns(sha256, user_); }
   std::string Read(const std::string& sha256) const override;
+  std::filesystem::path FileOf(const std::string& sha256) const override;
 
  private:
   const AssetStore& store_;

@@ -106,7 +106,7 @@ std::vector<std::string> Job::Assets() const {
     std::lock_guard lock(mutex_);
     request = request_;  // held while it is read, whoever ends the job meanwhile
   }
-  return request ? MeshAssets(request->scene()) : std::vector<std::string>{};
+  return request ? SceneAssets(request->scene()) : std::vector<std::string>{};
 }
 
 bool Job::Commit(const std::function<bool(JobRecord&)>& change) {
