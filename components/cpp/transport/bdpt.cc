@@ -47,6 +47,8 @@ struct Vertex {
   Vec3 p;
   // The geometric normal; a point light's or the camera's axis.
   Vec3 n;
+  // Surfaces: the shading frame the surface model sees (ShadingFrame).
+  Frame frame{Vec3(0, 0, 1)};
   // Toward the previous vertex of its subpath, world space.
   Vec3 wi;
   Vec3 beta;
@@ -173,6 +175,7 @@ class Bdpt final : public Transport {
         v = Vertex{};
         v.p = rays[k].origin + rays[k].direction * hits[k].t;
         v.n = hits[k].normal;
+        v.frame = ShadingFrame(hits[k], -rays[k].direction);
         v.wi = -rays[k].direction;
         v.beta = walkers[i].beta;
         v.pdf_fwd = prev.ToArea(walkers[i].pdf_dir, v);
@@ -182,7 +185,7 @@ class Bdpt final : public Transport {
         v.v = hits[k].v;
         v.emitter = scene.EmitterOf(hits[k].shape);
         if (paths.count[i] == paths.capacity) continue;
-        ScatterQuery q{v.material, Frame(v.n).ToLocal(v.wi), v.u, v.v};
+        ScatterQuery q{v.material, v.frame.ToLocal(v.wi), v.u, v.v};
         q.uniform[0] = points.Get(i, base + 2);
         q.uniform[1] = points.Get(i, base);
         q.uniform[2] = points.Get(i, base + 1);
@@ -194,13 +197,13 @@ class Bdpt final : public Transport {
       for (size_t q = 0; q < queries.size(); ++q) {
         const uint32_t i = scattering[q];
         const ScatterAnswer& a = sampled[q];
-        if (!(a.pdf > 0) || !(MaxComponent(a.weight) > 0)) continue;
         Vertex& v = paths.at(i, paths.count[i] - 1);
+        const Vec3 weight = a.weight * ShadingWeight(v.frame, v.n, queries[q].wi, a.wo, mode);
+        if (!(a.pdf > 0) || !(MaxComponent(weight) > 0)) continue;
         Vertex& prev = paths.at(i, paths.count[i] - 2);
-        const Frame frame(v.n);
-        const Vec3 dir = Normalize(frame.ToWorld(a.wo));
+        const Vec3 dir = Normalize(v.frame.ToWorld(a.wo));
         Walker& walker = walkers[i];
-        walker.beta *= a.weight;
+        walker.beta *= weight;
         walker.pdf_dir = a.pdf;
         float pdf_rev = a.pdf_reverse;
         if (a.flags & kScatterDelta) {
@@ -230,7 +233,10 @@ class Bdpt final : public Transport {
     std::vector<Join> joins;
     std::vector<SurfaceQuery> light_queries, camera_queries;
     std::vector<EmitterQuery> emitter_queries;
-    const auto local = [](const Vertex& v, Vec3 w) { return Frame(v.n).ToLocal(w); };
+    // Surface models see a surface vertex's shading frame; emitters the
+    // geometric one.
+    const auto local = [](const Vertex& v, Vec3 w) { return v.frame.ToLocal(w); };
+    const auto emitter_local = [](const Vertex& v, Vec3 w) { return Frame(v.n).ToLocal(w); };
     for (uint32_t i = 0; i < camera.count.size(); ++i)
       for (uint32_t t = 1; t <= camera.count[i]; ++t)
         for (uint32_t s = 0; s <= light.count[i]; ++s) {
@@ -243,7 +249,7 @@ class Bdpt final : public Transport {
           if (s == 0) {
             if (!pt.emitter) continue;
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.push_back({pt.emitter, local(pt, pt.wi), pt.u, pt.v});
+            emitter_queries.push_back({pt.emitter, emitter_local(pt, pt.wi), pt.u, pt.v});
             joins.push_back(j);
             continue;
           }
@@ -264,7 +270,7 @@ class Bdpt final : public Transport {
           const Vec3 to_pt = Normalize(d);
           if (s == 1) {
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.push_back({qs.emitter, local(qs, to_pt), qs.u, qs.v});
+            emitter_queries.push_back({qs.emitter, emitter_local(qs, to_pt), qs.u, qs.v});
           } else {
             j.light_surface = uint32_t(light_queries.size());
             light_queries.push_back({qs.material, local(qs, qs.wi), local(qs, to_pt), qs.u, qs.v});
@@ -298,17 +304,24 @@ class Bdpt final : public Transport {
       const Vec3 d = target - qs.p;
       const float dist2 = Dot(d, d);
       const Vec3 to_pt = d / std::sqrt(dist2);
-      // Light end: the emitter's radiance, or f·beta of a surface; with the
-      // cosine there when it has a surface.
+      // Light end: the emitter's radiance with its cosine, or beta·f of a
+      // surface with the shading cosine and its importance correction.
       Vec3 value = qs.beta;
-      const float cos_qs = qs.OnSurface() ? std::abs(Dot(qs.n, to_pt)) : 1.0f;
-      value *= (j.s == 1 ? emitted[j.emitter].radiance : at_light[j.light_surface].f) * cos_qs;
+      if (j.s == 1) {
+        value *= emitted[j.emitter].radiance * (qs.OnSurface() ? std::abs(Dot(qs.n, to_pt)) : 1.0f);
+      } else {
+        const SurfaceQuery& q = light_queries[j.light_surface];
+        value *= at_light[j.light_surface].f *
+                 (std::abs(q.wo.z) * ShadingWeight(qs.frame, qs.n, q.wi, q.wo, TransportMode::kImportance));
+      }
       if (j.t == 1) {
         value *= j.camera.importance / dist2;
         x = j.camera.raster_x;
         y = j.camera.raster_y;
       } else {
-        value *= pt.beta * at_camera[j.camera_surface].f * (std::abs(Dot(pt.n, to_pt)) / dist2);
+        const SurfaceQuery& q = camera_queries[j.camera_surface];
+        value *= pt.beta * at_camera[j.camera_surface].f *
+                 (std::abs(q.wo.z) * ShadingWeight(pt.frame, pt.n, q.wi, q.wo, TransportMode::kRadiance) / dist2);
       }
       if (!(MaxComponent(value) > 0)) continue;
       const SurfaceAnswer* light_answer = j.s > 1 ? &at_light[j.light_surface] : nullptr;

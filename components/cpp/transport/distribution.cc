@@ -68,11 +68,8 @@ class DistributionRayTracer final : public Transport {
  private:
   struct Vertex {
     uint32_t path;
-    Vec3 position;
-    Frame frame;
-    Vec3 wi;
+    ShadingPoint at;
     uint32_t material;
-    float u, v;
   };
 
   std::vector<uint32_t> Bounce(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
@@ -86,15 +83,12 @@ class DistributionRayTracer final : public Transport {
     std::vector<uint32_t> seen_by;
     for (size_t k = 0; k < active.size(); ++k) {
       if (!hits[k].Found()) continue;
-      const Frame frame(hits[k].normal);
-      const Vec3 wi = frame.ToLocal(-rays[k].direction);
       const Emitter* emitter = scene.EmitterOf(hits[k].shape);
       if (emitter && paths[active[k]].sees_emitters) {
-        seen.push_back({emitter, wi, hits[k].u, hits[k].v});
+        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), hits[k].u, hits[k].v});
         seen_by.push_back(active[k]);
       }
-      vertices.push_back({active[k], rays[k].origin + rays[k].direction * hits[k].t, frame, wi,
-                          scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v});
+      vertices.push_back({active[k], ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
     }
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
     for (size_t q = 0; q < seen.size(); ++q)
@@ -117,7 +111,8 @@ class DistributionRayTracer final : public Transport {
           scene.SampleLight(points.Get(v.path, base + kLightChoice), points.Get(v.path, base + kLightPosition),
                             points.Get(v.path, base + kLightPosition + 1));
       if (!s.emitter) continue;
-      connections.push_back({v.material, v.position, v.frame, v.wi, v.u, v.v, paths[v.path].ray.time, s});
+      connections.push_back(
+          {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.u, v.at.v, paths[v.path].ray.time, s});
       owners.push_back(v.path);
     }
     const std::vector<Vec3> light = DirectLight(scene, connections);
@@ -131,7 +126,7 @@ class DistributionRayTracer final : public Transport {
     std::vector<uint32_t> owners;
     for (uint32_t k = 0; k < vertices.size(); ++k) {
       const Vertex& v = vertices[k];
-      ScatterQuery q{v.material, v.wi, v.u, v.v};
+      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
       q.uniform[0] = points.Get(v.path, base + kLobe);
       q.uniform[1] = points.Get(v.path, base + kDirection);
       q.uniform[2] = points.Get(v.path, base + kDirection + 1);
@@ -144,11 +139,13 @@ class DistributionRayTracer final : public Transport {
       const ScatterAnswer& a = sampled[q];
       if (!(a.pdf > 0) || !(MaxComponent(a.weight) > 0)) continue;
       const Vertex& v = vertices[owners[q]];
+      const float shading = ShadingWeight(v.at.frame, v.at.ng, v.at.wi, a.wo, TransportMode::kRadiance);
+      if (!(shading > 0)) continue;
       Path& p = paths[v.path];
       p.throughput *= a.weight;
       p.sees_emitters = (a.flags & kScatterDelta) != 0;
-      const Vec3 dir = Normalize(v.frame.ToWorld(a.wo));
-      Redirect(p.ray, v.position, v.frame.n, dir);
+      const Vec3 dir = Normalize(v.at.frame.ToWorld(a.wo));
+      Redirect(p.ray, v.at.position, v.at.ng, dir);
       if (depth >= length_.rr_depth && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
       next.push_back(v.path);
     }

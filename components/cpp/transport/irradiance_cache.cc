@@ -217,11 +217,8 @@ class IrradianceCache final : public Transport {
   };
   struct Vertex {
     uint32_t path;
-    Vec3 position;
-    Frame frame;  // frame.n is the geometric normal
-    Vec3 wi;
+    ShadingPoint at;
     uint32_t material;
-    float u, v;
   };
 
   // Intersects the active paths, adds what they see, shades the first
@@ -237,13 +234,11 @@ class IrradianceCache final : public Transport {
     std::vector<uint32_t> seen_by;
     for (size_t k = 0; k < active.size(); ++k) {
       if (!hits[k].Found()) continue;
-      const Frame frame(hits[k].normal);
-      const Vertex v{active[k], rays[k].origin + rays[k].direction * hits[k].t, frame,
-                     frame.ToLocal(-rays[k].direction), scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v};
+      const Vertex v{active[k], ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
       // Paths reach here from the camera or through delta lobes only, so
       // every emitter they hit counts.
       if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
-        seen.push_back({emitter, v.wi, v.u, v.v});
+        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), v.at.u, v.at.v});
         seen_by.push_back(v.path);
       }
       (OnlySpecular(scene.Material(v.material).Lobes()) ? specular : shaded).push_back(v);
@@ -272,14 +267,15 @@ class IrradianceCache final : public Transport {
             scene.SampleLight(points.Get(v.path, base + kLightChoice), points.Get(v.path, base + kLightPosition),
                               points.Get(v.path, base + kLightPosition + 1));
         if (s.emitter) {
-          connections.push_back({v.material, v.position, v.frame, v.wi, v.u, v.v, paths[v.path].ray.time, s});
+          connections.push_back(
+              {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.u, v.at.v, paths[v.path].ray.time, s});
           lit.push_back(v.path);
         }
       }
-      if (HasDiffuseLobe(lobes) && v.wi.z != 0) {
-        const float side = v.wi.z > 0 ? 1.0f : -1.0f;
-        diffuse.push_back({v.material, v.wi, Vec3(0, 0, side), v.u, v.v});
-        irradiance.push_back(records_.Estimate(v.position, v.frame.n * side));
+      if (HasDiffuseLobe(lobes) && v.at.wi.z != 0) {
+        const float side = v.at.wi.z > 0 ? 1.0f : -1.0f;
+        diffuse.push_back({v.material, v.at.wi, Vec3(0, 0, side), v.at.u, v.at.v});
+        irradiance.push_back(records_.Estimate(v.at.position, v.at.frame.n * side));
         cached.push_back(v.path);
       }
     }
@@ -295,7 +291,7 @@ class IrradianceCache final : public Transport {
                                 const std::vector<Vertex>& vertices, uint32_t base) const {
     std::vector<ScatterQuery> queries;
     for (const Vertex& v : vertices) {
-      ScatterQuery q{v.material, v.wi, v.u, v.v};
+      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
       q.uniform[0] = points.Get(v.path, base + kLobe);
       q.uniform[1] = points.Get(v.path, base + kDirection);
       q.uniform[2] = points.Get(v.path, base + kDirection + 1);
@@ -305,10 +301,11 @@ class IrradianceCache final : public Transport {
     std::vector<uint32_t> next;
     for (size_t q = 0; q < queries.size(); ++q) {
       const ScatterAnswer& a = sampled[q];
-      if (!(MaxComponent(a.weight) > 0)) continue;
       const Vertex& v = vertices[q];
-      paths[v.path].throughput *= a.weight;
-      Redirect(paths[v.path].ray, v.position, v.frame.n, Normalize(v.frame.ToWorld(a.wo)));
+      const Vec3 weight = a.weight * ShadingWeight(v.at.frame, v.at.ng, v.at.wi, a.wo, TransportMode::kRadiance);
+      if (!(MaxComponent(weight) > 0)) continue;
+      paths[v.path].throughput *= weight;
+      Redirect(paths[v.path].ray, v.at.position, v.at.ng, Normalize(v.at.frame.ToWorld(a.wo)));
       next.push_back(v.path);
     }
     return next;
@@ -334,14 +331,12 @@ class IrradianceCache final : public Transport {
       std::vector<Vertex> specular;
       for (size_t k = 0; k < rays.size(); ++k) {
         if (!hits[k].Found()) continue;
-        const Frame frame(hits[k].normal);
-        const Vertex v{owner[k], rays[k].origin + rays[k].direction * hits[k].t, frame,
-                       frame.ToLocal(-rays[k].direction), scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v};
+        const Vertex v{owner[k], ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
         const uint32_t lobes = scene.Material(v.material).Lobes();
-        if (HasDiffuseLobe(lobes) && v.wi.z != 0)
-          found[v.path].push_back({v.position, v.frame.n * (v.wi.z > 0 ? 1.0f : -1.0f)});
+        if (HasDiffuseLobe(lobes) && v.at.wi.z != 0)
+          found[v.path].push_back({v.at.position, v.at.frame.n * (v.at.wi.z > 0 ? 1.0f : -1.0f), v.at.ng});
         if (!OnlySpecular(lobes) || depth == settings_.max_depth) continue;
-        ScatterQuery q{v.material, v.wi, v.u, v.v};
+        ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
         for (int d = 0; d < 3; ++d) q.uniform[d] = Uniform(kVisitSalt, v.path, uint64_t(depth), uint64_t(d));
         queries.push_back(q);
         specular.push_back(v);
@@ -350,10 +345,13 @@ class IrradianceCache final : public Transport {
       rays.clear();
       owner.clear();
       for (size_t q = 0; q < queries.size(); ++q) {
-        if (!(MaxComponent(sampled[q].weight) > 0)) continue;
+        const ShadingPoint& at = specular[q].at;
+        if (!(MaxComponent(sampled[q].weight) > 0) ||
+            !(ShadingWeight(at.frame, at.ng, at.wi, sampled[q].wo, TransportMode::kRadiance) > 0))
+          continue;
         Ray ray;
         ray.time = time;
-        Redirect(ray, specular[q].position, specular[q].frame.n, Normalize(specular[q].frame.ToWorld(sampled[q].wo)));
+        Redirect(ray, at.position, at.ng, Normalize(at.frame.ToWorld(sampled[q].wo)));
         rays.push_back(ray);
         owner.push_back(specular[q].path);
       }

@@ -17,10 +17,10 @@
 
 namespace yarf {
 
-// A point where the cache is wanted: position and the normal on the side
-// it is seen from.
+// A point where the cache is wanted: position and the shading normal on
+// the side it is seen from; the geometric normal for leaving the surface.
 struct SurfacePoint {
-  Vec3 position, normal;
+  Vec3 position, normal, geometric_normal;
 };
 
 struct GatherSettings {
@@ -88,7 +88,7 @@ inline IrradianceRecord GatherRecord(const SceneView& scene, const SurfacePoint&
       const float sin = std::sqrt(sin2), cos = std::sqrt(std::max(0.0f, 1 - sin2));
       directions[cell] = Normalize(frame.ToWorld({sin * std::cos(phi), sin * std::sin(phi), cos}));
       rays[cell].time = time;
-      Redirect(rays[cell], p.position, p.normal, directions[cell]);
+      Redirect(rays[cell], p.position, p.geometric_normal, directions[cell]);
     }
   std::vector<Hit> hits(rays.size());
   scene.Intersect(rays, hits);
@@ -105,9 +105,8 @@ inline IrradianceRecord GatherRecord(const SceneView& scene, const SurfacePoint&
     const LightSample s = scene.SampleLight(Uniform(kGatherSalt, index, c, 2), Uniform(kGatherSalt, index, c, 3),
                                             Uniform(kGatherSalt, index, c, 4));
     if (!s.emitter) continue;
-    const Frame at(hits[c].normal);
-    connections.push_back({material, rays[c].origin + rays[c].direction * hits[c].t, at,
-                           at.ToLocal(-rays[c].direction), hits[c].u, hits[c].v, time, s});
+    const ShadingPoint at = ShadingPointOf(hits[c], rays[c]);
+    connections.push_back({material, at.position, at.ng, at.frame, at.wi, at.u, at.v, time, s});
     lit.push_back(c);
   }
   const std::vector<Vec3> direct = DirectLight(scene, connections);

@@ -118,8 +118,8 @@ class LightTracer final : public Transport {
 
     struct Vertex {
       uint32_t path;
-      Vec3 position;
-      Frame frame;
+      ShadingPoint at;
+      uint32_t material;
       float time;
     };
     std::vector<Vertex> vertices;
@@ -129,14 +129,12 @@ class LightTracer final : public Transport {
     for (size_t k = 0; k < active.size(); ++k) {
       if (!hits[k].Found()) continue;
       const Ray& ray = rays[k];
-      const Frame frame(hits[k].normal);
-      const Vertex v{active[k], ray.origin + ray.direction * hits[k].t, frame, ray.time};
-      const uint32_t material = scene.MaterialOf(hits[k].shape);
+      const Vertex v{active[k], ShadingPointOf(hits[k], ray), scene.MaterialOf(hits[k].shape), ray.time};
       CameraConnection c;
-      if (scene.ConnectToCamera(v.position, points.Get(v.path, kLensDimension),
+      if (scene.ConnectToCamera(v.at.position, points.Get(v.path, kLensDimension),
                                 points.Get(v.path, kLensDimension + 1), c)) {
-        to_camera.push_back({material, frame.ToLocal(-ray.direction),
-                             frame.ToLocal(Normalize(c.lens_point - v.position)), hits[k].u, hits[k].v});
+        to_camera.push_back({v.material, v.at.wi, v.at.frame.ToLocal(Normalize(c.lens_point - v.at.position)),
+                             v.at.u, v.at.v});
         connections.push_back(c);
         connected.push_back(uint32_t(vertices.size()));
       }
@@ -150,11 +148,12 @@ class LightTracer final : public Transport {
     for (size_t q = 0; q < connected.size(); ++q) {
       const Vertex& v = vertices[connected[q]];
       const CameraConnection& c = connections[q];
-      const Vec3 d = c.lens_point - v.position;
+      const Vec3 d = c.lens_point - v.at.position;
+      const float shading = ShadingWeight(v.at.frame, v.at.ng, v.at.wi, to_camera[q].wo, TransportMode::kImportance);
       const Vec3 value =
-          paths[v.path].throughput * f[q].f * (std::abs(to_camera[q].wo.z) * c.importance / Dot(d, d));
+          paths[v.path].throughput * f[q].f * (std::abs(to_camera[q].wo.z) * shading * c.importance / Dot(d, d));
       if (!(MaxComponent(value) > 0)) continue;
-      shadow.push_back(RayToLens(v.position, v.frame.n, c.lens_point, v.time));
+      shadow.push_back(RayToLens(v.at.position, v.at.ng, c.lens_point, v.time));
       values.push_back(value);
       kept.push_back(uint32_t(q));
     }
@@ -166,25 +165,25 @@ class LightTracer final : public Transport {
     const uint32_t base = kFirstBounce + kPerBounce * uint32_t(bounce - 1);
     std::vector<ScatterQuery> queries;
     std::vector<uint32_t> scattering;  // into vertices
-    for (size_t k = 0, j = 0; k < active.size(); ++k) {
-      if (!hits[k].Found()) continue;
-      const Vertex& v = vertices[j++];
-      ScatterQuery q{scene.MaterialOf(hits[k].shape), v.frame.ToLocal(-rays[k].direction), hits[k].u, hits[k].v};
+    for (uint32_t j = 0; j < vertices.size(); ++j) {
+      const Vertex& v = vertices[j];
+      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
       q.uniform[0] = points.Get(v.path, base + 2);
       q.uniform[1] = points.Get(v.path, base);
       q.uniform[2] = points.Get(v.path, base + 1);
       queries.push_back(q);
-      scattering.push_back(uint32_t(j - 1));
+      scattering.push_back(j);
     }
     const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kImportance, 0, queries);
     std::vector<uint32_t> next;
     for (size_t q = 0; q < queries.size(); ++q) {
       const Vertex& v = vertices[scattering[q]];
       LightPath& p = paths[v.path];
-      if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
-      p.throughput *= sampled[q].weight;
-      const Vec3 dir = Normalize(v.frame.ToWorld(sampled[q].wo));
-      Redirect(p.ray, v.position, v.frame.n, dir);
+      const float shading = ShadingWeight(v.at.frame, v.at.ng, v.at.wi, sampled[q].wo, TransportMode::kImportance);
+      if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight * shading) > 0)) continue;
+      p.throughput *= sampled[q].weight * shading;
+      const Vec3 dir = Normalize(v.at.frame.ToWorld(sampled[q].wo));
+      Redirect(p.ray, v.at.position, v.at.ng, dir);
       if (bounce >= length_.rr_depth && !Survives(p.throughput, points.Get(v.path, base + 3))) continue;
       next.push_back(v.path);
     }

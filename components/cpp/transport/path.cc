@@ -57,10 +57,7 @@ struct Path {
 // A surface hit that scatters further.
 struct Vertex {
   uint32_t path;
-  Vec3 position;
-  Frame frame;  // frame.n is the geometric normal
-  Vec3 wi;
-  float u, v;
+  ShadingPoint at;
   float time;
 };
 
@@ -106,10 +103,7 @@ class PathTracer final : public Transport {
       if (!hit.Found()) continue;
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
       if (!may_scatter || paths[active[k]].last) continue;
-      const Ray& ray = rays[k];
-      const Frame frame(hit.normal);
-      vertices.push_back({active[k], ray.origin + ray.direction * hit.t, frame,
-                          frame.ToLocal(-ray.direction), hit.u, hit.v, ray.time});
+      vertices.push_back({active[k], ShadingPointOf(hit, rays[k]), rays[k].time});
       vertex_material.push_back(scene.MaterialOf(hit.shape));
     }
     AddEmission(scene, paths, active, rays, hits, emitted);
@@ -172,7 +166,7 @@ class PathTracer final : public Transport {
       const LightSample s =
           scene.SampleLight(points.Get(path, base + kLightChoice), points.Get(path, base + kLightPosition),
                             points.Get(path, base + kLightPosition + 1));
-      Vec3 to_light = s.position - v.position;
+      Vec3 to_light = s.position - v.at.position;
       const float dist = Length(to_light);
       to_light = dist > 0 ? to_light / dist : Vec3(0, 0, 1);
       // A point light has no area: its "pdf" per solid angle is the
@@ -181,14 +175,14 @@ class PathTracer final : public Transport {
       light_pdf[j] = cos_light > 0 && dist > 0 ? s.pdf * dist * dist / cos_light : 0;
       delta[j] = s.delta_position;
       emitters[j] = s.emitter;
-      v.wi.Store(&wi[3 * j]);
-      v.frame.ToLocal(to_light).Store(&wo[3 * j]);
-      uv[2 * j] = v.u;
-      uv[2 * j + 1] = v.v;
+      v.at.wi.Store(&wi[3 * j]);
+      v.at.frame.ToLocal(to_light).Store(&wo[3 * j]);
+      uv[2 * j] = v.at.u;
+      uv[2 * j + 1] = v.at.v;
       Frame(s.normal).ToLocal(-to_light).Store(&light_w[3 * j]);
       light_uv[2 * j] = s.u;
       light_uv[2 * j + 1] = s.v;
-      shadow[j] = ShadowRay(v.position, v.frame.n, s.position);
+      shadow[j] = ShadowRay(v.at.position, v.at.ng, s.position);
       shadow[j].time = v.time;
       if (s.delta_position) shadow[j].tfar = std::max(0.0f, Length(s.position - shadow[j].origin));
     }
@@ -212,11 +206,14 @@ class PathTracer final : public Transport {
     std::vector<Vec3> contributions;
     for (size_t j = 0; j < m; ++j) {
       if (!emitters[j] || light_pdf[j] <= 0) continue;
-      const Path& p = paths[vertices[members[j]].path];
+      const Vertex& v = vertices[members[j]];
+      const Path& p = paths[v.path];
       const float cos_surface = std::abs(wo[3 * j + 2]);
       const float mis = delta[j] ? 1.0f : PowerHeuristic(light_pdf[j], pdf[j]);
+      const float shading =
+          ShadingWeight(v.at.frame, v.at.ng, v.at.wi, Vec3::Load(&wo[3 * j]), TransportMode::kRadiance);
       const Vec3 c = p.throughput * Vec3::Load(&f[3 * j]) * Vec3::Load(&le[3 * j]) *
-                     (cos_surface * mis / light_pdf[j]);
+                     (cos_surface * mis * shading / light_pdf[j]);
       if (MaxComponent(c) <= 0) continue;
       rays.push_back(shadow[j]);
       owners.push_back(vertices[members[j]].path);
@@ -237,9 +234,9 @@ class PathTracer final : public Transport {
     std::vector<uint32_t> flags(m);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
-      v.wi.Store(&wi[3 * j]);
-      uv[2 * j] = v.u;
-      uv[2 * j + 1] = v.v;
+      v.at.wi.Store(&wi[3 * j]);
+      uv[2 * j] = v.at.u;
+      uv[2 * j + 1] = v.at.v;
       u[3 * j] = points.Get(v.path, base + kBsdfLobe);
       u[3 * j + 1] = points.Get(v.path, base + kBsdfDirection);
       u[3 * j + 2] = points.Get(v.path, base + kBsdfDirection + 1);
@@ -248,14 +245,15 @@ class PathTracer final : public Transport {
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
       Path& p = paths[v.path];
-      const Vec3 w = Vec3::Load(&weight[3 * j]);
+      const Vec3 out = Vec3::Load(&wo[3 * j]);
+      const Vec3 w = Vec3::Load(&weight[3 * j]) * ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
       if (!(pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
       p.throughput *= w;
       p.bsdf_pdf = pdf[j];
       p.full_weight = !sampled_lights || (flags[j] & kScatterDelta);
       p.last = !diffuse_indirect_ && (flags[j] & kScatterDiffuse);
-      const Vec3 dir = Normalize(v.frame.ToWorld(Vec3::Load(&wo[3 * j])));
-      Redirect(p.ray, v.position, v.frame.n, dir);
+      const Vec3 dir = Normalize(v.at.frame.ToWorld(out));
+      Redirect(p.ray, v.at.position, v.at.ng, dir);
       if (depth >= length_.rr_depth && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
       next.push_back(v.path);
     }

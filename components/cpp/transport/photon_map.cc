@@ -118,7 +118,7 @@ class PhotonMapper final : public Transport {
     std::vector<ScatterQuery> queries(visible.size());
     for (size_t k = 0; k < visible.size(); ++k) {
       const SurfacePoint& s = visible[k];
-      queries[k] = {s.material, s.wi, s.u, s.v};
+      queries[k] = {s.material, s.at.wi, s.at.u, s.at.v};
       queries[k].uniform[0] = points.Get(s.owner, GatherSample() + 2);
       queries[k].uniform[1] = points.Get(s.owner, GatherSample());
       queries[k].uniform[2] = points.Get(s.owner, GatherSample() + 1);
@@ -126,11 +126,13 @@ class PhotonMapper final : public Transport {
     const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
     std::vector<Walk> walks;
     for (size_t k = 0; k < visible.size(); ++k) {
-      if (!(sampled[k].pdf > 0) || !(MaxComponent(sampled[k].weight) > 0)) continue;
       const SurfacePoint& s = visible[k];
-      Walk w{s.owner, Ray{}, s.throughput * sampled[k].weight};
+      const Vec3 weight =
+          sampled[k].weight * ShadingWeight(s.at.frame, s.at.ng, s.at.wi, sampled[k].wo, TransportMode::kRadiance);
+      if (!(sampled[k].pdf > 0) || !(MaxComponent(weight) > 0)) continue;
+      Walk w{s.owner, Ray{}, s.throughput * weight};
       w.ray.time = s.time;
-      Redirect(w.ray, s.position, s.frame.n, Normalize(s.frame.ToWorld(sampled[k].wo)));
+      Redirect(w.ray, s.at.position, s.at.ng, Normalize(s.at.frame.ToWorld(sampled[k].wo)));
       walks.push_back(w);
     }
     return WalkToDiffuse(scene, points, std::move(walks), GatherWalk(), Bounces(), nullptr);

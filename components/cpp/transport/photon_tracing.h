@@ -120,7 +120,7 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
       const uint32_t base = kFirstBounce + kPerBounce * uint32_t(bounce - 1);
       std::vector<ScatterQuery> queries;
       std::vector<uint32_t> owners;
-      std::vector<Vec3> positions, normals;
+      std::vector<ShadingPoint> shading;
       for (size_t k = 0; k < active.size(); ++k) {
         if (!hits[k].Found()) continue;
         Live& p = paths[active[k]];
@@ -133,15 +133,14 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
                             p.history});
         }
         if (bounce == last_bounce) continue;
-        const Frame frame(hits[k].normal);
-        ScatterQuery q{material, frame.ToLocal(-rays[k].direction), hits[k].u, hits[k].v};
+        const ShadingPoint at = ShadingPointOf(hits[k], rays[k]);
+        ScatterQuery q{material, at.wi, at.u, at.v};
         q.uniform[0] = points.Get(active[k], base + 2);
         q.uniform[1] = points.Get(active[k], base);
         q.uniform[2] = points.Get(active[k], base + 1);
         queries.push_back(q);
         owners.push_back(active[k]);
-        positions.push_back(position);
-        normals.push_back(hits[k].normal);
+        shading.push_back(at);
         // The history after this bounce.
         if (diffuse) p.history = PhotonHistory::kIndirect;
         else if (p.history == PhotonHistory::kDirect) p.history = PhotonHistory::kCaustic;
@@ -150,11 +149,13 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
       std::vector<uint32_t> next;
       for (size_t q = 0; q < queries.size(); ++q) {
         Live& p = paths[owners[q]];
-        if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
-        p.power = p.power * sampled[q].weight;
-        p.carried = p.carried * sampled[q].weight;
-        const Frame frame(normals[q]);
-        Redirect(p.ray, positions[q], normals[q], Normalize(frame.ToWorld(sampled[q].wo)));
+        const ShadingPoint& at = shading[q];
+        const Vec3 weight =
+            sampled[q].weight * ShadingWeight(at.frame, at.ng, at.wi, sampled[q].wo, TransportMode::kImportance);
+        if (!(sampled[q].pdf > 0) || !(MaxComponent(weight) > 0)) continue;
+        p.power = p.power * weight;
+        p.carried = p.carried * weight;
+        Redirect(p.ray, at.position, at.ng, Normalize(at.frame.ToWorld(sampled[q].wo)));
         // Roulette on what the bounces kept of the photon's power, so that
         // photons' powers stay alike (Jensen's "equal power" photons).
         if (bounce >= shooting.rr_depth) {
@@ -245,13 +246,11 @@ struct SurfacePoint {
   uint32_t owner;
   // What the walk carried there (product of BSDF sample weights).
   Vec3 throughput;
-  Vec3 position;
-  Frame frame;  // geometric normal, as the shape gives it
-  Vec3 wi;      // local, toward where the walk came from
-  float u = 0, v = 0, time = 0;
+  ShadingPoint at;
+  float time = 0;
   uint32_t material = 0;
-  // The normal on the side the walk arrived from.
-  Vec3 FacingNormal() const { return wi.z >= 0 ? frame.n : -frame.n; }
+  // The geometric normal on the side the walk arrived from.
+  Vec3 FacingNormal() const { return Dot(at.frame.ToWorld(at.wi), at.ng) >= 0 ? at.ng : -at.ng; }
 };
 
 // A ray on its way to a surface with a diffuse lobe.
@@ -291,36 +290,35 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
     }
     std::vector<ScatterQuery> queries;
     std::vector<uint32_t> scattering;
-    std::vector<Vec3> positions;
+    std::vector<ShadingPoint> shading;
     for (size_t k = 0; k < walks.size(); ++k) {
       if (!hits[k].Found()) continue;
-      const Frame frame(hits[k].normal);
-      const Vec3 position = rays[k].origin + rays[k].direction * hits[k].t;
+      const ShadingPoint at = ShadingPointOf(hits[k], rays[k]);
       const uint32_t material = scene.MaterialOf(hits[k].shape);
-      const Vec3 wi = frame.ToLocal(-rays[k].direction);
       if (StoresPhotons(scene.Material(material).Lobes())) {
-        reached.push_back({walks[k].owner, walks[k].throughput, position, frame, wi, hits[k].u, hits[k].v,
-                           rays[k].time, material});
+        reached.push_back({walks[k].owner, walks[k].throughput, at, rays[k].time, material});
         continue;
       }
       if (bounce >= bounces) continue;
       const uint32_t base = first + 4 * uint32_t(bounce);
-      ScatterQuery q{material, wi, hits[k].u, hits[k].v};
+      ScatterQuery q{material, at.wi, at.u, at.v};
       q.uniform[0] = points.Get(walks[k].owner, base + 2);
       q.uniform[1] = points.Get(walks[k].owner, base);
       q.uniform[2] = points.Get(walks[k].owner, base + 1);
       queries.push_back(q);
       scattering.push_back(uint32_t(k));
-      positions.push_back(position);
+      shading.push_back(at);
     }
     const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
     std::vector<Walk> next;
     for (size_t q = 0; q < queries.size(); ++q) {
-      if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
+      const ShadingPoint& at = shading[q];
+      const Vec3 weight =
+          sampled[q].weight * ShadingWeight(at.frame, at.ng, at.wi, sampled[q].wo, TransportMode::kRadiance);
+      if (!(sampled[q].pdf > 0) || !(MaxComponent(weight) > 0)) continue;
       Walk w = walks[scattering[q]];
-      const Vec3 n = hits[scattering[q]].normal;
-      w.throughput *= sampled[q].weight;
-      Redirect(w.ray, positions[q], n, Normalize(Frame(n).ToWorld(sampled[q].wo)));
+      w.throughput *= weight;
+      Redirect(w.ray, at.position, at.ng, Normalize(at.frame.ToWorld(sampled[q].wo)));
       next.push_back(w);
     }
     walks = std::move(next);
@@ -338,7 +336,7 @@ inline std::vector<Vec3> DirectLightAt(const SceneView& scene, const PrimarySamp
   for (const SurfacePoint& s : at) {
     const LightSample light = scene.SampleLight(points.Get(s.owner, first + 2), points.Get(s.owner, first),
                                                 points.Get(s.owner, first + 1));
-    connections.push_back({s.material, s.position, s.frame, s.wi, s.u, s.v, s.time, light});
+    connections.push_back({s.material, s.at.position, s.at.ng, s.at.frame, s.at.wi, s.at.u, s.at.v, s.time, light});
   }
   std::vector<Vec3> direct = DirectLight(scene, connections);
   for (size_t k = 0; k < at.size(); ++k) direct[k] = direct[k] * at[k].throughput;
@@ -365,7 +363,7 @@ inline std::vector<Vec3> ReflectedRadiance(const SceneView& scene, const PhotonT
     std::vector<float> wi(3 * m), wo(3 * m), uv(2 * m), f(3 * m);
     for (size_t j = 0; j < m; ++j) {
       const KernelPhoton& kp = found[members[j]];
-      const SurfacePoint& s = at[kp.point];
+      const ShadingPoint& s = at[kp.point].at;
       s.wi.Store(&wi[3 * j]);
       s.frame.ToLocal(tree[kp.photon].from).Store(&wo[3 * j]);
       uv[2 * j] = s.u;
@@ -374,7 +372,16 @@ inline std::vector<Vec3> ReflectedRadiance(const SceneView& scene, const PhotonT
     scene.Material(material).Evaluate(TransportMode::kRadiance, wi, wo, uv, f);
     for (size_t j = 0; j < m; ++j) {
       const KernelPhoton& kp = found[members[j]];
-      radiance[kp.point] += Vec3::Load(&f[3 * j]) * tree[kp.photon].power * kp.weight;
+      const ShadingPoint& s = at[kp.point].at;
+      // Photons' power is flux through the geometric surface; the
+      // estimate integrates against the shading cosine.
+      const Vec3 from = tree[kp.photon].from;
+      const float cos_geometric = std::abs(Dot(from, s.ng));
+      const Vec3 local = Vec3::Load(&wo[3 * j]);
+      const float shading = cos_geometric > 0
+          ? ShadingWeight(s.frame, s.ng, s.wi, local, TransportMode::kRadiance) * std::abs(local.z) / cos_geometric
+          : 0.0f;
+      radiance[kp.point] += Vec3::Load(&f[3 * j]) * tree[kp.photon].power * (kp.weight * shading);
     }
   }
   for (size_t k = 0; k < at.size(); ++k) radiance[k] = radiance[k] * at[k].throughput;
@@ -394,7 +401,7 @@ inline std::vector<Vec3> ConeEstimate(const SceneView& scene, const PhotonTree& 
   std::vector<uint32_t> indices(k);
   std::vector<float> distance2(k);
   for (uint32_t q = 0; q < at.size(); ++q) {
-    const size_t count = tree.Nearest(at[q].position, k, indices.data(), distance2.data());
+    const size_t count = tree.Nearest(at[q].at.position, k, indices.data(), distance2.data());
     if (count == 0) continue;
     const float r = std::sqrt(distance2[count - 1]);
     if (!(r > 0)) continue;
@@ -414,7 +421,7 @@ inline std::vector<Vec3> DiscEstimate(const SceneView& scene, const PhotonTree& 
   const float weight = 1.0f / (kPi * radius * radius);
   for (uint32_t q = 0; q < at.size(); ++q) {
     const Vec3 facing = at[q].FacingNormal();
-    tree.Within(at[q].position, radius, [&](uint32_t photon, float) {
+    tree.Within(at[q].at.position, radius, [&](uint32_t photon, float) {
       if (SameSurface(tree[photon], facing)) found.push_back({q, photon, weight});
     });
   }

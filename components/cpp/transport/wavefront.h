@@ -13,9 +13,36 @@
 
 #include "yarf/error.h"
 #include "yarf/properties.h"
+#include "yarf/shading.h"
 #include "yarf/transport.h"
 
 namespace yarf {
+
+// Where a ray met a surface, as scattering sees it: surface models get
+// directions in the shading frame (ShadingFrame); leaving the surface and
+// telling its sides apart go by the geometric normal ng.
+struct ShadingPoint {
+  Vec3 position;
+  Vec3 ng;
+  Frame frame;
+  Vec3 wi;  // local: back along the ray
+  float u = 0, v = 0;
+};
+
+inline ShadingPoint ShadingPointOf(const Hit& hit, const Ray& ray) {
+  const Frame frame = ShadingFrame(hit, -ray.direction);
+  return {ray.origin + ray.direction * hit.t, hit.normal, frame, frame.ToLocal(-ray.direction), hit.u, hit.v};
+}
+
+// What a scattering from local wi to local wo at a surface point carries
+// beyond f·|cos θo|: nothing where the geometric and the shading normal
+// disagree on whether it reflects (no light through the surface); for
+// importance, Veach's correction (ImportanceShadingFactor).
+inline float ShadingWeight(const Frame& frame, Vec3 ng, Vec3 wi, Vec3 wo, TransportMode mode) {
+  const Vec3 wi_world = frame.ToWorld(wi), wo_world = frame.ToWorld(wo);
+  if (!SidesAgree(wi_world, wo_world, ng, wi.z, wo.z)) return 0;
+  return mode == TransportMode::kImportance ? ImportanceShadingFactor(wi_world, wo_world, ng, frame.n) : 1.0f;
+}
 
 // Whether light samples can find anything at a surface with these lobes:
 // all but purely specular ones (a model without kind flags counts as not
@@ -302,7 +329,8 @@ namespace yarf {
 struct LightConnection {
   uint32_t material;
   Vec3 position;
-  Frame frame;
+  Vec3 ng;  // geometric normal
+  Frame frame;  // shading frame
   Vec3 wi;
   float u = 0, v = 0;
   float time = 0;
@@ -321,7 +349,7 @@ inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<L
     const Vec3 to_light = Normalize(c.light.position - c.position);
     surfaces[k] = {c.material, c.wi, c.frame.ToLocal(to_light), c.u, c.v};
     lights[k] = {c.light.emitter, Frame(c.light.normal).ToLocal(-to_light), c.light.u, c.light.v};
-    shadow[k] = ShadowRay(c.position, c.frame.n, c.light.position);
+    shadow[k] = ShadowRay(c.position, c.ng, c.light.position);
     // A point light has no surface to stop short of.
     if (c.light.delta_position) shadow[k].tfar = std::max(0.0f, Length(c.light.position - shadow[k].origin));
     shadow[k].time = c.time;
@@ -337,7 +365,8 @@ inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<L
     const float dist2 = Dot(d, d);
     if (occluded[k] || !(dist2 > 0) || !(c.light.pdf > 0)) continue;
     const float cos_light = c.light.delta_position ? 1.0f : std::abs(lights[k].w.z);
-    out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * cos_light / (dist2 * c.light.pdf));
+    const float shading = ShadingWeight(c.frame, c.ng, c.wi, surfaces[k].wo, TransportMode::kRadiance);
+    out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * cos_light * shading / (dist2 * c.light.pdf));
   }
   return out;
 }

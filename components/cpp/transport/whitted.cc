@@ -53,11 +53,8 @@ class Whitted final : public Transport {
  private:
   struct Vertex {
     uint32_t branch;
-    Vec3 position;
-    Frame frame;
-    Vec3 wi;
+    ShadingPoint at;
     uint32_t material;
-    float u, v;
   };
 
   // Shades the hits of one level; returns the next level's rays.
@@ -73,14 +70,11 @@ class Whitted final : public Transport {
     std::vector<uint32_t> seen_by;
     for (size_t k = 0; k < level.size(); ++k) {
       if (!hits[k].Found()) continue;
-      const Frame frame(hits[k].normal);
-      const Vec3 wi = frame.ToLocal(-rays[k].direction);
       if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
-        seen.push_back({emitter, wi, hits[k].u, hits[k].v});
+        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), hits[k].u, hits[k].v});
         seen_by.push_back(uint32_t(k));
       }
-      vertices.push_back({uint32_t(k), rays[k].origin + rays[k].direction * hits[k].t, frame, wi,
-                          scene.MaterialOf(hits[k].shape), hits[k].u, hits[k].v});
+      vertices.push_back({uint32_t(k), ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
     }
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
     for (size_t q = 0; q < seen.size(); ++q) {
@@ -99,8 +93,8 @@ class Whitted final : public Transport {
     for (const Vertex& v : vertices) {
       if (!SamplesLights(scene.Material(v.material).Lobes())) continue;
       for (uint32_t l = 0; l < scene.LightCount(); ++l)
-        connections.push_back({v.material, v.position, v.frame, v.wi, v.u, v.v, level[v.branch].ray.time,
-                               scene.LightPoint(l, v.position)});
+        connections.push_back({v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.u, v.at.v,
+                               level[v.branch].ray.time, scene.LightPoint(l, v.at.position)});
     }
     const std::vector<Vec3> light = DirectLight(scene, connections);
     size_t k = 0;
@@ -119,7 +113,7 @@ class Whitted final : public Transport {
     for (uint32_t k = 0; k < vertices.size(); ++k) {
       const Vertex& v = vertices[k];
       if (!(scene.Material(v.material).Lobes() & kScatterDelta)) continue;
-      ScatterQuery q{v.material, v.wi, v.u, v.v};
+      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
       q.uniform[0] = q.uniform[1] = q.uniform[2] = 0.5f;
       queries.push_back(q);
       owners.push_back(k);
@@ -131,10 +125,12 @@ class Whitted final : public Transport {
       for (size_t q = 0; q < queries.size(); ++q) {
         if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
         const Vertex& v = vertices[owners[q]];
+        const float shading = ShadingWeight(v.at.frame, v.at.ng, v.at.wi, sampled[q].wo, TransportMode::kRadiance);
+        if (!(shading > 0)) continue;
         const Branch& parent = level[v.branch];
         Branch b{parent.point, parent.ray, parent.weight * sampled[q].weight};
-        const Vec3 dir = Normalize(v.frame.ToWorld(sampled[q].wo));
-        Redirect(b.ray, v.position, v.frame.n, dir);
+        const Vec3 dir = Normalize(v.at.frame.ToWorld(sampled[q].wo));
+        Redirect(b.ray, v.at.position, v.at.ng, dir);
         next.push_back(b);
       }
     }
