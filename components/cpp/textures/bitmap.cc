@@ -1,0 +1,261 @@
+// bitmap — an image file looked up by uv (Mitsuba's `bitmap`, pbrt-v4's
+// `imagemap`), filtered by OpenImageIO's TextureSystem
+//
+// Parameters (Mitsuba's name first; pbrt's where it differs)
+//   filename                 file            required
+//       The image, as the server resolved it (any format OpenImageIO reads).
+//   filter_type / filter     string          default "bilinear"
+//       "nearest" (pbrt: "point"): the texel containing the point;
+//       "bilinear": bilinear between the four nearest texels of the full
+//       image, no MIP map (as Mitsuba and pbrt's bilinear);
+//       "trilinear": bilinear in the two MIP levels the footprint's width
+//       selects, blended; "ewa": OpenImageIO's anisotropic MIP filter
+//       along the footprint's major axis.
+//   wrap_mode / wrap         string          default "repeat"
+//       Outside [0, 1]²: "repeat", "mirror" (Mitsuba), "clamp", or
+//       "black" (pbrt). pbrt's "octahedralsphere" is refused.
+//   raw                      bool            default false
+//   encoding                 string          default "sRGB"
+//       How an integer (8- or 16-bit) image encodes linear values: raw =
+//       false or "sRGB" decode the sRGB curve, raw = true or "linear" take
+//       the stored values, "gamma G" (pbrt) gives value^G. Decoding comes
+//       before filtering; float images are linear and never decoded.
+//   to_uv                    transform       default identity
+//   uscale, vscale, udelta, vdelta   float   default 1, 1, 0, 0
+//       The uv map before lookup: Mitsuba's transform (its action on
+//       (u, v, 0)) or pbrt's u' = u·uscale + udelta, v' = v·vscale + vdelta,
+//       applied to yarf's uv (v = 0 at the image's top row).
+//   mapping                  string          default "uv"
+//       pbrt's; "uv" is the only one (the others need surface positions).
+//   scale                    float           default 1
+//   invert                   bool            default false
+//       pbrt's: the value is scale · texel, then max(0, 1 − that) if inverted.
+//   maxanisotropy            float           default 8
+//       pbrt's bound on the ewa filter's major / minor axis ratio.
+//
+// Channels: 1 for a grey image (with or without alpha), else 3 (the first
+// three; alpha is ignored). Mean: the mean over the texels of the value
+// above (it ignores the uv map and the wrap mode).
+//
+// OpenImageIO 2.4's TextureSystem filters the stored values and has no
+// colour conversion of its own, so the image is decoded here to linear
+// float, written as a tiled, MIP-mapped float EXR into a private
+// temporary folder this instance owns, and the TextureSystem reads that.
+// Each instance has its own TextureSystem with a bounded 64 MiB cache:
+// no state is shared between instances, and lookups are thread-safe.
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/texture.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "linear_image.h"
+#include "temporary_folder.h"
+#include "texture_rows.h"
+#include "uv_map.h"
+#include "yarf/plugin.h"
+
+namespace {
+
+using yarf::Error;
+using yarf::Properties;
+using yarf::textures::Encoding;
+using yarf::textures::LinearImage;
+
+// The Mitsuba key's value, or else the pbrt key's; both at once is an error.
+std::string ReadEither(const Properties& props, const std::string& mitsuba, const std::string& pbrt,
+                       const std::string& fallback) {
+  if (props.Has(mitsuba) && props.Has(pbrt))
+    throw Error("properties '" + mitsuba + "' and '" + pbrt + "' are two names of one setting: give one");
+  return props.Has(pbrt) ? props.String(pbrt, fallback) : props.String(mitsuba, fallback);
+}
+
+std::string KeyOf(const Properties& props, const std::string& mitsuba, const std::string& pbrt) {
+  return props.Has(pbrt) ? pbrt : mitsuba;
+}
+
+OIIO::TextureOpt ReadLookup(const Properties& props) {
+  OIIO::TextureOpt opt;
+  const std::string filter = ReadEither(props, "filter_type", "filter", "bilinear");
+  if (filter == "nearest" || filter == "point") {
+    opt.interpmode = OIIO::TextureOpt::InterpClosest;
+    opt.mipmode = OIIO::TextureOpt::MipModeNoMIP;
+  } else if (filter == "bilinear") {
+    opt.interpmode = OIIO::TextureOpt::InterpBilinear;
+    opt.mipmode = OIIO::TextureOpt::MipModeNoMIP;
+  } else if (filter == "trilinear") {
+    opt.interpmode = OIIO::TextureOpt::InterpBilinear;
+    opt.mipmode = OIIO::TextureOpt::MipModeTrilinear;
+  } else if (filter == "ewa") {
+    opt.interpmode = OIIO::TextureOpt::InterpBilinear;
+    opt.mipmode = OIIO::TextureOpt::MipModeAniso;
+  } else {
+    throw Error("property '" + KeyOf(props, "filter_type", "filter") + "' must be one of nearest (or point), " +
+                "bilinear, trilinear, ewa; got '" + filter + "'");
+  }
+
+  const std::string wrap = ReadEither(props, "wrap_mode", "wrap", "repeat");
+  const std::string wrap_key = KeyOf(props, "wrap_mode", "wrap");
+  if (wrap == "repeat") {
+    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
+  } else if (wrap == "mirror") {
+    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapMirror;
+  } else if (wrap == "clamp") {
+    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapClamp;
+  } else if (wrap == "black") {
+    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapBlack;
+  } else if (wrap == "octahedralsphere") {
+    throw Error("property '" + wrap_key + "': the octahedral sphere wrap (of pbrt's equal-area environment " +
+                "maps) is not supported for textures");
+  } else {
+    throw Error("property '" + wrap_key + "' must be one of repeat, mirror, clamp, black; got '" + wrap + "'");
+  }
+
+  const double anisotropy = props.Float("maxanisotropy", 8.0);
+  if (!(anisotropy >= 1.0 && anisotropy <= 1024.0))
+    throw Error("property 'maxanisotropy' must lie in [1, 1024]");
+  opt.anisotropic = int(std::lround(anisotropy));
+  return opt;
+}
+
+Encoding ReadEncoding(const Properties& props) {
+  Encoding encoding;
+  if (props.Has("raw") && props.Has("encoding"))
+    throw Error("properties 'raw' (Mitsuba) and 'encoding' (pbrt) both set how texels are decoded: give one");
+  if (props.Has("raw")) {
+    encoding.kind = props.Bool("raw", false) ? Encoding::Kind::kLinear : Encoding::Kind::kSrgb;
+    return encoding;
+  }
+  const std::string name = props.String("encoding", "sRGB");
+  if (name == "sRGB") return encoding;
+  if (name == "linear") {
+    encoding.kind = Encoding::Kind::kLinear;
+    return encoding;
+  }
+  if (name.rfind("gamma ", 0) == 0) {
+    size_t used = 0;
+    double gamma = 0;
+    try {
+      gamma = std::stod(name.substr(6), &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == name.size() - 6 && gamma > 0 && gamma <= 100) {
+      encoding.kind = Encoding::Kind::kGamma;
+      encoding.gamma = gamma;
+      return encoding;
+    }
+  }
+  throw Error("property 'encoding' must be sRGB, linear or \"gamma G\" with 0 < G <= 100; got '" + name + "'");
+}
+
+// Writes `image` as a tiled float texture with all its MIP levels, each
+// level the box average of the one above.
+void WriteMipmapped(LinearImage& image, const std::filesystem::path& file) {
+  const OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeFloat);
+  const OIIO::ImageBuf source(spec, image.texels.data());  // wraps the texels, no copy
+  OIIO::ImageSpec config;
+  config.format = OIIO::TypeFloat;
+  config.tile_width = config.tile_height = 64;
+  config.attribute("maketx:filtername", "box");
+  config.attribute("maketx:hash", 0);  // the file's SHA-1: not needed for a private file
+  std::ostringstream log;
+  if (!OIIO::ImageBufAlgo::make_texture(OIIO::ImageBufAlgo::MakeTxTexture, source, file.string(), config, &log))
+    throw Error("property 'filename': the MIP-mapped copy of the image could not be written: " + log.str());
+}
+
+struct TextureSystemDeleter {
+  void operator()(OIIO::TextureSystem* system) const { OIIO::TextureSystem::destroy(system); }
+};
+
+class Bitmap final : public yarf::Texture {
+ public:
+  explicit Bitmap(const Properties& props)
+      : file_(props.ResolvedFile("filename")),
+        lookup_(ReadLookup(props)),
+        map_(yarf::textures::ReadUvMap(props)),
+        scale_(float(yarf::textures::RequireFinite(props.Float("scale", 1.0), "scale"))),
+        invert_(props.Bool("invert", false)),
+        folder_("yarf-bitmap") {
+    LinearImage image = yarf::textures::ReadLinearImage(file_, ReadEncoding(props), "filename");
+    channels_ = uint32_t(image.channels);
+    mean_ = MeanOf(image);
+    const std::filesystem::path texture_file = folder_.path() / "texture.exr";
+    WriteMipmapped(image, texture_file);
+
+    system_.reset(OIIO::TextureSystem::create(false));
+    if (!system_) throw Error("the image texture system could not be created");
+    system_->attribute("max_memory_MB", 64.0f);
+    system_->attribute("max_open_files", 4);
+    system_->attribute("deduplicate", 0);
+    handle_ = system_->get_texture_handle(OIIO::ustring(texture_file.string()));
+    if (!handle_ || !system_->good(handle_))
+      throw Error("property 'filename': the MIP-mapped copy of the image could not be opened: " +
+                  system_->geterror());
+  }
+
+  uint32_t Channels() const override { return channels_; }
+
+  void Evaluate(const yarf::TexturePoints& at, std::span<float> value) const override {
+    yarf::textures::CheckShapes(at, value, channels_);
+    OIIO::TextureSystem::Perthread* thread = system_->get_perthread_info();
+    OIIO::TextureOpt opt = lookup_;  // texture() may change its options
+    float texel[3];
+    for (size_t k = 0; k < at.Count(); ++k) {
+      const double u = at.uv[2 * k], v = at.uv[2 * k + 1];
+      const std::array<double, 4> d = map_.Footprint(yarf::textures::FootprintAt(at, k));
+      // OIIO's (s, t) are yarf's (u, v): t = 0 at the top row.
+      if (!system_->texture(handle_, thread, opt, float(map_.U(u, v)), float(map_.V(u, v)), float(d[0]),
+                            float(d[1]), float(d[2]), float(d[3]), int(channels_), texel))
+        throw Error("bitmap '" + file_.filename().string() + "': lookup failed: " + system_->geterror());
+      for (uint32_t c = 0; c < channels_; ++c) value[k * channels_ + c] = Adjust(texel[c]);
+    }
+  }
+
+  std::vector<float> Mean() const override { return mean_; }
+
+ private:
+  // pbrt's order: scale first, then invert.
+  float Adjust(float texel) const {
+    const float scaled = scale_ * texel;
+    return invert_ ? std::max(0.0f, 1.0f - scaled) : scaled;
+  }
+
+  std::vector<float> MeanOf(const LinearImage& image) const {
+    std::vector<double> sum(image.channels, 0.0);
+    for (size_t i = 0; i < image.texels.size(); ++i) sum[i % image.channels] += Adjust(image.texels[i]);
+    const double count = double(image.width) * double(image.height);
+    std::vector<float> mean(image.channels);
+    for (int c = 0; c < image.channels; ++c) mean[c] = float(sum[c] / count);
+    return mean;
+  }
+
+  std::filesystem::path file_;
+  OIIO::TextureOpt lookup_;
+  yarf::textures::UvMap map_;
+  float scale_;
+  bool invert_;
+  uint32_t channels_ = 0;
+  std::vector<float> mean_;
+  // Declared before the texture system, so destroyed after it: the
+  // system's open file lives in this folder.
+  yarf::textures::TemporaryFolder folder_;
+  std::unique_ptr<OIIO::TextureSystem, TextureSystemDeleter> system_;
+  OIIO::TextureSystem::TextureHandle* handle_ = nullptr;  // owned by system_
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<Bitmap>(registrar, "bitmap", "1.0.0",
+                         "An image file looked up by uv, decoded to linear and filtered by OpenImageIO");
+}

@@ -1,0 +1,62 @@
+// mix — a blend of two textures (pbrt-v4's `mix`)
+//
+// Parameters
+//   tex1     rgb (or float, or a texture)   default 0
+//   tex2     rgb (or float, or a texture)   default 1
+//       The two values blended.
+//   amount   float (or a texture)           default 0.5
+//       The weight of tex2: 0 gives tex1, 1 gives tex2. Any finite
+//       number is accepted (pbrt does not bound it either); a colour
+//       texture is read as its luminance.
+//
+// Channels: 3. Value: (1 − amount) · tex1 + amount · tex2 at each point.
+// Mean: the same blend of the means, exact unless `amount` and one of
+// tex1 / tex2 both vary over the surface.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "texture_input.h"
+#include "texture_rows.h"
+#include "yarf/plugin.h"
+
+namespace {
+
+using yarf::Vec3;
+using yarf::textures::TextureInput;
+
+class Mix final : public yarf::Texture {
+ public:
+  explicit Mix(const yarf::Properties& props)
+      : tex1_(TextureInput::Color(props, "tex1", Vec3(0, 0, 0))),
+        tex2_(TextureInput::Color(props, "tex2", Vec3(1, 1, 1))),
+        amount_(TextureInput::Float(props, "amount", 0.5f)) {}
+
+  uint32_t Channels() const override { return 3; }
+
+  void Evaluate(const yarf::TexturePoints& at, std::span<float> value) const override {
+    yarf::textures::CheckShapes(at, value, 3);
+    std::vector<Vec3> tex1, tex2;
+    std::vector<float> amount;
+    tex1_.Evaluate(at, tex1);
+    tex2_.Evaluate(at, tex2);
+    amount_.Evaluate(at, amount);
+    for (size_t k = 0; k < amount.size(); ++k)
+      ((1.0f - amount[k]) * tex1[k] + amount[k] * tex2[k]).Store(&value[3 * k]);
+  }
+
+  std::vector<float> Mean() const override {
+    const float a = amount_.Mean().x;
+    const Vec3 mean = (1.0f - a) * tex1_.Mean() + a * tex2_.Mean();
+    return {mean.x, mean.y, mean.z};
+  }
+
+ private:
+  TextureInput tex1_, tex2_, amount_;
+};
+
+}  // namespace
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<Mix>(registrar, "mix", "1.0.0", "A blend of two textures by an amount (pbrt-v4 mix)");
+}

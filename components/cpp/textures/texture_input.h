@@ -1,0 +1,69 @@
+// An operand of a composite texture (checkerboard's colours, mix's and
+// scale's inputs): a constant or a texture, as TexturedValue, together
+// with its mean over the unit square, which Texture::Mean of the
+// composite needs and TexturedValue does not keep.
+#pragma once
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "yarf/error.h"
+#include "yarf/properties.h"
+#include "yarf/texture.h"
+#include "yarf/vecmath.h"
+
+namespace yarf::textures {
+
+class TextureInput {
+ public:
+  // The colour property `key` (an RGB, a float or a texture).
+  static TextureInput Color(const Properties& props, const std::string& key, Vec3 fallback) {
+    TextureInput input(TexturedValue::Color(props, key, fallback, false));
+    const auto texture = props.TextureOf(key);
+    input.mean_ = texture ? MeanColor(*texture) : input.value_.Constant();
+    input.RequireFiniteConstant(key);
+    return input;
+  }
+  // The float property `key` (a number or a texture, an RGB one read as
+  // its luminance); its mean is held in all three channels.
+  static TextureInput Float(const Properties& props, const std::string& key, float fallback) {
+    TextureInput input(TexturedValue::Float(props, key, fallback));
+    const auto texture = props.TextureOf(key);
+    const float mean = texture ? MeanFloat(*texture) : input.value_.Constant().x;
+    input.mean_ = Vec3(mean, mean, mean);
+    input.RequireFiniteConstant(key);
+    return input;
+  }
+
+  bool IsConstant() const { return value_.IsConstant(); }
+  Vec3 Constant() const { return value_.Constant(); }
+  Vec3 Mean() const { return mean_; }
+  void Evaluate(const TexturePoints& at, std::vector<Vec3>& out) const { value_.Evaluate(at, out); }
+  void Evaluate(const TexturePoints& at, std::vector<float>& out) const { value_.Evaluate(at, out); }
+
+ private:
+  explicit TextureInput(TexturedValue value) : value_(std::move(value)) {}
+
+  static Vec3 MeanColor(const Texture& texture) {
+    const std::vector<float> mean = texture.Mean();
+    if (mean.size() == 3) return Vec3::Load(mean.data());
+    return mean.size() == 1 ? Vec3(mean[0], mean[0], mean[0]) : Vec3();
+  }
+  static float MeanFloat(const Texture& texture) {
+    const std::vector<float> mean = texture.Mean();
+    if (mean.size() == 3) return Luminance(Vec3::Load(mean.data()));
+    return mean.size() == 1 ? mean[0] : 0.0f;
+  }
+  void RequireFiniteConstant(const std::string& key) const {
+    const Vec3 c = value_.Constant();
+    if (IsConstant() && !(std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z)))
+      throw Error("property '" + key + "' must be finite in every channel");
+  }
+
+  TexturedValue value_;
+  Vec3 mean_;
+};
+
+}  // namespace yarf::textures
