@@ -6,6 +6,10 @@
 // and stays in each file.
 #pragma once
 
+#include <optional>
+#include <span>
+
+#include "yarf/texture.h"
 #include "yarf/vecmath.h"
 
 namespace yarf::coating {
@@ -37,5 +41,39 @@ inline LobeWeights WeighLobes(Vec3 diffuse, Vec3 specular) {
   const float total = Mean(diffuse) + Mean(specular);
   return {Mean(diffuse) > 0, Mean(specular) > 0, total > 0 ? Mean(specular) / total : 0.0f};
 }
+
+// The coating's colours at one point.
+struct Point {
+  Vec3 specular;
+  LobeWeights lobes;
+  // ρ' / η² per channel (ScaledDiffuse).
+  Vec3 scaled_diffuse;
+};
+
+// The coating's colours at a call's points, its base (`diffuse`) and
+// coating (`specular`) colours perhaps textures: derived once per call
+// when neither varies.
+class Points {
+ public:
+  Points(const TexturedValue& diffuse, const TexturedValue& specular, std::span<const float> uv, double internal,
+         bool nonlinear, float eta)
+      : diffuse_(diffuse.At(uv)), specular_(specular.At(uv)), internal_(internal), nonlinear_(nonlinear), eta_(eta) {
+    if (diffuse_.IsUniform() && specular_.IsUniform()) uniform_ = At(0);
+  }
+
+  Point operator[](size_t k) const { return uniform_ ? *uniform_ : At(k); }
+
+ private:
+  Point At(size_t k) const {
+    const Vec3 diffuse = diffuse_[k], specular = specular_[k];
+    return {specular, WeighLobes(diffuse, specular), ScaledDiffuse(diffuse, internal_, nonlinear_, eta_)};
+  }
+
+  PointValues<Vec3> diffuse_, specular_;
+  double internal_;
+  bool nonlinear_;
+  float eta_;
+  std::optional<Point> uniform_;
+};
 
 }  // namespace yarf::coating

@@ -16,8 +16,9 @@
 //   k                      rgb (or float)   default 1    imaginary part κ ≥ 0
 //       The defaults η = 0, κ = 1 make F = 1 at every angle: a perfect
 //       mirror, as Mitsuba's material "none". Not with a named material.
-//   specular_reflectance   rgb (or float)   default 1
-//       A factor on the Fresnel reflectance, per channel in [0, 1].
+//   specular_reflectance   rgb, float or texture   default 1
+//       A factor on the Fresnel reflectance, per channel in [0, 1] (a
+//       texture's values are clamped to it).
 //
 // Lobes: delta reflection. Sample returns wo = (-wi.x, -wi.y, wi.z),
 // weight = specular_reflectance · F(cos θi), pdf = 1 (the only lobe).
@@ -29,6 +30,7 @@
 #include "microfacet.h"
 #include "scatter_rows.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -41,7 +43,8 @@ class Conductor final : public yarf::DeltaSurfaceModel {
  public:
   explicit Conductor(const yarf::Properties& props)
       : ior_(yarf::metals::ReadConductorIor(props)),
-        specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
+        specular_(yarf::TexturedValue::Color(props, "specular_reflectance", Vec3(1.0f, 1.0f, 1.0f),
+                                             /*unit=*/true)) {}
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
@@ -50,6 +53,7 @@ class Conductor final : public yarf::DeltaSurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
+    const auto specular = specular_.At(uv);
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       if (!can_reflect || !(in.z > 0)) {
@@ -57,7 +61,7 @@ class Conductor final : public yarf::DeltaSurfaceModel {
         continue;
       }
       rows.Store(k, yarf::Reflect(in),
-                 specular_ * yarf::microfacet::FresnelConductor(in.z, ior_.eta, ior_.k), 1.0f,
+                 specular[k] * yarf::microfacet::FresnelConductor(in.z, ior_.eta, ior_.k), 1.0f,
                  kMirrorLobe);
     }
   }
@@ -66,7 +70,7 @@ class Conductor final : public yarf::DeltaSurfaceModel {
 
  private:
   yarf::metals::ComplexIor ior_;
-  Vec3 specular_;
+  yarf::TexturedValue specular_;
 };
 
 }  // namespace

@@ -11,25 +11,29 @@
 // so f is symmetric and the two transport modes agree.
 //
 // Parameters
-//   reflectance     rgb (or float)   default 0.25   per channel in [0, 1]
-//   transmittance   rgb (or float)   default 0.25   per channel in [0, 1]
+//   reflectance     rgb, float or texture   default 0.25   per channel in [0, 1]
+//   transmittance   rgb, float or texture   default 0.25   per channel in [0, 1]
 // reflectance + transmittance must not exceed 1 in any channel (energy
-// conservation).
+// conservation). Texture values are clamped to [0, 1], and where a
+// textured pair sums to more than 1 both are scaled down to sum to 1.
 //
 // Lobes: diffuse reflection and diffuse transmission (kScatterRefract:
-// wo on the other side), each present when its colour is not black.
+// wo on the other side), each present unless its colour is a constant
+// black.
 // Sample picks one with probability proportional to the maximum channel
 // of its colour (as pbrt), among the lobes `allowed` leaves, and draws wo
 // from the cosine-weighted hemisphere of that side: the weight is the
 // lobe's colour over its probability.
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 
 #include "scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -42,18 +46,20 @@ constexpr uint32_t kTransmitLobe = yarf::kScatterRefract | yarf::kScatterDiffuse
 class DiffuseTransmission final : public yarf::SurfaceModel {
  public:
   explicit DiffuseTransmission(const yarf::Properties& props)
-      : reflectance_(props.Reflectance("reflectance", Vec3(0.25f, 0.25f, 0.25f))),
-        transmittance_(props.Reflectance("transmittance", Vec3(0.25f, 0.25f, 0.25f))) {
+      : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.25f, 0.25f, 0.25f),
+                                                /*unit=*/true)),
+        transmittance_(yarf::TexturedValue::Color(props, "transmittance",
+                                                  Vec3(0.25f, 0.25f, 0.25f), /*unit=*/true)) {
     yarf::RequireEnergyConserving(reflectance_, transmittance_, "reflectance", "transmittance");
-    reflect_weight_ = yarf::MaxComponent(reflectance_);
-    transmit_weight_ = yarf::MaxComponent(transmittance_);
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) {
+    const Colours colours(*this, uv);
+    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
+      const Local lobes = colours[k];
       const float product = in.z * out.z;
-      const Vec3 f = product > 0 ? reflectance_ : (product < 0 ? transmittance_ : Vec3());
+      const Vec3 f = product > 0 ? lobes.reflectance : (product < 0 ? lobes.transmittance : Vec3());
       return f * yarf::kInvPi;
     });
   }
@@ -63,13 +69,15 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const float reflect_share =
-        yarf::LobeAllowed(kReflectLobe, allowed) ? reflect_weight_ : 0.0f;
-    const float transmit_share =
-        yarf::LobeAllowed(kTransmitLobe, allowed) ? transmit_weight_ : 0.0f;
-    const float total = reflect_share + transmit_share;
+    const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
+    const bool can_transmit = yarf::LobeAllowed(kTransmitLobe, allowed);
+    const Colours colours(*this, uv);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
+      const Local lobes = colours[k];
+      const float reflect_share = can_reflect ? lobes.reflect_weight : 0.0f;
+      const float transmit_share = can_transmit ? lobes.transmit_weight : 0.0f;
+      const float total = reflect_share + transmit_share;
       const float wi_z = wi[3 * k + 2];
       const float* u = &uniform[3 * k];
       const bool reflect = u[0] * total < reflect_share;
@@ -85,30 +93,64 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
         continue;
       }
       // f·|cos θo| / pdf = (colour/π)·|cos θo| / (probability·|cos θo|/π).
-      rows.Store(k, out, (reflect ? reflectance_ : transmittance_) / probability, density,
+      rows.Store(k, out, (reflect ? lobes.reflectance : lobes.transmittance) / probability, density,
                  reflect ? kReflectLobe : kTransmitLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const float total = reflect_weight_ + transmit_weight_;
-    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
+    const Colours colours(*this, uv);
+    yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
+      const Local lobes = colours[k];
+      const float total = lobes.reflect_weight + lobes.transmit_weight;
       const float product = in.z * out.z;
-      const float share = product > 0 ? reflect_weight_ : (product < 0 ? transmit_weight_ : 0.0f);
+      const float share =
+          product > 0 ? lobes.reflect_weight : (product < 0 ? lobes.transmit_weight : 0.0f);
       return total > 0 ? share / total * yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
     });
   }
 
   uint32_t Lobes() const override {
-    return (reflect_weight_ > 0 ? kReflectLobe : 0u) | (transmit_weight_ > 0 ? kTransmitLobe : 0u);
+    return (reflectance_.IsZero() ? 0u : kReflectLobe) |
+           (transmittance_.IsZero() ? 0u : kTransmitLobe);
   }
 
  private:
-  Vec3 reflectance_;
-  Vec3 transmittance_;
-  // Max channels of the two colours: the odds of sampling each lobe.
-  float reflect_weight_ = 0, transmit_weight_ = 0;
+  // The two colours at one point, and the max channel of each: the odds
+  // of sampling each lobe.
+  struct Local {
+    Vec3 reflectance, transmittance;
+    float reflect_weight = 0, transmit_weight = 0;
+  };
+
+  // The colours at a call's points.
+  class Colours {
+   public:
+    Colours(const DiffuseTransmission& model, std::span<const float> uv)
+        : reflectance_(model.reflectance_.At(uv)),
+          transmittance_(model.transmittance_.At(uv)) {
+      if (reflectance_.IsUniform() && transmittance_.IsUniform()) uniform_ = At(0);
+    }
+
+    Local operator[](size_t k) const { return uniform_ ? *uniform_ : At(k); }
+
+   private:
+    Local At(size_t k) const {
+      Local out{reflectance_[k], transmittance_[k]};
+      yarf::ConserveEnergy(out.reflectance, out.transmittance);
+      out.reflect_weight = yarf::MaxComponent(out.reflectance);
+      out.transmit_weight = yarf::MaxComponent(out.transmittance);
+      return out;
+    }
+
+    yarf::PointValues<Vec3> reflectance_, transmittance_;
+    // The colours at every point, when neither varies.
+    std::optional<Local> uniform_;
+  };
+
+  yarf::TexturedValue reflectance_;
+  yarf::TexturedValue transmittance_;
 };
 
 }  // namespace

@@ -6,8 +6,9 @@
 // material, as pbrt's DiffuseBxDF); there is no transmission.
 //
 // Parameters
-//   reflectance   rgb (or float)   default 0.5
-//       Fraction of the incident light reflected, per channel in [0, 1].
+//   reflectance   rgb, float or texture   default 0.5
+//       Fraction of the incident light reflected, per channel in [0, 1]
+//       (a texture's values are clamped to it).
 //
 // Lobes: reflection. Sample draws wo from the cosine-weighted hemisphere
 // on wi's side, so its weight is the reflectance itself.
@@ -18,6 +19,7 @@
 
 #include "scatter_rows.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -29,12 +31,14 @@ constexpr uint32_t kLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 class Lambertian final : public yarf::SurfaceModel {
  public:
   explicit Lambertian(const yarf::Properties& props)
-      : reflectance_(props.Reflectance("reflectance", Vec3(0.5f, 0.5f, 0.5f))) {}
+      : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.5f, 0.5f, 0.5f),
+                                                /*unit=*/true)) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) {
-      return in.z * out.z > 0 ? reflectance_ * yarf::kInvPi : Vec3();
+    const auto reflectance = reflectance_.At(uv);
+    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
+      return in.z * out.z > 0 ? reflectance[k] * yarf::kInvPi : Vec3();
     });
   }
 
@@ -45,6 +49,7 @@ class Lambertian final : public yarf::SurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
+    const auto reflectance = reflectance_.At(uv);
     for (size_t k = 0; k < count; ++k) {
       const float wi_z = wi[3 * k + 2];
       Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);
@@ -56,13 +61,13 @@ class Lambertian final : public yarf::SurfaceModel {
         continue;
       }
       // f·|cos θo| / pdf = (ρ/π)·cos θo / (cos θo/π).
-      rows.Store(k, out, reflectance_, density, kLobe);
+      rows.Store(k, out, reflectance[k], density, kLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf, [](Vec3 in, Vec3 out) {
+    yarf::PdfEach(wi, wo, pdf, [](size_t, Vec3 in, Vec3 out) {
       return in.z * out.z > 0 ? yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
     });
   }
@@ -70,7 +75,7 @@ class Lambertian final : public yarf::SurfaceModel {
   uint32_t Lobes() const override { return kLobe; }
 
  private:
-  Vec3 reflectance_;
+  yarf::TexturedValue reflectance_;
 };
 
 }  // namespace

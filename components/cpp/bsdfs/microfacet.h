@@ -13,10 +13,14 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
+#include <span>
 #include <string>
+#include <utility>
 
 #include "yarf/error.h"
 #include "yarf/properties.h"
+#include "yarf/texture.h"
 #include "yarf/vecmath.h"
 #include "yarf/warps.h"
 
@@ -39,19 +43,49 @@ inline float RequireAlpha(double alpha, const std::string& property) {
   return std::max(float(alpha), kMinAlpha);
 }
 
+// A roughness property: a finite number > 0 (raised to kMinAlpha), or a
+// texture whose values are clamped to ≥ kMinAlpha where it is looked up.
+inline TexturedValue ReadAlpha(const Properties& props, const std::string& property,
+                               double fallback) {
+  if (auto texture = props.TextureOf(property))
+    return TexturedValue(std::move(texture)).Clamped(kMinAlpha, std::numeric_limits<float>::max());
+  return TexturedValue(RequireAlpha(props.Float(property, fallback), property));
+}
+
+// The roughness at a call's points (TexturedRoughness::At).
+class PointRoughness {
+ public:
+  PointRoughness(PointValues<float> x, PointValues<float> y) : x_(std::move(x)), y_(std::move(y)) {}
+  Roughness operator[](size_t k) const { return {x_[k], y_[k]}; }
+
+ private:
+  PointValues<float> x_, y_;
+};
+
+// Roughness whose α may vary over the surface (textures).
+struct TexturedRoughness {
+  TexturedValue alpha_x, alpha_y;
+
+  // At the [N,2] uv of a surface call.
+  PointRoughness At(std::span<const float> uv) const {
+    return {alpha_x.FloatsAt(uv), alpha_y.FloatsAt(uv)};
+  }
+};
+
 // Reads Mitsuba's roughness properties: 'alpha' (isotropic, default
 // `fallback`), or 'alpha_u' and 'alpha_v' together when the model is
-// `anisotropic`; and 'distribution', which may only name "ggx", the one
-// distribution here (Mitsuba's default is Beckmann: a scene that relies on
-// it must say "ggx" to mean this model).
-inline Roughness ReadRoughness(const Properties& props, double fallback, bool anisotropic) {
+// `anisotropic`, each a number or a texture; and 'distribution', which
+// may only name "ggx", the one distribution here (Mitsuba's default is
+// Beckmann: a scene that relies on it must say "ggx" to mean this model).
+inline TexturedRoughness ReadTexturedRoughness(const Properties& props, double fallback,
+                                               bool anisotropic) {
   const std::string distribution = props.String("distribution", "ggx");
   if (distribution != "ggx")
     throw Error("property 'distribution' must be \"ggx\" (the only microfacet distribution), "
                 "not \"" + distribution + "\"");
   const bool has_u = props.Has("alpha_u"), has_v = props.Has("alpha_v");
   if (!has_u && !has_v) {
-    const float alpha = RequireAlpha(props.Float("alpha", fallback), "alpha");
+    const TexturedValue alpha = ReadAlpha(props, "alpha", fallback);
     return {alpha, alpha};
   }
   const std::string given = has_u ? "alpha_u" : "alpha_v";
@@ -62,8 +96,18 @@ inline Roughness ReadRoughness(const Properties& props, double fallback, bool an
   if (!has_u || !has_v)
     throw Error(std::string("property '") + (has_u ? "alpha_v" : "alpha_u") +
                 "' is missing: anisotropic roughness needs both 'alpha_u' and 'alpha_v'");
-  return {RequireAlpha(props.Float("alpha_u"), "alpha_u"),
-          RequireAlpha(props.Float("alpha_v"), "alpha_v")};
+  return {ReadAlpha(props, "alpha_u", fallback), ReadAlpha(props, "alpha_v", fallback)};
+}
+
+// The same for a model whose roughness is one number over the whole
+// surface (tables built for it at construction): a texture is an Error.
+inline Roughness ReadRoughness(const Properties& props, double fallback, bool anisotropic) {
+  const TexturedRoughness roughness = ReadTexturedRoughness(props, fallback, anisotropic);
+  for (const char* property : {"alpha", "alpha_u", "alpha_v"})
+    if (props.TextureOf(property))
+      throw Error("property '" + std::string(property) +
+                  "' must be a number: this model's roughness cannot vary over the surface");
+  return {roughness.alpha_x.Constant().x, roughness.alpha_y.Constant().x};
 }
 
 // --- Geometry about a microfacet -------------------------------------------

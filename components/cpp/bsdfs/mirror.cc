@@ -5,8 +5,9 @@
 // return 0 and only Sample finds it. Both sides reflect alike.
 //
 // Parameters
-//   reflectance   rgb (or float)   default 1
-//       Fraction of the incident light reflected, per channel in [0, 1].
+//   reflectance   rgb, float or texture   default 1
+//       Fraction of the incident light reflected, per channel in [0, 1]
+//       (a texture's values are clamped to it).
 //
 // Lobes: delta reflection. Sample returns wo = (-wi.x, -wi.y, wi.z),
 // weight = reflectance, pdf = 1 (the probability of the only lobe).
@@ -17,6 +18,7 @@
 
 #include "scatter_rows.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -28,7 +30,8 @@ constexpr uint32_t kMirrorLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 class Mirror final : public yarf::DeltaSurfaceModel {
  public:
   explicit Mirror(const yarf::Properties& props)
-      : reflectance_(props.Reflectance("reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
+      : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(1.0f, 1.0f, 1.0f),
+                                                /*unit=*/true)) {}
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
@@ -37,20 +40,21 @@ class Mirror final : public yarf::DeltaSurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
+    const auto reflectance = reflectance_.At(uv);
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       if (!can_reflect || in.z == 0) {
         rows.StoreNoSample(k);
         continue;
       }
-      rows.Store(k, yarf::Reflect(in), reflectance_, 1.0f, kMirrorLobe);
+      rows.Store(k, yarf::Reflect(in), reflectance[k], 1.0f, kMirrorLobe);
     }
   }
 
   uint32_t Lobes() const override { return kMirrorLobe; }
 
  private:
-  Vec3 reflectance_;
+  yarf::TexturedValue reflectance_;
 };
 
 }  // namespace

@@ -11,25 +11,32 @@
 // reflect alike (two-sided); wi and wo on opposite sides give 0.
 //
 // Parameters
-//   diffuse_reflectance    rgb (or float)   default 0.5    kd, per channel ≥ 0
-//   specular_reflectance   rgb (or float)   default 0.2    ks, per channel ≥ 0
-//   exponent               float            default 30     n ≥ 0; larger is shinier
-// kd + ks must not exceed 1 in any channel (energy conservation).
+//   diffuse_reflectance    rgb, float or texture   default 0.5   kd, per channel in [0, 1]
+//   specular_reflectance   rgb, float or texture   default 0.2   ks, per channel in [0, 1]
+//   exponent               float or texture        default 30    n ≥ 0; larger is shinier
+// kd + ks must not exceed 1 in any channel (energy conservation). Texture
+// values are clamped to these ranges, and where textured kd + ks exceeds
+// 1 in a channel both are scaled down to sum to 1.
 //
-// Lobes: diffuse reflection (when kd > 0) and glossy reflection (when
-// ks > 0). Sample picks one of the allowed lobes with probability
-// proportional to the luminance of kd and ks, draws wo from the
+// Lobes: diffuse reflection (unless kd is a constant 0) and glossy
+// reflection (unless ks is). Sample picks one of the allowed lobes with
+// probability proportional to the luminance of kd and ks at the point,
+// draws wo from the
 // cosine-weighted hemisphere or the cos^n lobe around the mirror
 // direction, and returns the density of the mixture of the allowed lobes
 // (and their value in the weight).
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -39,30 +46,34 @@ using yarf::Vec3;
 constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 constexpr uint32_t kGlossyLobe = yarf::kScatterReflect | yarf::kScatterGlossy;
 
-float RequireExponent(double exponent) {
+// The exponent property: a finite number ≥ 0, or a texture clamped to ≥ 0.
+yarf::TexturedValue ReadExponent(const yarf::Properties& props) {
+  if (auto texture = props.TextureOf("exponent"))
+    return yarf::TexturedValue(std::move(texture)).Clamped(0.0f, std::numeric_limits<float>::max());
+  const double exponent = props.Float("exponent", 30.0);
   if (!(exponent >= 0.0 && std::isfinite(exponent)))
     throw yarf::Error("property 'exponent' must be a finite number ≥ 0");
-  return float(exponent);
+  return yarf::TexturedValue(float(exponent));
 }
 
 class Phong final : public yarf::SurfaceModel {
  public:
   explicit Phong(const yarf::Properties& props)
-      : diffuse_(props.Reflectance("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f))),
-        specular_(props.Reflectance("specular_reflectance", Vec3(0.2f, 0.2f, 0.2f))),
-        exponent_(RequireExponent(props.Float("exponent", 30.0))) {
+      : diffuse_(yarf::TexturedValue::Color(props, "diffuse_reflectance",
+                                            Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
+        specular_(yarf::TexturedValue::Color(props, "specular_reflectance",
+                                             Vec3(0.2f, 0.2f, 0.2f), /*unit=*/true)),
+        exponent_(ReadExponent(props)) {
     yarf::RequireEnergyConserving(diffuse_, specular_, "diffuse_reflectance",
                                   "specular_reflectance");
-    diffuse_weight_ = yarf::Luminance(diffuse_);
-    specular_weight_ = yarf::Luminance(specular_);
-    const float total = diffuse_weight_ + specular_weight_;
-    specular_probability_ = total > 0 ? specular_weight_ / total : 0.0f;
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value,
-                       [&](Vec3 in, Vec3 out) { return Value(in, out, true, true); });
+    const Parameters parameters(*this, uv);
+    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
+      return parameters[k].Value(in, out, true, true);
+    });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -70,12 +81,18 @@ class Phong final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed) && diffuse_weight_ > 0;
-    const bool glossy = yarf::LobeAllowed(kGlossyLobe, allowed) && specular_weight_ > 0;
-    const float total = (diffuse ? diffuse_weight_ : 0.0f) + (glossy ? specular_weight_ : 0.0f);
-    const float specular_probability = total > 0 ? (glossy ? specular_weight_ : 0.0f) / total : 0.0f;
+    const bool can_diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const bool can_glossy = yarf::LobeAllowed(kGlossyLobe, allowed);
+    const Parameters parameters(*this, uv);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
+      const Local local = parameters[k];
+      const bool diffuse = can_diffuse && local.diffuse_weight > 0;
+      const bool glossy = can_glossy && local.specular_weight > 0;
+      const float total =
+          (diffuse ? local.diffuse_weight : 0.0f) + (glossy ? local.specular_weight : 0.0f);
+      const float specular_probability =
+          total > 0 ? (glossy ? local.specular_weight : 0.0f) / total : 0.0f;
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
       Vec3 out;
@@ -84,62 +101,101 @@ class Phong final : public yarf::SurfaceModel {
         // The lobe is symmetric about the mirror direction: sample it in
         // a frame whose z axis is that direction.
         const yarf::Frame mirror(yarf::Reflect(in));
-        out = mirror.ToWorld(yarf::SamplePhongLobe(u[1], u[2], exponent_));
+        out = mirror.ToWorld(yarf::SamplePhongLobe(u[1], u[2], local.exponent));
       } else {
         out = yarf::SampleCosineHemisphere(u[1], u[2]);
         if (in.z < 0) out.z = -out.z;
       }
       // Zero when the glossy lobe dipped below the surface.
-      const float density = total > 0 ? Density(in, out, specular_probability) : 0.0f;
+      const float density = total > 0 ? local.Density(in, out, specular_probability) : 0.0f;
       if (!(density > 0)) {
         rows.StoreNoSample(k);
         continue;
       }
-      rows.Store(k, out, Value(in, out, diffuse, glossy) * (std::abs(out.z) / density), density,
-                 specular ? kGlossyLobe : kDiffuseLobe);
+      rows.Store(k, out, local.Value(in, out, diffuse, glossy) * (std::abs(out.z) / density),
+                 density, specular ? kGlossyLobe : kDiffuseLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf,
-                  [&](Vec3 in, Vec3 out) { return Density(in, out, specular_probability_); });
+    const Parameters parameters(*this, uv);
+    yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
+      const Local local = parameters[k];
+      return local.Density(in, out, local.specular_probability);
+    });
   }
 
   uint32_t Lobes() const override {
-    return (diffuse_weight_ > 0 ? kDiffuseLobe : 0u) | (specular_weight_ > 0 ? kGlossyLobe : 0u);
+    return (diffuse_.IsZero() ? 0u : kDiffuseLobe) | (specular_.IsZero() ? 0u : kGlossyLobe);
   }
 
  private:
+  // The model at one point.
+  struct Local {
+    Vec3 diffuse, specular;
+    float exponent = 0;
+    // Luminances of kd and ks: the odds of sampling each lobe.
+    float diffuse_weight = 0, specular_weight = 0;
+    float specular_probability = 0;
+
+    // f of the lobes asked for.
+    Vec3 Value(Vec3 wi, Vec3 wo, bool with_diffuse, bool with_glossy) const {
+      if (!(wi.z * wo.z > 0)) return Vec3();
+      const float cos_alpha = CosToMirror(wi, wo);
+      const float lobe = with_glossy && cos_alpha > 0 ? (exponent + 2.0f) / (2.0f * yarf::kPi) *
+                                                            std::pow(cos_alpha, exponent)
+                                                      : 0.0f;
+      return (with_diffuse ? diffuse * yarf::kInvPi : Vec3()) + specular * lobe;
+    }
+
+    // Density of the lobe mixture Sample draws from; the part of the
+    // glossy lobe below the surface is lost (Sample returns no sample
+    // there).
+    float Density(Vec3 wi, Vec3 wo, float p_specular) const {
+      if (!(wi.z * wo.z > 0)) return 0.0f;
+      return (1.0f - p_specular) * yarf::CosineHemispherePdf(std::abs(wo.z)) +
+             p_specular * yarf::PhongLobePdf(CosToMirror(wi, wo), exponent);
+    }
+  };
+
+  // The parameters at a call's points.
+  class Parameters {
+   public:
+    Parameters(const Phong& model, std::span<const float> uv)
+        : diffuse_(model.diffuse_.At(uv)),
+          specular_(model.specular_.At(uv)),
+          exponent_(model.exponent_.FloatsAt(uv)) {
+      if (diffuse_.IsUniform() && specular_.IsUniform() && exponent_.IsUniform()) uniform_ = At(0);
+    }
+
+    Local operator[](size_t k) const { return uniform_ ? *uniform_ : At(k); }
+
+   private:
+    Local At(size_t k) const {
+      Local out{diffuse_[k], specular_[k], exponent_[k]};
+      yarf::ConserveEnergy(out.diffuse, out.specular);
+      out.diffuse_weight = yarf::Luminance(out.diffuse);
+      out.specular_weight = yarf::Luminance(out.specular);
+      const float total = out.diffuse_weight + out.specular_weight;
+      out.specular_probability = total > 0 ? out.specular_weight / total : 0.0f;
+      return out;
+    }
+
+    yarf::PointValues<Vec3> diffuse_, specular_;
+    yarf::PointValues<float> exponent_;
+    // The model at every point, when no parameter varies.
+    std::optional<Local> uniform_;
+  };
+
   // cos α between wo and the mirror direction of wi. Symmetric in wi and
   // wo, which makes the model reciprocal, and unchanged by mirroring both
   // to the other side, which makes it two-sided.
   static float CosToMirror(Vec3 wi, Vec3 wo) { return yarf::Dot(wo, yarf::Reflect(wi)); }
 
-  // f of the lobes asked for.
-  Vec3 Value(Vec3 wi, Vec3 wo, bool diffuse, bool glossy) const {
-    if (!(wi.z * wo.z > 0)) return Vec3();
-    const float cos_alpha = CosToMirror(wi, wo);
-    const float lobe = glossy && cos_alpha > 0
-                           ? (exponent_ + 2.0f) / (2.0f * yarf::kPi) * std::pow(cos_alpha, exponent_)
-                           : 0.0f;
-    return (diffuse ? diffuse_ * yarf::kInvPi : Vec3()) + specular_ * lobe;
-  }
-
-  // Density of the lobe mixture Sample draws from; the part of the glossy
-  // lobe below the surface is lost (Sample returns no sample there).
-  float Density(Vec3 wi, Vec3 wo, float specular_probability) const {
-    if (!(wi.z * wo.z > 0)) return 0.0f;
-    return (1.0f - specular_probability) * yarf::CosineHemispherePdf(std::abs(wo.z)) +
-           specular_probability * yarf::PhongLobePdf(CosToMirror(wi, wo), exponent_);
-  }
-
-  Vec3 diffuse_;
-  Vec3 specular_;
-  float exponent_;
-  // Luminances of kd and ks: the odds of sampling each lobe.
-  float diffuse_weight_ = 0, specular_weight_ = 0;
-  float specular_probability_ = 0;
+  yarf::TexturedValue diffuse_;
+  yarf::TexturedValue specular_;
+  yarf::TexturedValue exponent_;
 };
 
 }  // namespace

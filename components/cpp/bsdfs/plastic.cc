@@ -18,19 +18,23 @@
 // coating does. One-sided, as in Mitsuba: 0 unless wi and wo lie above.
 //
 // Parameters
-//   diffuse_reflectance    rgb (or float)   default 0.5        ρ, per channel in [0, 1]
-//   specular_reflectance   rgb (or float)   default 1          a factor on F (for realism, 1)
-//   int_ior                float            default 1.49       interior index (polypropylene)
-//   ext_ior                float            default 1.000277   exterior index (air)
-//   nonlinear              bool             default false      see above
+//   diffuse_reflectance    rgb, float or texture  default 0.5       ρ, per channel in [0, 1]
+//   specular_reflectance   rgb, float or texture  default 1         a factor on F, in [0, 1]
+//                                                                   (for realism, 1)
+//   int_ior                float                  default 1.49      interior index (polypropylene)
+//   ext_ior                float                  default 1.000277  exterior index (air)
+//   nonlinear              bool                   default false     see above
+// A texture's values are clamped to [0, 1].
 //
 // Lobes: delta reflection and diffuse reflection. Evaluate and Pdf see
 // the diffuse lobe only. Sample picks the specular lobe with probability
 // F s / (F s + (1 - F)(1 - s)), s = mean(specular) / (mean(specular) +
-// mean(ρ)) as in Mitsuba, or the one lobe `allowed` leaves; the diffuse
-// lobe samples the cosine-weighted hemisphere.
+// mean(ρ)) at the point as in Mitsuba, or the one lobe `allowed` leaves;
+// the diffuse lobe samples the cosine-weighted hemisphere. A lobe whose
+// colour is 0 at a point is not drawn there.
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -39,6 +43,7 @@
 #include "scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -52,19 +57,21 @@ constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 class Plastic final : public yarf::SurfaceModel {
  public:
   explicit Plastic(const yarf::Properties& props)
-      : diffuse_(props.Reflectance("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f))),
-        specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))),
+      : diffuse_(yarf::TexturedValue::Color(props, "diffuse_reflectance",
+                                            Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
+        specular_(yarf::TexturedValue::Color(props, "specular_reflectance",
+                                             Vec3(1.0f, 1.0f, 1.0f), /*unit=*/true)),
         eta_(yarf::ReadRelativeIndex(props, 1.49, 1.000277)),
-        lobes_(yarf::coating::WeighLobes(diffuse_, specular_)) {
-    const bool nonlinear = props.Bool("nonlinear", false);
-    // A smooth coating's r̄ is F_dr,int.
-    scaled_diffuse_ = yarf::coating::ScaledDiffuse(
-        diffuse_, mf::FresnelDiffuseReflectance(1.0f / eta_), nonlinear, eta_);
-  }
+        // A smooth coating's r̄ is F_dr,int.
+        internal_reflectance_(mf::FresnelDiffuseReflectance(1.0f / eta_)),
+        nonlinear_(props.Bool("nonlinear", false)) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) { return Diffuse(in, out); });
+    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
+      return Diffuse(coating[k], in, out);
+    });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -72,14 +79,18 @@ class Plastic final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool specular = lobes_.has_specular && yarf::LobeAllowed(kSpecularLobe, allowed);
-    const bool diffuse = lobes_.has_diffuse && yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const bool can_specular = yarf::LobeAllowed(kSpecularLobe, allowed);
+    const bool can_diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
+      const yarf::coating::Point local = coating[k];
+      const bool specular = local.lobes.has_specular && can_specular;
+      const bool diffuse = local.lobes.has_diffuse && can_diffuse;
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
       const float p_specular =
-          in.z > 0 ? SpecularProbability(in.z, specular, diffuse) : 0.0f;
+          in.z > 0 ? SpecularProbability(local, in.z, specular, diffuse) : 0.0f;
       const bool pick_specular = u[0] < p_specular;
       Vec3 out, w;
       float density = 0;
@@ -87,11 +98,11 @@ class Plastic final : public yarf::SurfaceModel {
         if (pick_specular) {
           out = yarf::Reflect(in);
           density = p_specular;
-          w = specular_ * (yarf::FresnelDielectric(in.z, eta_) / density);
+          w = local.specular * (yarf::FresnelDielectric(in.z, eta_) / density);
         } else {
           out = yarf::SampleCosineHemisphere(u[1], u[2]);
           density = (1.0f - p_specular) * yarf::CosineHemispherePdf(out.z);
-          if (density > 0) w = Diffuse(in, out) * (out.z / density);
+          if (density > 0) w = Diffuse(local, in, out) * (out.z / density);
         }
       }
       if (!(density > 0)) {
@@ -104,43 +115,44 @@ class Plastic final : public yarf::SurfaceModel {
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
-      return lobes_.has_diffuse && in.z > 0 && out.z > 0
-                 ? (1.0f - SpecularProbability(in.z, lobes_.has_specular, true)) *
+    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
+      const yarf::coating::Point local = coating[k];
+      return local.lobes.has_diffuse && in.z > 0 && out.z > 0
+                 ? (1.0f - SpecularProbability(local, in.z, local.lobes.has_specular, true)) *
                        yarf::CosineHemispherePdf(out.z)
                  : 0.0f;
     });
   }
 
   uint32_t Lobes() const override {
-    return (lobes_.has_specular ? kSpecularLobe : 0u) | (lobes_.has_diffuse ? kDiffuseLobe : 0u);
+    return (specular_.IsZero() ? 0u : kSpecularLobe) | (diffuse_.IsZero() ? 0u : kDiffuseLobe);
   }
 
  private:
-  Vec3 Diffuse(Vec3 wi, Vec3 wo) const {
-    if (!(wi.z > 0 && wo.z > 0) || !lobes_.has_diffuse) return Vec3();
+  Vec3 Diffuse(const yarf::coating::Point& local, Vec3 wi, Vec3 wo) const {
+    if (!(wi.z > 0 && wo.z > 0) || !local.lobes.has_diffuse) return Vec3();
     const float transmitted =
         (1.0f - yarf::FresnelDielectric(wi.z, eta_)) * (1.0f - yarf::FresnelDielectric(wo.z, eta_));
-    return scaled_diffuse_ * (transmitted * yarf::kInvPi);
+    return local.scaled_diffuse * (transmitted * yarf::kInvPi);
   }
 
   // The odds of the specular lobe among the lobes in play at cos θi > 0.
-  float SpecularProbability(float cos_i, bool specular, bool diffuse) const {
+  float SpecularProbability(const yarf::coating::Point& local, float cos_i, bool specular, bool diffuse) const {
     if (!specular) return 0.0f;
     if (!diffuse) return 1.0f;
     const float fresnel = yarf::FresnelDielectric(cos_i, eta_);
-    const float s = fresnel * lobes_.specular_weight;
-    const float d = (1.0f - fresnel) * (1.0f - lobes_.specular_weight);
+    const float s = fresnel * local.lobes.specular_weight;
+    const float d = (1.0f - fresnel) * (1.0f - local.lobes.specular_weight);
     return s / (s + d);
   }
 
-  Vec3 diffuse_;
-  Vec3 specular_;
+  yarf::TexturedValue diffuse_;
+  yarf::TexturedValue specular_;
   float eta_;
-  yarf::coating::LobeWeights lobes_;
-  // ρ' / η² per channel: the diffuse lobe's value before the two Fresnel
-  // transmissions and 1/π.
-  Vec3 scaled_diffuse_;
+  // r̄, the coating's reflectance, from inside, of diffuse light.
+  float internal_reflectance_;
+  bool nonlinear_;
 };
 
 }  // namespace

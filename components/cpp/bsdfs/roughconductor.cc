@@ -15,14 +15,15 @@
 // 3's `roughconductor`: 0 unless wi and wo both lie above (z > 0).
 //
 // Parameters
-//   alpha                  float            default 0.1      GGX roughness α > 0
-//   alpha_u, alpha_v       float                             anisotropic roughness along the
-//       shading frame's x and y, instead of alpha (both or neither)
-//   distribution           string           default "ggx"    the only one
-//   material               string           default "none"   a named metal (metals.h)
-//   eta, k                 rgb (or float)   default 0, 1     complex index η + iκ, with
+//   alpha                  float or texture        default 0.1      GGX roughness α > 0
+//   alpha_u, alpha_v       float or texture                         anisotropic roughness along
+//       the shading frame's x and y, instead of alpha (both or neither)
+//   distribution           string                  default "ggx"    the only one
+//   material               string                  default "none"   a named metal (metals.h)
+//   eta, k                 rgb (or float)          default 0, 1     complex index η + iκ, with
 //       material "none" (the defaults make F = 1: a perfect mirror)
-//   specular_reflectance   rgb (or float)   default 1        R, per channel in [0, 1]
+//   specular_reflectance   rgb, float or texture   default 1        R, per channel in [0, 1]
+// A texture's values are clamped: α to ≥ 10⁻⁴ (microfacet.h), R to [0, 1].
 //
 // Lobes: glossy reflection. Sample draws a microfacet normal from the
 // normals visible from wi (Heitz, JCGT 2018) and reflects wi about it:
@@ -37,6 +38,7 @@
 #include "microfacet.h"
 #include "scatter_rows.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -49,13 +51,18 @@ constexpr uint32_t kLobe = yarf::kScatterReflect | yarf::kScatterGlossy;
 class RoughConductor final : public yarf::SurfaceModel {
  public:
   explicit RoughConductor(const yarf::Properties& props)
-      : roughness_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/true)),
+      : roughness_(mf::ReadTexturedRoughness(props, 0.1, /*anisotropic=*/true)),
         ior_(yarf::metals::ReadConductorIor(props)),
-        specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))) {}
+        specular_(yarf::TexturedValue::Color(props, "specular_reflectance", Vec3(1.0f, 1.0f, 1.0f),
+                                             /*unit=*/true)) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) { return Value(in, out); });
+    const auto roughness = roughness_.At(uv);
+    const auto specular = specular_.At(uv);
+    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
+      return Value(roughness[k], specular[k], in, out);
+    });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -64,56 +71,62 @@ class RoughConductor final : public yarf::SurfaceModel {
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
+    const auto roughnesses = roughness_.At(uv);
+    const auto specular = specular_.At(uv);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
+      const mf::Roughness roughness = roughnesses[k];
       Vec3 out;
       float density = 0;
       if (can_reflect && in.z > 0) {
-        const Vec3 m = yarf::SampleGgxVisibleNormal(in, roughness_.alpha_x, roughness_.alpha_y,
+        const Vec3 m = yarf::SampleGgxVisibleNormal(in, roughness.alpha_x, roughness.alpha_y,
                                                     u[1], u[2]);
         out = mf::ReflectAbout(in, m);
         // Density and value both from (wi, wo), as Pdf and Evaluate see them.
-        density = Density(in, out);
+        density = Density(roughness, in, out);
       }
       if (!(density > 0)) {
         rows.StoreNoSample(k);
         continue;
       }
-      rows.Store(k, out, Value(in, out) * (out.z / density), density, kLobe);
+      rows.Store(k, out, Value(roughness, specular[k], in, out) * (out.z / density), density,
+                 kLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) { return Density(in, out); });
+    const auto roughness = roughness_.At(uv);
+    yarf::PdfEach(wi, wo, pdf,
+                  [&](size_t k, Vec3 in, Vec3 out) { return Density(roughness[k], in, out); });
   }
 
   uint32_t Lobes() const override { return kLobe; }
 
  private:
-  Vec3 Value(Vec3 wi, Vec3 wo) const {
+  Vec3 Value(mf::Roughness roughness, Vec3 specular, Vec3 wi, Vec3 wo) const {
     if (!(wi.z > 0 && wo.z > 0)) return Vec3();
     const Vec3 h = yarf::Normalize(wi + wo);
-    const float d = yarf::GgxDistribution(h, roughness_.alpha_x, roughness_.alpha_y);
-    const float g = mf::SmithG2(wi, wo, roughness_.alpha_x, roughness_.alpha_y);
+    const float d = yarf::GgxDistribution(h, roughness.alpha_x, roughness.alpha_y);
+    const float g = mf::SmithG2(wi, wo, roughness.alpha_x, roughness.alpha_y);
     const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(wi, h), ior_.eta, ior_.k);
-    return specular_ * fresnel * (d * g / (4.0f * wi.z * wo.z));
+    return specular * fresnel * (d * g / (4.0f * wi.z * wo.z));
   }
 
   // The density of visible normals, D_wi(h) = G1(wi) (wi·h) D(h) / cos θi,
   // times the Jacobian 1 / (4 wi·h) of reflection about h.
-  float Density(Vec3 wi, Vec3 wo) const {
+  static float Density(mf::Roughness roughness, Vec3 wi, Vec3 wo) {
     if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
     const Vec3 h = yarf::Normalize(wi + wo);
-    return yarf::GgxSmithG1(wi, roughness_.alpha_x, roughness_.alpha_y) *
-           yarf::GgxDistribution(h, roughness_.alpha_x, roughness_.alpha_y) / (4.0f * wi.z);
+    return yarf::GgxSmithG1(wi, roughness.alpha_x, roughness.alpha_y) *
+           yarf::GgxDistribution(h, roughness.alpha_x, roughness.alpha_y) / (4.0f * wi.z);
   }
 
-  mf::Roughness roughness_;
+  mf::TexturedRoughness roughness_;
   yarf::metals::ComplexIor ior_;
-  Vec3 specular_;
+  yarf::TexturedValue specular_;
 };
 
 }  // namespace

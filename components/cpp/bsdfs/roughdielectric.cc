@@ -27,9 +27,11 @@
 //   ext_ior            float    default 1.000277   exterior index of refraction (air)
 //       They must differ: matched indices make the interface a delta
 //       pass-through (use `dielectric`).
-//   alpha              float    default 0.1        GGX roughness α > 0
-//   alpha_u, alpha_v   float                       anisotropic roughness (x, y), instead of alpha
-//   distribution       string   default "ggx"      the only one
+//   alpha              float or texture   default 0.1   GGX roughness α > 0
+//   alpha_u, alpha_v   float or texture                 anisotropic roughness (x, y), instead
+//       of alpha
+//   distribution       string             default "ggx" the only one
+// A texture's α is clamped to ≥ 10⁻⁴ (microfacet.h).
 //
 // Lobes: glossy reflection and glossy refraction. Sample draws a normal m
 // from the normals visible from wi (Heitz, JCGT 2018), then reflects with
@@ -47,6 +49,7 @@
 #include "scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -69,13 +72,14 @@ class RoughDielectric final : public yarf::SurfaceModel {
  public:
   explicit RoughDielectric(const yarf::Properties& props)
       : eta_(RequireDistinctIndices(yarf::ReadRelativeIndex(props, 1.5046, 1.000277))),
-        roughness_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/true)) {}
+        roughness_(mf::ReadTexturedRoughness(props, 0.1, /*anisotropic=*/true)) {}
 
   void Evaluate(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value, [&](Vec3 in, Vec3 out) {
+    const auto roughness = roughness_.At(uv);
+    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       Local local;
-      const float f = At(in, out, &local) ? Value(local, mode) : 0.0f;
+      const float f = At(roughness[k], in, out, &local) ? Value(local, mode) : 0.0f;
       return Vec3(f, f, f);
     });
   }
@@ -87,8 +91,10 @@ class RoughDielectric final : public yarf::SurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
     const bool can_refract = yarf::LobeAllowed(kRefractLobe, allowed);
+    const auto roughnesses = roughness_.At(uv);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
+      const mf::Roughness roughness = roughnesses[k];
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
       Vec3 out;
@@ -97,8 +103,8 @@ class RoughDielectric final : public yarf::SurfaceModel {
       if ((can_reflect || can_refract) && in.z != 0) {
         // Normals visible from wi's side: those of -wi when it lies below.
         const Vec3 seen_from = in.z > 0 ? in : -in;
-        const Vec3 m = yarf::SampleGgxVisibleNormal(seen_from, roughness_.alpha_x,
-                                                    roughness_.alpha_y, u[1], u[2]);
+        const Vec3 m = yarf::SampleGgxVisibleNormal(seen_from, roughness.alpha_x,
+                                                    roughness.alpha_y, u[1], u[2]);
         const float fresnel = yarf::FresnelDielectric(yarf::Dot(in, m), eta_);
         const float reflect_share = can_reflect ? fresnel : 0.0f;
         const float total = reflect_share + (can_refract ? 1.0f - fresnel : 0.0f);
@@ -112,7 +118,7 @@ class RoughDielectric final : public yarf::SurfaceModel {
           }
         }
         // Density and value from (wi, wo), as Pdf and Evaluate see them.
-        found = found && At(in, out, &local) && local.reflect == reflect;
+        found = found && At(roughness, in, out, &local) && local.reflect == reflect;
       }
       float density = 0;
       if (found) {
@@ -132,9 +138,10 @@ class RoughDielectric final : public yarf::SurfaceModel {
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
+    const auto roughness = roughness_.At(uv);
+    yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       Local local;
-      return At(in, out, &local)
+      return At(roughness[k], in, out, &local)
                  ? local.density * (local.reflect ? local.fresnel : 1.0f - local.fresnel)
                  : 0.0f;
     });
@@ -156,7 +163,7 @@ class RoughDielectric final : public yarf::SurfaceModel {
   // The microfacet that scatters wi into wo, and what it contributes.
   // False when there is none (grazing directions, a microfacet facing away
   // from wi or wo).
-  bool At(Vec3 wi, Vec3 wo, Local* out) const {
+  bool At(mf::Roughness roughness, Vec3 wi, Vec3 wo, Local* out) const {
     if (wi.z == 0 || wo.z == 0) return false;
     Local l;
     l.reflect = wi.z * wo.z > 0;
@@ -168,9 +175,9 @@ class RoughDielectric final : public yarf::SurfaceModel {
     if (m.z < 0) m = -m;
     const float cos_im = yarf::Dot(wi, m), cos_om = yarf::Dot(wo, m);
     if (cos_im * wi.z <= 0 || cos_om * wo.z <= 0) return false;
-    const float d = yarf::GgxDistribution(m, roughness_.alpha_x, roughness_.alpha_y);
+    const float d = yarf::GgxDistribution(m, roughness.alpha_x, roughness.alpha_y);
     const float visible =
-        mf::SmithG1(wi, roughness_.alpha_x, roughness_.alpha_y) * std::abs(cos_im) * d /
+        mf::SmithG1(wi, roughness.alpha_x, roughness.alpha_y) * std::abs(cos_im) * d /
         std::abs(wi.z);
     if (l.reflect) {
       l.jacobian = 1.0f / (4.0f * std::abs(cos_im) * std::abs(cos_om));
@@ -183,7 +190,7 @@ class RoughDielectric final : public yarf::SurfaceModel {
       l.density = visible * l.eta * l.eta * std::abs(cos_om) * l.jacobian;
     }
     l.fresnel = yarf::FresnelDielectric(cos_im, eta_);
-    l.geometry = d * mf::SmithG2(wi, wo, roughness_.alpha_x, roughness_.alpha_y) *
+    l.geometry = d * mf::SmithG2(wi, wo, roughness.alpha_x, roughness.alpha_y) *
                  std::abs(cos_im) * std::abs(cos_om) / (std::abs(wi.z) * std::abs(wo.z));
     *out = l;
     return true;
@@ -197,7 +204,7 @@ class RoughDielectric final : public yarf::SurfaceModel {
 
   // int_ior / ext_ior: the index below the surface over the one above.
   float eta_;
-  mf::Roughness roughness_;
+  mf::TexturedRoughness roughness_;
 };
 
 }  // namespace

@@ -24,24 +24,27 @@
 // One-sided, as in Mitsuba: 0 unless wi and wo lie above.
 //
 // Parameters
-//   diffuse_reflectance    rgb (or float)   default 0.5        ρ, per channel in [0, 1]
-//   specular_reflectance   rgb (or float)   default 1          R (for realism, 1)
-//   alpha                  float            default 0.1        GGX roughness α > 0 (isotropic)
-//   distribution           string           default "ggx"      the only one
-//   int_ior                float            default 1.49       interior index (polypropylene)
-//   ext_ior                float            default 1.000277   exterior index (air)
-//   nonlinear              bool             default false      see above and plastic.cc
+//   diffuse_reflectance    rgb, float or texture  default 0.5       ρ, per channel in [0, 1]
+//   specular_reflectance   rgb, float or texture  default 1         R, in [0, 1] (for realism, 1)
+//   alpha                  float                  default 0.1       GGX roughness α > 0
+//       (isotropic; a number, as in Mitsuba: t and r̄ are tabulated for it)
+//   distribution           string                 default "ggx"     the only one
+//   int_ior                float                  default 1.49      interior index (polypropylene)
+//   ext_ior                float                  default 1.000277  exterior index (air)
+//   nonlinear              bool                   default false     see above and plastic.cc
+// A texture's values are clamped to [0, 1].
 //
 // Lobes: glossy reflection and diffuse reflection. Sample picks the glossy
 // lobe with probability (1 - t) s / ((1 - t) s + t (1 - s)), s =
-// mean(R) / (mean(R) + mean(ρ)) as in Mitsuba, or the one lobe `allowed`
-// leaves; it draws the glossy lobe from the normals visible from wi
+// mean(R) / (mean(R) + mean(ρ)) at the point as in Mitsuba, or the one
+// lobe `allowed` leaves; it draws the glossy lobe from the normals visible from wi
 // (Heitz 2018), the diffuse one from the cosine-weighted hemisphere, and
 // returns the density and value of the mixture of the allowed lobes.
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -51,6 +54,7 @@
 #include "scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -64,23 +68,25 @@ constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 class RoughPlastic final : public yarf::SurfaceModel {
  public:
   explicit RoughPlastic(const yarf::Properties& props)
-      : diffuse_(props.Reflectance("diffuse_reflectance", Vec3(0.5f, 0.5f, 0.5f))),
-        specular_(props.Reflectance("specular_reflectance", Vec3(1.0f, 1.0f, 1.0f))),
+      : diffuse_(yarf::TexturedValue::Color(props, "diffuse_reflectance",
+                                            Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
+        specular_(yarf::TexturedValue::Color(props, "specular_reflectance",
+                                             Vec3(1.0f, 1.0f, 1.0f), /*unit=*/true)),
         alpha_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/false).alpha_x),
         eta_(yarf::ReadRelativeIndex(props, 1.49, 1.000277)),
-        lobes_(yarf::coating::WeighLobes(diffuse_, specular_)) {
-    const bool nonlinear = props.Bool("nonlinear", false);
+        internal_reflectance_(InternalReflectance(alpha_, eta_)),
+        nonlinear_(props.Bool("nonlinear", false)) {
     for (int i = 0; i < kTableSize; ++i)
       transmittance_[i] =
           1.0f - mf::RoughDielectricReflectance(float(i) / (kTableSize - 1), alpha_, eta_);
-    scaled_diffuse_ = yarf::coating::ScaledDiffuse(diffuse_, InternalReflectance(alpha_, eta_),
-                                                   nonlinear, eta_);
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value,
-                       [&](Vec3 in, Vec3 out) { return Value(in, out, true, true); });
+    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
+      return Value(coating[k], in, out, true, true);
+    });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
@@ -88,13 +94,17 @@ class RoughPlastic final : public yarf::SurfaceModel {
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
-    const bool glossy = lobes_.has_specular && yarf::LobeAllowed(kGlossyLobe, allowed);
-    const bool diffuse = lobes_.has_diffuse && yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const bool can_glossy = yarf::LobeAllowed(kGlossyLobe, allowed);
+    const bool can_diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed);
+    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
+      const yarf::coating::Point local = coating[k];
+      const bool glossy = local.lobes.has_specular && can_glossy;
+      const bool diffuse = local.lobes.has_diffuse && can_diffuse;
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
-      const float p_glossy = in.z > 0 ? GlossyProbability(in.z, glossy, diffuse) : 0.0f;
+      const float p_glossy = in.z > 0 ? GlossyProbability(local, in.z, glossy, diffuse) : 0.0f;
       const bool pick_glossy = u[0] < p_glossy;
       Vec3 out;
       float density = 0;
@@ -109,22 +119,24 @@ class RoughPlastic final : public yarf::SurfaceModel {
         rows.StoreNoSample(k);
         continue;
       }
-      rows.Store(k, out, Value(in, out, glossy, diffuse) * (out.z / density), density,
+      rows.Store(k, out, Value(local, in, out, glossy, diffuse) * (out.z / density), density,
                  pick_glossy ? kGlossyLobe : kDiffuseLobe);
     }
   }
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
-    const bool glossy = lobes_.has_specular, diffuse = lobes_.has_diffuse;
-    yarf::PdfEach(wi, wo, pdf, [&](Vec3 in, Vec3 out) {
-      const float p_glossy = in.z > 0 ? GlossyProbability(in.z, glossy, diffuse) : 0.0f;
+    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
+      const yarf::coating::Point local = coating[k];
+      const bool glossy = local.lobes.has_specular, diffuse = local.lobes.has_diffuse;
+      const float p_glossy = in.z > 0 ? GlossyProbability(local, in.z, glossy, diffuse) : 0.0f;
       return glossy || diffuse ? Density(in, out, p_glossy) : 0.0f;
     });
   }
 
   uint32_t Lobes() const override {
-    return (lobes_.has_specular ? kGlossyLobe : 0u) | (lobes_.has_diffuse ? kDiffuseLobe : 0u);
+    return (specular_.IsZero() ? 0u : kGlossyLobe) | (diffuse_.IsZero() ? 0u : kDiffuseLobe);
   }
 
  private:
@@ -156,27 +168,27 @@ class RoughPlastic final : public yarf::SurfaceModel {
   }
 
   // The odds of the glossy lobe among the lobes in play at cos θi > 0.
-  float GlossyProbability(float cos_i, bool glossy, bool diffuse) const {
+  float GlossyProbability(const yarf::coating::Point& local, float cos_i, bool glossy, bool diffuse) const {
     if (!glossy) return 0.0f;
     if (!diffuse) return 1.0f;
     const float t = Transmittance(cos_i);
-    const float g = (1.0f - t) * lobes_.specular_weight;
-    const float d = t * (1.0f - lobes_.specular_weight);
+    const float g = (1.0f - t) * local.lobes.specular_weight;
+    const float d = t * (1.0f - local.lobes.specular_weight);
     return g + d > 0 ? g / (g + d) : 0.0f;
   }
 
   // f of the lobes asked for.
-  Vec3 Value(Vec3 wi, Vec3 wo, bool glossy, bool diffuse) const {
+  Vec3 Value(const yarf::coating::Point& local, Vec3 wi, Vec3 wo, bool glossy, bool diffuse) const {
     if (!(wi.z > 0 && wo.z > 0)) return Vec3();
     Vec3 out;
-    if (glossy && lobes_.has_specular) {
+    if (glossy && local.lobes.has_specular) {
       const Vec3 h = yarf::Normalize(wi + wo);
       const float fresnel = yarf::FresnelDielectric(yarf::Dot(wi, h), eta_);
-      out += specular_ * (fresnel * yarf::GgxDistribution(h, alpha_, alpha_) *
+      out += local.specular * (fresnel * yarf::GgxDistribution(h, alpha_, alpha_) *
                           mf::SmithG2(wi, wo, alpha_, alpha_) / (4.0f * wi.z * wo.z));
     }
-    if (diffuse && lobes_.has_diffuse)
-      out += scaled_diffuse_ * (Transmittance(wi.z) * Transmittance(wo.z) * yarf::kInvPi);
+    if (diffuse && local.lobes.has_diffuse)
+      out += local.scaled_diffuse * (Transmittance(wi.z) * Transmittance(wo.z) * yarf::kInvPi);
     return out;
   }
 
@@ -193,15 +205,14 @@ class RoughPlastic final : public yarf::SurfaceModel {
     return density;
   }
 
-  Vec3 diffuse_;
-  Vec3 specular_;
+  yarf::TexturedValue diffuse_;
+  yarf::TexturedValue specular_;
   float alpha_;
   float eta_;
-  yarf::coating::LobeWeights lobes_;
+  // r̄, the interface's reflectance, from inside, of diffuse light.
+  double internal_reflectance_;
+  bool nonlinear_;
   std::array<float, kTableSize> transmittance_{};
-  // ρ' / η² per channel: the diffuse lobe's value before the two
-  // transmittances and 1/π.
-  Vec3 scaled_diffuse_;
 };
 
 }  // namespace

@@ -1,8 +1,9 @@
 // Property checks several surface models share (bsdfs/*.cc): indices of
 // refraction, and two colours whose sum must not create energy. Each
 // throws an Error that names the property, so a scene's mistake points at
-// its key. (Roughness is read in microfacet.h, a conductor's complex
-// index in metals.h.)
+// its key; a texture, which cannot be checked before it is looked up, is
+// brought into range at each point instead. (Roughness is read in
+// microfacet.h, a conductor's complex index in metals.h.)
 #pragma once
 
 #include <cmath>
@@ -10,6 +11,7 @@
 
 #include "yarf/error.h"
 #include "yarf/properties.h"
+#include "yarf/texture.h"
 #include "yarf/vecmath.h"
 
 namespace yarf {
@@ -36,6 +38,28 @@ inline void RequireEnergyConserving(Vec3 a, Vec3 b, const std::string& name_a,
     if (a[c] + b[c] > 1.0f)
       throw Error("properties '" + name_a + "' + '" + name_b + "' exceed 1 in the " +
                   kChannel[c] + " channel: the material would create energy");
+}
+
+// The same for two properties that may be textures: checked here when
+// both are constants, at each point by ConserveEnergy otherwise.
+inline void RequireEnergyConserving(const TexturedValue& a, const TexturedValue& b,
+                                    const std::string& name_a, const std::string& name_b) {
+  if (a.IsConstant() && b.IsConstant())
+    RequireEnergyConserving(a.Constant(), b.Constant(), name_a, name_b);
+}
+
+// Scales a and b down together in each channel where their sum exceeds 1
+// (textured lobes' colours at one point); colours that passed
+// RequireEnergyConserving are left exactly as they are.
+inline void ConserveEnergy(Vec3& a, Vec3& b) {
+  float out_a[3], out_b[3];
+  for (int c = 0; c < 3; ++c) {
+    const float sum = a[c] + b[c];
+    out_a[c] = sum > 1.0f ? a[c] / sum : a[c];
+    out_b[c] = sum > 1.0f ? b[c] / sum : b[c];
+  }
+  a = Vec3::Load(out_a);
+  b = Vec3::Load(out_b);
 }
 
 }  // namespace yarf

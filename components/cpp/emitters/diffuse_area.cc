@@ -8,14 +8,16 @@
 // direction.
 //
 // Parameters
-//   radiance   rgb (or float)   required
-//       Emitted radiance in W·m⁻²·sr⁻¹, per channel ≥ 0.
+//   radiance   rgb, float or texture   required
+//       Emitted radiance in W·m⁻²·sr⁻¹, per channel ≥ 0; a texture is
+//       looked up at the emitting point's uv, its values clamped to ≥ 0.
 #include <cmath>
 #include <cstdint>
 #include <span>
 
 #include "intensity.h"
 #include "yarf/plugin.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace {
@@ -24,13 +26,15 @@ using yarf::Vec3;
 
 class DiffuseArea final : public yarf::Emitter {
  public:
-  explicit DiffuseArea(const yarf::Properties& props) : radiance_(yarf::RequiredIntensity(props, "radiance")) {}
+  explicit DiffuseArea(const yarf::Properties& props)
+      : radiance_(yarf::RequiredTexturedIntensity(props, "radiance")) {}
 
   void Radiance(std::span<const float> w, std::span<const float> uv,
                 std::span<float> radiance) const override {
     const size_t count = w.size() / 3;
+    const auto emitted = radiance_.At(uv);
     for (size_t k = 0; k < count; ++k)
-      (w[3 * k + 2] > 0 ? radiance_ : Vec3()).Store(&radiance[3 * k]);
+      (w[3 * k + 2] > 0 ? emitted[k] : Vec3()).Store(&radiance[3 * k]);
   }
 
   // Cosine-weighted over the front hemisphere: emitted power goes as cos θ.
@@ -51,14 +55,14 @@ class DiffuseArea final : public yarf::Emitter {
   }
 
  private:
-  Vec3 radiance_;
+  yarf::TexturedValue radiance_;
 };
 
 }  // namespace
 
 YARF_PLUGIN(registrar) {
   yarf::Register<DiffuseArea>(registrar, "diffuse_area", "1.0.0",
-                              "One-sided diffuse area light of constant radiance");
+                              "One-sided diffuse area light, its radiance constant or a texture");
   yarf::Register<DiffuseArea>(registrar, "constant", "1.0.0",
                               "Uniform environment: the same radiance from every direction");
 }

@@ -1,16 +1,20 @@
 // Tests of the emitter plugins (emitters/*.cc), loaded through the
 // registry as yarfd loads them: where each emits, that SampleDirection
-// agrees with PdfDirection, and that each density integrates to one.
+// agrees with PdfDirection, that each density integrates to one, and that
+// an area light's radiance may be a texture.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "components/registry.h"
 #include "yarf/hash.h"
 #include "yarf/surface.h"
+#include "yarf/texture.h"
 #include "yarf/warps.h"
 
 namespace yarf {
@@ -146,6 +150,45 @@ TEST_F(EmitterTest, PropertiesAreChecked) {
   beam.Set("cutoff_angle", 20.0);
   beam.Set("beam_width", 25.0);
   EXPECT_NE(CreationError("spot", beam).find("'beam_width'"), std::string::npos);
+}
+
+// Radiance (4u - 1, 4v, 2): negative where u < 1/4.
+class UvRadiance final : public Texture {
+ public:
+  uint32_t Channels() const override { return 3; }
+  void Evaluate(const TexturePoints& at, std::span<float> value) const override {
+    for (size_t k = 0; k < at.Count(); ++k) At(at.uv[2 * k], at.uv[2 * k + 1]).Store(&value[3 * k]);
+  }
+  std::vector<float> Mean() const override { return {1, 2, 2}; }
+
+  static Vec3 At(float u, float v) { return Vec3(4 * u - 1, 4 * v, 2); }
+};
+
+TEST_F(EmitterTest, AreaRadianceMayBeATextureLookedUpAtUv) {
+  Properties props;
+  props.Set("radiance", std::shared_ptr<const Texture>(std::make_shared<const UvRadiance>()));
+  const auto emitter = Make("diffuse_area", props);
+  const float uv[8] = {0.5f, 0.25f, 0.9f, 0.75f, 0.1f, 0.5f, 0.5f, 0.25f};
+  float w[12], radiance[12];
+  for (int k = 0; k < 4; ++k) Vec3(0, 0, k == 3 ? -1.0f : 1.0f).Store(&w[3 * k]);
+  emitter->Radiance(w, uv, radiance);
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 expected = UvRadiance::At(uv[2 * k], uv[2 * k + 1]);
+    // Negative values clamped to 0.
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(radiance[3 * k + c], std::max(0.0f, expected[c]))
+          << "row " << k << " channel " << c;
+  }
+  // Nothing from the back.
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(radiance[9 + c], 0.0f);
+}
+
+TEST_F(EmitterTest, AreaRadianceReferringToNoTextureIsAnError) {
+  Properties props;
+  props.Set("radiance", Reference{"sky"});
+  EXPECT_NE(CreationError("diffuse_area", props)
+                .find("property 'radiance' refers to 'sky', which is not a texture of the scene"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -2,9 +2,12 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <string>
+#include <utility>
 
 #include "yarf/properties.h"
+#include "yarf/texture.h"
 
 namespace yarf {
 
@@ -15,6 +18,15 @@ inline Vec3 RequiredIntensity(const Properties& props, const std::string& name) 
     if (!(value[c] >= 0.0f && std::isfinite(value[c])))
       throw Error("property '" + name + "' must be finite and non-negative in every channel");
   return value;
+}
+
+// The same property where it may also be a texture (an area light's
+// radiance): a texture's values are clamped to [0, float max] where they
+// are looked up.
+inline TexturedValue RequiredTexturedIntensity(const Properties& props, const std::string& name) {
+  if (auto texture = props.TextureOf(name))
+    return TexturedValue(std::move(texture)).Clamped(0.0f, std::numeric_limits<float>::max());
+  return TexturedValue(RequiredIntensity(props, name));
 }
 
 }  // namespace yarf
