@@ -13,6 +13,7 @@
 #include "importers/import.h"
 #include "importers/pbrt_params.h"
 #include "importers/pbrt_tokenizer.h"
+#include "importers/properties_util.h"
 #include "importers/scene_assembly.h"
 #include "importers/scene_folder.h"
 #include "importers/spectrum.h"
@@ -68,8 +69,13 @@ class PbrtImporter {
   // pbrt_spectra.cc: a spectrum-valued parameter (rgb, spectrum, blackbody, float or a
   // texture) as RGB.
   Rgb Colour(PbrtParams& params, const std::string& name, Rgb fallback, SpectrumUse use, const SourceLocation& where);
-  // A float parameter or float texture.
+  // A float parameter or float texture (its mean).
   double FloatOrTexture(PbrtParams& params, const std::string& name, double fallback);
+  // The same where yarf takes textures: a texture reference names the
+  // scene texture it became (or, for one yarf has no class for, its mean).
+  Textured TexturedColour(PbrtParams& params, const std::string& name, Rgb fallback, SpectrumUse use,
+                          const SourceLocation& where);
+  Textured TexturedFloat(PbrtParams& params, const std::string& name, double fallback);
 
   // pbrt_shapes.cc
   void Shape(const std::string& type, PbrtParams& params, const SourceLocation& where);
@@ -90,8 +96,9 @@ class PbrtImporter {
   std::map<std::string, Matrix4> coordinate_systems_;
   std::map<std::string, std::string> named_materials_;  // pbrt name → yarf material
   std::map<std::string, std::string> material_cache_;   // content → yarf material
-  std::map<std::string, Rgb> spectrum_textures_;
-  std::map<std::string, double> float_textures_;
+  // pbrt texture name → what it became: a scene texture and its mean.
+  std::map<std::string, Textured> spectrum_textures_;
+  std::map<std::string, Textured> float_textures_;
   std::vector<std::filesystem::path> files_;  // the files being read, for include cycles
   int includes_ = 0;
   std::string object_;  // the ObjectBegin being defined

@@ -41,11 +41,19 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
       Warn(params.WhereIs(key, where), std::string("material:") + key, std::string(key) + " is not supported: ignored");
     }
   v1::Properties props;
+  // A reflectance: a texture (clamped into [0, 1] by the model; `scale`
+  // only for constants), or a constant clamped here.
   auto reflectance = [&](const std::string& key, const std::string& out, double fallback, double scale = 1) {
-    const Rgb c = Colour(params, key, {fallback, fallback, fallback}, SpectrumUse::kReflectance, where) * scale;
-    SetRgb(props, out, ClampColour(c, 0, 1, [&] {
-             Warn(params.WhereIs(key, where), "clamp:" + key, what + ": " + key + " clamped into [0, 1]");
-           }));
+    Textured value = TexturedColour(params, key, {fallback, fallback, fallback}, SpectrumUse::kReflectance, where);
+    if (value.IsTexture() && scale != 1) {
+      Warn(params.WhereIs(key, where), "texture-scale:" + key, what + ": a scaled texture " + key + ": its mean used");
+      value.texture.clear();
+    }
+    if (!value.IsTexture())
+      value.constant = ClampColour(value.constant * scale, 0, 1, [&] {
+        Warn(params.WhereIs(key, where), "clamp:" + key, what + ": " + key + " clamped into [0, 1]");
+      });
+    SetColour(props, out, value);
   };
   // eta as a number, a named glass or (approximately) a spectrum.
   auto eta = [&](const std::string& key, double fallback) {

@@ -55,7 +55,8 @@ TEST_F(PbrtBasic, NamedMaterialIsTheOneUsed) {
 TEST_F(PbrtBasic, TransformsInAttributeBlocksPlaceTheShape) {
   const Matrix4 to_world = ToMatrix(shape(1).to_world());
   ExpectNear(to_world.Point({0, 0, 0}), {1, 2, 3});
-  ExpectNear(to_world.Point({0, 0, 1}), {1, 2, 5});  // Scale 2
+  // Scale 2, and the sphere mirrored in z for pbrt's uv (v = 1 − θ/π).
+  ExpectNear(to_world.Point({0, 0, -1}), {1, 2, 5});
   EXPECT_DOUBLE_EQ(shape(1).sphere().radius(), 0.5);
   // AttributeEnd restored the identity for the next shapes.
   ExpectNear(ToMatrix(shape(3).to_world()).Point({0, 0, 0}), {0, 0, 0});
@@ -67,11 +68,25 @@ TEST_F(PbrtBasic, ConductorWithNamedMetalSpectraAndRemappedRoughness) {
   EXPECT_NEAR(FloatProperty(material(1).properties(), "alpha"), 0.3, 1e-12);  // sqrt(0.09)
 }
 
-TEST_F(PbrtBasic, TexturesBecomeTheirMeanColourWithAWarning) {
-  ExpectNear(RgbProperty(material(2).properties(), "reflectance"), {0.4, 0.4, 0.4}, 1e-12);
-  ExpectNear(RgbProperty(material(3).properties(), "reflectance"), {0.5, 0.5, 0.5}, 1e-6);
-  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:33: yarf has no textures yet: checkerboard"));
-  EXPECT_TRUE(Warns(result(), "pbrt_basic.pbrt:35: yarf has no textures yet: imagemap"));
+TEST_F(PbrtBasic, TexturesBecomeSceneTexturesTheMaterialsReferTo) {
+  const auto texture_of = [&](const v1::Material& material) -> const v1::ComponentSpec& {
+    const v1::Property& value = material.properties().values().at("reflectance");
+    EXPECT_EQ(value.value_case(), v1::Property::kReference);
+    for (const v1::SceneTexture& t : scene().textures())
+      if (t.name() == value.reference()) return t.texture();
+    ADD_FAILURE() << "no texture named " << value.reference();
+    return scene().textures(0).texture();
+  };
+  const v1::ComponentSpec& checks = texture_of(material(2));
+  EXPECT_EQ(checks.class_name(), "checkerboard");
+  ExpectNear(RgbProperty(checks.properties(), "tex1"), {0.2, 0.2, 0.2});
+  ExpectNear(RgbProperty(checks.properties(), "tex2"), {0.6, 0.6, 0.6});
+  const v1::ComponentSpec& image = texture_of(material(3));
+  EXPECT_EQ(image.class_name(), "bitmap");
+  EXPECT_EQ(StringProperty(image.properties(), "filename"), "assets/checker.png");
+  // pbrt's images have v = 0 at their bottom row, yarf's at the top.
+  const Matrix4 to_uv = ToMatrix(image.properties().values().at("to_uv").transform_value());
+  ExpectNear(to_uv.Point({0.25, 0.1, 0}), {0.25, 0.9, 0});
 }
 
 TEST_F(PbrtBasic, DiskIsAScaledFanAtItsHeight) {

@@ -51,9 +51,19 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
       if (n.size() != p.size()) Fail(params.WhereIs("N", where), what + ": N needs one normal per vertex");
       OrientByNormals(p, n, indices);
     }
+    std::vector<double> uv = params.Numbers("uv", {"point2", "float"});
+    if (uv.empty()) uv = params.Numbers("st", {"point2", "float"});
+    if (!uv.empty() && uv.size() != 2 * vertices)
+      Fail(params.WhereIs(params.Has("uv") ? "uv" : "st", where), what + ": uv needs one (u, v) per vertex");
     std::vector<float> positions(p.begin(), p.end());
-    *shape.mutable_mesh() = InlineMesh(positions, indices);
-    params.Accept({"uv", "S", "faceIndices", "st"});
+    v1::Mesh& mesh = *shape.mutable_mesh() = InlineMesh(positions, indices);
+    mesh.mutable_normals()->Add(n.begin(), n.end());
+    mesh.mutable_uvs()->Add(uv.begin(), uv.end());
+    if (params.Has("S")) {
+      params.Find("S");
+      Warn(params.WhereIs("S", where), "trianglemesh-S", "per-vertex tangents (S) are not supported: ignored");
+    }
+    params.Accept({"faceIndices"});
   } else if (type == "plymesh") {
     const std::string name = params.String("filename", "");
     const auto file = folder_.Resolve(name, origin_.file, params.WhereIs("filename", where));
@@ -75,6 +85,9 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "sphere radius must be positive");
     shape.mutable_sphere()->set_radius(radius);
     shape.mutable_sphere()->mutable_center();
+    // yarf's sphere has v = θ/π from its z axis (Mitsuba's); pbrt's has
+    // v = 1 − θ/π. Mirrored in z, the same sphere has pbrt's.
+    to_world = to_world * Matrix4::Scale({1, 1, -1});
     if (params.Float("zmin", -radius) > -radius || params.Float("zmax", radius) < radius ||
         params.Float("phimax", 360) < 360)
       Warn(where, "partial-sphere", "partial spheres (zmin, zmax, phimax) are rendered whole");
@@ -83,9 +96,19 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "disk radius must be positive");
     if (params.Float("innerradius", 0) > 0 || params.Float("phimax", 360) < 360)
       Warn(where, "partial-disk", "partial disks (innerradius, phimax) are rendered whole");
-    *shape.mutable_mesh() = DiskMesh();
+    *shape.mutable_mesh() = DiskMesh(DiskUv::kPbrt);
     to_world = to_world * Matrix4::Translate({0, 0, height}) * Matrix4::Scale({radius, radius, 1});
     Warn(where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
+  } else if (type == "cylinder") {
+    const double radius = params.Float("radius", 1), zmin = params.Float("zmin", -1), zmax = params.Float("zmax", 1);
+    const double phimax = params.Float("phimax", 360);
+    if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "cylinder radius must be positive");
+    if (!(zmax > zmin && zmax - zmin < 1e30)) Fail(params.WhereIs("zmax", where), "cylinder zmax must exceed zmin");
+    if (!(phimax > 0 && phimax <= 360)) Fail(params.WhereIs("phimax", where), "cylinder phimax must lie in (0, 360]");
+    *shape.mutable_mesh() = CylinderMesh(phimax);
+    to_world = to_world * Matrix4::Translate({0, 0, zmin}) * Matrix4::Scale({radius, radius, zmax - zmin});
+    Warn(where, "cylinder",
+         "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads per turn");
   } else {
     Warn(where, "shape:" + type, "shape '" + type + "' is not supported: ignored");
     return;

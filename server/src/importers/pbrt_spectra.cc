@@ -37,7 +37,10 @@ Rgb PbrtImporter::Colour(PbrtParams& params, const std::string& name, Rgb fallba
     const std::string texture = params.String(name, "");
     const auto it = spectrum_textures_.find(texture);
     if (it == spectrum_textures_.end()) Fail(p->where, "texture '" + texture + "' is not defined");
-    return it->second;
+    if (it->second.IsTexture())
+      Warn(p->where, "texture-constant:" + name,
+           "texture '" + texture + "' where yarf takes a constant (" + name + "): replaced by its mean");
+    return it->second.constant;
   }
   if (p->type == "blackbody") {
     if (p->numbers.empty() || p->numbers.size() > 2) Fail(p->where, "blackbody needs a temperature");
@@ -103,9 +106,35 @@ double PbrtImporter::FloatOrTexture(PbrtParams& params, const std::string& name,
     const std::string texture = params.String(name, "");
     const auto it = float_textures_.find(texture);
     if (it == float_textures_.end()) Fail(p->where, "float texture '" + texture + "' is not defined");
-    return it->second;
+    if (it->second.IsTexture())
+      Warn(p->where, "texture-constant:" + name,
+           "texture '" + texture + "' where yarf takes a constant (" + name + "): replaced by its mean");
+    return it->second.constant.r;
   }
   return params.Float(name, fallback);
+}
+
+Textured PbrtImporter::TexturedColour(PbrtParams& params, const std::string& name, Rgb fallback, SpectrumUse use,
+                                      const SourceLocation& where) {
+  const PbrtParam* p = params.Find(name);
+  if (p && p->type == "texture") {
+    const std::string texture = params.String(name, "");
+    const auto it = spectrum_textures_.find(texture);
+    if (it == spectrum_textures_.end()) Fail(p->where, "texture '" + texture + "' is not defined");
+    return it->second;
+  }
+  return {Colour(params, name, fallback, use, where), ""};
+}
+
+Textured PbrtImporter::TexturedFloat(PbrtParams& params, const std::string& name, double fallback) {
+  const PbrtParam* p = params.Find(name);
+  if (p && p->type == "texture") {
+    const std::string texture = params.String(name, "");
+    const auto it = float_textures_.find(texture);
+    if (it == float_textures_.end()) Fail(p->where, "float texture '" + texture + "' is not defined");
+    return it->second;
+  }
+  return Textured::Grey(params.Float(name, fallback));
 }
 
 }  // namespace yarf::importers

@@ -1,43 +1,82 @@
-// pbrt textures, reduced to their mean (yarf has no textures yet).
+// pbrt textures as scene textures (Scene.textures): imagemap, checkerboard,
+// scale, mix and constant. Each also keeps its mean, for the parameters
+// yarf takes as constants; a class yarf has none for is its mean alone.
 #include "importers/numbers.h"
 #include "importers/pbrt_importer.h"
 #include "importers/recursion_guard.h"
 #include "importers/texture_mean.h"
 
 namespace yarf::importers {
+namespace {
+
+Rgb Lerp(double t, const Rgb& a, const Rgb& b) {
+  return {a.r + t * (b.r - a.r), a.g + t * (b.g - a.g), a.b + t * (b.b - a.b)};
+}
+
+}  // namespace
 
 void PbrtImporter::Texture(const std::string& name, const std::string& type, const std::string& texture_class,
                            PbrtParams& params, const SourceLocation& where) {
   const RecursionGuard guard(nesting_, where);
   const bool spectral = type == "spectrum" || type == "color";
   if (!spectral && type != "float") Fail(where, "texture type must be \"spectrum\" or \"float\", not \"" + type + "\"");
-  auto colour = [&](const std::string& key, double fallback) -> Rgb {
-    if (spectral) return Colour(params, key, {fallback, fallback, fallback}, SpectrumUse::kReflectance, where);
-    const double v = FloatOrTexture(params, key, fallback);
-    return {v, v, v};
+  // A parameter that may itself be a texture of the texture's own type.
+  auto input = [&](const std::string& key, double fallback) -> Textured {
+    if (spectral) return TexturedColour(params, key, {fallback, fallback, fallback}, SpectrumUse::kReflectance, where);
+    return TexturedFloat(params, key, fallback);
   };
-  params.Accept({"mapping", "uscale", "vscale", "udelta", "vdelta", "v1", "v2", "filter", "maxanisotropy", "wrap"});
-  Rgb mean{0.5, 0.5, 0.5};
-  const std::string approximated = "yarf has no textures yet: " + texture_class + " textures replaced by their mean";
-  if (texture_class == "constant") {
-    mean = colour("value", 1);
-  } else if (texture_class == "scale") {
-    const Rgb t = colour("tex", 1);
-    mean = t * FloatOrTexture(params, "scale", 1);
-  } else if (texture_class == "mix" || texture_class == "directionmix") {
-    const Rgb a = colour("tex1", 0), b = colour("tex2", 1);
-    const double t = texture_class == "mix" ? FloatOrTexture(params, "amount", 0.5) : 0.5;
-    if (texture_class == "directionmix") {
-      params.Accept({"dir"});
-      Warn(where, "texture:" + texture_class, approximated);
+  v1::Properties props;
+  auto set = [&](const std::string& key, const Textured& value) {
+    spectral ? SetColour(props, key, value) : SetFloatOrTexture(props, key, value);
+  };
+  // pbrt's (u, v) mapping, u' = u·uscale + udelta (likewise v). An image
+  // texture then takes v' → 1 − v' (pbrt's images have v = 0 at their
+  // bottom row, yarf's at the top): the whole map as a to_uv transform.
+  // The checkerboard takes the scales as they are.
+  auto map_uv = [&](bool image) {
+    const std::string mapping = params.String("mapping", "uv");
+    if (mapping != "uv")
+      Warn(params.WhereIs("mapping", where), "texture-mapping:" + mapping,
+           "texture mapping '" + mapping + "' is not supported: uv mapping used");
+    const double us = params.Float("uscale", 1), vs = params.Float("vscale", 1);
+    const double ud = params.Float("udelta", 0), vd = params.Float("vdelta", 0);
+    params.Accept({"v1", "v2"});
+    if (!image) {
+      SetFloat(props, "uscale", us), SetFloat(props, "vscale", vs);
+      SetFloat(props, "udelta", ud), SetFloat(props, "vdelta", vd);
+      return;
     }
-    mean = {a.r + t * (b.r - a.r), a.g + t * (b.g - a.g), a.b + t * (b.b - a.b)};
-  } else if (texture_class == "checkerboard") {
-    const Rgb a = colour("tex1", 1), b = colour("tex2", 0);
-    mean = {(a.r + b.r) / 2, (a.g + b.g) / 2, (a.b + b.b) / 2};
-    params.Accept({"dimension"});
-    Warn(where, "texture:checkerboard", approximated);
+    SetTransform(props, "to_uv", Matrix4({us, 0, 0, ud, 0, -vs, 0, 1 - vd, 0, 0, 1, 0, 0, 0, 0, 1}));
+  };
+
+  Rgb mean{0.5, 0.5, 0.5};
+  std::string yarf_class = texture_class;
+  if (texture_class == "constant") {
+    yarf_class = "constant_texture";  // "constant" is the constant environment
+    const Textured value = input("value", 1);
+    mean = value.constant;
+    set("value", value);
+  } else if (texture_class == "scale") {
+    const Textured tex = input("tex", 1);
+    const Textured scale = TexturedFloat(params, "scale", 1);
+    mean = tex.constant * scale.constant.r;
+    set("tex", tex);
+    SetFloatOrTexture(props, "scale", scale);
+  } else if (texture_class == "mix") {
+    const Textured a = input("tex1", 0), b = input("tex2", 1);
+    const Textured amount = TexturedFloat(params, "amount", 0.5);
+    mean = Lerp(amount.constant.r, a.constant, b.constant);
+    set("tex1", a);
+    set("tex2", b);
+    SetFloatOrTexture(props, "amount", amount);
+  } else if (texture_class == "checkerboard" && params.Float("dimension", 2) == 2) {
+    const Textured a = input("tex1", 1), b = input("tex2", 0);
+    mean = Lerp(0.5, a.constant, b.constant);
+    set("tex1", a);
+    set("tex2", b);
+    map_uv(false);
   } else if (texture_class == "imagemap") {
+    yarf_class = "bitmap";
     const std::string filename = params.String("filename", "");
     const auto file = folder_.Resolve(filename, origin_.file, params.WhereIs("filename", where));
     const std::string encoding = params.String("encoding", "sRGB");
@@ -53,19 +92,31 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
     } else if (encoding != "sRGB") {
       Fail(params.WhereIs("encoding", where), "unknown encoding '" + encoding + "'");
     }
-    mean = ImageMeanColour(file, kind, gamma, where) * params.Float("scale", 1);
-    if (params.Bool("invert", false)) mean = {1 - mean.r, 1 - mean.g, 1 - mean.b};
-    Warn(where, "texture:imagemap", approximated);
+    const double scale = params.Float("scale", 1);
+    const bool invert = params.Bool("invert", false);
+    mean = ImageMeanColour(file, kind, gamma, where) * scale;
+    if (invert) mean = {1 - mean.r, 1 - mean.g, 1 - mean.b};
+    SetString(props, "filename", folder_.Relative(file));
+    SetString(props, "encoding", encoding);
+    if (scale != 1) SetFloat(props, "scale", scale);
+    if (invert) SetBool(props, "invert", true);
+    for (const char* key : {"filter", "wrap"})
+      if (params.Has(key)) SetString(props, key, params.String(key, ""));
+    params.Accept({"maxanisotropy"});
+    map_uv(true);
   } else {
-    Warn(where, "texture:" + texture_class, "texture '" + texture_class + "' is not supported: grey 0.5 used");
+    if (texture_class == "checkerboard") params.Accept({"tex1", "tex2", "dimension"});
+    Warn(where, "texture:" + texture_class,
+         "texture '" + texture_class + "' is not supported: replaced by its mean" +
+             (texture_class == "checkerboard" ? " (3-D checkerboard)" : " (grey 0.5)"));
+    if (texture_class == "checkerboard") mean = {0.5, 0.5, 0.5};
+    yarf_class.clear();
   }
-  if (texture_class == "constant" || texture_class == "scale" || texture_class == "mix" ||
-      texture_class == "directionmix" || texture_class == "checkerboard" || texture_class == "imagemap")
-    params.WarnUnused(diagnostics_, "texture '" + texture_class + "'");
-  if (spectral)
-    spectrum_textures_[name] = mean;
-  else
-    float_textures_[name] = (mean.r + mean.g + mean.b) / 3;
+  params.WarnUnused(diagnostics_, "texture '" + texture_class + "'");
+  const double grey = (mean.r + mean.g + mean.b) / 3;
+  Textured result{spectral ? mean : Rgb{grey, grey, grey}, ""};
+  if (!yarf_class.empty()) result.texture = assembly_.AddTexture(name, Spec(yarf_class, std::move(props)));
+  (spectral ? spectrum_textures_ : float_textures_)[name] = result;
 }
 
 }  // namespace yarf::importers

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <string>
 
+#include "importers/matrix.h"
 #include "importers/spectrum.h"
 #include "yarf/v1/scene.pb.h"
 
@@ -20,6 +21,40 @@ inline void SetString(v1::Properties& p, const std::string& name, const std::str
 inline void SetRgb(v1::Properties& p, const std::string& name, const Rgb& c) {
   v1::Rgb& rgb = *Slot(p, name).mutable_rgb_value();
   rgb.set_r(c.r), rgb.set_g(c.g), rgb.set_b(c.b);
+}
+
+// Names a scene texture (Scene.textures) as the property's value.
+inline void SetReference(v1::Properties& p, const std::string& name, const std::string& texture) {
+  Slot(p, name).set_reference(texture);
+}
+inline void SetTransform(v1::Properties& p, const std::string& name, const Matrix4& m) {
+  *Slot(p, name).mutable_transform_value() = m.ToProto();
+}
+
+// A parameter that varies over the surface or not: a scene texture, or a
+// constant (grey for a float).
+struct Textured {
+  Rgb constant;
+  std::string texture;  // its name in Scene.textures; empty for the constant
+
+  bool IsTexture() const { return !texture.empty(); }
+  static Textured Grey(double v) { return {{v, v, v}, ""}; }
+};
+
+// A colour property: the texture's name, else the constant as rgb.
+inline void SetColour(v1::Properties& p, const std::string& name, const Textured& v) {
+  if (v.IsTexture())
+    SetReference(p, name, v.texture);
+  else
+    SetRgb(p, name, v.constant);
+}
+// A float property: the texture's name, else the constant's red channel
+// (a float constant is grey).
+inline void SetFloatOrTexture(v1::Properties& p, const std::string& name, const Textured& v) {
+  if (v.IsTexture())
+    SetReference(p, name, v.texture);
+  else
+    SetFloat(p, name, v.constant.r);
 }
 
 inline v1::ComponentSpec Spec(const std::string& class_name, v1::Properties properties = {}) {

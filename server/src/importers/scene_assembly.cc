@@ -68,6 +68,13 @@ std::string SceneAssembly::AddMaterial(const std::string& name, const std::strin
   return m.name();
 }
 
+std::string SceneAssembly::AddTexture(const std::string& name, v1::ComponentSpec texture) {
+  v1::SceneTexture& t = *scene_.add_textures();
+  t.set_name(UniqueName(texture_names_, name));
+  *t.mutable_texture() = std::move(texture);
+  return t.name();
+}
+
 void SceneAssembly::AddShape(v1::SceneShape shape, const Matrix4& to_world, bool flip, NormalRule rule,
                              const SourceLocation& where, const std::string& group) {
   CheckTransform(to_world, where, "shape");

@@ -35,6 +35,9 @@ class SceneAssembly {
   std::string DefaultMaterial();
   // Adds a material; returns its name: `name`, made unique if taken.
   std::string AddMaterial(const std::string& name, const std::string& class_name, v1::Properties properties);
+  // Adds a texture (Scene.textures) after those it may refer to; returns
+  // its name: `name`, made unique if taken.
+  std::string AddTexture(const std::string& name, v1::ComponentSpec texture);
 
   // Adds a shape to the world (empty `group`) or to a group. `flip` is the
   // source's own "flip normals" / "reverse orientation" state. Fails at
@@ -80,6 +83,7 @@ class SceneAssembly {
 
   v1::Scene scene_;
   std::set<std::string> material_names_;
+  std::set<std::string> texture_names_;
   std::map<std::string, int> group_index_;
   std::string default_material_;
   std::vector<WorldShape> world_shapes_;   // parallel to scene_.shapes()

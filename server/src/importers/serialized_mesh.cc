@@ -164,15 +164,21 @@ SerializedMesh DecodeSerializedMesh(std::string_view bytes, uint64_t shape_index
   in.Skip(header.size);
   SerializedMesh mesh;
   mesh.name = header.name;
-  mesh.positions.reserve(vertices * 3);
-  for (uint64_t i = 0; i < vertices * 3; ++i) {
-    const double v = real == 8 ? in.Read<double>() : in.Read<float>();
-    // Converting a double beyond float's range is undefined.
-    if (!(std::abs(v) <= std::numeric_limits<float>::max()))
-      Fail(where, "serialized mesh: a vertex position is not finite");
-    mesh.positions.push_back(float(v));
-  }
-  in.Skip((reals_per_vertex - 3) * vertices * real);
+  // Positions, then each optional block in the file's order.
+  const auto read_block = [&](std::vector<float>& out, uint64_t per_vertex, const char* what) {
+    out.reserve(vertices * per_vertex);
+    for (uint64_t i = 0; i < vertices * per_vertex; ++i) {
+      const double v = real == 8 ? in.Read<double>() : in.Read<float>();
+      // Converting a double beyond float's range is undefined.
+      if (!(std::abs(v) <= std::numeric_limits<float>::max()))
+        Fail(where, std::string("serialized mesh: a vertex ") + what + " is not finite");
+      out.push_back(float(v));
+    }
+  };
+  read_block(mesh.positions, 3, "position");
+  if (header.flags & kHasNormals) read_block(mesh.normals, 3, "normal");
+  if (header.flags & kHasTexcoords) read_block(mesh.uvs, 2, "texture coordinate");
+  if (header.flags & kHasColors) read_block(mesh.colors, 3, "colour");
   mesh.indices.reserve(triangles * 3);
   for (uint64_t i = 0; i < triangles * 3; ++i) {
     const uint32_t index = in.Read<uint32_t>();

@@ -15,6 +15,9 @@ struct SerializedMesh {
   std::string name;              // version 4 files name their shapes
   std::vector<float> positions;  // xyz triples
   std::vector<uint32_t> indices; // triangle triples
+  // Each empty when the file has none: xyz per vertex, uv per vertex, and
+  // rgb per vertex.
+  std::vector<float> normals, uvs, colors;
 };
 
 // Decodes shape `shape_index` of a serialized file's bytes. Malformed or

@@ -35,11 +35,15 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
   const std::string what = "bsdf '" + type + "'";
   v1::Properties props;
 
+  // A reflectance: a texture (clamped into [0, 1] by the model), or a
+  // constant clamped here.
   auto reflectance = [&](const std::string& key, const std::string& out, Rgb fallback) {
-    const Rgb c = ClampColour(p.Color(key, fallback), 0, 1, [&] {
-      Warn(p.WhereIs(key), "clamp:" + key, what + ": " + key + " clamped into [0, 1]");
-    });
-    SetRgb(props, out, c);
+    Textured value = p.TexturedColor(key, fallback);
+    if (!value.IsTexture())
+      value.constant = ClampColour(value.constant, 0, 1, [&] {
+        Warn(p.WhereIs(key), "clamp:" + key, what + ": " + key + " clamped into [0, 1]");
+      });
+    SetColour(props, out, value);
   };
   auto ior = [&](const std::string& key, double fallback) {
     const double v = p.Ior(key, fallback);
@@ -56,6 +60,10 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     p.Accept({"sample_visible"});
   };
   auto alpha = [&](const std::string& key) {
+    if (const Textured t = p.TexturedColor(key, {0.1, 0.1, 0.1}); t.IsTexture()) {
+      SetReference(props, key, t.texture);
+      return;
+    }
     const double a = p.Float(key, 0.1);
     if (!(a > 0 && a <= 10)) Fail(p.WhereIs(key), what + ": " + key + " must lie in (0, 10]");
     SetFloat(props, key, a);

@@ -10,13 +10,15 @@ namespace yarf::importers {
 
 v1::ComponentSpec MitsubaImporter::AreaEmitter(const XmlElement& e) {
   XmlPlugin p(e, *this);
-  const Rgb radiance = ClampColour(p.Color("radiance", {1, 1, 1}), 0, 1e30, [&] {
-    Warn(p.WhereIs("radiance"), "negative-radiance", "area emitter: negative radiance (out of gamut) clamped to 0");
-  });
+  Textured radiance = p.TexturedColor("radiance", {1, 1, 1});
+  if (!radiance.IsTexture())
+    radiance.constant = ClampColour(radiance.constant, 0, 1e30, [&] {
+      Warn(p.WhereIs("radiance"), "negative-radiance", "area emitter: negative radiance (out of gamut) clamped to 0");
+    });
   p.Accept({"sampling_weight"});
   p.WarnUnused();
   v1::Properties props;
-  SetRgb(props, "radiance", radiance);
+  SetColour(props, "radiance", radiance);
   return Spec("diffuse_area", std::move(props));
 }
 

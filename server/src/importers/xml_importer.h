@@ -31,7 +31,10 @@ class MitsubaImporter {
   }
   const SceneFolder& folder() const { return folder_; }
 
-  // xml_texture.cc: what a textured or spectral value becomes.
+  // xml_texture.cc: what a textured or spectral value becomes. A texture
+  // yarf has a class for is added to the scene once per element (its
+  // name returned); "" for one it has none for.
+  std::string TextureReference(const XmlElement& texture);
   Rgb TextureMean(const XmlElement& texture);
   Rgb SpectrumValue(const XmlElement& spectrum, bool within_emitter);
   bool WithinEmitter(const XmlElement& element) const { return emitter_elements_.count(&element) > 0; }
@@ -69,6 +72,7 @@ class MitsubaImporter {
   std::set<const XmlElement*> emitter_elements_;  // elements inside an <emitter>
   std::set<const XmlElement*> attached_emitters_;
   std::map<const XmlElement*, std::string> materials_;
+  std::map<const XmlElement*, std::string> textures_;
   std::set<std::string> groups_made_;
 
  public:

@@ -178,6 +178,14 @@ std::optional<Rgb> XmlPlugin::OptionalColor(const std::string& name) {
 
 Rgb XmlPlugin::Color(const std::string& name, Rgb fallback) { return OptionalColor(name).value_or(fallback); }
 
+Textured XmlPlugin::TexturedColor(const std::string& name, Rgb fallback) {
+  if (Has(name) && named_.at(name)->tag == "texture") {
+    const XmlElement& e = Named(name, {"texture"});
+    if (std::string texture = importer_.TextureReference(e); !texture.empty()) return {{}, texture};
+  }
+  return {Color(name, fallback), ""};
+}
+
 Vec3d XmlPlugin::Point(const std::string& name, Vec3d fallback) {
   if (!Has(name)) return fallback;
   return ReadVector(Named(name, {"point", "vector"}), "value", 0);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "importers/matrix.h"
+#include "importers/properties_util.h"
 #include "importers/spectrum.h"
 #include "importers/xml_document.h"
 
@@ -41,6 +42,9 @@ class XmlPlugin {
   // rgb, spectrum, float (grey) or a texture (its mean colour).
   Rgb Color(const std::string& name, Rgb fallback);
   std::optional<Rgb> OptionalColor(const std::string& name);
+  // A colour or float that may vary over the surface: a texture yarf has
+  // a class for (added to the scene), else a constant as Color gives it.
+  Textured TexturedColor(const std::string& name, Rgb fallback);
   Vec3d Point(const std::string& name, Vec3d fallback);
   Matrix4 Transform(const std::string& name);
   // An index of refraction: a number or a named medium ("bk7", "air").

@@ -76,9 +76,12 @@ TEST(MitsubaImport, EveryShapeTypeBecomesAYarfShape) {
   EXPECT_EQ(ShapeNamed(scene, "cube").mesh().indices_size(), 36);
   EXPECT_EQ(ShapeNamed(scene, "disk").mesh().indices_size(), 3 * 128);
   EXPECT_TRUE(Warns(result, "fans of 128 triangles"));
-  // An unsupported shape is reported where it is, and left out.
-  EXPECT_TRUE(Warns(result, "mitsuba_shapes.xml:19: shape type 'cylinder' is not supported"));
-  EXPECT_THROW(ShapeNamed(scene, "cylinder"), std::runtime_error);
+  // The cylinder: a tube of 128 quads with smooth normals and uv.
+  const v1::Mesh& cylinder = ShapeNamed(scene, "cylinder").mesh();
+  EXPECT_EQ(cylinder.indices_size(), 6 * 128);
+  EXPECT_EQ(cylinder.normals_size(), cylinder.positions_size());
+  EXPECT_EQ(cylinder.uvs_size() * 3, cylinder.positions_size() * 2);
+  EXPECT_TRUE(Warns(result, "tubes of 128 quads"));
 }
 
 TEST(MitsubaImport, ShapeGroupsAndInstancesMapToGroupsAndInstances) {
@@ -129,14 +132,26 @@ TEST(MitsubaImport, BsdfsMapToSurfaceModels) {
   ExpectNear(RgbProperty(material("s13").properties(), "reflectance"), {0.5, 0.5, 0.5});
 }
 
-TEST(MitsubaImport, TexturesBecomeTheirMeanColourWithAWarning) {
+TEST(MitsubaImport, TexturesBecomeSceneTexturesTheMaterialsReferTo) {
   const ImportResult result = Import("mitsuba_materials.xml");
   const v1::Scene& scene = result.scene;
-  // checker.png: black and white sRGB pixels, linear mean 0.5.
-  ExpectNear(RgbProperty(MaterialNamed(scene, "textured").properties(), "reflectance"), {0.5, 0.5, 0.5}, 1e-6);
-  ExpectNear(RgbProperty(MaterialNamed(scene, "checks").properties(), "reflectance"), {0.4, 0.4, 0.4});
-  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:30: yarf has no textures yet: bitmap"));
-  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:35: yarf has no textures yet: checkerboard"));
+  const auto texture_of = [&](const std::string& material) -> const v1::ComponentSpec& {
+    const v1::Property& value = MaterialNamed(scene, material).properties().values().at("reflectance");
+    EXPECT_EQ(value.value_case(), v1::Property::kReference);
+    for (const v1::SceneTexture& t : scene.textures())
+      if (t.name() == value.reference()) return t.texture();
+    ADD_FAILURE() << "no texture named " << value.reference();
+    return scene.textures(0).texture();
+  };
+  ASSERT_EQ(scene.textures_size(), 2);
+  const v1::ComponentSpec& bitmap = texture_of("textured");
+  EXPECT_EQ(bitmap.class_name(), "bitmap");
+  EXPECT_EQ(StringProperty(bitmap.properties(), "filename"), "assets/checker.png");
+  const v1::ComponentSpec& checks = texture_of("checks");
+  EXPECT_EQ(checks.class_name(), "checkerboard");
+  ExpectNear(RgbProperty(checks.properties(), "color0"), {0.2, 0.2, 0.2});
+  ExpectNear(RgbProperty(checks.properties(), "color1"), {0.6, 0.6, 0.6});
+  EXPECT_FALSE(Warns(result, "mean colour"));
   EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:46: bsdf 'diffuse': parameter 'reflectanse' ignored"));
 }
 

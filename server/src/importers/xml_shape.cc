@@ -22,21 +22,36 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
   v1::SceneShape shape;
   shape.set_name(e.Get("id"));
   NormalRule rule = NormalRule::kWorldWinding;
+  Matrix4 cylinder_frame;  // a cylinder's unit tube to its p0, p1 and radius
   if (type == "obj" || type == "ply") {
     const std::string name = p.String("filename", "");
     const auto file = folder_.Resolve(name, e.file, p.WhereIs("filename"));
-    shape.mutable_mesh()->set_file(folder_.Relative(file));
-    shape.mutable_mesh()->set_format(type);
-    p.Accept({"face_normals", "flip_tex_coords"});
+    v1::Mesh& mesh = *shape.mutable_mesh();
+    mesh.set_file(folder_.Relative(file));
+    mesh.set_format(type);
+    mesh.set_face_normals(p.Boolean("face_normals", false));
+    mesh.set_flip_tex_coords(p.Boolean("flip_tex_coords", true));
   } else if (type == "serialized") {
     const std::string name = p.String("filename", "");
     const auto file = folder_.Resolve(name, e.file, p.WhereIs("filename"));
     const int64_t index = p.Integer("shape_index", 0);
     if (index < 0) Fail(p.WhereIs("shape_index"), "shape_index must be >= 0");
     const SerializedMesh mesh = DecodeSerializedMesh(ReadTextFile(file, e.where), uint64_t(index), e.where);
-    *shape.mutable_mesh() = InlineMesh(mesh.positions, mesh.indices);
+    v1::Mesh& inline_mesh = *shape.mutable_mesh() = InlineMesh(mesh.positions, mesh.indices);
+    inline_mesh.mutable_normals()->Add(mesh.normals.begin(), mesh.normals.end());
+    inline_mesh.mutable_uvs()->Add(mesh.uvs.begin(), mesh.uvs.end());
+    if (!mesh.colors.empty()) {
+      v1::MeshAttribute& colour = *inline_mesh.add_attributes();
+      colour.set_name("vertex_color");
+      colour.set_channels(3);
+      colour.mutable_values()->Add(mesh.colors.begin(), mesh.colors.end());
+    }
+    inline_mesh.set_face_normals(p.Boolean("face_normals", false));
     if (shape.name().empty()) shape.set_name(mesh.name);
-    p.Accept({"face_normals", "max_smooth_angle"});
+    if (p.Has("max_smooth_angle"))
+      Warn(p.WhereIs("max_smooth_angle"), "max_smooth_angle",
+           "max_smooth_angle is not supported: the file's own normals are used");
+    p.Accept({"max_smooth_angle"});
   } else if (type == "sphere") {
     rule = NormalRule::kSphere;
     const Vec3d c = p.Point("center", {0, 0, 0});
@@ -52,13 +67,25 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     *shape.mutable_mesh() = CubeMesh();
   } else if (type == "disk") {
     rule = NormalRule::kTransformed;
-    *shape.mutable_mesh() = DiskMesh();
+    *shape.mutable_mesh() = DiskMesh(DiskUv::kMitsuba);
     Warn(e.where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
+  } else if (type == "cylinder") {
+    rule = NormalRule::kTransformed;
+    const Vec3d p0 = p.Point("p0", {0, 0, 0}), p1 = p.Point("p1", {0, 0, 1});
+    const double radius = p.Float("radius", 1);
+    if (!(radius > 0 && radius < 1e30)) Fail(p.WhereIs("radius"), "cylinder radius must be positive");
+    const Vec3d axis = p1 - p0;
+    const auto frame = Matrix4::LookAt(p0, p1, std::abs(axis.y) < 0.9 * Length(axis) ? Vec3d{0, 1, 0} : Vec3d{1, 0, 0});
+    if (!frame) Fail(e.where, "cylinder: p0 and p1 must differ");
+    *shape.mutable_mesh() = CylinderMesh(360);
+    cylinder_frame = *frame * Matrix4::Scale({radius, radius, Length(axis)});
+    Warn(e.where, "cylinder",
+         "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads");
   } else {
     Warn(e.where, "shape:" + type, "shape type '" + type + "' is not supported: ignored");
     return;
   }
-  const Matrix4 to_world = p.Transform("to_world");
+  const Matrix4 to_world = p.Transform("to_world") * cylinder_frame;
   const bool flip = p.Boolean("flip_normals", false);
 
   const auto bsdfs = p.Objects("bsdf");

@@ -1,10 +1,12 @@
-// Textures and spectra of Mitsuba scenes as single RGB values: yarf has no
-// textures yet, so a texture becomes its mean colour (with a warning).
+// Textures and spectra of Mitsuba scenes: bitmaps and checkerboards become
+// scene textures (Scene.textures) that properties refer to; a texture
+// where yarf takes a constant, and a spectrum, become one RGB value.
 #include <algorithm>
 #include <cctype>
 #include <sstream>
 
 #include "importers/numbers.h"
+#include "importers/properties_util.h"
 #include "importers/texture_mean.h"
 #include "importers/xml_importer.h"
 
@@ -108,6 +110,32 @@ Rgb MitsubaImporter::SpectrumValue(const XmlElement& e, bool within_emitter) {
   return c;
 }
 
+std::string MitsubaImporter::TextureReference(const XmlElement& e) {
+  if (const auto it = textures_.find(&e); it != textures_.end()) return it->second;
+  const std::string type = e.Get("type");
+  if (type != "bitmap" && type != "checkerboard") return "";
+  const RecursionGuard guard(nesting, e.where);
+  XmlPlugin plugin(e, *this);
+  v1::Properties props;
+  if (type == "bitmap") {
+    const std::string name = plugin.String("filename", "");
+    const auto file = folder_.Resolve(name, e.file, plugin.WhereIs("filename"));
+    SetString(props, "filename", folder_.Relative(file));
+    for (const char* key : {"filter_type", "wrap_mode"})
+      if (plugin.Has(key)) SetString(props, key, plugin.String(key, ""));
+    if (plugin.Has("raw")) SetBool(props, "raw", plugin.Boolean("raw", false));
+    plugin.Accept({"format"});
+  } else {
+    SetColour(props, "color0", plugin.TexturedColor("color0", {0.4, 0.4, 0.4}));
+    SetColour(props, "color1", plugin.TexturedColor("color1", {0.2, 0.2, 0.2}));
+  }
+  if (plugin.Has("to_uv")) SetTransform(props, "to_uv", plugin.Transform("to_uv"));
+  plugin.WarnUnused();
+  const std::string name = assembly_.AddTexture(e.Get("id", type), Spec(type, std::move(props)));
+  textures_[&e] = name;
+  return name;
+}
+
 Rgb MitsubaImporter::TextureMean(const XmlElement& e) {
   const RecursionGuard guard(nesting, e.where);
   XmlPlugin plugin(e, *this);
@@ -119,12 +147,13 @@ Rgb MitsubaImporter::TextureMean(const XmlElement& e) {
     const auto file = folder_.Resolve(name, e.file, plugin.WhereIs("filename"));
     const bool raw = plugin.Boolean("raw", false);
     mean = ImageMeanColour(file, raw ? ImageEncoding::kLinear : ImageEncoding::kAuto, 1.0, e.where);
-    Warn(e.where, "texture:bitmap", "yarf has no textures yet: bitmap textures replaced by their mean colour");
+    Warn(e.where, "texture-constant:bitmap",
+         "a bitmap texture where yarf takes a constant: replaced by its mean colour");
   } else if (type == "checkerboard") {
     const Rgb a = plugin.Color("color0", {0.4, 0.4, 0.4}), b = plugin.Color("color1", {0.2, 0.2, 0.2});
     mean = {(a.r + b.r) / 2, (a.g + b.g) / 2, (a.b + b.b) / 2};
-    Warn(e.where, "texture:checkerboard",
-         "yarf has no textures yet: checkerboard textures replaced by their mean colour");
+    Warn(e.where, "texture-constant:checkerboard",
+         "a checkerboard texture where yarf takes a constant: replaced by its mean colour");
   } else {
     Warn(e.where, "texture:" + type, "texture type '" + type + "' is not supported: grey 0.5 used");
     return mean;
