@@ -76,3 +76,46 @@ def block_z_test(
     alpha = 1.0 - (1.0 - family_alpha) ** (1.0 / z.size)
     threshold = NormalDist().inv_cdf(1.0 - alpha / 2.0)
     return ZTest(z, threshold, means, reference_means)
+
+
+@dataclass(frozen=True)
+class PixelTest:
+    """Mitsuba's render-regression criterion: per pixel-channel z-tests."""
+
+    passed: float  # fraction of pixel channels within the threshold
+    threshold: float
+    worst: str
+
+    # Mitsuba's bar: at least this fraction of pixel channels pass.
+    REQUIRED = 0.9975
+
+    @property
+    def ok(self) -> bool:
+        return self.passed >= self.REQUIRED
+
+
+def pixel_z_test(
+    pixels: np.ndarray,
+    variance: np.ndarray,
+    reference: np.ndarray,
+    reference_variance: np.ndarray,
+) -> PixelTest:
+    """Mitsuba's criterion: each pixel channel's z-score against the reference,
+    Šidák-corrected α = 1 − 0.99^(1/pixels); at least 99.75% must pass."""
+    pixel_count = pixels.shape[0] * pixels.shape[1]
+    alpha = 1.0 - 0.99 ** (1.0 / pixel_count)
+    threshold = NormalDist().inv_cdf(1.0 - alpha / 2.0)
+    difference = np.asarray(pixels, np.float64) - reference
+    total = np.asarray(variance, np.float64) + reference_variance
+    z = np.zeros_like(difference)
+    noisy = total > 0
+    z[noisy] = difference[noisy] / np.sqrt(total[noisy])
+    z[~noisy & (np.abs(difference) > 1e-6)] = np.inf
+    failing = np.argwhere(np.abs(z) >= threshold)
+    order = sorted(failing.tolist(), key=lambda index: -abs(z[tuple(index)]))[:8]
+    worst = "\n".join(
+        f"  pixel (row {r}, column {c}) channel {k}: {pixels[r, c, k]:.5f} vs "
+        f"{reference[r, c, k]:.5f}, z = {z[r, c, k]:+.1f}"
+        for r, c, k in order
+    )
+    return PixelTest(1.0 - len(failing) / z.size, threshold, worst)

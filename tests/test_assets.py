@@ -22,7 +22,7 @@ from conftest import small_scene
 from google.protobuf import json_format
 
 from yarf import Client, LocalServer, SceneError, transform
-from yarf.assets import CHUNK_BYTES, asset_chunks, sha256_of, upload_mesh_assets
+from yarf.assets import CHUNK_BYTES, asset_chunks, sha256_of, upload_scene_assets
 from yarf.v1 import asset_pb2, render_pb2, scene_pb2
 
 QUAD_OBJ = b"v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n"
@@ -225,7 +225,7 @@ def test_a_mesh_asset_without_a_format_is_refused_at_submit(assets_client: Clien
     assert code == grpc.StatusCode.INVALID_ARGUMENT and "format" in details, details
 
 
-def test_upload_mesh_assets_sends_each_missing_file_once(
+def test_upload_scene_assets_sends_each_missing_file_once(
     assets_client: Client, tmp_path: Path
 ) -> None:
     (tmp_path / "meshes").mkdir()
@@ -241,15 +241,15 @@ def test_upload_mesh_assets_sends_each_missing_file_once(
     again = scene_pb2.Scene()
     again.CopyFrom(scene)
 
-    assert upload_mesh_assets(assets_client, scene, tmp_path) == 2
+    assert upload_scene_assets(assets_client, scene, tmp_path) == 2
     meshes = [s.mesh for s in scene.shapes if s.HasField("mesh")]
     assert [m.asset for m in meshes] == [sha256_of(mesh_bytes)] * 2 + [sha256_of(inline_bytes)]
     assert all(m.format == "obj" and not m.file and not m.data for m in meshes)
-    assert upload_mesh_assets(assets_client, again, tmp_path) == 0
+    assert upload_scene_assets(assets_client, again, tmp_path) == 0
     assert again == scene
 
 
-def test_upload_mesh_assets_refuses_a_file_outside_the_scene_folder(
+def test_upload_scene_assets_refuses_a_file_outside_the_scene_folder(
     assets_client: Client, tmp_path: Path
 ) -> None:
     (tmp_path / "outside.obj").write_bytes(QUAD_OBJ)
@@ -257,7 +257,7 @@ def test_upload_mesh_assets_refuses_a_file_outside_the_scene_folder(
     scene = small_scene()
     scene.shapes.add(name="sneaky", material="grey").mesh.file = "../outside.obj"
     with pytest.raises(SceneError, match="outside"):
-        upload_mesh_assets(assets_client, scene, tmp_path / "scene")
+        upload_scene_assets(assets_client, scene, tmp_path / "scene")
     assert scene.shapes[-1].mesh.file == "../outside.obj"
 
 

@@ -24,6 +24,7 @@ from conftest import REPO, SHARED
 from imagestats import block_z_test, mean_and_variance
 
 from yarf import Client, LocalServer, RenderResult
+from yarf.assets import upload_scene_assets
 from yarf.cli import main
 from yarf.scene import ImportedScene, import_scene, load_scene
 from yarf.v1 import render_pb2, scene_pb2
@@ -185,6 +186,7 @@ def test_every_imported_test_scene_is_accepted_by_the_server(client: Client, sce
     """The classes and parameters the importers write are those yarf's components read."""
     imported = import_scene(scene)
     imported.scene.film.width = imported.scene.film.height = 8
+    upload_scene_assets(client, imported.scene, scene.parent)
     job_id = client.submit(imported.scene, spp=1, name=scene.name)
     status = client.wait(job_id, timeout=60)
     assert status.state == render_pb2.SUCCEEDED, status.error

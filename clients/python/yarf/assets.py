@@ -1,9 +1,10 @@
-"""Assets by content: mesh files uploaded once to a yarfd, named by their SHA-256.
+"""Assets by content: mesh and texture files uploaded once to a yarfd, named by their SHA-256.
 
 A scene then names a mesh by its hash (``Mesh.asset`` + ``format``)
 instead of a path on the client (``Mesh.file``) or its bytes
-(``Mesh.data``): a remote server never reads the client's paths, and bytes
-the server already holds are not sent again.
+(``Mesh.data``), and a texture's image by an ``asset`` property instead of
+its ``filename``: a remote server never reads the client's paths, and
+bytes the server already holds are not sent again.
 """
 
 from __future__ import annotations
@@ -61,35 +62,55 @@ def _with_header(blocks: Iterator[bytes], sha256: str, size: int) -> Iterator[as
 
 
 @dataclass
-class MeshAssets:
-    """A scene's mesh files and inline meshes, checked and hashed, not yet sent."""
+class SceneAssets:
+    """A scene's mesh files, inline meshes and texture files, checked and hashed, not yet sent."""
 
     # The bytes, or the file, of each hash.
     sources: dict[str, AssetData] = field(default_factory=dict)
     # Each mesh of the scene to rename, with its hash and format.
     meshes: list[tuple[scene_pb2.Mesh, str, str]] = field(default_factory=list)
+    # Each texture whose `filename` becomes an `asset`, with its hash.
+    textures: list[tuple[scene_pb2.ComponentSpec, str]] = field(default_factory=list)
 
     def upload(self, client: Client) -> int:
         """Asks the server once which hashes it lacks, sends only those, then names
-        every mesh by its hash; returns how many assets were sent."""
+        every mesh and texture file by its hash; returns how many assets were sent."""
         missing = client.missing_assets(self.sources) if self.sources else []
         for digest in missing:
             client.upload_asset(self.sources[digest], sha256=digest)
         for mesh, digest, mesh_format in self.meshes:
             mesh.asset = digest  # clears `file` or `data` (same oneof)
             mesh.format = mesh_format
+        for texture, digest in self.textures:
+            values = texture.properties.values
+            del values["filename"]
+            values["asset"].string_value = digest
         return len(missing)
 
 
-def mesh_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> MeshAssets:
-    """Checks and hashes the mesh ``file`` and ``data`` of ``scene``; raises SceneError.
+def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
+    """Checks and hashes the mesh ``file`` and ``data`` and the texture files of
+    ``scene``; raises SceneError.
 
-    Files are named relative to ``base_dir`` and must stay inside it; each
-    is read here only to hash it (and again, in chunks, if it is sent).
+    Mesh files are named relative to ``base_dir`` and must stay inside it.
+    A texture's ``filename`` is relative to ``base_dir`` and may lie
+    anywhere its user can read (scenes share texture folders): only its
+    bytes reach the server. Each file is read here only to hash it (and
+    again, in chunks, if it is sent).
     """
     base = Path(base_dir).resolve()
-    assets = MeshAssets()
+    assets = SceneAssets()
     hashes_of_files: dict[Path, str] = {}
+    for index, texture in enumerate(scene.textures):
+        value = texture.texture.properties.values.get("filename")
+        if value is None or value.WhichOneof("value") != "string_value":
+            continue
+        where = f"textures[{index}] ({texture.name})"
+        path = (base / value.string_value).resolve()
+        if path not in hashes_of_files:
+            hashes_of_files[path] = _hash_file(where, value.string_value, path, "texture")
+        assets.sources.setdefault(hashes_of_files[path], path)
+        assets.textures.append((texture.texture, hashes_of_files[path]))
     for where, shape in iter_shapes(scene):
         if shape.WhichOneof("geometry") != "mesh":
             continue
@@ -99,7 +120,7 @@ def mesh_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> MeshAssets:
             mesh_format = _mesh_format(where, mesh.file, mesh.format)
             path = mesh_file_path(where, base, mesh.file)
             if path not in hashes_of_files:
-                hashes_of_files[path] = _hash_file(where, mesh.file, path)
+                hashes_of_files[path] = _hash_file(where, mesh.file, path, "mesh")
             digest = hashes_of_files[path]
             assets.sources.setdefault(digest, path)
         elif source == "data":
@@ -117,21 +138,22 @@ def mesh_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> MeshAssets:
     return assets
 
 
-def upload_mesh_assets(client: Client, scene: scene_pb2.Scene, base_dir: str | Path) -> int:
-    """Makes every mesh ``file`` and inline ``data`` of ``scene`` an uploaded ``asset``.
+def upload_scene_assets(client: Client, scene: scene_pb2.Scene, base_dir: str | Path) -> int:
+    """Makes every mesh ``file``, inline mesh ``data`` and texture file of ``scene``
+    an uploaded ``asset``.
 
-    Files are named relative to ``base_dir`` and must stay inside it. The
+    Files are named relative to ``base_dir`` (see :func:`scene_assets`). The
     server is asked once which hashes it lacks and only those are sent;
     returns how many assets were sent. The scene changes only once every
     upload succeeded.
     """
-    return mesh_assets(scene, base_dir).upload(client)
+    return scene_assets(scene, base_dir).upload(client)
 
 
-def _hash_file(where: str, name: str, path: Path) -> str:
+def _hash_file(where: str, name: str, path: Path, kind: str) -> str:
     try:
         return sha256_of(path)
     except FileNotFoundError:
-        raise SceneError(f"{where}: mesh file {name!r} not found (looked for {path})") from None
+        raise SceneError(f"{where}: {kind} file {name!r} not found (looked for {path})") from None
     except OSError as error:
-        raise SceneError(f"{where}: cannot read mesh file {name!r}: {error}") from None
+        raise SceneError(f"{where}: cannot read {kind} file {name!r}: {error}") from None

@@ -21,7 +21,7 @@ from pathlib import Path
 import grpc
 from tqdm import tqdm
 
-from yarf.assets import MeshAssets, mesh_assets
+from yarf.assets import SceneAssets, scene_assets
 from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, IMAGE_FORMATS, Client
 from yarf.credentials import resolve as resolve_credentials
 from yarf.scene import (
@@ -168,22 +168,22 @@ def _transport(args: argparse.Namespace, scene: scene_pb2.Scene) -> scene_pb2.Co
     return spec
 
 
-def _send_meshes(
-    client: Client, meshes: MeshAssets, scene: scene_pb2.Scene, base_dir: Path, *, quiet: bool
+def _send_assets(
+    client: Client, assets: SceneAssets, scene: scene_pb2.Scene, base_dir: Path, *, quiet: bool
 ) -> None:
-    """Uploads the mesh files the server lacks and names every mesh by its hash.
+    """Uploads the mesh and texture files the server lacks and names each by its hash.
 
-    A server without AssetService gets the files' bytes inline instead.
+    A server without AssetService gets the mesh files' bytes inline instead.
     """
     try:
-        uploaded = meshes.upload(client)
+        uploaded = assets.upload(client)
     except grpc.RpcError as error:
         if not (isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.UNIMPLEMENTED):
             raise
         inline_mesh_files(scene, base_dir)
         return
     if uploaded and not quiet:
-        _say(f"uploaded {uploaded} mesh file{'s' if uploaded > 1 else ''} the server lacked")
+        _say(f"uploaded {uploaded} file{'s' if uploaded > 1 else ''} the server lacked")
 
 
 def render_command(args: argparse.Namespace) -> int:
@@ -206,10 +206,10 @@ def render_command(args: argparse.Namespace) -> int:
             raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
         scene = load_scene(scene_path, inline_files=False)
     _replace_materials(scene, args.material)
-    # Before any server is asked for: a missing or misplaced mesh file fails here.
-    meshes = mesh_assets(scene, scene_path.parent)
+    # Before any server is asked for: a missing or misplaced file fails here.
+    assets = scene_assets(scene, scene_path.parent)
     with connect(args.server) as client:
-        _send_meshes(client, meshes, scene, scene_path.parent, quiet=args.quiet)
+        _send_assets(client, assets, scene, scene_path.parent, quiet=args.quiet)
         job_id = client.submit(
             scene,
             spp,

@@ -21,8 +21,8 @@ from google.protobuf import json_format
 from tqdm import tqdm
 
 from yarf import dashboard
-from yarf.assets import mesh_assets
-from yarf.cli import CommandError, _import, _send_meshes, connect
+from yarf.assets import scene_assets
+from yarf.cli import CommandError, _import, _send_assets, connect
 from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, IMAGE_FORMATS, Client
 from yarf.scene import IMPORTED_SUFFIXES, load_scene
 from yarf.v1 import render_pb2, scene_pb2
@@ -148,9 +148,9 @@ def submit_command(args: argparse.Namespace) -> int:
     scene, spp = _load(args)
     base_dir = Path(args.scene).parent
     # Before any server is asked for: a missing or misplaced mesh file fails here.
-    meshes = mesh_assets(scene, base_dir)
+    assets = scene_assets(scene, base_dir)
     with _job_server(args) as client:
-        _send_meshes(client, meshes, scene, base_dir, quiet=args.quiet)
+        _send_assets(client, assets, scene, base_dir, quiet=args.quiet)
         job_id = client.submit(
             scene,
             spp,

@@ -1,0 +1,110 @@
+"""Small Mitsuba scenes for checking surfaces against Mitsuba 3 itself.
+
+Each scene is a Mitsuba XML file (with the meshes and images it names)
+written into a folder, so that yarf's importer and Mitsuba read the very
+same file. The Mitsuba reference is rendered in the test, with Mitsuba's
+own render-regression budget: 2·10⁶ samples over the image, split into
+independent renders whose spread gives each pixel's variance.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from imagestats import mean_and_variance
+
+SIZE = 32
+# Mitsuba's render-regression budget: spp = 2·10⁶ / pixels.
+SPP = 2_000_000 // (SIZE * SIZE)
+# Independent Mitsuba renders the reference is made of.
+MITSUBA_RENDERS = 16
+
+
+def uv_sphere_obj(segments: int, rings: int) -> str:
+    """A unit UV sphere as OBJ text, with uvs and exact vertex normals.
+
+    Vertices are repeated along the seam (u = 0 and 1) and at the poles so
+    that each corner carries its own uv, as modelling tools write them.
+    """
+    lines = []
+    for ring in range(rings + 1):
+        theta = math.pi * ring / rings
+        for segment in range(segments + 1):
+            phi = 2 * math.pi * segment / segments
+            x, y, z = (
+                math.sin(theta) * math.cos(phi),
+                math.cos(theta),
+                math.sin(theta) * math.sin(phi),
+            )
+            lines.append(f"v {x:.7f} {y:.7f} {z:.7f}")
+            lines.append(f"vn {x:.7f} {y:.7f} {z:.7f}")
+            lines.append(f"vt {segment / segments:.7f} {1 - ring / rings:.7f}")
+    row = segments + 1
+    for ring in range(rings):
+        for segment in range(segments):
+            a = ring * row + segment + 1
+            b, c, d = a + 1, a + row, a + row + 1
+            # Counter-clockwise seen from outside.
+            for tri in ((a, b, d), (a, d, c)):
+                lines.append("f " + " ".join(f"{i}/{i}/{i}" for i in tri))
+    return "\n".join(lines) + "\n"
+
+
+def scene_xml(shape: str, *, max_depth: int = 4) -> str:
+    """A lit room around one shape (XML of Mitsuba 3): a floor, an area light."""
+    return f"""<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="{max_depth}"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="40"/>
+    <transform name="to_world">
+      <lookat origin="0, 1.5, 4" target="0, 0, 0" up="0, 1, 0"/>
+    </transform>
+    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    <film type="hdrfilm">
+      <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
+      <rfilter type="box"/>
+    </film>
+  </sensor>
+  {shape}
+  <shape type="rectangle">
+    <transform name="to_world">
+      <scale value="4"/><rotate x="1" angle="-90"/><translate y="-1"/>
+    </transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world">
+      <scale value="0.8"/><rotate x="1" angle="90"/><rotate z="1" angle="25"/>
+      <translate x="1" y="3" z="1"/>
+    </transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="12, 12, 12"/></emitter>
+  </shape>
+</scene>
+"""
+
+
+def write_scene(folder: Path, shape: str, files: dict[str, str] | None = None) -> Path:
+    """Writes the scene around ``shape`` and the text files it names; returns the XML's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in (files or {}).items():
+        (folder / name).write_text(text)
+    path = folder / "scene.xml"
+    path.write_text(scene_xml(shape))
+    return path
+
+
+def render_mitsuba(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Mitsuba 3's image of the scene file and the variance of each of its pixels."""
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    scene = mi.load_file(str(path))
+    spp = max(1, SPP // MITSUBA_RENDERS)
+    renders = [
+        np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)[..., :3]
+        for seed in range(MITSUBA_RENDERS)
+    ]
+    return mean_and_variance(renders)

@@ -1,0 +1,179 @@
+"""Surfaces as Mitsuba 3 renders them: UVs, vertex normals, smooth shading.
+
+Each scene is one Mitsuba XML file that yarf's importer and Mitsuba 3
+(scalar_rgb, made in the test) both read; yarf's render must pass Mitsuba's
+own render-regression criterion against Mitsuba's (imagestats.pixel_z_test).
+The path tracer, the light tracer and the bidirectional path tracer must
+also agree with each other on the smooth-shaded scene (block z-test), so
+that shading normals are handled alike for radiance and for importance.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from component_process import ComponentProcess
+from imagestats import block_z_test, pixel_z_test
+from surface_scenes import SPP, render_mitsuba, uv_sphere_obj, write_scene
+
+from yarf import Client, RenderResult, component, load_scene
+from yarf.assets import upload_scene_assets
+from yarf.v1 import scene_pb2
+
+INDEPENDENT = scene_pb2.ComponentSpec(class_name="independent")
+EXAMPLES = Path(__file__).resolve().parents[1] / "components" / "python" / "examples"
+NEAREST_CLAMPED = (
+    '<string name="filter_type" value="nearest"/><string name="wrap_mode" value="clamp"/>'
+    '<transform name="to_uv"><scale x="1.5" y="1.5"/></transform>'
+)
+LOW_POLY = uv_sphere_obj(segments=24, rings=12)
+GREY = '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.8, 0.8"/></bsdf>'
+
+
+def low_poly_sphere(face_normals: bool) -> str:
+    flat = '<boolean name="face_normals" value="true"/>' if face_normals else ""
+    return f'<shape type="obj"><string name="filename" value="sphere.obj"/>{flat}{GREY}</shape>'
+
+
+def png(path: Path) -> None:
+    """A 32×16 8-bit sRGB image of coloured stripes and blocks (its top rows red)."""
+    from PIL import Image
+
+    rows, columns = np.mgrid[0:16, 0:32]
+    image = np.zeros((16, 32, 3), np.uint8)
+    image[..., 0] = np.where(rows < 4, 230, 40)
+    image[..., 1] = (columns * 8 % 256).astype(np.uint8)
+    image[..., 2] = np.where((rows // 4 + columns // 4) % 2 == 0, 200, 20)
+    Image.fromarray(image).save(path)
+
+
+def bitmap(name: str, extra: str = "") -> str:
+    return (
+        f'<texture type="bitmap" name="{name}">'
+        f'<string name="filename" value="tex.png"/>{extra}</texture>'
+    )
+
+
+TEXTURED = {
+    "textured diffuse sphere": (
+        f'<shape type="sphere"><float name="radius" value="0.9"/>'
+        f'<bsdf type="diffuse">{bitmap("reflectance")}</bsdf></shape>'
+    ),
+    "textured rough conductor": (
+        '<shape type="sphere"><float name="radius" value="0.9"/>'
+        '<bsdf type="roughconductor"><string name="material" value="none"/>'
+        '<string name="distribution" value="ggx"/><float name="alpha" value="0.3"/>'
+        f"{bitmap('specular_reflectance')}</bsdf></shape>"
+    ),
+    "nearest-filtered texture, clamped": (
+        f'<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="diffuse">'
+        f"{bitmap('reflectance', NEAREST_CLAMPED)}</bsdf></shape>"
+    ),
+    "checkerboard at grazing angles": (
+        '<shape type="sphere"><float name="radius" value="0.5"/>'
+        '<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">'
+        '<rgb name="color0" value="0.9, 0.2, 0.1"/><rgb name="color1" value="0.1, 0.3, 0.8"/>'
+        '<transform name="to_uv"><scale x="6" y="3"/></transform></texture></bsdf></shape>'
+    ),
+}
+
+SHAPES = {
+    "smooth low-poly sphere": (low_poly_sphere(False), {"sphere.obj": LOW_POLY}),
+    "faceted low-poly sphere": (low_poly_sphere(True), {"sphere.obj": LOW_POLY}),
+    "cylinder": (
+        '<shape type="cylinder"><float name="radius" value="0.6"/>'
+        '<point name="p0" x="0" y="-1" z="0"/><point name="p1" x="0" y="0.8" z="0"/>'
+        # Its inside is in view: Mitsuba's diffuse is one-sided, yarf's two-sided.
+        f'<bsdf type="twosided">{GREY}</bsdf></shape>',
+        {},
+    ),
+    "cube": (
+        '<shape type="cube"><transform name="to_world"><scale value="0.7"/>'
+        '<rotate y="1" angle="30"/><translate y="-0.3"/></transform>'
+        f"{GREY}</shape>",
+        {},
+    ),
+}
+
+
+def assert_matches_mitsuba(client: Client, scene: scene_pb2.Scene, path: Path, name: str) -> None:
+    """yarf's render of ``scene`` passes Mitsuba's criterion against Mitsuba's of ``path``."""
+    reference, reference_variance = render_mitsuba(path)
+    result = client.render(scene, spp=SPP, seed=3, sampler=INDEPENDENT, timeout=600)
+    assert result.pixels.shape == reference.shape
+    test = pixel_z_test(result.pixels, result.variance, reference, reference_variance)
+    assert test.ok, (
+        f"{name}: {100 * test.passed:.2f}% of pixel channels within |z| < {test.threshold:.2f} "
+        f"(Mitsuba's bar: 99.75%); worst:\n{test.worst}"
+    )
+
+
+@pytest.mark.parametrize("name", list(SHAPES))
+def test_shape_matches_mitsuba(client: Client, tmp_path: Path, name: str) -> None:
+    shape, files = SHAPES[name]
+    path = write_scene(tmp_path, shape, files)
+    assert_matches_mitsuba(client, load_scene(path), path, name)
+
+
+@pytest.mark.parametrize("name", list(TEXTURED))
+def test_texture_matches_mitsuba(client: Client, tmp_path: Path, name: str) -> None:
+    png(tmp_path / "tex.png")
+    path = write_scene(tmp_path, TEXTURED[name])
+    scene = load_scene(path)
+    assert scene.textures, "the importer made no texture"
+    upload_scene_assets(client, scene, tmp_path)
+    assert_matches_mitsuba(client, scene, path, name)
+
+
+@pytest.mark.parametrize("transport", ["light", "bdpt"])
+def test_transports_agree_with_shading_normals(
+    client: Client, tmp_path: Path, transport: str
+) -> None:
+    shape, files = SHAPES["smooth low-poly sphere"]
+    scene = load_scene(write_scene(tmp_path, shape, files))
+
+    def render(name: str, spp: int, seed: int) -> RenderResult:
+        method = component(name, max_depth=4)
+        result = client.render(
+            scene, spp=spp, seed=seed, transport=method, sampler=INDEPENDENT, timeout=600
+        )
+        assert np.isfinite(result.pixels).all()
+        return result
+
+    reference = render("path", 1024, 1)
+    other = render(transport, 512, 2)
+    test = block_z_test(
+        other.pixels,
+        other.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"{transport} vs path, smooth shading:\n{test.report()}"
+
+
+def test_python_texture_renders_as_the_cpp_one(client: Client, tmp_path: Path) -> None:
+    """The SDK's py_checkerboard, out of process, against yarfd's checkerboard."""
+    scene = load_scene(write_scene(tmp_path, TEXTURED["checkerboard at grazing angles"]))
+    (texture,) = scene.textures
+    assert texture.texture.class_name == "checkerboard"
+    reference = client.render(scene, spp=256, seed=1, sampler=INDEPENDENT, timeout=600)
+    with ComponentProcess.python(
+        [f"{EXAMPLES / 'checkerboard.py'}:Checkerboard"], f"unix:{tmp_path / 'texture.sock'}"
+    ) as process:
+        texture.texture.class_name = "py_checkerboard"
+        texture.texture.address = process.address
+        remote = client.render(scene, spp=256, seed=2, sampler=INDEPENDENT, timeout=600)
+    test = block_z_test(
+        remote.pixels,
+        remote.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"py_checkerboard vs checkerboard:\n{test.report()}"
+    assert abs(remote.pixels.mean() - reference.pixels.mean()) < 0.02 * reference.pixels.mean()
