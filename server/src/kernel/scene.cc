@@ -102,6 +102,10 @@ void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& lo
   }
   for (size_t i = 0; i < mesh.positions.size(); ++i) mesh.positions[i].Store(vertices + 3 * i);
   std::copy(mesh.indices.begin(), mesh.indices.end(), indices);
+  if (look.alpha) {
+    alpha_cuts_.push_back(std::make_unique<AlphaCut>(look.alpha, mesh.indices, mesh.uvs));
+    alpha_cuts_.back()->Attach(geom);
+  }
   rtcCommitGeometry(geom);
   rtcAttachGeometry(groups_[group].scene, geom);
   rtcReleaseGeometry(geom);

@@ -11,9 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "kernel/alpha_cut.h"
 #include "kernel/camera.h"
 #include "kernel/embree_device.h"
 #include "kernel/mesh_io.h"
+#include "yarf/texture.h"
 #include "yarf/transport.h"
 
 namespace yarf {
@@ -24,6 +26,9 @@ struct ShapeLook {
   uint32_t material = 0;
   const Emitter* emitter = nullptr;
   bool flip_normals = false;
+  // Meshes: the probability that a ray meets the surface at a uv (a
+  // cut-out); null for an opaque one.
+  std::shared_ptr<const Texture> alpha;
 };
 
 class KernelScene final : public SceneView {
@@ -152,6 +157,8 @@ class KernelScene final : public SceneView {
   std::vector<std::unique_ptr<SurfaceModel>> materials_;
   std::vector<std::unique_ptr<Emitter>> emitters_;
   std::vector<TriangleMesh> meshes_;
+  // The cut-outs of meshes with an alpha texture, Embree's filter data.
+  std::vector<std::unique_ptr<AlphaCut>> alpha_cuts_;
   std::vector<Group> groups_;
   std::vector<Placement> placements_;
   // Unit normals of each mesh's triangles in the mesh's own space.

@@ -77,7 +77,8 @@ void RequireShapeAssets(const google::protobuf::RepeatedPtrField<v1::SceneShape>
 }
 
 void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
-                    const std::set<std::string>& materials, const std::string& where) {
+                    const std::set<std::string>& materials, const std::set<std::string>& textures,
+                    const std::string& where) {
   for (int i = 0; i < shapes.size(); ++i) {
     const v1::SceneShape& s = shapes[i];
     const std::string what = where + ShapeName(s, i);
@@ -87,6 +88,9 @@ void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& sh
       throw Error(what + " uses unknown material '" + s.material() + "'");
     if (s.has_emitter() && s.emitter().class_name().empty())
       throw Error(what + " has an emitter without a class");
+    if (!s.alpha().empty() && !textures.count(s.alpha()))
+      throw Error(what + ": alpha names '" + s.alpha() + "', which is not a texture of the scene");
+    if (!s.alpha().empty() && s.has_sphere()) throw Error(what + ": alpha cut-outs are for meshes, not spheres");
     if (s.has_sphere() && !(s.sphere().radius() > 0 && std::isfinite(s.sphere().radius())))
       throw Error(what + ": sphere radius must be positive");
     if (s.has_to_world()) CheckPlacement(FromProto(s.to_world(), what + " to_world"), what);
@@ -233,6 +237,11 @@ class Builder {
       look.name = s.name().empty() ? what : s.name();
       look.material = materials_.at(s.material());
       look.flip_normals = s.flip_normals();
+      if (!s.alpha().empty()) {
+        const auto alpha = resolved_.textures.find(s.alpha());
+        if (alpha == resolved_.textures.end()) throw Error(what + ": alpha names no texture of the scene");
+        look.alpha = alpha->second;
+      }
       if (s.has_emitter())
         look.emitter = kernel_->AddEmitter(
             Create<Emitter>(s.emitter().class_name(), s.emitter().properties(), s.emitter().address(),
@@ -421,7 +430,6 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
     if (m.class_name().empty()) throw Error("material '" + m.name() + "' has no class");
     if (!materials.insert(m.name()).second) throw Error("material '" + m.name() + "' defined twice");
   }
-  ValidateShapes(scene.shapes(), materials, "");
   std::set<std::string> textures;
   for (const v1::SceneTexture& t : scene.textures()) {
     if (t.name().empty()) throw Error("a texture has no name");
@@ -431,6 +439,7 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
         asset && (asset->value_case() != v1::Property::kStringValue || !IsSha256(asset->string_value())))
       throw Error(TextureName(t) + ": property 'asset' must be a SHA-256 (64 lowercase hex digits)");
   }
+  ValidateShapes(scene.shapes(), materials, textures, "");
   int environments = 0;
   for (int i = 0; i < scene.lights_size(); ++i) {
     const v1::Light& light = scene.lights(i);
@@ -441,7 +450,8 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
     if (light.has_to_world())
       CheckPlacement(FromProto(light.to_world(), LightName(light, i) + " to_world"), LightName(light, i));
   }
-  for (const v1::Group& g : scene.groups()) ValidateShapes(g.shapes(), materials, "group '" + g.name() + "' ");
+  for (const v1::Group& g : scene.groups())
+    ValidateShapes(g.shapes(), materials, textures, "group '" + g.name() + "' ");
   if (CountPlacements(scene) > SceneLimits::kMaxPlacements)
     throw Error("instancing expands to more than " + std::to_string(SceneLimits::kMaxPlacements) + " placements");
   if (!assets) return;

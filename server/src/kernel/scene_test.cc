@@ -228,6 +228,42 @@ TEST_F(SceneTest, TexturesNeedUniqueNamesAndTheirAssetsAHash) {
   EXPECT_THROW(ValidateScene(scene, nullptr), Error);
 }
 
+// A triangle at z = 5 whose alpha is a constant_texture of `opacity`: the
+// fraction of many rays through it (each a different ray) that hit it.
+TEST_F(SceneTest, AlphaCutsLetRaysThroughWithTheProbabilityOfTheirOpacity) {
+  for (const double opacity : {0.0, 0.3, 1.0}) {
+    v1::Scene scene = BaseScene();
+    v1::SceneTexture* t = scene.add_textures();
+    t->set_name("cut");
+    t->mutable_texture()->set_class_name("constant_texture");
+    (*t->mutable_texture()->mutable_properties()->mutable_values())["value"].set_float_value(opacity);
+    v1::SceneShape* triangle = AddTriangle(scene.mutable_shapes());
+    *triangle->mutable_to_world() = Translation(0, 0, 5);
+    triangle->set_alpha("cut");
+    auto kernel = Build(scene);
+    constexpr int kRays = 4000;
+    std::vector<Ray> rays(kRays);
+    for (int i = 0; i < kRays; ++i)
+      rays[i] = Ray{{0.001f * float(i % 100) - 0.05f, 0.001f * float(i / 100) - 0.3f, 0}, 0, {0, 0, 1}, kInfinity};
+    std::vector<Hit> hits(kRays);
+    kernel->Intersect(rays, hits);
+    std::vector<uint8_t> occluded(kRays);
+    kernel->Occluded(rays, occluded);
+    int hit = 0, blocked = 0;
+    for (int i = 0; i < kRays; ++i) hit += hits[i].Found(), blocked += occluded[i];
+    // Binomial: within 5σ of opacity·N.
+    const double sigma = std::sqrt(kRays * opacity * (1 - opacity)) + 1e-9;
+    EXPECT_NEAR(hit, opacity * kRays, 5 * sigma + 0.5) << "opacity " << opacity;
+    EXPECT_NEAR(blocked, opacity * kRays, 5 * sigma + 0.5) << "opacity " << opacity;
+  }
+}
+
+TEST_F(SceneTest, AlphaMustNameATextureOfTheScene) {
+  v1::Scene scene = BaseScene();
+  AddTriangle(scene.mutable_shapes())->set_alpha("nowhere");
+  EXPECT_THROW(ValidateScene(scene, nullptr), Error);
+}
+
 TEST_F(SceneTest, NestedInstancesComposeTheirTransforms) {
   v1::Scene scene = BaseScene();
   v1::Group* leaf = scene.add_groups();
