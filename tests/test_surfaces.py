@@ -38,7 +38,8 @@ def low_poly_sphere(face_normals: bool) -> str:
 
 
 def png(path: Path) -> None:
-    """A 32×16 8-bit sRGB image of coloured stripes and blocks (its top rows red)."""
+    """A 32×16 8-bit sRGB image of coloured stripes and blocks (its top rows red),
+    and alpha.png beside it."""
     from PIL import Image
 
     rows, columns = np.mgrid[0:16, 0:32]
@@ -47,6 +48,9 @@ def png(path: Path) -> None:
     image[..., 1] = (columns * 8 % 256).astype(np.uint8)
     image[..., 2] = np.where((rows // 4 + columns // 4) % 2 == 0, 200, 20)
     Image.fromarray(image).save(path)
+    # Beside it, a grey 6×6 checker of opaque and clear cells, for cut-outs.
+    cells = np.indices((6, 6)).sum(axis=0) % 2
+    Image.fromarray((cells * 255).astype(np.uint8), mode="L").save(path.with_name("alpha.png"))
 
 
 def bitmap(name: str, extra: str = "") -> str:
@@ -70,6 +74,17 @@ TEXTURED = {
     "nearest-filtered texture, clamped": (
         f'<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="diffuse">'
         f"{bitmap('reflectance', NEAREST_CLAMPED)}</bsdf></shape>"
+    ),
+    # The opacity is a bitmap: Mitsuba's checkerboard gives a float (eval_1)
+    # with its two colours swapped.
+    "alpha-masked leaf and its shadow": (
+        '<shape type="rectangle"><transform name="to_world"><scale value="0.9"/>'
+        '<rotate x="1" angle="-70"/><rotate y="1" angle="20"/><translate y="0.2"/></transform>'
+        '<bsdf type="mask"><texture type="bitmap" name="opacity">'
+        '<string name="filename" value="alpha.png"/><boolean name="raw" value="true"/>'
+        '<string name="filter_type" value="nearest"/></texture>'
+        '<bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.7, 0.2"/>'
+        "</bsdf></bsdf></bsdf></shape>"
     ),
     "checkerboard at grazing angles": (
         '<shape type="sphere"><float name="radius" value="0.5"/>'

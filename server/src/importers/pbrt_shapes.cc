@@ -114,8 +114,16 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     return;
   }
   if (params.Has("alpha")) {
-    params.Find("alpha");
-    Warn(params.WhereIs("alpha", where), "alpha", "alpha cut-outs are not supported: ignored");
+    const Textured alpha = TexturedFloat(params, "alpha", 1);
+    if (shape.has_sphere()) {
+      Warn(params.WhereIs("alpha", where), "alpha-sphere", "alpha cut-outs on spheres are not supported: ignored");
+    } else if (alpha.IsTexture()) {
+      shape.set_alpha(alpha.texture);
+    } else if (alpha.constant.r < 1) {
+      v1::Properties props;
+      SetFloat(props, "value", alpha.constant.r);
+      shape.set_alpha(assembly_.AddTexture("alpha", Spec("constant_texture", std::move(props))));
+    }
   }
   params.WarnUnused(diagnostics_, what);
 

@@ -1,4 +1,6 @@
 // Mitsuba BSDFs as yarf SurfaceModel classes.
+#include <algorithm>
+
 #include "importers/colour_checks.h"
 #include "importers/properties_util.h"
 #include "importers/xml_importer.h"
@@ -25,6 +27,21 @@ std::string MitsubaImporter::Material(const XmlElement& element) {
   const std::string name = MakeMaterial(element, element.Get("id", element.Get("type", "bsdf")));
   materials_[&element] = name;
   return name;
+}
+
+std::string MitsubaImporter::MaskAlpha(const XmlElement& bsdf) {
+  if (bsdf.Get("type") != "mask") return "";
+  if (const auto it = textures_.find(&bsdf); it != textures_.end()) return it->second;
+  XmlPlugin p(bsdf, *this);
+  const Textured opacity = p.TexturedColor("opacity", {0.5, 0.5, 0.5});
+  std::string alpha = opacity.texture;
+  if (!opacity.IsTexture() && opacity.constant.r < 1) {
+    v1::Properties props;
+    SetFloat(props, "value", std::max(0.0, opacity.constant.r));
+    alpha = assembly_.AddTexture(bsdf.Get("id", "opacity"), Spec("constant_texture", std::move(props)));
+  }
+  textures_[&bsdf] = alpha;
+  return alpha;
 }
 
 // Returns the material's name, or "" for a null BSDF (an invisible surface).
@@ -92,9 +109,13 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     if (front.Get("type") != "diffuse")
       Warn(e.where, "twosided", "twosided: the back side follows the inner model's own two-sidedness");
     return MakeMaterial(front, name);
-  } else if (type == "mask" || type == "bumpmap" || type == "normalmap" || type == "blendbsdf") {
+  } else if (type == "mask") {
+    // Its opacity is the shape's cut-out (MaskAlpha); the surface is the nested BSDF's.
+    p.Accept({"opacity"});
+    return MakeMaterial(inner(), name);
+  } else if (type == "bumpmap" || type == "normalmap" || type == "blendbsdf") {
     Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' is not supported: its (first) nested BSDF is used");
-    p.Accept({"opacity", "weight", "scale", "normalmap", "texture"});
+    p.Accept({"weight", "scale", "normalmap", "texture"});
     return MakeMaterial(inner(), name);
   } else if (type == "null") {
     Warn(e.where, "bsdf:null", "null BSDF: shapes using it are left out (yarf has no invisible surfaces)");

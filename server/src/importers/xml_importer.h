@@ -52,6 +52,9 @@ class MitsubaImporter {
   // xml_bsdf.cc: the material a <bsdf> becomes, made once per element.
   std::string Material(const XmlElement& element);
   std::string MakeMaterial(const XmlElement& element, const std::string& name);
+  // A `mask` BSDF's opacity as the scene texture a shape's alpha names; ""
+  // for any other BSDF (or an opaque mask).
+  std::string MaskAlpha(const XmlElement& bsdf);
   std::string KnownMetal(const std::string& name, const SourceLocation& where);
 
   // xml_shape.cc

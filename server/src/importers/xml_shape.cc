@@ -97,6 +97,12 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     return;  // a null BSDF: invisible in Mitsuba, left out here
   }
   shape.set_material(material);
+  if (const std::string alpha = bsdfs.empty() ? "" : MaskAlpha(*bsdfs.front()); !alpha.empty()) {
+    if (shape.has_sphere())
+      Warn(bsdfs.front()->where, "mask-sphere", "mask opacity on a sphere is not supported: the sphere is opaque");
+    else
+      shape.set_alpha(alpha);
+  }
   for (const XmlElement* emitter : p.Objects("emitter")) {
     if (emitter->Get("type") != "area") {
       Warn(emitter->where, "shape-emitter:" + emitter->Get("type"),
