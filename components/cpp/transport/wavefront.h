@@ -39,6 +39,7 @@ inline ShadingPoint ShadingPointOf(const Hit& hit, const Ray& ray) {
 // disagree on whether it reflects (no light through the surface); for
 // importance, Veach's correction (ImportanceShadingFactor).
 inline float ShadingWeight(const Frame& frame, Vec3 ng, Vec3 wi, Vec3 wo, TransportMode mode) {
+  if (SameVector(frame.n, ng)) return 1;  // one normal: nothing to disagree or correct
   const Vec3 wi_world = frame.ToWorld(wi), wo_world = frame.ToWorld(wo);
   if (!SidesAgree(wi_world, wo_world, ng, wi.z, wo.z)) return 0;
   return mode == TransportMode::kImportance ? ImportanceShadingFactor(wi_world, wo_world, ng, frame.n) : 1.0f;

@@ -43,7 +43,8 @@ struct Hit {
   // side; `normal` itself where there are none.
   Vec3 shading_normal;
   // ∂p/∂u and ∂p/∂v, world space (not unit); for a mesh without uvs, of
-  // its barycentric parameterisation.
+  // its barycentric parameterisation, and zero when it has no vertex
+  // normals either (nothing to orient a frame by).
   Vec3 dpdu, dpdv;
 
   bool Found() const { return shape != kNoShape; }

@@ -12,6 +12,10 @@
 
 namespace yarf {
 
+// Whether two vectors are the same bit for bit (a flat surface's shading
+// normal is its geometric one).
+inline bool SameVector(Vec3 a, Vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
 // ns bent toward ng (both unit, on wi's side) until the mirror reflection
 // of wi lies above the surface by the margin ShadingNormalSeenFrom names.
 inline Vec3 BentShadingNormal(Vec3 ng, Vec3 ns, Vec3 wi) {
@@ -44,6 +48,7 @@ inline Vec3 BentShadingNormal(Vec3 ng, Vec3 ns, Vec3 wi) {
 // stays on the outward side, as hit.normal, so that models which tell
 // inside from outside (dielectrics) still can.
 inline Vec3 ShadingNormalSeenFrom(const Hit& hit, Vec3 wi) {
+  if (SameVector(hit.shading_normal, hit.normal)) return hit.normal;  // flat: nothing to bend
   const float side = Dot(wi, hit.normal) >= 0 ? 1.0f : -1.0f;
   return BentShadingNormal(hit.normal * side, hit.shading_normal * side, wi) * side;
 }

@@ -398,6 +398,13 @@ void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit
     return;
   }
   const TriangleMesh& mesh = meshes_[shape.mesh];
+  if (mesh.uvs.empty() && mesh.normals.empty()) {
+    // Flat and unparameterised: its barycentrics are its uv, the shading
+    // frame is the normal's own (dp/du left zero), and nothing is read.
+    hit.u = hit.b1, hit.v = hit.b2;
+    hit.dpdu = hit.dpdv = Vec3();
+    return;
+  }
   const uint32_t* v = &mesh.indices[3 * hit.primitive];
   Transform to_world = shape.to_world;
   if (shape.moving)
