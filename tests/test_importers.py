@@ -254,3 +254,16 @@ def test_a_malformed_scene_fails_in_one_line_with_file_and_line(
     assert len(lines) == 1, done.stderr
     assert lines[0].startswith("yarf: error: ") and where in lines[0], lines[0]
     assert not output.exists()
+
+
+def test_strict_refuses_what_would_be_ignored_and_names_misspellings(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    scene = TEST_SCENES / "mitsuba_materials.xml"
+    assert main(["convert", str(scene), str(tmp_path / "loose.json")]) == 0
+    assert (
+        "parameter 'reflectanse' ignored (did you mean 'reflectance'?)" in capsys.readouterr().err
+    )
+    assert main(["convert", "--strict", str(scene), str(tmp_path / "strict.json")]) != 0
+    assert "--strict refuses what would be ignored or approximated" in capsys.readouterr().err
+    assert not (tmp_path / "strict.json").exists()

@@ -112,9 +112,14 @@ def _parameters(definitions: Sequence[str]) -> dict[str, str]:
     return parameters
 
 
-def _import(path: Path, definitions: Sequence[str], *, inline_files: bool) -> ImportedScene:
-    """Converts a Mitsuba or pbrt scene, showing what was ignored or approximated."""
-    imported = import_scene(path, parameters=_parameters(definitions), inline_files=inline_files)
+def _import(
+    path: Path, definitions: Sequence[str], *, inline_files: bool, strict: bool = False
+) -> ImportedScene:
+    """Converts a Mitsuba or pbrt scene, showing what was ignored or approximated
+    (``strict``: refusing it)."""
+    imported = import_scene(
+        path, parameters=_parameters(definitions), inline_files=inline_files, strict=strict
+    )
     for warning in imported.warnings:
         _say(f"warning: {warning}")
     return imported
@@ -198,7 +203,7 @@ def render_command(args: argparse.Namespace) -> int:
     scene_path = Path(args.scene)
     spp = args.spp
     if scene_path.suffix.lower() in IMPORTED_SUFFIXES:
-        imported = _import(scene_path, args.define, inline_files=False)
+        imported = _import(scene_path, args.define, inline_files=False, strict=args.strict)
         scene = imported.scene
         spp = spp or imported.sample_count
     else:
@@ -247,7 +252,7 @@ def convert_command(args: argparse.Namespace) -> int:
     # names are relative to its folder); elsewhere they are inlined.
     same_folder = source.resolve().parent == target.resolve().parent
     if source.suffix.lower() in IMPORTED_SUFFIXES:
-        imported = _import(source, args.define, inline_files=not same_folder)
+        imported = _import(source, args.define, inline_files=not same_folder, strict=args.strict)
         scene, sample_count = imported.scene, imported.sample_count
     else:
         if args.define:
@@ -299,7 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
             "else a yarfd started for this command)",
         )
 
-    def add_define_option(command: argparse.ArgumentParser) -> None:
+    def add_import_options(command: argparse.ArgumentParser) -> None:
         command.add_argument(
             "-D",
             "--define",
@@ -307,6 +312,12 @@ def build_parser() -> argparse.ArgumentParser:
             default=[],
             metavar="NAME=VALUE",
             help="set a Mitsuba scene parameter ($NAME), overriding its <default>",
+        )
+        command.add_argument(
+            "--strict",
+            action="store_true",
+            help="refuse a Mitsuba or pbrt scene with anything that would be ignored or "
+            "approximated (every warning an error)",
         )
 
     render = commands.add_parser("render", help="render a scene file into an EXR or PNG image")
@@ -322,7 +333,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="samples per pixel (default: the Mitsuba or pbrt file's, else the server's, 16)",
     )
-    add_define_option(render)
+    add_import_options(render)
     render.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     render.add_argument(
         "--transport",
@@ -360,7 +371,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     convert.add_argument("input", help="scene file (.xml, .pbrt, .json or .textproto)")
     convert.add_argument("output", help="yarf scene to write (.json or .textproto)")
-    add_define_option(convert)
+    add_import_options(convert)
     convert.set_defaults(handler=convert_command)
 
     classes = commands.add_parser("classes", help="list the server's classes and plugin errors")
@@ -370,7 +381,7 @@ def build_parser() -> argparse.ArgumentParser:
     # Imported here: the job verbs use this module's helpers.
     from yarf.jobs_cli import add_job_commands
 
-    add_job_commands(commands, add_define_option)
+    add_job_commands(commands, add_import_options)
     return parser
 
 

@@ -81,7 +81,7 @@ def _load(args: argparse.Namespace) -> tuple[scene_pb2.Scene, int]:
     ask for (0: the default)."""
     path = Path(args.scene)
     if path.suffix.lower() in IMPORTED_SUFFIXES:
-        imported = _import(path, args.define, inline_files=False)
+        imported = _import(path, args.define, inline_files=False, strict=args.strict)
         return imported.scene, args.spp or imported.sample_count
     if args.define:
         raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
@@ -314,7 +314,7 @@ def add_server_option(command: argparse.ArgumentParser) -> None:
 
 def add_job_commands(
     commands: argparse._SubParsersAction[argparse.ArgumentParser],
-    add_define_option: Callable[[argparse.ArgumentParser], None],
+    add_import_options: Callable[[argparse.ArgumentParser], None],
 ) -> None:
     """Adds the job verbs to the ``yarf`` parser."""
 
@@ -350,7 +350,7 @@ def add_job_commands(
         "--watch", action="store_true", help="follow the job to its end, as `yarf watch` does"
     )
     submit.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    add_define_option(submit)
+    add_import_options(submit)
     add_server_option(submit)
     submit.set_defaults(handler=submit_command)
 

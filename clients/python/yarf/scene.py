@@ -91,15 +91,17 @@ def import_scene(
     *,
     parameters: Mapping[str, str] | None = None,
     inline_files: bool = True,
+    strict: bool = False,
 ) -> ImportedScene:
     """Converts a Mitsuba 3 (.xml) or pbrt-v4 (.pbrt) file with yarf-import.
 
     ``parameters`` set Mitsuba's ``$name`` scene parameters (overriding the
     file's ``<default>``s). Mesh files are named relative to the file's
-    folder; with ``inline_files`` they become inline data.
+    folder; with ``inline_files`` they become inline data. ``strict``: any
+    construct that would be ignored or approximated is a SceneError.
     """
     path = Path(path)
-    command = [str(find_yarf_import()), str(path)]
+    command = [str(find_yarf_import()), str(path), *(["--strict"] if strict else [])]
     for name, value in (parameters or {}).items():
         command += ["-D", f"{name}={value}"]
     try:

@@ -9,6 +9,10 @@
 
 namespace yarf::importers {
 
+// " (did you mean 'reflectance'?)" when `word` is one or two edits from
+// one of `known` (the nearest), else "": for misspelt names and types.
+std::string DidYouMean(const std::string& word, const std::vector<std::string>& known);
+
 class Diagnostics {
  public:
   // Records a warning. Warnings with the same key are reported once, at

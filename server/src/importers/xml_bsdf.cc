@@ -181,7 +181,12 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     p.WarnUnused();
     return assembly_.AddMaterial(name, class_name, std::move(props));
   } else {
-    Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' is not supported: a grey Lambertian used");
+    static const std::vector<std::string> kKnown = {
+        "diffuse", "roughdiffuse", "twosided", "mask", "bumpmap", "normalmap", "blendbsdf", "null",
+        "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
+        "roughplastic", "phong", "principled", "principledthin"};
+    Warn(e.where, "bsdf:" + type,
+         "bsdf '" + type + "' is not supported: a grey Lambertian used" + DidYouMean(type, kKnown));
     return assembly_.DefaultMaterial();
   }
   p.WarnUnused();

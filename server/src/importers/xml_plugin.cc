@@ -221,14 +221,16 @@ std::vector<const XmlElement*> XmlPlugin::Objects(const std::string& tag) {
 }
 
 void XmlPlugin::Accept(std::initializer_list<const char*> names) {
-  for (const char* name : names) used_.insert(name);
+  for (const char* name : names) used_.insert(name), asked_.insert(name);
 }
 
 void XmlPlugin::WarnUnused() {
   const std::string what = element_.tag + " '" + type_ + "'";
+  const std::vector<std::string> asked(asked_.begin(), asked_.end());
   for (const auto& [name, e] : named_)
     if (!used_.count(name))
-      importer_.Warn(e->where, what + ":" + name, what + ": parameter '" + name + "' ignored");
+      importer_.Warn(e->where, what + ":" + name,
+                     what + ": parameter '" + name + "' ignored" + DidYouMean(name, asked));
   for (const XmlElement* e : unnamed_)
     if (!used_objects_.count(e))
       importer_.Warn(e->where, what + ":<" + e->tag + ">",

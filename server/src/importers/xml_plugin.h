@@ -31,7 +31,12 @@ class XmlPlugin {
   // "<bsdf type=\"plastic\">", for messages.
   std::string Describe() const;
 
-  bool Has(const std::string& name) const { return named_.count(name) > 0; }
+  // Whether the property is given; the name asked for is remembered, so
+  // that a misspelt one can be told what it was meant to be.
+  bool Has(const std::string& name) const {
+    asked_.insert(name);
+    return named_.count(name) > 0;
+  }
   // Where the named property is written (the plugin's place when absent).
   SourceLocation WhereIs(const std::string& name) const;
   double Float(const std::string& name, double fallback);
@@ -70,6 +75,7 @@ class XmlPlugin {
   std::map<std::string, const XmlElement*> named_;
   std::vector<const XmlElement*> unnamed_;
   std::set<std::string> used_;
+  mutable std::set<std::string> asked_;  // names the importer looked for
   std::set<const XmlElement*> used_objects_;
 };
 

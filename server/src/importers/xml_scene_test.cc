@@ -152,7 +152,8 @@ TEST(MitsubaImport, TexturesBecomeSceneTexturesTheMaterialsReferTo) {
   ExpectNear(RgbProperty(checks.properties(), "color0"), {0.2, 0.2, 0.2});
   ExpectNear(RgbProperty(checks.properties(), "color1"), {0.6, 0.6, 0.6});
   EXPECT_FALSE(Warns(result, "mean colour"));
-  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:46: bsdf 'diffuse': parameter 'reflectanse' ignored"));
+  EXPECT_TRUE(Warns(result, "mitsuba_materials.xml:46: bsdf 'diffuse': parameter 'reflectanse' ignored "
+                            "(did you mean 'reflectance'?)"));
 }
 
 TEST(MitsubaImport, EmittersBecomeAreaPointAndSpotLights) {

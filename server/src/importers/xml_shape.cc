@@ -82,7 +82,9 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     Warn(e.where, "cylinder",
          "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads");
   } else {
-    Warn(e.where, "shape:" + type, "shape type '" + type + "' is not supported: ignored");
+    static const std::vector<std::string> kKnown = {"obj",  "ply",  "serialized", "sphere",   "rectangle",
+                                                    "cube", "disk", "cylinder",   "instance", "shapegroup"};
+    Warn(e.where, "shape:" + type, "shape type '" + type + "' is not supported: ignored" + DidYouMean(type, kKnown));
     return;
   }
   const Matrix4 to_world = p.Transform("to_world") * cylinder_frame;

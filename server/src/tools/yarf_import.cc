@@ -1,7 +1,7 @@
 // yarf-import — converts a Mitsuba 3 (.xml) or pbrt-v4 (.pbrt) scene into
 // yarf's own Scene (protobuf JSON or text format).
 //
-//   yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]...
+//   yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]... [--strict]
 //
 // The scene goes to stdout as JSON, or to OUT in the format its extension
 // names. On stderr: one "warning: file:line: ..." line per construct that
@@ -9,6 +9,7 @@
 // asks for a number of samples per pixel (yarf's render options carry it,
 // not the Scene). Mesh files stay files, named relative to IN's folder.
 // -D sets a Mitsuba scene parameter ($name), overriding its <default>.
+// --strict makes every warning an error: nothing is ignored or approximated.
 //
 // Exit status: 0 on success, 2 when IN cannot be imported (one line on
 // stderr: "yarf-import: error: file:line: message") or the command line
@@ -26,7 +27,7 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]...\n";
+    "usage: yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]... [--strict]\n";
 
 int UsageError(const std::string& message) {
   std::cerr << "yarf-import: error: " << message << "\n" << kUsage;
@@ -41,12 +42,17 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
 
 int main(int argc, char** argv) {
   std::string input, output;
+  bool strict = false;
   yarf::importers::ImportOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "-h" || arg == "--help") {
       std::cout << kUsage;
       return 0;
+    }
+    if (arg == "--strict") {
+      strict = true;
+      continue;
     }
     if (arg == "-o" || arg == "-D") {
       if (i + 1 >= argc) return UsageError(arg + " needs a value");
@@ -83,6 +89,13 @@ int main(int argc, char** argv) {
     return 2;
   }
   for (const std::string& warning : result.warnings) std::cerr << "warning: " << warning << "\n";
+  if (strict && !result.warnings.empty()) {
+    const size_t more = result.warnings.size() - 1;
+    std::cerr << "yarf-import: error: " << result.warnings.front()
+              << (more ? " (and " + std::to_string(more) + " more warning" + (more > 1 ? "s" : "") + ")" : "")
+              << "; --strict refuses what would be ignored or approximated\n";
+    return 2;
+  }
   if (result.sample_count > 0) std::cerr << "info: sample_count " << result.sample_count << "\n";
 
   std::string text;
