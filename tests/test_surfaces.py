@@ -51,12 +51,31 @@ def png(path: Path) -> None:
     # Beside it, a grey 6×6 checker of opaque and clear cells, for cut-outs.
     cells = np.indices((6, 6)).sum(axis=0) % 2
     Image.fromarray((cells * 255).astype(np.uint8), mode="L").save(path.with_name("alpha.png"))
+    # And normal maps: ridges across u (tilted ±35° in x), and the flat map.
+    tilt = np.radians(35) * np.sin(np.linspace(0, 8 * np.pi, 64, endpoint=False))
+    normal = np.stack([np.sin(tilt), np.zeros_like(tilt), np.cos(tilt)], axis=-1)
+    ridges = np.broadcast_to(normal, (32, 64, 3))
+    for name, normals in (
+        ("ridges.png", ridges),
+        ("flat.png", np.full((4, 4, 3), [0.0, 0.0, 1.0])),
+    ):
+        encoded = np.round((np.asarray(normals) + 1) / 2 * 255).astype(np.uint8)
+        Image.fromarray(encoded).save(path.with_name(name))
 
 
 def bitmap(name: str, extra: str = "") -> str:
     return (
         f'<texture type="bitmap" name="{name}">'
         f'<string name="filename" value="tex.png"/>{extra}</texture>'
+    )
+
+
+def normal_mapped(image: str) -> str:
+    """A sphere of a grey diffuse seen through the normal map ``image``."""
+    return (
+        '<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="normalmap">'
+        f'<texture type="bitmap" name="normalmap"><string name="filename" value="{image}"/>'
+        f'<boolean name="raw" value="true"/></texture>{GREY}</bsdf></shape>'
     )
 
 
@@ -75,6 +94,7 @@ TEXTURED = {
         f'<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="diffuse">'
         f"{bitmap('reflectance', NEAREST_CLAMPED)}</bsdf></shape>"
     ),
+    "normal map, identity": normal_mapped("flat.png"),
     # The opacity is a bitmap: Mitsuba's checkerboard gives a float (eval_1)
     # with its two colours swapped.
     "alpha-masked leaf and its shadow": (

@@ -25,6 +25,7 @@ struct Reference {
   std::string name;
 };
 class Texture;
+class SurfaceModel;
 
 class Properties {
  public:
@@ -33,7 +34,8 @@ class Properties {
   // scene's folder or the asset store) as a path, which no request can
   // set directly.
   using Value = std::variant<double, int64_t, bool, std::string, Vec3, Rgb, Transform, Reference,
-                             std::shared_ptr<const Texture>, std::filesystem::path>;
+                             std::shared_ptr<const Texture>, std::shared_ptr<const SurfaceModel>,
+                             std::filesystem::path>;
 
   void Set(const std::string& key, Value value) { values_[key] = std::move(value); }
   bool Has(const std::string& key) const { return values_.count(key) != 0; }
@@ -93,6 +95,15 @@ class Properties {
     if (!texture) return nullptr;
     Find(key);
     return *texture;
+  }
+  // The material property `key` names (a wrapper's nested model), which
+  // must be given and be a material of the scene defined before this one.
+  std::shared_ptr<const SurfaceModel> SurfaceModelOf(const std::string& key) const {
+    if (!Has(key)) throw Error("property '" + key + "' (a material of the scene) is missing");
+    if (auto* reference = std::get_if<Reference>(&values_.at(key)))
+      throw Error("property '" + key + "' refers to '" + reference->name +
+                  "', which is not a material defined before this one");
+    return Get<std::shared_ptr<const SurfaceModel>>(key, Find(key), "material");
   }
   Transform Matrix(const std::string& key, const Transform& fallback) const {
     return Has(key) ? Get<Transform>(key, Find(key), "transform") : fallback;

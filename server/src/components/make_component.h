@@ -42,8 +42,9 @@ struct ComponentSources {
 // server found for it (a request names files only by relative path or
 // asset hash).
 struct ResolvedProperties {
-  std::map<std::string, std::shared_ptr<const Texture>> textures;  // by texture name
-  std::map<std::string, std::filesystem::path> files;              // by property key
+  std::map<std::string, std::shared_ptr<const Texture>> textures;        // by texture name
+  std::map<std::string, std::shared_ptr<const SurfaceModel>> materials;  // by material name
+  std::map<std::string, std::filesystem::path> files;                    // by property key
 };
 
 // The interfaces with a Remote<I>.
@@ -64,10 +65,13 @@ std::unique_ptr<I> MakeComponent(const ComponentSources& sources, const std::str
     Properties local = FromProto(properties);
     local.SetFileFolder(sources.file_folder);
     if (resolved) {
-      for (const auto& [key, value] : properties.values())
-        if (value.value_case() == v1::Property::kReference)
-          if (auto it = resolved->textures.find(value.reference()); it != resolved->textures.end())
-            local.Set(key, it->second);
+      for (const auto& [key, value] : properties.values()) {
+        if (value.value_case() != v1::Property::kReference) continue;
+        if (auto it = resolved->textures.find(value.reference()); it != resolved->textures.end())
+          local.Set(key, it->second);
+        else if (auto model = resolved->materials.find(value.reference()); model != resolved->materials.end())
+          local.Set(key, model->second);
+      }
       for (const auto& [key, path] : resolved->files) local.Set(key, path);
     }
     return sources.registry.CreateAs<I>(class_name, local);

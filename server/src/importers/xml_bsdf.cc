@@ -113,9 +113,20 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     // Its opacity is the shape's cut-out (MaskAlpha); the surface is the nested BSDF's.
     p.Accept({"opacity"});
     return MakeMaterial(inner(), name);
-  } else if (type == "bumpmap" || type == "normalmap" || type == "blendbsdf") {
+  } else if (type == "normalmap") {
+    const Textured normals = p.TexturedColor("normalmap", {0.5, 0.5, 1});
+    const std::string nested = MakeMaterial(inner(), name + "-nested");
+    if (!normals.IsTexture()) {
+      Warn(e.where, "normalmap-constant", "normalmap without a normal texture: the nested BSDF is used");
+      return nested;
+    }
+    if (nested.empty()) return "";
+    SetReference(props, "bsdf", nested);
+    SetReference(props, "normalmap", normals.texture);
+    return assembly_.AddMaterial(name, "normalmap", std::move(props));
+  } else if (type == "bumpmap" || type == "blendbsdf") {
     Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' is not supported: its (first) nested BSDF is used");
-    p.Accept({"weight", "scale", "normalmap", "texture"});
+    p.Accept({"weight", "scale", "texture"});
     return MakeMaterial(inner(), name);
   } else if (type == "null") {
     Warn(e.where, "bsdf:null", "null BSDF: shapes using it are left out (yarf has no invisible surfaces)");

@@ -74,7 +74,7 @@ KernelScene::~KernelScene() {
   for (Group& g : groups_) rtcReleaseScene(g.scene);
 }
 
-uint32_t KernelScene::AddMaterial(std::unique_ptr<SurfaceModel> material) {
+uint32_t KernelScene::AddMaterial(std::shared_ptr<const SurfaceModel> material) {
   materials_.push_back(std::move(material));
   return uint32_t(materials_.size() - 1);
 }

@@ -42,7 +42,7 @@ class KernelScene final : public SceneView {
 
   // Building: materials and emitters first, then shapes in groups (group
   // kWorld is the world itself), then placements of groups, then Commit.
-  uint32_t AddMaterial(std::unique_ptr<SurfaceModel> material);
+  uint32_t AddMaterial(std::shared_ptr<const SurfaceModel> material);
   const Emitter* AddEmitter(std::unique_ptr<Emitter> emitter);
   uint32_t NewGroup();
   // Geometry in the group's own space.
@@ -154,7 +154,8 @@ class KernelScene final : public SceneView {
   Camera camera_;
   uint64_t service_handle_ = 0;
   uint32_t width_, height_;
-  std::vector<std::unique_ptr<SurfaceModel>> materials_;
+  // Shared: a material may wrap another (normalmap).
+  std::vector<std::shared_ptr<const SurfaceModel>> materials_;
   std::vector<std::unique_ptr<Emitter>> emitters_;
   std::vector<TriangleMesh> meshes_;
   // The cut-outs of meshes with an alpha texture, Embree's filter data.

@@ -165,8 +165,10 @@ class Builder {
     }
     for (const v1::Material& m : scene_.materials()) {
       const std::string what = "material '" + m.name() + "' (" + m.class_name() + ")";
-      materials_[m.name()] = kernel_->AddMaterial(
-          Create<SurfaceModel>(m.class_name(), m.properties(), m.address(), what));
+      // In order: a material may wrap one before it.
+      std::shared_ptr<const SurfaceModel> model = Create<SurfaceModel>(m.class_name(), m.properties(), m.address(), what);
+      resolved_.materials[m.name()] = model;
+      materials_[m.name()] = kernel_->AddMaterial(std::move(model));
     }
     for (int i = 0; i < scene_.lights_size(); ++i) {
       const v1::Light& light = scene_.lights(i);
