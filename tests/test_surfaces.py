@@ -94,6 +94,7 @@ TEXTURED = {
         f'<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="diffuse">'
         f"{bitmap('reflectance', NEAREST_CLAMPED)}</bsdf></shape>"
     ),
+    "normal map": normal_mapped("ridges.png"),
     "normal map, identity": normal_mapped("flat.png"),
     # The opacity is a bitmap: Mitsuba's checkerboard gives a float (eval_1)
     # with its two colours swapped.

@@ -3,11 +3,14 @@
 // The nested model scatters in a frame whose normal the map gives at each
 // point: n' = normalize(2·rgb − 1) in the shading frame (x along ∂p/∂u,
 // z the shading normal), tangent-space maps as Mitsuba's and pbrt-v4's
-// `normalmap` read them. Directions go to the nested model in that frame;
-// its cosine is the perturbed one, so f·|cos θo| is f'·|cos θ'o| and
-// a lobe's sampling weight is the nested model's own. A direction on the
-// other side of the perturbed surface than of the shading one scatters
-// nothing (as Mitsuba's normalmap), so no light leaks through.
+// `normalmap` read them. As Mitsuba's normalmap: a mapped normal that
+// faces away from wi is mirrored about the shading normal (its x and y
+// negated); directions go to the nested model in the perturbed frame,
+// whose cosine replaces the shading one (f·|cos θo| is f'·|cos θ'o|); a
+// wo on the other side of the perturbed surface than of the shading one
+// scatters nothing, so no light leaks through; and Conty Estevez et
+// al.'s shadowing function (Ray Tracing Gems, 2019) of the tilt softens
+// the shadow terminator the tilted normals would make.
 //
 // Parameters
 //   bsdf        material (a name of the scene's materials, defined before)
@@ -17,6 +20,7 @@
 //       model as it is.
 //
 // Lobes: the nested model's.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -39,7 +43,7 @@ class NormalMap final : public yarf::SurfaceModel {
   void Evaluate(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> wo,
                 std::span<const float> uv, std::span<float> value) const override {
     const size_t n = wi.size() / 3;
-    const std::vector<Frame> frames = Frames(uv, n);
+    const std::vector<Frame> frames = Frames(wi, uv, n);
     std::vector<float> local_wi(3 * n), local_wo(3 * n);
     for (size_t k = 0; k < n; ++k) {
       frames[k].ToLocal(Vec3::Load(&wi[3 * k])).Store(&local_wi[3 * k]);
@@ -48,8 +52,8 @@ class NormalMap final : public yarf::SurfaceModel {
     nested_->Evaluate(mode, local_wi, local_wo, uv, value);
     for (size_t k = 0; k < n; ++k) {
       const float cos = wo[3 * k + 2], perturbed = local_wo[3 * k + 2];
-      const float scale = Agree(wi[3 * k + 2], local_wi[3 * k + 2], cos, perturbed) && cos != 0
-                              ? std::abs(perturbed / cos)
+      const float scale = Agree(cos, perturbed) && cos != 0
+                              ? std::abs(perturbed / cos) * Shadowing(frames[k].n, cos)
                               : 0.0f;
       for (int c = 0; c < 3; ++c) value[3 * k + c] *= scale;
     }
@@ -59,7 +63,7 @@ class NormalMap final : public yarf::SurfaceModel {
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo, std::span<float> weight,
               std::span<float> pdf, std::span<uint32_t> flags) const override {
     const size_t n = wi.size() / 3;
-    const std::vector<Frame> frames = Frames(uv, n);
+    const std::vector<Frame> frames = Frames(wi, uv, n);
     std::vector<float> local_wi(3 * n);
     for (size_t k = 0; k < n; ++k) frames[k].ToLocal(Vec3::Load(&wi[3 * k])).Store(&local_wi[3 * k]);
     std::vector<float> local_wo(3 * n);
@@ -67,7 +71,9 @@ class NormalMap final : public yarf::SurfaceModel {
     for (size_t k = 0; k < n; ++k) {
       const Vec3 out = frames[k].ToWorld(Vec3::Load(&local_wo[3 * k]));
       out.Store(&wo[3 * k]);
-      if (!Agree(wi[3 * k + 2], local_wi[3 * k + 2], out.z, local_wo[3 * k + 2])) {
+      const float shadowing = Shadowing(frames[k].n, out.z);
+      for (int c = 0; c < 3; ++c) weight[3 * k + c] *= shadowing;
+      if (!Agree(out.z, local_wo[3 * k + 2])) {
         Vec3().Store(&wo[3 * k]);
         Vec3().Store(&weight[3 * k]);
         pdf[k] = 0;
@@ -79,7 +85,7 @@ class NormalMap final : public yarf::SurfaceModel {
   void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
            std::span<float> pdf) const override {
     const size_t n = wi.size() / 3;
-    const std::vector<Frame> frames = Frames(uv, n);
+    const std::vector<Frame> frames = Frames(wi, uv, n);
     std::vector<float> local_wi(3 * n), local_wo(3 * n);
     for (size_t k = 0; k < n; ++k) {
       frames[k].ToLocal(Vec3::Load(&wi[3 * k])).Store(&local_wi[3 * k]);
@@ -87,7 +93,7 @@ class NormalMap final : public yarf::SurfaceModel {
     }
     nested_->Pdf(local_wi, local_wo, uv, pdf);
     for (size_t k = 0; k < n; ++k)
-      if (!Agree(wi[3 * k + 2], local_wi[3 * k + 2], wo[3 * k + 2], local_wo[3 * k + 2])) pdf[k] = 0;
+      if (!Agree(wo[3 * k + 2], local_wo[3 * k + 2])) pdf[k] = 0;
   }
 
   uint32_t Lobes() const override { return nested_->Lobes(); }
@@ -101,28 +107,37 @@ class NormalMap final : public yarf::SurfaceModel {
   }
 
   // Each point's perturbed frame, in the shading frame's coordinates: z
-  // the mapped normal, x the shading frame's x made perpendicular to it.
-  std::vector<Frame> Frames(std::span<const float> uv, size_t n) const {
+  // the mapped normal (mirrored to face wi), x the shading frame's x made
+  // perpendicular to it.
+  std::vector<Frame> Frames(std::span<const float> wi, std::span<const float> uv, size_t n) const {
     const yarf::PointValues<Vec3> rgb = normals_.At(uv.first(2 * n));
     std::vector<Frame> frames(n, Frame(Vec3(0, 0, 1)));
     for (size_t k = 0; k < n; ++k) {
-      const Vec3 m = rgb[k] * 2.0f - Vec3(1, 1, 1);
+      Vec3 m = rgb[k] * 2.0f - Vec3(1, 1, 1);
       const float length = yarf::Length(m);
-      // A map texel below the surface or of no length leaves the frame be.
-      if (!(length > 1e-6f) || !(m.z > 0)) continue;
+      if (!(length > 1e-6f)) continue;  // a map texel of no length leaves the frame be
+      const Vec3 in = Vec3::Load(&wi[3 * k]);
+      if (in.z * yarf::Dot(in, m) <= 0) m = Vec3(-m.x, -m.y, m.z);
       Frame& f = frames[k];
       f.n = m / length;
-      const Vec3 s = Vec3(1, 0, 0) - f.n * f.n.x;
-      f.s = yarf::Normalize(s);
+      f.s = yarf::Normalize(Vec3(1, 0, 0) - f.n * f.n.x);
       f.t = yarf::Cross(f.n, f.s);
     }
     return frames;
   }
 
-  // Whether wi and wo lie on the same sides of the perturbed surface as of
-  // the shading one (their z in each frame).
-  static bool Agree(float wi_z, float wi_perturbed_z, float wo_z, float wo_perturbed_z) {
-    return (wi_z > 0) == (wi_perturbed_z > 0) && (wo_z > 0) == (wo_perturbed_z > 0);
+  // Whether wo lies on the same side of the perturbed surface as of the
+  // shading one (its z in each frame).
+  static bool Agree(float wo_z, float wo_perturbed_z) { return wo_z * wo_perturbed_z > 0; }
+
+  // Conty Estevez et al.'s shadowing of a normal tilted to `n` (shading
+  // frame) toward a direction of cosine `cos_o`: 1 for an untilted one.
+  static float Shadowing(Vec3 n, float cos_o) {
+    const float cos_d = std::min(std::abs(n.z), 1.0f);
+    if (!(cos_d > 0)) return 0;
+    const float alpha2 = std::clamp(0.125f * (1 - cos_d * cos_d) / (cos_d * cos_d), 0.0f, 1.0f);
+    const float cos2_o = std::max(cos_o * cos_o, 1e-12f);
+    return 2 / (1 + std::sqrt(1 + alpha2 * (1 - cos2_o) / cos2_o));
   }
 
   std::shared_ptr<const yarf::SurfaceModel> nested_;
