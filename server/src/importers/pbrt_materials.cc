@@ -35,11 +35,21 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   const RecursionGuard guard(nesting_, where);
   const std::string what = "material '" + type + "'";
   params.Accept({"type"});
-  for (const char* key : {"displacement", "normalmap"})
-    if (params.Has(key)) {
-      params.Find(key);
-      Warn(params.WhereIs(key, where), std::string("material:") + key, std::string(key) + " is not supported: ignored");
-    }
+  if (params.Has("displacement")) {
+    params.Find("displacement");
+    Warn(params.WhereIs("displacement", where), "material:displacement", "displacement is not supported: ignored");
+  }
+  // A normal map: the material made below, seen through it (normalmap).
+  std::string normal_map;
+  if (params.Has("normalmap")) {
+    const auto file = folder_.Resolve(params.String("normalmap", ""), origin_.file, params.WhereIs("normalmap", where));
+    v1::Properties image;
+    SetString(image, "filename", folder_.Relative(file));
+    SetString(image, "encoding", "linear");
+    // pbrt's images have v = 0 at their bottom row, yarf's at the top.
+    SetTransform(image, "to_uv", Matrix4({1, 0, 0, 0, 0, -1, 0, 1, 0, 0, 1, 0, 0, 0, 0, 1}));
+    normal_map = assembly_.AddTexture("normalmap", Spec("bitmap", std::move(image)));
+  }
   v1::Properties props;
   // A reflectance: a texture (clamped into [0, 1] by the model; `scale`
   // only for constants), or a constant clamped here.
@@ -189,6 +199,12 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   if (name.empty()) {
     const auto it = material_cache_.find(key);
     if (it != material_cache_.end()) return it->second;
+  }
+  if (!normal_map.empty()) {
+    v1::Properties wrapper;
+    SetReference(wrapper, "bsdf", assembly_.AddMaterial((name.empty() ? type : name) + "-nested", class_name, std::move(props)));
+    SetReference(wrapper, "normalmap", normal_map);
+    return assembly_.AddMaterial(name.empty() ? type : name, "normalmap", std::move(wrapper));
   }
   const std::string made = assembly_.AddMaterial(name.empty() ? type : name, class_name, std::move(props));
   if (name.empty()) material_cache_[key] = made;

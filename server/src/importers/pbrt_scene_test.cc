@@ -272,5 +272,33 @@ TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {
     EXPECT_NE(ImportErrorOf(file).find(message), std::string::npos) << file << ": " << ImportErrorOf(file);
 }
 
+TEST(PbrtImport, NormalMapsCutOutsCylindersAndMeshAttributes) {
+  const ImportResult result = Import("pbrt_surfaces.pbrt");
+  const v1::Scene& scene = result.scene;
+  ASSERT_EQ(scene.shapes_size(), 2);
+  // The normal-mapped diffuse: a normalmap wrapper of the diffuse, its
+  // map a linear bitmap with v flipped.
+  const v1::Material& wrapped = MaterialOf(scene, scene.shapes(0));
+  EXPECT_EQ(wrapped.class_name(), "normalmap");
+  const std::string nested = wrapped.properties().values().at("bsdf").reference();
+  EXPECT_EQ(MaterialNamed(scene, nested).class_name(), "lambertian");
+  const std::string map = wrapped.properties().values().at("normalmap").reference();
+  const v1::SceneTexture* image = nullptr;
+  for (const v1::SceneTexture& t : scene.textures())
+    if (t.name() == map) image = &t;
+  ASSERT_NE(image, nullptr);
+  EXPECT_EQ(image->texture().class_name(), "bitmap");
+  EXPECT_EQ(StringProperty(image->texture().properties(), "encoding"), "linear");
+  // The half cylinder: 64 quads with smooth normals, and a constant cut-out.
+  const v1::SceneShape& cylinder = scene.shapes(0);
+  EXPECT_EQ(cylinder.mesh().indices_size(), 6 * 64);
+  EXPECT_FALSE(cylinder.alpha().empty());
+  // The triangle keeps its normals and uv.
+  const v1::Mesh& triangle = scene.shapes(1).mesh();
+  EXPECT_EQ(triangle.normals_size(), 9);
+  EXPECT_EQ(triangle.uvs_size(), 6);
+  EXPECT_FLOAT_EQ(triangle.uvs(5), 1.0f);
+}
+
 }  // namespace
 }  // namespace yarf::importers
