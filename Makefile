@@ -104,6 +104,7 @@ bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
 	$(PY) bench/cornell_box.py
 	$(BUILD)/bin/integrator_throughput
+	$(BUILD)/bin/texture_lookups
 	$(PY) bench/integrators.py
 	$(PY) bench/render_integrators.py
 	$(PY) bench/light_transport.py
