@@ -44,11 +44,7 @@ class NormalMap final : public yarf::SurfaceModel {
                 std::span<const float> uv, std::span<float> value) const override {
     const size_t n = wi.size() / 3;
     const std::vector<Frame> frames = Frames(wi, uv, n);
-    std::vector<float> local_wi(3 * n), local_wo(3 * n);
-    for (size_t k = 0; k < n; ++k) {
-      frames[k].ToLocal(Vec3::Load(&wi[3 * k])).Store(&local_wi[3 * k]);
-      frames[k].ToLocal(Vec3::Load(&wo[3 * k])).Store(&local_wo[3 * k]);
-    }
+    const std::vector<float> local_wi = InFrames(frames, wi), local_wo = InFrames(frames, wo);
     nested_->Evaluate(mode, local_wi, local_wo, uv, value);
     for (size_t k = 0; k < n; ++k) {
       const float cos = wo[3 * k + 2], perturbed = local_wo[3 * k + 2];
@@ -64,8 +60,7 @@ class NormalMap final : public yarf::SurfaceModel {
               std::span<float> pdf, std::span<uint32_t> flags) const override {
     const size_t n = wi.size() / 3;
     const std::vector<Frame> frames = Frames(wi, uv, n);
-    std::vector<float> local_wi(3 * n);
-    for (size_t k = 0; k < n; ++k) frames[k].ToLocal(Vec3::Load(&wi[3 * k])).Store(&local_wi[3 * k]);
+    const std::vector<float> local_wi = InFrames(frames, wi);
     std::vector<float> local_wo(3 * n);
     nested_->Sample(mode, local_wi, uv, uniform, allowed, local_wo, weight, pdf, flags);
     for (size_t k = 0; k < n; ++k) {
@@ -86,11 +81,7 @@ class NormalMap final : public yarf::SurfaceModel {
            std::span<float> pdf) const override {
     const size_t n = wi.size() / 3;
     const std::vector<Frame> frames = Frames(wi, uv, n);
-    std::vector<float> local_wi(3 * n), local_wo(3 * n);
-    for (size_t k = 0; k < n; ++k) {
-      frames[k].ToLocal(Vec3::Load(&wi[3 * k])).Store(&local_wi[3 * k]);
-      frames[k].ToLocal(Vec3::Load(&wo[3 * k])).Store(&local_wo[3 * k]);
-    }
+    const std::vector<float> local_wi = InFrames(frames, wi), local_wo = InFrames(frames, wo);
     nested_->Pdf(local_wi, local_wo, uv, pdf);
     for (size_t k = 0; k < n; ++k)
       if (!Agree(wo[3 * k + 2], local_wo[3 * k + 2])) pdf[k] = 0;
@@ -124,6 +115,13 @@ class NormalMap final : public yarf::SurfaceModel {
       f.t = yarf::Cross(f.n, f.s);
     }
     return frames;
+  }
+
+  // Directions [N,3] of the shading frames in each point's perturbed one.
+  static std::vector<float> InFrames(const std::vector<Frame>& frames, std::span<const float> w) {
+    std::vector<float> local(3 * frames.size());
+    for (size_t k = 0; k < frames.size(); ++k) frames[k].ToLocal(Vec3::Load(&w[3 * k])).Store(&local[3 * k]);
+    return local;
   }
 
   // Whether wo lies on the same side of the perturbed surface as of the
