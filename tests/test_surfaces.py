@@ -28,7 +28,7 @@ NEAREST_CLAMPED = (
     '<string name="filter_type" value="nearest"/><string name="wrap_mode" value="clamp"/>'
     '<transform name="to_uv"><scale x="1.5" y="1.5"/></transform>'
 )
-LOW_POLY = uv_sphere_obj(segments=24, rings=12)
+LOW_POLY = uv_sphere_obj(segments=12, rings=6)
 GREY = '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.8, 0.8"/></bsdf>'
 
 
@@ -167,8 +167,15 @@ def test_texture_matches_mitsuba(client: Client, tmp_path: Path, name: str) -> N
 def test_transports_agree_with_shading_normals(
     client: Client, tmp_path: Path, transport: str
 ) -> None:
-    shape, files = SHAPES["smooth low-poly sphere"]
-    scene = load_scene(write_scene(tmp_path, shape, files))
+    """On the smooth low-poly sphere, textured: shading normals and textures alike
+    for radiance and importance."""
+    png(tmp_path / "tex.png")
+    textured = (
+        '<shape type="obj"><string name="filename" value="sphere.obj"/>'
+        f'<bsdf type="diffuse">{bitmap("reflectance")}</bsdf></shape>'
+    )
+    scene = load_scene(write_scene(tmp_path, textured, {"sphere.obj": LOW_POLY}))
+    upload_scene_assets(client, scene, tmp_path)
 
     def render(name: str, spp: int, seed: int) -> RenderResult:
         method = component(name, max_depth=4)

@@ -175,7 +175,7 @@ class Bdpt final : public Transport {
         v = Vertex{};
         v.p = rays[k].origin + rays[k].direction * hits[k].t;
         v.n = hits[k].normal;
-        v.frame = ShadingFrame(hits[k], -rays[k].direction);
+        v.frame = ShadingFrame(hits[k]);
         v.wi = -rays[k].direction;
         v.beta = walkers[i].beta;
         v.pdf_fwd = prev.ToArea(walkers[i].pdf_dir, v);

@@ -30,7 +30,7 @@ struct ShadingPoint {
 };
 
 inline ShadingPoint ShadingPointOf(const Hit& hit, const Ray& ray) {
-  const Frame frame = ShadingFrame(hit, -ray.direction);
+  const Frame frame = ShadingFrame(hit);
   return {ray.origin + ray.direction * hit.t, hit.normal, frame, frame.ToLocal(-ray.direction), hit.u, hit.v};
 }
 

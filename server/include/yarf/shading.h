@@ -1,8 +1,8 @@
 // The frame surface models see at a hit, and the rules that keep
-// interpolated (shading) normals from leaking light or darkening grazing
-// views: Veach 1997 §5.3 for importance transport, and a bend of the
-// shading normal toward the geometric one where a view would reflect
-// below the surface (as Cycles' valid-reflection rule does).
+// interpolated (shading) normals from leaking light through a surface:
+// scatterings the geometric and the shading normal disagree on carry
+// nothing, and importance transport takes Veach's correction (Veach 1997,
+// §5.3), as pbrt-v3 and Mitsuba do.
 #pragma once
 
 #include <algorithm>
@@ -16,48 +16,14 @@ namespace yarf {
 // normal is its geometric one).
 inline bool SameVector(Vec3 a, Vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 
-// ns bent toward ng (both unit, on wi's side) until the mirror reflection
-// of wi lies above the surface by the margin ShadingNormalSeenFrom names.
-inline Vec3 BentShadingNormal(Vec3 ng, Vec3 ns, Vec3 wi) {
-  const float iz = Dot(wi, ng);
-  const float threshold = std::min(0.9f * iz, 0.01f);
-  if (2 * Dot(ns, wi) * Dot(ns, ng) - iz >= threshold) return ns;
-  // In the plane of ng and the part of ns across it, ns = sin θ·x + cos θ·ng
-  // reflects wi to height ix·sin 2θ + iz·cos 2θ = A·cos(2θ − φ). It is above
-  // the threshold at θ = 0 (ng itself) and below at ns's own θ; the normal
-  // used is where it crosses the threshold between them.
-  const Vec3 across = ns - ng * Dot(ns, ng);
-  const float across_length = Length(across);
-  if (!(across_length > 1e-6f)) return ng;
-  const Vec3 x = across / across_length;
-  const float ix = Dot(wi, x);
-  const float a = std::sqrt(ix * ix + iz * iz), phi = std::atan2(ix, iz);
-  const float theta_ns = std::atan2(across_length, Dot(ns, ng));
-  const float spread = std::acos(std::clamp(threshold / a, -1.0f, 1.0f));
-  float theta = 0;
-  for (const float root : {0.5f * (phi + spread), 0.5f * (phi - spread)})
-    if (root > theta && root < theta_ns) theta = root;
-  return Normalize(x * std::sin(theta) + ng * std::cos(theta));
-}
-
-// The shading normal a path arriving from direction `wi` (unit, away from
-// the surface toward where the path came from) sees at `hit`: its
-// shading normal, bent toward the geometric normal just enough that the
-// mirror reflection of wi leaves the surface on wi's side
-// (Dot(reflection, ng) at least min(0.9·Dot(wi, ng), 0.01) there). It
-// stays on the outward side, as hit.normal, so that models which tell
-// inside from outside (dielectrics) still can.
-inline Vec3 ShadingNormalSeenFrom(const Hit& hit, Vec3 wi) {
-  if (SameVector(hit.shading_normal, hit.normal)) return hit.normal;  // flat: nothing to bend
-  const float side = Dot(wi, hit.normal) >= 0 ? 1.0f : -1.0f;
-  return BentShadingNormal(hit.normal * side, hit.shading_normal * side, wi) * side;
-}
-
-// The local frame of the surface models at `hit` for a path arriving
-// from `wi`: z the shading normal seen from wi, x along ∂p/∂u where it is
-// not parallel to it (so anisotropic models follow the parameterisation).
-inline Frame ShadingFrame(const Hit& hit, Vec3 wi) {
-  const Vec3 n = ShadingNormalSeenFrom(hit, wi);
+// The local frame of the surface models at `hit`: z its shading normal,
+// x along ∂p/∂u where it is not parallel to it (so anisotropic models
+// follow the parameterisation). It depends on the point alone, not on the
+// direction a path arrives from, so that paths from the camera and from
+// the lights see one and the same BSDF (a view-dependent bend of the
+// normal would make them estimate different integrals).
+inline Frame ShadingFrame(const Hit& hit) {
+  const Vec3 n = hit.shading_normal;
   const Vec3 s = hit.dpdu - n * Dot(n, hit.dpdu);
   const float length = Length(s);
   if (!(length > 1e-12f) || !std::isfinite(length)) return Frame(n);
