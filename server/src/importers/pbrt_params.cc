@@ -78,6 +78,7 @@ PbrtParams PbrtParams::Parse(PbrtTokenizer& tokens) {
 }
 
 const PbrtParam* PbrtParams::Find(const std::string& name) {
+  asked_.insert(name);
   for (PbrtParam& p : params_)
     if (p.name == name) {
       p.used = true;
@@ -87,6 +88,7 @@ const PbrtParam* PbrtParams::Find(const std::string& name) {
 }
 
 bool PbrtParams::Has(const std::string& name) const {
+  asked_.insert(name);
   for (const PbrtParam& p : params_)
     if (p.name == name) return true;
   return false;
@@ -146,8 +148,11 @@ void PbrtParams::Accept(std::initializer_list<const char*> names) {
 }
 
 void PbrtParams::WarnUnused(Diagnostics& diagnostics, const std::string& what) const {
+  const std::vector<std::string> asked(asked_.begin(), asked_.end());
   for (const PbrtParam& p : params_)
-    if (!p.used) diagnostics.Warn(p.where, what + ":" + p.name, what + ": parameter '" + p.name + "' ignored");
+    if (!p.used)
+      diagnostics.Warn(p.where, what + ":" + p.name,
+                       what + ": parameter '" + p.name + "' ignored" + DidYouMean(p.name, asked));
 }
 
 }  // namespace yarf::importers

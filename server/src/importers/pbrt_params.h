@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,8 @@ class PbrtParams {
   const PbrtParam& Typed(const std::string& name, std::initializer_list<const char*> types);
 
   std::vector<PbrtParam> params_;
+  // Names the importer looked for, so a misspelt one can be told the nearest.
+  mutable std::set<std::string> asked_;
 };
 
 }  // namespace yarf::importers

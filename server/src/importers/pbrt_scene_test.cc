@@ -298,6 +298,8 @@ TEST(PbrtImport, NormalMapsCutOutsCylindersAndMeshAttributes) {
   EXPECT_EQ(triangle.normals_size(), 9);
   EXPECT_EQ(triangle.uvs_size(), 6);
   EXPECT_FLOAT_EQ(triangle.uvs(5), 1.0f);
+  // A misspelt parameter is told the nearest one pbrt's material has.
+  EXPECT_TRUE(Warns(result, "parameter 'reflectanse' ignored (did you mean 'reflectance'?)"));
 }
 
 }  // namespace
