@@ -146,6 +146,19 @@ def assert_matches_mitsuba(client: Client, scene: scene_pb2.Scene, path: Path, n
     )
 
 
+def assert_agrees(result: RenderResult, reference: RenderResult, label: str) -> None:
+    """Two yarf renders agree within their noise: means of 4×4 blocks, block z-test."""
+    test = block_z_test(
+        result.pixels,
+        result.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"{label}:\n{test.report()}"
+
+
 @pytest.mark.parametrize("name", list(SHAPES))
 def test_shape_matches_mitsuba(client: Client, tmp_path: Path, name: str) -> None:
     shape, files = SHAPES[name]
@@ -187,15 +200,7 @@ def test_transports_agree_with_shading_normals(
 
     reference = render("path", 1024, 1)
     other = render(transport, 512, 2)
-    test = block_z_test(
-        other.pixels,
-        other.variance,
-        reference.pixels,
-        reference.variance,
-        block=4,
-        family_alpha=1e-3,
-    )
-    assert not test.failing.size, f"{transport} vs path, smooth shading:\n{test.report()}"
+    assert_agrees(other, reference, f"{transport} vs path, smooth shading")
 
 
 def test_python_texture_renders_as_the_cpp_one(client: Client, tmp_path: Path) -> None:
@@ -210,13 +215,5 @@ def test_python_texture_renders_as_the_cpp_one(client: Client, tmp_path: Path) -
         texture.texture.class_name = "py_checkerboard"
         texture.texture.address = process.address
         remote = client.render(scene, spp=256, seed=2, sampler=INDEPENDENT, timeout=600)
-    test = block_z_test(
-        remote.pixels,
-        remote.variance,
-        reference.pixels,
-        reference.variance,
-        block=4,
-        family_alpha=1e-3,
-    )
-    assert not test.failing.size, f"py_checkerboard vs checkerboard:\n{test.report()}"
+    assert_agrees(remote, reference, "py_checkerboard vs checkerboard")
     assert abs(remote.pixels.mean() - reference.pixels.mean()) < 0.02 * reference.pixels.mean()

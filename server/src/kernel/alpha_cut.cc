@@ -2,6 +2,7 @@
 
 #include <bit>
 
+#include "kernel/mesh_io.h"
 #include "yarf/hash.h"
 
 namespace yarf {
@@ -16,12 +17,8 @@ void AlphaCut::Attach(RTCGeometry geometry) const {
 }
 
 float AlphaCut::Opacity(uint32_t primitive, float b1, float b2) const {
-  float uv[2] = {b1, b2};
-  if (!uvs_.empty()) {
-    const uint32_t* v = &indices_[3 * size_t(primitive)];
-    const float b0 = 1 - b1 - b2;
-    for (int c = 0; c < 2; ++c) uv[c] = b0 * uvs_[2 * v[0] + c] + b1 * uvs_[2 * v[1] + c] + b2 * uvs_[2 * v[2] + c];
-  }
+  float uv[2];
+  TriangleUvAt(indices_, uvs_, primitive, b1, b2, uv);
   return alpha_.FloatsAt(std::span<const float>(uv, 2))[0];
 }
 

@@ -34,6 +34,20 @@ struct TriangleMesh {
   size_t TriangleCount() const { return indices.size() / 3; }
 };
 
+// The uv at barycentrics (b1, b2) of triangle `primitive` of a mesh with
+// these indices and per-vertex `uvs`; (b1, b2) itself when it has none
+// (the barycentric parameterisation).
+inline void TriangleUvAt(const std::vector<uint32_t>& indices, const std::vector<float>& uvs, uint32_t primitive,
+                         float b1, float b2, float uv[2]) {
+  if (uvs.empty()) {
+    uv[0] = b1, uv[1] = b2;
+    return;
+  }
+  const uint32_t* v = &indices[3 * size_t(primitive)];
+  const float b0 = 1 - b1 - b2;
+  for (int c = 0; c < 2; ++c) uv[c] = b0 * uvs[2 * v[0] + c] + b1 * uvs[2 * v[1] + c] + b2 * uvs[2 * v[2] + c];
+}
+
 // How mesh files are read.
 struct MeshOptions {
   // OBJ: v becomes 1 − v (Mitsuba's flip_tex_coords).

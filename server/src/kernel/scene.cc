@@ -377,18 +377,6 @@ void KernelScene::SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hi
   hit.dpdv = along_theta * (kPi * r);
 }
 
-void KernelScene::TriangleUv(const ShapeRecord& shape, uint32_t primitive, float b1, float b2, float uv[2]) const {
-  const TriangleMesh& mesh = meshes_[shape.mesh];
-  if (mesh.uvs.empty()) {
-    uv[0] = b1, uv[1] = b2;
-    return;
-  }
-  const uint32_t* v = &mesh.indices[3 * primitive];
-  const float b0 = 1 - b1 - b2;
-  for (int c = 0; c < 2; ++c)
-    uv[c] = b0 * mesh.uvs[2 * v[0] + c] + b1 * mesh.uvs[2 * v[1] + c] + b2 * mesh.uvs[2 * v[2] + c];
-}
-
 void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const {
   hit.shading_normal = hit.normal;
   if (shape.kind == Kind::kSphere) {
@@ -596,7 +584,8 @@ LightSample KernelScene::SampleLight(float u_choice, float u0, float u1) const {
   const auto b = SampleUniformTriangle(u0, u1);
   s.position = e.p0 * b[0] + e.p1 * b[1] + e.p2 * (1 - b[0] - b[1]);
   float uv[2];
-  TriangleUv(shapes_[e.shape], e.primitive, b[1], 1 - b[0] - b[1], uv);
+  const TriangleMesh& mesh = meshes_[shapes_[e.shape].mesh];
+  TriangleUvAt(mesh.indices, mesh.uvs, e.primitive, b[1], 1 - b[0] - b[1], uv);
   s.u = uv[0], s.v = uv[1];
   s.normal = e.normal;
   return s;

@@ -143,8 +143,6 @@ class KernelScene final : public SceneView {
   // A sphere's uv and ∂p/∂u, ∂p/∂v at unit direction d from its centre
   // (world), radius r.
   static void SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hit& hit);
-  // Texture coordinates at barycentrics (b1, b2) of a triangle.
-  void TriangleUv(const ShapeRecord& shape, uint32_t primitive, float b1, float b2, float uv[2]) const;
   // Lights that need the scene's extent, added to the committed world.
   void AddInfiniteLights();
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
