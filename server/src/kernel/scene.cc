@@ -347,11 +347,16 @@ float KernelScene::PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) c
   return 0.5f * Length(Cross(v[1] - v[0], v[2] - v[0]));
 }
 
-Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position,
-                         float time) const {
+Transform KernelScene::PlacementAt(const ShapeRecord& shape, float time) {
   Transform to_world = shape.to_world;
   if (shape.moving)
     for (int i = 0; i < 16; ++i) to_world.m[i] += time * (shape.to_world_end.m[i] - to_world.m[i]);
+  return to_world;
+}
+
+Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position,
+                         float time) const {
+  const Transform to_world = PlacementAt(shape, time);
   if (shape.kind == Kind::kTriangles) {
     const Vec3 n = face_normals_[shape.mesh][primitive];  // flipped already
     return shape.placed ? Normalize(to_world.Normal(n)) : n;
@@ -394,9 +399,7 @@ void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit
     return;
   }
   const uint32_t* v = &mesh.indices[3 * hit.primitive];
-  Transform to_world = shape.to_world;
-  if (shape.moving)
-    for (int i = 0; i < 16; ++i) to_world.m[i] += time * (shape.to_world_end.m[i] - to_world.m[i]);
+  const Transform to_world = PlacementAt(shape, time);
   Vec3 p[3];
   for (int k = 0; k < 3; ++k) p[k] = shape.placed ? to_world.Point(mesh.positions[v[k]]) : mesh.positions[v[k]];
   // uv of the corners: the mesh's, else the barycentric parameterisation.

@@ -136,6 +136,8 @@ class KernelScene final : public SceneView {
     std::vector<ShapeRecord> shapes;
   };
 
+  // A placed shape's to_world at shutter time `time` (moving ones interpolated).
+  static Transform PlacementAt(const ShapeRecord& shape, float time);
   Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position, float time) const;
   // Fills hit's uv, shading normal and ∂p/∂u, ∂p/∂v (its shape, primitive,
   // barycentrics and geometric normal set) at `position`.
