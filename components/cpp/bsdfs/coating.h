@@ -55,9 +55,9 @@ struct Point {
 // when neither varies.
 class Points {
  public:
-  Points(const TexturedValue& diffuse, const TexturedValue& specular, std::span<const float> uv, double internal,
+  Points(const TexturedValue& diffuse, const TexturedValue& specular, const yarf::SurfacePoints& at, double internal,
          bool nonlinear, float eta)
-      : diffuse_(diffuse.At(uv)), specular_(specular.At(uv)), internal_(internal), nonlinear_(nonlinear), eta_(eta) {
+      : diffuse_(diffuse.At(at)), specular_(specular.At(at)), internal_(internal), nonlinear_(nonlinear), eta_(eta) {
     if (diffuse_.IsUniform() && specular_.IsUniform()) uniform_ = At(0);
   }
 

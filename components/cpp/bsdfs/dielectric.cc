@@ -42,7 +42,7 @@ class Dielectric final : public yarf::DeltaSurfaceModel {
   explicit Dielectric(const yarf::Properties& props)
       : eta_(yarf::ReadRelativeIndex(props, 1.5046, 1.000277)) {}
 
-  void Sample(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode mode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {

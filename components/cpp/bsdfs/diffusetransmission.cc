@@ -54,8 +54,8 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    const Colours colours(*this, uv);
+                const yarf::SurfacePoints& at, std::span<float> value) const override {
+    const Colours colours(*this, at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       const Local lobes = colours[k];
       const float product = in.z * out.z;
@@ -64,14 +64,14 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
     });
   }
 
-  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
     const bool can_transmit = yarf::LobeAllowed(kTransmitLobe, allowed);
-    const Colours colours(*this, uv);
+    const Colours colours(*this, at);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Local lobes = colours[k];
@@ -98,9 +98,9 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    const Colours colours(*this, uv);
+    const Colours colours(*this, at);
     yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       const Local lobes = colours[k];
       const float total = lobes.reflect_weight + lobes.transmit_weight;
@@ -127,9 +127,9 @@ class DiffuseTransmission final : public yarf::SurfaceModel {
   // The colours at a call's points.
   class Colours {
    public:
-    Colours(const DiffuseTransmission& model, std::span<const float> uv)
-        : reflectance_(model.reflectance_.At(uv)),
-          transmittance_(model.transmittance_.At(uv)) {
+    Colours(const DiffuseTransmission& model, const yarf::SurfacePoints& at)
+        : reflectance_(model.reflectance_.At(at)),
+          transmittance_(model.transmittance_.At(at)) {
       if (reflectance_.IsUniform() && transmittance_.IsUniform()) uniform_ = At(0);
     }
 

@@ -35,21 +35,21 @@ class Lambertian final : public yarf::SurfaceModel {
                                                 /*unit=*/true)) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    const auto reflectance = reflectance_.At(uv);
+                const yarf::SurfacePoints& at, std::span<float> value) const override {
+    const auto reflectance = reflectance_.At(at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       return in.z * out.z > 0 ? reflectance[k] * yarf::kInvPi : Vec3();
     });
   }
 
-  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
-    const auto reflectance = reflectance_.At(uv);
+    const auto reflectance = reflectance_.At(at);
     for (size_t k = 0; k < count; ++k) {
       const float wi_z = wi[3 * k + 2];
       Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);
@@ -65,7 +65,7 @@ class Lambertian final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
     yarf::PdfEach(wi, wo, pdf, [](size_t, Vec3 in, Vec3 out) {
       return in.z * out.z > 0 ? yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;

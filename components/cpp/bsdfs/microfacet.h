@@ -67,8 +67,8 @@ struct TexturedRoughness {
   TexturedValue alpha_x, alpha_y;
 
   // At the [N,2] uv of a surface call.
-  PointRoughness At(std::span<const float> uv) const {
-    return {alpha_x.FloatsAt(uv), alpha_y.FloatsAt(uv)};
+  PointRoughness At(const yarf::SurfacePoints& at) const {
+    return {alpha_x.FloatsAt(at), alpha_y.FloatsAt(at)};
   }
 };
 

@@ -33,14 +33,14 @@ class Mirror final : public yarf::DeltaSurfaceModel {
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(1.0f, 1.0f, 1.0f),
                                                 /*unit=*/true)) {}
 
-  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
-    const auto reflectance = reflectance_.At(uv);
+    const auto reflectance = reflectance_.At(at);
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       if (!can_reflect || in.z == 0) {

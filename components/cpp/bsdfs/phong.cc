@@ -69,21 +69,21 @@ class Phong final : public yarf::SurfaceModel {
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    const Parameters parameters(*this, uv);
+                const yarf::SurfacePoints& at, std::span<float> value) const override {
+    const Parameters parameters(*this, at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       return parameters[k].Value(in, out, true, true);
     });
   }
 
-  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed);
     const bool can_glossy = yarf::LobeAllowed(kGlossyLobe, allowed);
-    const Parameters parameters(*this, uv);
+    const Parameters parameters(*this, at);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Local local = parameters[k];
@@ -117,9 +117,9 @@ class Phong final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    const Parameters parameters(*this, uv);
+    const Parameters parameters(*this, at);
     yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       const Local local = parameters[k];
       return local.Density(in, out, local.specular_probability);
@@ -162,10 +162,10 @@ class Phong final : public yarf::SurfaceModel {
   // The parameters at a call's points.
   class Parameters {
    public:
-    Parameters(const Phong& model, std::span<const float> uv)
-        : diffuse_(model.diffuse_.At(uv)),
-          specular_(model.specular_.At(uv)),
-          exponent_(model.exponent_.FloatsAt(uv)) {
+    Parameters(const Phong& model, const yarf::SurfacePoints& at)
+        : diffuse_(model.diffuse_.At(at)),
+          specular_(model.specular_.At(at)),
+          exponent_(model.exponent_.FloatsAt(at)) {
       if (diffuse_.IsUniform() && specular_.IsUniform() && exponent_.IsUniform()) uniform_ = At(0);
     }
 

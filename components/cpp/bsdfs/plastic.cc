@@ -67,21 +67,21 @@ class Plastic final : public yarf::SurfaceModel {
         nonlinear_(props.Bool("nonlinear", false)) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+                const yarf::SurfacePoints& at, std::span<float> value) const override {
+    const yarf::coating::Points coating(diffuse_, specular_, at, internal_reflectance_, nonlinear_, eta_);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       return Diffuse(coating[k], in, out);
     });
   }
 
-  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_specular = yarf::LobeAllowed(kSpecularLobe, allowed);
     const bool can_diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed);
-    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    const yarf::coating::Points coating(diffuse_, specular_, at, internal_reflectance_, nonlinear_, eta_);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const yarf::coating::Point local = coating[k];
@@ -113,9 +113,9 @@ class Plastic final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    const yarf::coating::Points coating(diffuse_, specular_, at, internal_reflectance_, nonlinear_, eta_);
     yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       const yarf::coating::Point local = coating[k];
       return local.lobes.has_diffuse && in.z > 0 && out.z > 0

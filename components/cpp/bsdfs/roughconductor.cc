@@ -57,22 +57,22 @@ class RoughConductor final : public yarf::SurfaceModel {
                                              /*unit=*/true)) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    const auto roughness = roughness_.At(uv);
-    const auto specular = specular_.At(uv);
+                const yarf::SurfacePoints& at, std::span<float> value) const override {
+    const auto roughness = roughness_.At(at);
+    const auto specular = specular_.At(at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       return Value(roughness[k], specular[k], in, out);
     });
   }
 
-  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
-    const auto roughnesses = roughness_.At(uv);
-    const auto specular = specular_.At(uv);
+    const auto roughnesses = roughness_.At(at);
+    const auto specular = specular_.At(at);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
@@ -96,9 +96,9 @@ class RoughConductor final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    const auto roughness = roughness_.At(uv);
+    const auto roughness = roughness_.At(at);
     yarf::PdfEach(wi, wo, pdf,
                   [&](size_t k, Vec3 in, Vec3 out) { return Density(roughness[k], in, out); });
   }

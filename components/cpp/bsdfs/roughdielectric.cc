@@ -75,8 +75,8 @@ class RoughDielectric final : public yarf::SurfaceModel {
         roughness_(mf::ReadTexturedRoughness(props, 0.1, /*anisotropic=*/true)) {}
 
   void Evaluate(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    const auto roughness = roughness_.At(uv);
+                const yarf::SurfacePoints& at, std::span<float> value) const override {
+    const auto roughness = roughness_.At(at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       Local local;
       const float f = At(roughness[k], in, out, &local) ? Value(local, mode) : 0.0f;
@@ -84,14 +84,14 @@ class RoughDielectric final : public yarf::SurfaceModel {
     });
   }
 
-  void Sample(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode mode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_reflect = yarf::LobeAllowed(kReflectLobe, allowed);
     const bool can_refract = yarf::LobeAllowed(kRefractLobe, allowed);
-    const auto roughnesses = roughness_.At(uv);
+    const auto roughnesses = roughness_.At(at);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const mf::Roughness roughness = roughnesses[k];
@@ -136,9 +136,9 @@ class RoughDielectric final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    const auto roughness = roughness_.At(uv);
+    const auto roughness = roughness_.At(at);
     yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       Local local;
       return At(roughness[k], in, out, &local)

@@ -82,21 +82,21 @@ class RoughPlastic final : public yarf::SurfaceModel {
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+                const yarf::SurfacePoints& at, std::span<float> value) const override {
+    const yarf::coating::Points coating(diffuse_, specular_, at, internal_reflectance_, nonlinear_, eta_);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       return Value(coating[k], in, out, true, true);
     });
   }
 
-  void Sample(yarf::TransportMode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
               std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t count = wi.size() / 3;
     const bool can_glossy = yarf::LobeAllowed(kGlossyLobe, allowed);
     const bool can_diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed);
-    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    const yarf::coating::Points coating(diffuse_, specular_, at, internal_reflectance_, nonlinear_, eta_);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const yarf::coating::Point local = coating[k];
@@ -124,9 +124,9 @@ class RoughPlastic final : public yarf::SurfaceModel {
     }
   }
 
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    const yarf::coating::Points coating(diffuse_, specular_, uv, internal_reflectance_, nonlinear_, eta_);
+    const yarf::coating::Points coating(diffuse_, specular_, at, internal_reflectance_, nonlinear_, eta_);
     yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       const yarf::coating::Point local = coating[k];
       const bool glossy = local.lobes.has_specular, diffuse = local.lobes.has_diffuse;

@@ -71,7 +71,7 @@ inline Vec3 EvaluateOne(const SurfaceModel& model, Vec3 wi, Vec3 wo,
   const float uv[2] = {0, 0};
   wi.Store(in);
   wo.Store(out);
-  model.Evaluate(mode, in, out, uv, value);
+  model.Evaluate(mode, in, out, SurfacePoints{.uv = uv}, value);
   return Vec3::Load(value);
 }
 
@@ -80,7 +80,7 @@ inline float PdfOne(const SurfaceModel& model, Vec3 wi, Vec3 wo) {
   const float uv[2] = {0, 0};
   wi.Store(in);
   wo.Store(out);
-  model.Pdf(in, out, uv, pdf);
+  model.Pdf(in, out, SurfacePoints{.uv = uv}, pdf);
   return pdf[0];
 }
 
@@ -93,7 +93,7 @@ inline std::vector<float> PdfBatch(const SurfaceModel& model, Vec3 wi,
     wi.Store(&in[3 * k]);
     wo[k].Store(&out[3 * k]);
   }
-  model.Pdf(in, out, uv, pdf);
+  model.Pdf(in, out, SurfacePoints{.uv = uv}, pdf);
   return pdf;
 }
 
@@ -105,7 +105,7 @@ inline std::vector<Vec3> EvaluateBatch(const SurfaceModel& model, Vec3 wi,
     wi.Store(&in[3 * k]);
     wo[k].Store(&out[3 * k]);
   }
-  model.Evaluate(mode, in, out, uv, value);
+  model.Evaluate(mode, in, out, SurfacePoints{.uv = uv}, value);
   std::vector<Vec3> result(count);
   for (size_t k = 0; k < count; ++k) result[k] = Vec3::Load(&value[3 * k]);
   return result;
@@ -131,7 +131,7 @@ inline std::vector<Scattered> SampleBatch(const SurfaceModel& model, const std::
     wi[k].Store(&in[3 * k]);
     std::copy(uniform[k].begin(), uniform[k].end(), &u[3 * k]);
   }
-  model.Sample(mode, in, uv, u, allowed, wo, weight, pdf, flags);
+  model.Sample(mode, in, SurfacePoints{.uv = uv}, u, allowed, wo, weight, pdf, flags);
   std::vector<Scattered> out(count);
   for (size_t k = 0; k < count; ++k)
     out[k] = {Vec3::Load(&wo[3 * k]), Vec3::Load(&weight[3 * k]), pdf[k], flags[k]};

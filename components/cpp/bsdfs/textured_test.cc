@@ -32,7 +32,7 @@ class FunctionTexture final : public Texture {
       : channels_(channels), function_(std::move(function)) {}
 
   uint32_t Channels() const override { return channels_; }
-  void Evaluate(const TexturePoints& at, std::span<float> value) const override {
+  void Evaluate(const SurfacePoints& at, std::span<float> value) const override {
     for (size_t k = 0; k < at.Count(); ++k) {
       const std::vector<float> v = function_(at.uv[2 * k], at.uv[2 * k + 1]);
       std::copy(v.begin(), v.end(), value.begin() + channels_ * k);
@@ -121,9 +121,9 @@ Results CallAll(const SurfaceModel& model, const Rows& rows, uint32_t allowed = 
   }
   Results r{std::vector<float>(3 * n), std::vector<float>(n), std::vector<float>(3 * n),
             std::vector<float>(3 * n), std::vector<float>(n), std::vector<uint32_t>(n)};
-  model.Evaluate(TransportMode::kRadiance, wi, wo, rows.uv, r.value);
-  model.Pdf(wi, wo, rows.uv, r.pdf);
-  model.Sample(TransportMode::kRadiance, wi, rows.uv, uniform, allowed, r.wo, r.weight,
+  model.Evaluate(TransportMode::kRadiance, wi, wo, SurfacePoints{.uv = rows.uv}, r.value);
+  model.Pdf(wi, wo, SurfacePoints{.uv = rows.uv}, r.pdf);
+  model.Sample(TransportMode::kRadiance, wi, SurfacePoints{.uv = rows.uv}, uniform, allowed, r.wo, r.weight,
                r.sample_pdf, r.flags);
   return r;
 }
@@ -240,7 +240,7 @@ TEST_F(TexturedParameterTest, RoughnessTextureChangesTheLobeBetweenCells) {
     wi.Store(&in[3 * k]);
     wo.Store(&out[3 * k]);
   }
-  model->Evaluate(TransportMode::kRadiance, in, out, uv, value);
+  model->Evaluate(TransportMode::kRadiance, in, out, SurfacePoints{.uv = uv}, value);
   // Near the mirror direction the smoother cell's lobe is far higher.
   EXPECT_GT(value[0], 10.0f * value[3]);
 }

@@ -29,10 +29,10 @@ class DiffuseArea final : public yarf::Emitter {
   explicit DiffuseArea(const yarf::Properties& props)
       : radiance_(yarf::RequiredTexturedIntensity(props, "radiance")) {}
 
-  void Radiance(std::span<const float> w, std::span<const float> uv,
+  void Radiance(std::span<const float> w, const yarf::SurfacePoints& at,
                 std::span<float> radiance) const override {
     const size_t count = w.size() / 3;
-    const auto emitted = radiance_.At(uv);
+    const auto emitted = radiance_.At(at);
     for (size_t k = 0; k < count; ++k)
       (w[3 * k + 2] > 0 ? emitted[k] : Vec3()).Store(&radiance[3 * k]);
   }

@@ -58,7 +58,7 @@ class EmitterTest : public testing::Test {
 Vec3 RadianceToward(const Emitter& emitter, Vec3 w) {
   float dir[3], uv[2] = {0, 0}, radiance[3];
   w.Store(dir);
-  emitter.Radiance(dir, uv, radiance);
+  emitter.Radiance(dir, SurfacePoints{.uv = uv}, radiance);
   return Vec3::Load(radiance);
 }
 
@@ -70,7 +70,7 @@ TEST_F(EmitterTest, DiffuseAreaEmitsFromTheFrontOnly) {
   const std::vector<float> w = {0, 0, 1, 0.6f, 0, 0.8f, 0, 0.6f, -0.8f, 1, 0, 0};
   const std::vector<float> uv(8, 0.0f);
   std::vector<float> radiance(12, -1.0f);
-  emitter->Radiance(w, uv, radiance);
+  emitter->Radiance(w, SurfacePoints{.uv = uv}, radiance);
   EXPECT_EQ(radiance, (std::vector<float>{1, 2, 3, 1, 2, 3, 0, 0, 0, 0, 0, 0}));
 }
 
@@ -156,7 +156,7 @@ TEST_F(EmitterTest, PropertiesAreChecked) {
 class UvRadiance final : public Texture {
  public:
   uint32_t Channels() const override { return 3; }
-  void Evaluate(const TexturePoints& at, std::span<float> value) const override {
+  void Evaluate(const SurfacePoints& at, std::span<float> value) const override {
     for (size_t k = 0; k < at.Count(); ++k) At(at.uv[2 * k], at.uv[2 * k + 1]).Store(&value[3 * k]);
   }
   std::vector<float> Mean() const override { return {1, 2, 2}; }
@@ -171,7 +171,7 @@ TEST_F(EmitterTest, AreaRadianceMayBeATextureLookedUpAtUv) {
   const float uv[8] = {0.5f, 0.25f, 0.9f, 0.75f, 0.1f, 0.5f, 0.5f, 0.25f};
   float w[12], radiance[12];
   for (int k = 0; k < 4; ++k) Vec3(0, 0, k == 3 ? -1.0f : 1.0f).Store(&w[3 * k]);
-  emitter->Radiance(w, uv, radiance);
+  emitter->Radiance(w, SurfacePoints{.uv = uv}, radiance);
   for (int k = 0; k < 3; ++k) {
     const Vec3 expected = UvRadiance::At(uv[2 * k], uv[2 * k + 1]);
     // Negative values clamped to 0.

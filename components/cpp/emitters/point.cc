@@ -29,7 +29,7 @@ class IsotropicLight final : public yarf::Emitter {
   explicit IsotropicLight(const yarf::Properties& props)
       : intensity_(yarf::RequiredIntensity(props, power)) {}
 
-  void Radiance(std::span<const float> w, std::span<const float> uv,
+  void Radiance(std::span<const float> w, const yarf::SurfacePoints& at,
                 std::span<float> radiance) const override {
     const size_t count = w.size() / 3;
     for (size_t k = 0; k < count; ++k) intensity_.Store(&radiance[3 * k]);

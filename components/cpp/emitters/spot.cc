@@ -35,7 +35,7 @@ class SpotLight final : public yarf::Emitter {
       throw yarf::Error("property 'beam_width' must be in (0, cutoff_angle] degrees");
   }
 
-  void Radiance(std::span<const float> w, std::span<const float> uv,
+  void Radiance(std::span<const float> w, const yarf::SurfacePoints& at,
                 std::span<float> radiance) const override {
     const size_t count = w.size() / 3;
     for (size_t k = 0; k < count; ++k) (intensity_ * Falloff(w[3 * k + 2])).Store(&radiance[3 * k]);

@@ -205,7 +205,7 @@ class Bitmap final : public yarf::Texture {
 
   uint32_t Channels() const override { return channels_; }
 
-  void Evaluate(const yarf::TexturePoints& at, std::span<float> value) const override {
+  void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
     yarf::textures::CheckShapes(at, value, channels_);
     OIIO::TextureSystem::Perthread* thread = system_->get_perthread_info();
     OIIO::TextureOpt opt = lookup_;  // texture() may change its options

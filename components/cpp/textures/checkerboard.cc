@@ -110,7 +110,7 @@ class Checkerboard final : public yarf::Texture {
 
   uint32_t Channels() const override { return 3; }
 
-  void Evaluate(const yarf::TexturePoints& at, std::span<float> value) const override {
+  void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
     yarf::textures::CheckShapes(at, value, 3);
     std::vector<Vec3> first, second;
     first_.Evaluate(at, first);

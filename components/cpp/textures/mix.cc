@@ -34,7 +34,7 @@ class Mix final : public yarf::Texture {
 
   uint32_t Channels() const override { return 3; }
 
-  void Evaluate(const yarf::TexturePoints& at, std::span<float> value) const override {
+  void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
     yarf::textures::CheckShapes(at, value, 3);
     std::vector<Vec3> tex1, tex2;
     std::vector<float> amount;

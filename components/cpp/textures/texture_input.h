@@ -40,8 +40,8 @@ class TextureInput {
   bool IsConstant() const { return value_.IsConstant(); }
   Vec3 Constant() const { return value_.Constant(); }
   Vec3 Mean() const { return mean_; }
-  void Evaluate(const TexturePoints& at, std::vector<Vec3>& out) const { value_.Evaluate(at, out); }
-  void Evaluate(const TexturePoints& at, std::vector<float>& out) const { value_.Evaluate(at, out); }
+  void Evaluate(const SurfacePoints& at, std::vector<Vec3>& out) const { value_.Evaluate(at, out); }
+  void Evaluate(const SurfacePoints& at, std::vector<float>& out) const { value_.Evaluate(at, out); }
 
  private:
   explicit TextureInput(TexturedValue value) : value_(std::move(value)) {}

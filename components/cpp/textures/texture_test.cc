@@ -236,9 +236,9 @@ TEST_F(BitmapTextureTest, BadPropertiesAndFilesGiveClearErrors) {
 TEST_F(BitmapTextureTest, WrongArrayShapesAreRefused) {
   const auto texture = MakeBitmap(Four());
   std::vector<float> uv = {0.5f, 0.5f}, value(2), footprint(3);
-  EXPECT_THROW(texture->Evaluate(TexturePoints{uv, {}}, value), Error);
+  EXPECT_THROW(texture->Evaluate(SurfacePoints{uv, {}}, value), Error);
   value.resize(1);
-  EXPECT_THROW(texture->Evaluate(TexturePoints{uv, footprint}, value), Error);
+  EXPECT_THROW(texture->Evaluate(SurfacePoints{uv, footprint}, value), Error);
 }
 
 // --- checkerboard ------------------------------------------------------------

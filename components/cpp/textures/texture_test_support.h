@@ -68,7 +68,7 @@ class TexturePluginTest : public testing::Test {
 inline std::vector<float> Lookup(const Texture& texture, const std::vector<float>& uv,
                                  const std::vector<float>& footprint = {}) {
   std::vector<float> value(uv.size() / 2 * texture.Channels());
-  texture.Evaluate(TexturePoints{uv, footprint}, value);
+  texture.Evaluate(SurfacePoints{uv, footprint}, value);
   return value;
 }
 

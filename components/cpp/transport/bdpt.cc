@@ -56,7 +56,7 @@ struct Vertex {
   // from its successor by the other subpath's sampler.
   float pdf_fwd = 0, pdf_rev = 0;
   uint32_t material = 0, shape = kNoShape;
-  float u = 0, v = 0;
+  SurfaceSite site;
   const Emitter* emitter = nullptr;
 
   bool OnSurface() const { return kind == Kind::kSurface || (kind == Kind::kLight && !delta_position); }
@@ -139,8 +139,7 @@ class Bdpt final : public Transport {
         l.beta = Vec3(1, 1, 1) * (1.0f / s.light.pdf);
         l.pdf_fwd = s.light.pdf;
         l.shape = s.light.shape;
-        l.u = s.light.u;
-        l.v = s.light.v;
+        l.site = SurfaceSite::Uv(s.light.u, s.light.v);
         l.emitter = s.light.emitter;
         light.count[i] = 1;
         if (!s.Valid()) continue;
@@ -173,19 +172,19 @@ class Bdpt final : public Transport {
         Vertex& prev = paths.at(i, paths.count[i] - 1);
         Vertex& v = paths.at(i, paths.count[i]++);
         v = Vertex{};
-        v.p = rays[k].origin + rays[k].direction * hits[k].t;
+        const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
+        v.p = at.position;
         v.n = hits[k].normal;
-        v.frame = ShadingFrame(hits[k]);
+        v.frame = at.frame;
+        v.site = at.site;
         v.wi = -rays[k].direction;
         v.beta = walkers[i].beta;
         v.pdf_fwd = prev.ToArea(walkers[i].pdf_dir, v);
         v.material = scene.MaterialOf(hits[k].shape);
         v.shape = hits[k].shape;
-        v.u = hits[k].u;
-        v.v = hits[k].v;
         v.emitter = scene.EmitterOf(hits[k].shape);
         if (paths.count[i] == paths.capacity) continue;
-        ScatterQuery q{v.material, v.frame.ToLocal(v.wi), v.u, v.v};
+        ScatterQuery q{v.material, v.frame.ToLocal(v.wi), v.site};
         q.uniform[0] = points.Get(i, base + 2);
         q.uniform[1] = points.Get(i, base);
         q.uniform[2] = points.Get(i, base + 1);
@@ -249,7 +248,7 @@ class Bdpt final : public Transport {
           if (s == 0) {
             if (!pt.emitter) continue;
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.push_back({pt.emitter, emitter_local(pt, pt.wi), pt.u, pt.v});
+            emitter_queries.push_back({pt.emitter, emitter_local(pt, pt.wi), pt.site});
             joins.push_back(j);
             continue;
           }
@@ -270,20 +269,20 @@ class Bdpt final : public Transport {
           const Vec3 to_pt = Normalize(d);
           if (s == 1) {
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.push_back({qs.emitter, emitter_local(qs, to_pt), qs.u, qs.v});
+            emitter_queries.push_back({qs.emitter, emitter_local(qs, to_pt), qs.site});
           } else {
             j.light_surface = uint32_t(light_queries.size());
-            light_queries.push_back({qs.material, local(qs, qs.wi), local(qs, to_pt), qs.u, qs.v});
+            light_queries.push_back({qs.material, local(qs, qs.wi), local(qs, to_pt), qs.site});
           }
           if (t > 1) {
             j.camera_surface = uint32_t(camera_queries.size());
-            camera_queries.push_back({pt.material, local(pt, pt.wi), local(pt, -to_pt), pt.u, pt.v});
+            camera_queries.push_back({pt.material, local(pt, pt.wi), local(pt, -to_pt), pt.site});
           }
           joins.push_back(j);
         }
     const std::vector<SurfaceAnswer> at_light = EvaluateSurfaces(scene, TransportMode::kImportance, light_queries);
     const std::vector<SurfaceAnswer> at_camera = EvaluateSurfaces(scene, TransportMode::kRadiance, camera_queries);
-    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(emitter_queries);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, emitter_queries);
 
     std::vector<Ray> shadow;
     std::vector<Vec3> values;

@@ -85,12 +85,12 @@ class DistributionRayTracer final : public Transport {
       if (!hits[k].Found()) continue;
       const Emitter* emitter = scene.EmitterOf(hits[k].shape);
       if (emitter && paths[active[k]].sees_emitters) {
-        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), hits[k].u, hits[k].v});
+        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
         seen_by.push_back(active[k]);
       }
-      vertices.push_back({active[k], ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
+      vertices.push_back({active[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
     }
-    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen);
     for (size_t q = 0; q < seen.size(); ++q)
       paths[seen_by[q]].radiance += paths[seen_by[q]].throughput * emitted[q].radiance;
     if (length_.max_depth >= 0 && depth >= length_.max_depth) return {};
@@ -112,7 +112,7 @@ class DistributionRayTracer final : public Transport {
                             points.Get(v.path, base + kLightPosition + 1));
       if (!s.emitter) continue;
       connections.push_back(
-          {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.u, v.at.v, paths[v.path].ray.time, s});
+          {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.site, paths[v.path].ray.time, s});
       owners.push_back(v.path);
     }
     const std::vector<Vec3> light = DirectLight(scene, connections);
@@ -126,7 +126,7 @@ class DistributionRayTracer final : public Transport {
     std::vector<uint32_t> owners;
     for (uint32_t k = 0; k < vertices.size(); ++k) {
       const Vertex& v = vertices[k];
-      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
+      ScatterQuery q{v.material, v.at.wi, v.at.site};
       q.uniform[0] = points.Get(v.path, base + kLobe);
       q.uniform[1] = points.Get(v.path, base + kDirection);
       q.uniform[2] = points.Get(v.path, base + kDirection + 1);

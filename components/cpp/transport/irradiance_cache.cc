@@ -139,10 +139,11 @@ uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
   auto mix = [&](uint64_t v) { key = Hash(key, v); };
   auto mix3 = [&](Vec3 v) { mix(Bits(v.x)), mix(Bits(v.y)), mix(Bits(v.z)); };
   const std::vector<float> wi{0.3f, 0.2f, 0.932738f}, wo{0, 0, 1}, uv{0.5f, 0.5f};
+  const SurfacePoints at{.uv = uv};
   mix(scene.MaterialCount());
   for (uint32_t m = 0; m < scene.MaterialCount(); ++m) {
     std::vector<float> f(3);
-    scene.Material(m).Evaluate(TransportMode::kRadiance, wi, wo, uv, f);
+    scene.Material(m).Evaluate(TransportMode::kRadiance, wi, wo, at, f);
     mix(scene.Material(m).Lobes());
     mix3(Vec3::Load(f.data()));
   }
@@ -157,7 +158,7 @@ uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
     }
     if (const Emitter* emitter = scene.EmitterOf(s)) {
       std::vector<float> radiance(3);
-      emitter->Radiance(wo, uv, radiance);
+      emitter->Radiance(wo, at, radiance);
       mix3(Vec3::Load(radiance.data()));
     }
   }
@@ -167,7 +168,7 @@ uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
     mix3(s.position), mix3(s.normal), mix(Bits(s.pdf));
     if (s.emitter) {
       std::vector<float> radiance(3);
-      s.emitter->Radiance(wo, uv, radiance);
+      s.emitter->Radiance(wo, at, radiance);
       mix3(Vec3::Load(radiance.data()));
     }
   }
@@ -234,16 +235,16 @@ class IrradianceCache final : public Transport {
     std::vector<uint32_t> seen_by;
     for (size_t k = 0; k < active.size(); ++k) {
       if (!hits[k].Found()) continue;
-      const Vertex v{active[k], ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
+      const Vertex v{active[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
       // Paths reach here from the camera or through delta lobes only, so
       // every emitter they hit counts.
       if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
-        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), v.at.u, v.at.v});
+        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), v.at.site});
         seen_by.push_back(v.path);
       }
       (OnlySpecular(scene.Material(v.material).Lobes()) ? specular : shaded).push_back(v);
     }
-    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen);
     for (size_t q = 0; q < seen.size(); ++q)
       paths[seen_by[q]].radiance += paths[seen_by[q]].throughput * emitted[q].radiance;
     const uint32_t base = kTransportDimension + kPerSegment * uint32_t(depth - 1);
@@ -268,13 +269,13 @@ class IrradianceCache final : public Transport {
                               points.Get(v.path, base + kLightPosition + 1));
         if (s.emitter) {
           connections.push_back(
-              {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.u, v.at.v, paths[v.path].ray.time, s});
+              {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.site, paths[v.path].ray.time, s});
           lit.push_back(v.path);
         }
       }
       if (HasDiffuseLobe(lobes) && v.at.wi.z != 0) {
         const float side = v.at.wi.z > 0 ? 1.0f : -1.0f;
-        diffuse.push_back({v.material, v.at.wi, Vec3(0, 0, side), v.at.u, v.at.v});
+        diffuse.push_back({v.material, v.at.wi, Vec3(0, 0, side), v.at.site});
         irradiance.push_back(records_.Estimate(v.at.position, v.at.frame.n * side));
         cached.push_back(v.path);
       }
@@ -291,7 +292,7 @@ class IrradianceCache final : public Transport {
                                 const std::vector<Vertex>& vertices, uint32_t base) const {
     std::vector<ScatterQuery> queries;
     for (const Vertex& v : vertices) {
-      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
+      ScatterQuery q{v.material, v.at.wi, v.at.site};
       q.uniform[0] = points.Get(v.path, base + kLobe);
       q.uniform[1] = points.Get(v.path, base + kDirection);
       q.uniform[2] = points.Get(v.path, base + kDirection + 1);
@@ -331,12 +332,12 @@ class IrradianceCache final : public Transport {
       std::vector<Vertex> specular;
       for (size_t k = 0; k < rays.size(); ++k) {
         if (!hits[k].Found()) continue;
-        const Vertex v{owner[k], ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
+        const Vertex v{owner[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
         const uint32_t lobes = scene.Material(v.material).Lobes();
         if (HasDiffuseLobe(lobes) && v.at.wi.z != 0)
           found[v.path].push_back({v.at.position, v.at.frame.n * (v.at.wi.z > 0 ? 1.0f : -1.0f), v.at.ng});
         if (!OnlySpecular(lobes) || depth == settings_.max_depth) continue;
-        ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
+        ScatterQuery q{v.material, v.at.wi, v.at.site};
         for (int d = 0; d < 3; ++d) q.uniform[d] = Uniform(kVisitSalt, v.path, uint64_t(depth), uint64_t(d));
         queries.push_back(q);
         specular.push_back(v);

@@ -105,8 +105,8 @@ inline IrradianceRecord GatherRecord(const SceneView& scene, const SurfacePoint&
     const LightSample s = scene.SampleLight(Uniform(kGatherSalt, index, c, 2), Uniform(kGatherSalt, index, c, 3),
                                             Uniform(kGatherSalt, index, c, 4));
     if (!s.emitter) continue;
-    const ShadingPoint at = ShadingPointOf(hits[c], rays[c]);
-    connections.push_back({material, at.position, at.ng, at.frame, at.wi, at.u, at.v, time, s});
+    const ShadingPoint at = ShadingPointOf(scene, hits[c], rays[c]);
+    connections.push_back({material, at.position, at.ng, at.frame, at.wi, at.site, time, s});
     lit.push_back(c);
   }
   const std::vector<Vec3> direct = DirectLight(scene, connections);

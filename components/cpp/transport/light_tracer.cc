@@ -83,11 +83,11 @@ class LightTracer final : public Transport {
       if (!scene.ConnectToCamera(l.position, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), c))
         continue;
       const Vec3 to_camera = Normalize(c.lens_point - l.position);
-      queries.push_back({l.emitter, Frame(l.normal).ToLocal(to_camera), l.u, l.v});
+      queries.push_back({l.emitter, Frame(l.normal).ToLocal(to_camera), SurfaceSite::Uv(l.u, l.v)});
       connections.push_back(c);
       owners.push_back(i);
     }
-    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(queries);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, queries);
     std::vector<Ray> rays;
     std::vector<Vec3> values;
     std::vector<uint32_t> kept;
@@ -129,12 +129,12 @@ class LightTracer final : public Transport {
     for (size_t k = 0; k < active.size(); ++k) {
       if (!hits[k].Found()) continue;
       const Ray& ray = rays[k];
-      const Vertex v{active[k], ShadingPointOf(hits[k], ray), scene.MaterialOf(hits[k].shape), ray.time};
+      const Vertex v{active[k], ShadingPointOf(scene, hits[k], ray), scene.MaterialOf(hits[k].shape), ray.time};
       CameraConnection c;
       if (scene.ConnectToCamera(v.at.position, points.Get(v.path, kLensDimension),
                                 points.Get(v.path, kLensDimension + 1), c)) {
         to_camera.push_back({v.material, v.at.wi, v.at.frame.ToLocal(Normalize(c.lens_point - v.at.position)),
-                             v.at.u, v.at.v});
+                             v.at.site});
         connections.push_back(c);
         connected.push_back(uint32_t(vertices.size()));
       }
@@ -167,7 +167,7 @@ class LightTracer final : public Transport {
     std::vector<uint32_t> scattering;  // into vertices
     for (uint32_t j = 0; j < vertices.size(); ++j) {
       const Vertex& v = vertices[j];
-      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
+      ScatterQuery q{v.material, v.at.wi, v.at.site};
       q.uniform[0] = points.Get(v.path, base + 2);
       q.uniform[1] = points.Get(v.path, base);
       q.uniform[2] = points.Get(v.path, base + 1);

@@ -103,7 +103,7 @@ class PathTracer final : public Transport {
       if (!hit.Found()) continue;
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
       if (!may_scatter || paths[active[k]].last) continue;
-      vertices.push_back({active[k], ShadingPointOf(hit, rays[k]), rays[k].time});
+      vertices.push_back({active[k], ShadingPointOf(scene, hit, rays[k]), rays[k].time});
       vertex_material.push_back(scene.MaterialOf(hit.shape));
     }
     AddEmission(scene, paths, active, rays, hits, emitted);
@@ -114,7 +114,7 @@ class PathTracer final : public Transport {
       const SurfaceModel& model = scene.Material(material);
       const bool sample_lights = scene.HasLights() && SamplesLights(model.Lobes());
       if (sample_lights) SampleLights(scene, points, model, paths, vertices, members, base);
-      ScatterBsdf(points, model, paths, vertices, members, base, depth, sample_lights, next);
+      ScatterBsdf(scene, points, model, paths, vertices, members, base, depth, sample_lights, next);
     }
     return next;
   }
@@ -127,14 +127,14 @@ class PathTracer final : public Transport {
     for (uint32_t k : emitted) keys.push_back(scene.EmitterOf(hits[k].shape));
     for (const auto& [emitter, members] : GroupBy(keys)) {
       const size_t m = members.size();
-      std::vector<float> w(3 * m), uv(2 * m), le(3 * m);
+      std::vector<float> w(3 * m), le(3 * m);
+      SurfaceRows rows(&scene, m);
       for (size_t j = 0; j < m; ++j) {
         const uint32_t k = emitted[members[j]];
         Frame(hits[k].normal).ToLocal(-rays[k].direction).Store(&w[3 * j]);
-        uv[2 * j] = hits[k].u;
-        uv[2 * j + 1] = hits[k].v;
+        rows.Add(SurfaceSite::Of(hits[k]));
       }
-      emitter->Radiance(w, uv, le);
+      emitter->Radiance(w, rows.Points(), le);
       for (size_t j = 0; j < m; ++j) {
         const uint32_t k = emitted[members[j]];
         Path& p = paths[active[k]];
@@ -155,8 +155,9 @@ class PathTracer final : public Transport {
                     std::vector<Path>& paths, const std::vector<Vertex>& vertices,
                     const std::vector<uint32_t>& members, uint32_t base) const {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), wo(3 * m), uv(2 * m), f(3 * m), pdf(m);
+    std::vector<float> wi(3 * m), wo(3 * m), f(3 * m), pdf(m);
     std::vector<float> light_w(3 * m), light_uv(2 * m), le(3 * m), light_pdf(m);
+    SurfaceRows rows(&scene, m);
     std::vector<Ray> shadow(m);
     std::vector<const Emitter*> emitters(m);
     std::vector<uint8_t> delta(m);
@@ -177,8 +178,7 @@ class PathTracer final : public Transport {
       emitters[j] = s.emitter;
       v.at.wi.Store(&wi[3 * j]);
       v.at.frame.ToLocal(to_light).Store(&wo[3 * j]);
-      uv[2 * j] = v.at.u;
-      uv[2 * j + 1] = v.at.v;
+      rows.Add(v.at.site);
       Frame(s.normal).ToLocal(-to_light).Store(&light_w[3 * j]);
       light_uv[2 * j] = s.u;
       light_uv[2 * j + 1] = s.v;
@@ -186,18 +186,20 @@ class PathTracer final : public Transport {
       shadow[j].time = v.time;
       if (s.delta_position) shadow[j].tfar = std::max(0.0f, Length(s.position - shadow[j].origin));
     }
-    model.Evaluate(TransportMode::kRadiance, wi, wo, uv, f);
-    model.Pdf(wi, wo, uv, pdf);
+    const SurfacePoints at = rows.Points();
+    model.Evaluate(TransportMode::kRadiance, wi, wo, at, f);
+    model.Pdf(wi, wo, at, pdf);
     std::vector<const Emitter*> keys = emitters;
     for (const auto& [emitter, group] : GroupBy(keys)) {
       if (!emitter) continue;
       const size_t g = group.size();
-      std::vector<float> w(3 * g), guv(2 * g), radiance(3 * g);
+      std::vector<float> w(3 * g), radiance(3 * g);
+      SurfaceRows light_rows(&scene, g);
       for (size_t q = 0; q < g; ++q) {
         std::copy_n(&light_w[3 * group[q]], 3, &w[3 * q]);
-        std::copy_n(&light_uv[2 * group[q]], 2, &guv[2 * q]);
+        light_rows.Add(SurfaceSite::Uv(light_uv[2 * group[q]], light_uv[2 * group[q] + 1]));
       }
-      emitter->Radiance(w, guv, radiance);
+      emitter->Radiance(w, light_rows.Points(), radiance);
       for (size_t q = 0; q < g; ++q) std::copy_n(&radiance[3 * q], 3, &le[3 * group[q]]);
     }
     // Trace shadow rays only for samples that would contribute.
@@ -226,22 +228,23 @@ class PathTracer final : public Transport {
   }
 
   // Samples the BSDF for each vertex, extends the path, applies roulette.
-  void ScatterBsdf(const PrimarySamples& points, const SurfaceModel& model, std::vector<Path>& paths,
+  void ScatterBsdf(const SceneView& scene, const PrimarySamples& points, const SurfaceModel& model,
+                   std::vector<Path>& paths,
                    const std::vector<Vertex>& vertices, const std::vector<uint32_t>& members,
                    uint32_t base, int depth, bool sampled_lights, std::vector<uint32_t>& next) const {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), uv(2 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m);
+    std::vector<float> wi(3 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m);
     std::vector<uint32_t> flags(m);
+    SurfaceRows rows(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
       v.at.wi.Store(&wi[3 * j]);
-      uv[2 * j] = v.at.u;
-      uv[2 * j + 1] = v.at.v;
+      rows.Add(v.at.site);
       u[3 * j] = points.Get(v.path, base + kBsdfLobe);
       u[3 * j + 1] = points.Get(v.path, base + kBsdfDirection);
       u[3 * j + 2] = points.Get(v.path, base + kBsdfDirection + 1);
     }
-    model.Sample(TransportMode::kRadiance, wi, uv, u, 0, wo, weight, pdf, flags);
+    model.Sample(TransportMode::kRadiance, wi, rows.Points(), u, 0, wo, weight, pdf, flags);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
       Path& p = paths[v.path];

@@ -118,7 +118,7 @@ class PhotonMapper final : public Transport {
     std::vector<ScatterQuery> queries(visible.size());
     for (size_t k = 0; k < visible.size(); ++k) {
       const SurfacePoint& s = visible[k];
-      queries[k] = {s.material, s.at.wi, s.at.u, s.at.v};
+      queries[k] = {s.material, s.at.wi, s.at.site};
       queries[k].uniform[0] = points.Get(s.owner, GatherSample() + 2);
       queries[k].uniform[1] = points.Get(s.owner, GatherSample());
       queries[k].uniform[2] = points.Get(s.owner, GatherSample() + 1);

@@ -133,8 +133,8 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
                             p.history});
         }
         if (bounce == last_bounce) continue;
-        const ShadingPoint at = ShadingPointOf(hits[k], rays[k]);
-        ScatterQuery q{material, at.wi, at.u, at.v};
+        const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
+        ScatterQuery q{material, at.wi, at.site};
         q.uniform[0] = points.Get(active[k], base + 2);
         q.uniform[1] = points.Get(active[k], base);
         q.uniform[2] = points.Get(active[k], base + 1);
@@ -281,10 +281,10 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
       for (size_t k = 0; k < walks.size(); ++k)
         if (hits[k].Found())
           if (const Emitter* e = scene.EmitterOf(hits[k].shape)) {
-            lights.push_back({e, Frame(hits[k].normal).ToLocal(-rays[k].direction), hits[k].u, hits[k].v});
+            lights.push_back({e, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
             lit.push_back(uint32_t(k));
           }
-      const std::vector<EmitterAnswer> le = EvaluateEmitters(lights);
+      const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
       for (size_t q = 0; q < lit.size(); ++q)
         (*emitted)[walks[lit[q]].owner] += walks[lit[q]].throughput * le[q].radiance;
     }
@@ -293,7 +293,7 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
     std::vector<ShadingPoint> shading;
     for (size_t k = 0; k < walks.size(); ++k) {
       if (!hits[k].Found()) continue;
-      const ShadingPoint at = ShadingPointOf(hits[k], rays[k]);
+      const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
       const uint32_t material = scene.MaterialOf(hits[k].shape);
       if (StoresPhotons(scene.Material(material).Lobes())) {
         reached.push_back({walks[k].owner, walks[k].throughput, at, rays[k].time, material});
@@ -301,7 +301,7 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
       }
       if (bounce >= bounces) continue;
       const uint32_t base = first + 4 * uint32_t(bounce);
-      ScatterQuery q{material, at.wi, at.u, at.v};
+      ScatterQuery q{material, at.wi, at.site};
       q.uniform[0] = points.Get(walks[k].owner, base + 2);
       q.uniform[1] = points.Get(walks[k].owner, base);
       q.uniform[2] = points.Get(walks[k].owner, base + 1);
@@ -336,7 +336,7 @@ inline std::vector<Vec3> DirectLightAt(const SceneView& scene, const PrimarySamp
   for (const SurfacePoint& s : at) {
     const LightSample light = scene.SampleLight(points.Get(s.owner, first + 2), points.Get(s.owner, first),
                                                 points.Get(s.owner, first + 1));
-    connections.push_back({s.material, s.at.position, s.at.ng, s.at.frame, s.at.wi, s.at.u, s.at.v, s.time, light});
+    connections.push_back({s.material, s.at.position, s.at.ng, s.at.frame, s.at.wi, s.at.site, s.time, light});
   }
   std::vector<Vec3> direct = DirectLight(scene, connections);
   for (size_t k = 0; k < at.size(); ++k) direct[k] = direct[k] * at[k].throughput;
@@ -360,16 +360,16 @@ inline std::vector<Vec3> ReflectedRadiance(const SceneView& scene, const PhotonT
   for (size_t j = 0; j < found.size(); ++j) keys[j] = at[found[j].point].material;
   for (const auto& [material, members] : GroupBy(keys)) {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), wo(3 * m), uv(2 * m), f(3 * m);
+    std::vector<float> wi(3 * m), wo(3 * m), f(3 * m);
+    SurfaceRows rows(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const KernelPhoton& kp = found[members[j]];
       const ShadingPoint& s = at[kp.point].at;
       s.wi.Store(&wi[3 * j]);
       s.frame.ToLocal(tree[kp.photon].from).Store(&wo[3 * j]);
-      uv[2 * j] = s.u;
-      uv[2 * j + 1] = s.v;
+      rows.Add(s.site);
     }
-    scene.Material(material).Evaluate(TransportMode::kRadiance, wi, wo, uv, f);
+    scene.Material(material).Evaluate(TransportMode::kRadiance, wi, wo, rows.Points(), f);
     for (size_t j = 0; j < m; ++j) {
       const KernelPhoton& kp = found[members[j]];
       const ShadingPoint& s = at[kp.point].at;

@@ -191,7 +191,7 @@ class Radiosity final : public Transport {
     for (size_t k = 0; k < queries.size(); ++k) {
       const radiosity::Patch& e = elements[k / 2];
       const Vec3 normal(0, 0, k % 2 ? -1.0f : 1.0f);
-      queries[k] = {scene.MaterialOf(mesh.triangles()[e.triangle].shape), normal, normal, e.u, e.v};
+      queries[k] = {scene.MaterialOf(mesh.triangles()[e.triangle].shape), normal, normal, SurfaceSite::Uv(e.u, e.v)};
     }
     const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, queries);
     std::vector<Vec3> rho(queries.size());
@@ -209,9 +209,9 @@ class Radiosity final : public Transport {
     for (size_t k = 0; k < queries.size(); ++k) {
       const radiosity::Patch& e = elements[k / 2];
       queries[k] = {scene.EmitterOf(mesh.triangles()[e.triangle].shape), Vec3(0, 0, k % 2 ? -1.0f : 1.0f),
-                    e.u, e.v};
+                    SurfaceSite::Uv(e.u, e.v)};
     }
-    const std::vector<EmitterAnswer> le = EvaluateEmitters(queries);
+    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries);
     std::vector<Vec3> exitance(queries.size());
     for (size_t k = 0; k < exitance.size(); ++k) exitance[k] = le[k].radiance * kPi;
     return exitance;
@@ -275,11 +275,11 @@ class Radiosity final : public Transport {
     for (uint32_t i = 0; i < hits.size(); ++i) {
       if (!hits[i].Found()) continue;
       if (const Emitter* emitter = scene.EmitterOf(hits[i].shape)) {
-        queries.push_back({emitter, Frame(hits[i].normal).ToLocal(-rays[i].direction), hits[i].u, hits[i].v});
+        queries.push_back({emitter, Frame(hits[i].normal).ToLocal(-rays[i].direction), SurfaceSite::Of(hits[i])});
         owners.push_back(i);
       }
     }
-    const std::vector<EmitterAnswer> le = EvaluateEmitters(queries);
+    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries);
     for (size_t q = 0; q < owners.size(); ++q) radiance[owners[q]] += le[q].radiance;
   }
 
@@ -299,14 +299,13 @@ class Radiosity final : public Transport {
                         hits[i].normal,
                         frame,
                         frame.ToLocal(-rays[i].direction),
-                        hits[i].u,
-                        hits[i].v,
+                        SurfaceSite::Uv(hits[i].u, hits[i].v),
                         rays[i].time,
                         LightSample{}};
       if (scene.HasLights())
         c.light = scene.SampleLight(points.Get(i, kLightChoice), points.Get(i, kLightPosition),
                                     points.Get(i, kLightPosition + 1));
-      ScatterQuery q{c.material, c.wi, c.u, c.v};
+      ScatterQuery q{c.material, c.wi, c.site};
       q.uniform[0] = points.Get(i, kGatherLobe);
       q.uniform[1] = points.Get(i, kGatherDirection);
       q.uniform[2] = points.Get(i, kGatherDirection + 1);

@@ -21,17 +21,80 @@ namespace yarf {
 // Where a ray met a surface, as scattering sees it: surface models get
 // directions in the shading frame (ShadingFrame); leaving the surface and
 // telling its sides apart go by the geometric normal ng.
+// What a surface call knows of a point besides directions: one row of its
+// SurfacePoints (the footprint and ∂p/∂u, ∂p/∂v zero where unknown).
+struct SurfaceSite {
+  float u = 0, v = 0;
+  float footprint[4] = {0, 0, 0, 0};
+  Vec3 position;
+  Vec3 dpdu, dpdv;  // in the local shading frame
+  SurfaceLocation location;
+
+  // A point known by its uv alone (a point on a light).
+  static SurfaceSite Uv(float u, float v) {
+    SurfaceSite site;
+    site.u = u, site.v = v;
+    return site;
+  }
+  // Where a hit lies, without footprint or frame (an emitter seen there).
+  static SurfaceSite Of(const Hit& hit) {
+    SurfaceSite site = Uv(hit.u, hit.v);
+    site.location = {hit.shape, hit.primitive, hit.b1, hit.b2};
+    return site;
+  }
+};
+
+// The SurfacePoints of a batch of sites, owning its arrays.
+class SurfaceRows {
+ public:
+  SurfaceRows(const SurfaceAttributes* attributes, size_t capacity) : attributes_(attributes) {
+    uv_.reserve(2 * capacity);
+    footprint_.reserve(4 * capacity);
+    position_.reserve(3 * capacity);
+    dpdu_.reserve(3 * capacity);
+    dpdv_.reserve(3 * capacity);
+    location_.reserve(capacity);
+  }
+  void Add(const SurfaceSite& site) {
+    uv_.insert(uv_.end(), {site.u, site.v});
+    footprint_.insert(footprint_.end(), site.footprint, site.footprint + 4);
+    position_.insert(position_.end(), {site.position.x, site.position.y, site.position.z});
+    dpdu_.insert(dpdu_.end(), {site.dpdu.x, site.dpdu.y, site.dpdu.z});
+    dpdv_.insert(dpdv_.end(), {site.dpdv.x, site.dpdv.y, site.dpdv.z});
+    location_.push_back(site.location);
+  }
+  SurfacePoints Points() const { return {uv_, footprint_, position_, dpdu_, dpdv_, location_, attributes_}; }
+
+ private:
+  const SurfaceAttributes* attributes_;
+  std::vector<float> uv_, footprint_, position_, dpdu_, dpdv_;
+  std::vector<SurfaceLocation> location_;
+};
+
 struct ShadingPoint {
   Vec3 position;
   Vec3 ng;
   Frame frame;
   Vec3 wi;  // local: back along the ray
-  float u = 0, v = 0;
+  SurfaceSite site;
 };
 
-inline ShadingPoint ShadingPointOf(const Hit& hit, const Ray& ray) {
+// The hit of `ray` as scattering sees it, with the texture footprint of a
+// camera sample's spacing there (SceneView::SampleSpacing) on
+// parameterised surfaces.
+inline ShadingPoint ShadingPointOf(const SceneView& scene, const Hit& hit, const Ray& ray) {
   const Frame frame = ShadingFrame(hit);
-  return {ray.origin + ray.direction * hit.t, hit.normal, frame, frame.ToLocal(-ray.direction), hit.u, hit.v};
+  ShadingPoint at{ray.origin + ray.direction * hit.t, hit.normal, frame, frame.ToLocal(-ray.direction),
+                  SurfaceSite::Of(hit)};
+  at.site.position = at.position;
+  if (hit.dpdu.x != 0 || hit.dpdu.y != 0 || hit.dpdu.z != 0) {
+    at.site.dpdu = frame.ToLocal(hit.dpdu);
+    at.site.dpdv = frame.ToLocal(hit.dpdv);
+    Vec3 dpdx, dpdy;
+    scene.SampleSpacing(at.position, hit.normal, dpdx, dpdy);
+    UvFootprint(hit.dpdu, hit.dpdv, dpdx, dpdy, at.site.footprint);
+  }
+  return at;
 }
 
 // What a scattering from local wi to local wo at a surface point carries
@@ -138,7 +201,7 @@ std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key
 struct SurfaceQuery {
   uint32_t material;
   Vec3 wi, wo;
-  float u = 0, v = 0;
+  SurfaceSite site;
 };
 struct SurfaceAnswer {
   Vec3 f;
@@ -154,18 +217,19 @@ inline std::vector<SurfaceAnswer> EvaluateSurfaces(const SceneView& scene, Trans
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
   for (const auto& [material, members] : GroupBy(keys)) {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), wo(3 * m), uv(2 * m), f(3 * m), pdf(m), reverse(m);
+    std::vector<float> wi(3 * m), wo(3 * m), f(3 * m), pdf(m), reverse(m);
+    SurfaceRows rows(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const SurfaceQuery& q = queries[members[j]];
       q.wi.Store(&wi[3 * j]);
       q.wo.Store(&wo[3 * j]);
-      uv[2 * j] = q.u;
-      uv[2 * j + 1] = q.v;
+      rows.Add(q.site);
     }
+    const SurfacePoints at = rows.Points();
     const SurfaceModel& model = scene.Material(material);
-    model.Evaluate(mode, wi, wo, uv, f);
-    model.Pdf(wi, wo, uv, pdf);
-    model.Pdf(wo, wi, uv, reverse);
+    model.Evaluate(mode, wi, wo, at, f);
+    model.Pdf(wi, wo, at, pdf);
+    model.Pdf(wo, wi, at, reverse);
     for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&f[3 * j]), pdf[j], reverse[j]};
   }
   return answers;
@@ -175,7 +239,7 @@ inline std::vector<SurfaceAnswer> EvaluateSurfaces(const SceneView& scene, Trans
 struct ScatterQuery {
   uint32_t material;
   Vec3 wi;
-  float u = 0, v = 0;
+  SurfaceSite site;
   // Lobe choice, then the direction's two numbers.
   float uniform[3] = {0, 0, 0};
 };
@@ -194,18 +258,19 @@ inline std::vector<ScatterAnswer> SampleSurfaces(const SceneView& scene, Transpo
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
   for (const auto& [material, members] : GroupBy(keys)) {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), uv(2 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m), reverse(m);
+    std::vector<float> wi(3 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m), reverse(m);
     std::vector<uint32_t> flags(m);
+    SurfaceRows rows(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const ScatterQuery& q = queries[members[j]];
       q.wi.Store(&wi[3 * j]);
-      uv[2 * j] = q.u;
-      uv[2 * j + 1] = q.v;
+      rows.Add(q.site);
       std::copy_n(q.uniform, 3, &u[3 * j]);
     }
+    const SurfacePoints at = rows.Points();
     const SurfaceModel& model = scene.Material(material);
-    model.Sample(mode, wi, uv, u, allowed, wo, weight, pdf, flags);
-    model.Pdf(wo, wi, uv, reverse);
+    model.Sample(mode, wi, at, u, allowed, wo, weight, pdf, flags);
+    model.Pdf(wo, wi, at, reverse);
     for (size_t j = 0; j < m; ++j)
       answers[members[j]] = {Vec3::Load(&wo[3 * j]), Vec3::Load(&weight[3 * j]), pdf[j], reverse[j], flags[j]};
   }
@@ -216,7 +281,7 @@ inline std::vector<ScatterAnswer> SampleSurfaces(const SceneView& scene, Transpo
 struct EmitterQuery {
   const Emitter* emitter;
   Vec3 w;
-  float u = 0, v = 0;
+  SurfaceSite site;
 };
 struct EmitterAnswer {
   Vec3 radiance;
@@ -225,21 +290,21 @@ struct EmitterAnswer {
 };
 
 // Radiance (and direction density) of every query: one call each per emitter.
-inline std::vector<EmitterAnswer> EvaluateEmitters(const std::vector<EmitterQuery>& queries) {
+inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const std::vector<EmitterQuery>& queries) {
   std::vector<EmitterAnswer> answers(queries.size());
   std::vector<const Emitter*> keys(queries.size());
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].emitter;
   for (const auto& [emitter, members] : GroupBy(keys)) {
     if (!emitter) continue;
     const size_t m = members.size();
-    std::vector<float> w(3 * m), uv(2 * m), radiance(3 * m), pdf(m);
+    std::vector<float> w(3 * m), radiance(3 * m), pdf(m);
+    SurfaceRows rows(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const EmitterQuery& q = queries[members[j]];
       q.w.Store(&w[3 * j]);
-      uv[2 * j] = q.u;
-      uv[2 * j + 1] = q.v;
+      rows.Add(q.site);
     }
-    emitter->Radiance(w, uv, radiance);
+    emitter->Radiance(w, rows.Points(), radiance);
     emitter->PdfDirection(w, pdf);
     for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&radiance[3 * j]), pdf[j]};
   }
@@ -286,15 +351,15 @@ inline std::vector<LightStart> StartLightPaths(const SceneView& scene, const Pri
   for (const auto& [emitter, members] : GroupBy(keys)) {
     if (!emitter) continue;
     const size_t m = members.size();
-    std::vector<float> u(2 * m), w(3 * m), pdf(m), uv(2 * m), radiance(3 * m);
+    std::vector<float> u(2 * m), w(3 * m), pdf(m), radiance(3 * m);
+    SurfaceRows rows(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       u[2 * j] = points.Get(members[j], direction);
       u[2 * j + 1] = points.Get(members[j], direction + 1);
-      uv[2 * j] = starts[members[j]].light.u;
-      uv[2 * j + 1] = starts[members[j]].light.v;
+      rows.Add(SurfaceSite::Uv(starts[members[j]].light.u, starts[members[j]].light.v));
     }
     emitter->SampleDirection(u, w, pdf);
-    emitter->Radiance(w, uv, radiance);
+    emitter->Radiance(w, rows.Points(), radiance);
     for (size_t j = 0; j < m; ++j) {
       LightStart& s = starts[members[j]];
       s.direction = Normalize(Frame(s.light.normal).ToWorld(Vec3::Load(&w[3 * j])));
@@ -333,7 +398,7 @@ struct LightConnection {
   Vec3 ng;  // geometric normal
   Frame frame;  // shading frame
   Vec3 wi;
-  float u = 0, v = 0;
+  SurfaceSite site;
   float time = 0;
   LightSample light;
 };
@@ -348,15 +413,15 @@ inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<L
   for (size_t k = 0; k < n; ++k) {
     const LightConnection& c = connections[k];
     const Vec3 to_light = Normalize(c.light.position - c.position);
-    surfaces[k] = {c.material, c.wi, c.frame.ToLocal(to_light), c.u, c.v};
-    lights[k] = {c.light.emitter, Frame(c.light.normal).ToLocal(-to_light), c.light.u, c.light.v};
+    surfaces[k] = {c.material, c.wi, c.frame.ToLocal(to_light), c.site};
+    lights[k] = {c.light.emitter, Frame(c.light.normal).ToLocal(-to_light), SurfaceSite::Uv(c.light.u, c.light.v)};
     shadow[k] = ShadowRay(c.position, c.ng, c.light.position);
     // A point light has no surface to stop short of.
     if (c.light.delta_position) shadow[k].tfar = std::max(0.0f, Length(c.light.position - shadow[k].origin));
     shadow[k].time = c.time;
   }
   const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
-  const std::vector<EmitterAnswer> le = EvaluateEmitters(lights);
+  const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
   std::vector<uint8_t> occluded(n);
   scene.Occluded(shadow, occluded);
   std::vector<Vec3> out(n);

@@ -71,12 +71,12 @@ class Whitted final : public Transport {
     for (size_t k = 0; k < level.size(); ++k) {
       if (!hits[k].Found()) continue;
       if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
-        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), hits[k].u, hits[k].v});
+        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
         seen_by.push_back(uint32_t(k));
       }
-      vertices.push_back({uint32_t(k), ShadingPointOf(hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
+      vertices.push_back({uint32_t(k), ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
     }
-    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(seen);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen);
     for (size_t q = 0; q < seen.size(); ++q) {
       const Branch& b = level[seen_by[q]];
       radiance[b.point] += b.weight * emitted[q].radiance;
@@ -93,7 +93,7 @@ class Whitted final : public Transport {
     for (const Vertex& v : vertices) {
       if (!SamplesLights(scene.Material(v.material).Lobes())) continue;
       for (uint32_t l = 0; l < scene.LightCount(); ++l)
-        connections.push_back({v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.u, v.at.v,
+        connections.push_back({v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.site,
                                level[v.branch].ray.time, scene.LightPoint(l, v.at.position)});
     }
     const std::vector<Vec3> light = DirectLight(scene, connections);
@@ -113,7 +113,7 @@ class Whitted final : public Transport {
     for (uint32_t k = 0; k < vertices.size(); ++k) {
       const Vertex& v = vertices[k];
       if (!(scene.Material(v.material).Lobes() & kScatterDelta)) continue;
-      ScatterQuery q{v.material, v.at.wi, v.at.u, v.at.v};
+      ScatterQuery q{v.material, v.at.wi, v.at.site};
       q.uniform[0] = q.uniform[1] = q.uniform[2] = 0.5f;
       queries.push_back(q);
       owners.push_back(k);

@@ -33,6 +33,25 @@ inline Frame ShadingFrame(const Hit& hit) {
   return frame;
 }
 
+// The footprint (du/dx, dv/dx, du/dy, dv/dy) of a point whose position
+// moves by dpdx, dpdy from one film sample to the next: the least-squares
+// solution of dpdx = ∂p/∂u·du/dx + ∂p/∂v·dv/dx (likewise y). Zero for a
+// degenerate parameterisation; bounded, so that a texture's filter stays
+// finite.
+inline void UvFootprint(Vec3 dpdu, Vec3 dpdv, Vec3 dpdx, Vec3 dpdy, float footprint[4]) {
+  const float uu = Dot(dpdu, dpdu), uv = Dot(dpdu, dpdv), vv = Dot(dpdv, dpdv);
+  const float det = uu * vv - uv * uv;
+  const float inverse = det > 0 && std::isfinite(det) ? 1 / det : 0.0f;
+  const Vec3 steps[2] = {dpdx, dpdy};
+  for (int i = 0; i < 2; ++i) {
+    const float bu = Dot(dpdu, steps[i]), bv = Dot(dpdv, steps[i]);
+    const float du = (vv * bu - uv * bv) * inverse, dv = (uu * bv - uv * bu) * inverse;
+    constexpr float kLargest = 1e8f;
+    footprint[2 * i] = std::isfinite(du) ? std::clamp(du, -kLargest, kLargest) : 0.0f;
+    footprint[2 * i + 1] = std::isfinite(dv) ? std::clamp(dv, -kLargest, kLargest) : 0.0f;
+  }
+}
+
 // Whether a scattering from wi to wo (world, unit) is a reflection or a
 // transmission alike for the geometric normal ng and in the shading frame
 // (local z of each): where they disagree the value is 0, or light would

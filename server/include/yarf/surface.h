@@ -8,6 +8,7 @@
 #include <span>
 
 #include "yarf/component.h"
+#include "yarf/surface_points.h"
 
 namespace yarf {
 
@@ -39,18 +40,18 @@ class SurfaceModel : public virtual Component {
   static constexpr const char* kInterface = "yarf.v1.SurfaceModel";
   static constexpr const char* kMethods[] = {"Evaluate", "Sample", "Pdf", "Lobes"};
 
-  // wi, wo: [N,3]; uv: [N,2]; value: [N,3] = f(wi, wo) in 1/sr, no cosine.
+  // wi, wo: [N,3] at N points; value: [N,3] = f(wi, wo) in 1/sr, no cosine.
   virtual void Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo,
-                        std::span<const float> uv, std::span<float> value) const = 0;
-  // wi: [N,3]; uv: [N,2]; uniform: [N,3] -> wo [N,3], weight [N,3]
+                        const SurfacePoints& at, std::span<float> value) const = 0;
+  // wi: [N,3]; uniform: [N,3] -> wo [N,3], weight [N,3]
   // (f·|cos θo|/pdf), pdf [N], flags [N] (the lobe sampled).
-  virtual void Sample(TransportMode mode, std::span<const float> wi, std::span<const float> uv,
+  virtual void Sample(TransportMode mode, std::span<const float> wi, const SurfacePoints& at,
                       std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
                       std::span<float> weight, std::span<float> pdf,
                       std::span<uint32_t> flags) const = 0;
   // pdf: [N], solid angle; 0 for delta lobes.
   virtual void Pdf(std::span<const float> wi, std::span<const float> wo,
-                   std::span<const float> uv, std::span<float> pdf) const = 0;
+                   const SurfacePoints& at, std::span<float> pdf) const = 0;
   virtual uint32_t Lobes() const = 0;
 };
 
@@ -59,10 +60,10 @@ class SurfaceModel : public virtual Component {
 class DeltaSurfaceModel : public SurfaceModel {
  public:
   void Evaluate(TransportMode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const final {
+                const SurfacePoints& at, std::span<float> value) const final {
     std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
   }
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const SurfacePoints& at,
            std::span<float> pdf) const final {
     std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
   }
@@ -76,9 +77,9 @@ class Emitter : public virtual Component {
   static constexpr const char* kInterface = "yarf.v1.Emitter";
   static constexpr const char* kMethods[] = {"Radiance", "SampleDirection", "PdfDirection"};
 
-  // w: [N,3] local direction of travel away from the emitter; uv: [N,2];
+  // w: [N,3] local direction of travel away from the emitter at N points;
   // radiance: [N,3] in W·m⁻²·sr⁻¹ (a point light: intensity, W·sr⁻¹).
-  virtual void Radiance(std::span<const float> w, std::span<const float> uv,
+  virtual void Radiance(std::span<const float> w, const SurfacePoints& at,
                         std::span<float> radiance) const = 0;
   // uniform: [N,2] -> w [N,3] local direction of emission, pdf [N] (solid
   // angle), for paths that start at the light.

@@ -15,20 +15,10 @@
 
 #include "yarf/component.h"
 #include "yarf/properties.h"
+#include "yarf/surface_points.h"
 #include "yarf/vecmath.h"
 
 namespace yarf {
-
-// N surface points to look textures up at.
-struct TexturePoints {
-  // [N,2] texture coordinates (u, v); v = 0 is an image's top row.
-  std::span<const float> uv;
-  // [N,4] the footprint: (du/dx, dv/dx, du/dy, dv/dy), the change of uv
-  // from one pixel to the next; empty (or zero) for a point lookup.
-  std::span<const float> footprint;
-
-  size_t Count() const { return uv.size() / 2; }
-};
 
 class Texture : public virtual Component {
  public:
@@ -38,7 +28,7 @@ class Texture : public virtual Component {
   // 1 (a float texture) or 3 (RGB).
   virtual uint32_t Channels() const = 0;
   // value: [N, Channels()].
-  virtual void Evaluate(const TexturePoints& at, std::span<float> value) const = 0;
+  virtual void Evaluate(const SurfacePoints& at, std::span<float> value) const = 0;
   // The mean over the unit square of uv, Channels() values (for methods
   // that need one number, e.g. light selection by power).
   virtual std::vector<float> Mean() const = 0;
@@ -108,7 +98,7 @@ class TexturedValue {
   bool IsZero() const { return IsConstant() && constant_.x == 0 && constant_.y == 0 && constant_.z == 0; }
 
   // One RGB value per point (a float texture's value in all three).
-  void Evaluate(const TexturePoints& at, std::vector<Vec3>& out) const {
+  void Evaluate(const SurfacePoints& at, std::vector<Vec3>& out) const {
     const size_t n = at.Count();
     out.assign(n, constant_);
     if (IsConstant()) return;
@@ -120,7 +110,7 @@ class TexturedValue {
       out[k] = channels == 3 ? Vec3::Load(&values[3 * k]) : Vec3(values[k], values[k], values[k]);
   }
   // One float per point: a float texture's value, an RGB one's luminance.
-  void Evaluate(const TexturePoints& at, std::vector<float>& out) const {
+  void Evaluate(const SurfacePoints& at, std::vector<float>& out) const {
     const size_t n = at.Count();
     out.assign(n, constant_.x);
     if (IsConstant()) return;
@@ -133,23 +123,19 @@ class TexturedValue {
 
   // The RGB values at the points, as Evaluate gives them; no lookup (and
   // no allocation) for a constant.
-  PointValues<Vec3> At(const TexturePoints& at) const {
+  PointValues<Vec3> At(const SurfacePoints& at) const {
     if (IsConstant()) return PointValues<Vec3>(constant_);
     std::vector<Vec3> values;
     Evaluate(at, values);
     return PointValues<Vec3>(std::move(values));
   }
   // The float values at the points, likewise.
-  PointValues<float> FloatsAt(const TexturePoints& at) const {
+  PointValues<float> FloatsAt(const SurfacePoints& at) const {
     if (IsConstant()) return PointValues<float>(constant_.x);
     std::vector<float> values;
     Evaluate(at, values);
     return PointValues<float>(std::move(values));
   }
-  // The same at the [N,2] uv of a surface call, looked up as points (no
-  // footprint).
-  PointValues<Vec3> At(std::span<const float> uv) const { return At(TexturePoints{uv, {}}); }
-  PointValues<float> FloatsAt(std::span<const float> uv) const { return FloatsAt(TexturePoints{uv, {}}); }
 
  private:
   // max before min, so that a NaN becomes lo.

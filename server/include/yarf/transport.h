@@ -4,6 +4,7 @@
 // may ask of the scene; an Integrator feeds a RenderTarget with the results.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <optional>
@@ -13,6 +14,7 @@
 #include "yarf/component.h"
 #include "yarf/geometry.h"
 #include "yarf/surface.h"
+#include "yarf/surface_points.h"
 
 namespace yarf {
 
@@ -96,8 +98,9 @@ struct CameraConnection {
   float importance = 0;
 };
 
-// What a transport algorithm may ask of the scene of its job.
-class SceneView : public Intersector {
+// What a transport algorithm may ask of the scene of its job; its meshes'
+// attributes answer the textures that read them.
+class SceneView : public Intersector, public SurfaceAttributes {
  public:
   // Materials are numbered 0..MaterialCount()-1 so that a wavefront can
   // group queries by material and call each SurfaceModel once per batch.
@@ -128,6 +131,12 @@ class SceneView : public Intersector {
   // The camera seen from p through lens position (u, v): false when p is
   // off the film, behind the camera or outside its clip range.
   virtual bool ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const = 0;
+  // How far one film sample's step moves a point p of a surface with
+  // normal n, seen from the camera: dp/dx, dp/dy on its tangent plane, for
+  // texture footprints at any depth of a path (pbrt-v4's approximation: a
+  // pixel's step at p's distance and angle, shrunk for many samples per
+  // pixel). Zero when unknown or the plane is seen edge-on.
+  virtual void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const { dpdx = dpdy = Vec3(); }
   // Whether the lens has area (thin lens) or is a point (pinhole).
   virtual bool CameraHasLens() const = 0;
   // Density per solid angle of camera ray directions over the whole
@@ -145,6 +154,10 @@ class SceneView : public Intersector {
   // The handle under which the server's JobScene and Intersect services
   // serve this scene to out-of-process transports; 0 when not served.
   virtual uint64_t ServiceHandle() const { return 0; }
+  // SurfaceAttributes: none, unless the scene keeps them.
+  void Attribute(std::string_view, std::span<const SurfaceLocation>, std::span<float> rgb) const override {
+    std::fill(rgb.begin(), rgb.end(), 0.0f);
+  }
 };
 
 class Transport : public virtual Component {

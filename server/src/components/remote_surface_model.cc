@@ -43,10 +43,10 @@ void Remote<SurfaceModel>::RequireNonNegative(const char* method, const char* fi
 }
 
 void Remote<SurfaceModel>::Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo,
-                                    std::span<const float> uv, std::span<float> value) const {
+                                    const SurfacePoints& at, std::span<float> value) const {
   const uint32_t n = uint32_t(wi.size() / 3);
   if (n == 0) return;
-  v1::SurfaceQuery request = QueryOf(wi, wo, uv, n);
+  v1::SurfaceQuery request = QueryOf(wi, wo, at.uv, n);
   request.set_mode(ToProto(mode));
   v1::EvaluateSurfaceReply reply;
   instance_->Call("Evaluate", [&](grpc::ClientContext& context, uint64_t handle) {
@@ -57,7 +57,7 @@ void Remote<SurfaceModel>::Evaluate(TransportMode mode, std::span<const float> w
   RequireNonNegative("Evaluate", "value", value.first(3 * n));
 }
 
-void Remote<SurfaceModel>::Sample(TransportMode mode, std::span<const float> wi, std::span<const float> uv,
+void Remote<SurfaceModel>::Sample(TransportMode mode, std::span<const float> wi, const SurfacePoints& at,
                                   std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
                                   std::span<float> weight, std::span<float> pdf,
                                   std::span<uint32_t> flags) const {
@@ -65,7 +65,7 @@ void Remote<SurfaceModel>::Sample(TransportMode mode, std::span<const float> wi,
   if (n == 0) return;
   v1::SampleSurfaceRequest request;
   SetFloats(request.mutable_wi(), wi, {n, 3});
-  SetFloats(request.mutable_uv(), uv.first(2 * n), {n, 2});
+  SetFloats(request.mutable_uv(), at.uv.first(2 * n), {n, 2});
   SetFloats(request.mutable_uniform(), uniform.first(3 * n), {n, 3});
   request.set_allowed(allowed);
   request.set_mode(ToProto(mode));
@@ -85,11 +85,11 @@ void Remote<SurfaceModel>::Sample(TransportMode mode, std::span<const float> wi,
       throw instance_->BadReply("Sample", "unknown flags " + std::to_string(flags[i]) + " at query " + std::to_string(i));
 }
 
-void Remote<SurfaceModel>::Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+void Remote<SurfaceModel>::Pdf(std::span<const float> wi, std::span<const float> wo, const SurfacePoints& at,
                                std::span<float> pdf) const {
   const uint32_t n = uint32_t(wi.size() / 3);
   if (n == 0) return;
-  v1::SurfaceQuery request = QueryOf(wi, wo, uv, n);
+  v1::SurfaceQuery request = QueryOf(wi, wo, at.uv, n);
   v1::PdfSurfaceReply reply;
   instance_->Call("Pdf", [&](grpc::ClientContext& context, uint64_t handle) {
     request.set_handle(handle);

@@ -16,11 +16,11 @@ class Remote<SurfaceModel> final : public SurfaceModel {
   Remote(std::unique_ptr<RemoteInstance> instance);
 
   void Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override;
-  void Sample(TransportMode mode, std::span<const float> wi, std::span<const float> uv,
+                const SurfacePoints& at, std::span<float> value) const override;
+  void Sample(TransportMode mode, std::span<const float> wi, const SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo, std::span<float> weight,
               std::span<float> pdf, std::span<uint32_t> flags) const override;
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const SurfacePoints& at,
            std::span<float> pdf) const override;
   uint32_t Lobes() const override { return lobes_; }
 

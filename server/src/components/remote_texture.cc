@@ -29,7 +29,7 @@ Remote<Texture>::Remote(std::unique_ptr<RemoteInstance> instance)
   mean_.assign(mean.mean().begin(), mean.mean().end());
 }
 
-void Remote<Texture>::Evaluate(const TexturePoints& at, std::span<float> value) const {
+void Remote<Texture>::Evaluate(const SurfacePoints& at, std::span<float> value) const {
   const uint32_t n = uint32_t(at.Count());
   if (n == 0) return;
   v1::TextureQuery request;

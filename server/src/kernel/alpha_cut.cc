@@ -19,7 +19,7 @@ void AlphaCut::Attach(RTCGeometry geometry) const {
 float AlphaCut::Opacity(uint32_t primitive, float b1, float b2) const {
   float uv[2];
   TriangleUvAt(indices_, uvs_, primitive, b1, b2, uv);
-  return alpha_.FloatsAt(std::span<const float>(uv, 2))[0];
+  return alpha_.FloatsAt(SurfacePoints{.uv = uv})[0];
 }
 
 void AlphaCut::Filter(const RTCFilterFunctionNArguments* args) {

@@ -45,6 +45,8 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
     throw Error("camera: shutter must lie in [0, 1], got " + std::to_string(camera.shutter()));
   shutter_ = float(camera.shutter());
   inv_film_area_ = 1.0f / (4 * tan_half_x_ * tan_half_y_);
+  pixel_x_ = 2 * tan_half_x_ / float(width);
+  pixel_y_ = 2 * tan_half_y_ / float(height);
 }
 
 Vec3 Camera::LensPoint(float lens_u, float lens_v) const {
@@ -72,6 +74,28 @@ bool Camera::Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float
   *importance = inv_film_area_ / (cos_theta * cos_theta * cos_theta);
   *lens_point = origin_ + right_ * lens.x + up_ * lens.y;
   return true;
+}
+
+void Camera::PixelSpacing(Vec3 p, Vec3 n, Vec3* dpdx, Vec3* dpdy) const {
+  *dpdx = *dpdy = Vec3();
+  const Vec3 rel = p - origin_;
+  const float distance = Length(rel);
+  if (!(distance > 0) || !std::isfinite(distance)) return;
+  const Vec3 d = rel / distance;
+  // Steps across d along the film's axes (along up when d is the right axis).
+  Vec3 across = right_ - d * Dot(d, right_);
+  if (!(Length(across) > 1e-3f)) across = up_ - d * Dot(d, up_);
+  const Vec3 ex = Normalize(across), ey = Cross(d, ex);
+  const float plane = Dot(n, rel);
+  Vec3 landed[2];
+  const Vec3 directions[2] = {d + ex * pixel_x_, d + ey * pixel_y_};
+  for (int i = 0; i < 2; ++i) {
+    const float cos = Dot(n, directions[i]);
+    if (!(std::abs(cos) > 1e-6f)) return;
+    landed[i] = directions[i] * (plane / cos) - rel;
+    if (!std::isfinite(Dot(landed[i], landed[i]))) return;
+  }
+  *dpdx = landed[0], *dpdy = landed[1];
 }
 
 float Camera::DirectionPdf(Vec3 direction) const {

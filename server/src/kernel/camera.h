@@ -21,6 +21,12 @@ class Camera {
   // 1/(A cos³θ) for a world direction leaving the lens inside the field
   // of view, 0 outside.
   float DirectionPdf(Vec3 direction) const;
+  // How far the ray of the next pixel over, in x and in y, lands from p on
+  // the plane through p with normal n, taken from the lens centre toward p
+  // (pbrt-v4's approximation of ray differentials at any point; exact for
+  // a pinhole's first hit near the view axis). Zero when the plane is seen
+  // edge-on or p is at the lens.
+  void PixelSpacing(Vec3 p, Vec3 n, Vec3* dpdx, Vec3* dpdy) const;
   // The shutter's time for a uniform u: u·shutter.
   float Time(float u) const { return u * shutter_; }
   bool HasLens() const { return lens_radius_ > 0; }
@@ -36,6 +42,8 @@ class Camera {
   float lens_radius_ = 0, focus_distance_ = 1;
   float near_clip_ = 0, far_clip_ = 0;
   float shutter_ = 0;
+  // One pixel's width and height on the plane at distance 1.
+  float pixel_x_ = 0, pixel_y_ = 0;
   // 1/A, A the film's area on the plane at distance 1.
   float inv_film_area_ = 0;
 };

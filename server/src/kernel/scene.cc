@@ -12,11 +12,11 @@ namespace {
 // What the environment's sphere is made of: it absorbs everything.
 class Absorber final : public SurfaceModel {
  public:
-  void Evaluate(TransportMode, std::span<const float> wi, std::span<const float>, std::span<const float>,
+  void Evaluate(TransportMode, std::span<const float> wi, std::span<const float>, const SurfacePoints&,
                 std::span<float> value) const override {
     std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
   }
-  void Sample(TransportMode, std::span<const float> wi, std::span<const float>, std::span<const float>, uint32_t,
+  void Sample(TransportMode, std::span<const float> wi, const SurfacePoints&, std::span<const float>, uint32_t,
               std::span<float> wo, std::span<float> weight, std::span<float> pdf,
               std::span<uint32_t> flags) const override {
     const size_t n = wi.size() / 3;
@@ -25,7 +25,7 @@ class Absorber final : public SurfaceModel {
     std::fill(pdf.begin(), pdf.begin() + n, 0.0f);
     std::fill(flags.begin(), flags.begin() + n, kScatterNone);
   }
-  void Pdf(std::span<const float> wi, std::span<const float>, std::span<const float>,
+  void Pdf(std::span<const float> wi, std::span<const float>, const SurfacePoints&,
            std::span<float> pdf) const override {
     std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
   }
@@ -39,8 +39,8 @@ class FarSpotLight final : public Emitter {
   FarSpotLight(const Emitter& irradiance, float distance, float cos_cone)
       : irradiance_(irradiance), scale_(distance * distance), cos_cone_(cos_cone) {}
 
-  void Radiance(std::span<const float> w, std::span<const float> uv, std::span<float> radiance) const override {
-    irradiance_.Radiance(w, uv, radiance);
+  void Radiance(std::span<const float> w, const SurfacePoints& at, std::span<float> radiance) const override {
+    irradiance_.Radiance(w, at, radiance);
     for (size_t k = 0; k < w.size() / 3; ++k)
       for (int c = 0; c < 3; ++c) radiance[3 * k + c] *= w[3 * k + 2] >= cos_cone_ ? scale_ : 0.0f;
   }
@@ -319,6 +319,49 @@ void KernelScene::Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[
   for (int k = 0; k < 3; ++k) {
     v[k] = mesh.positions[mesh.indices[3 * primitive + k]];
     if (shape.placed) v[k] = shape.to_world.Point(v[k]);
+  }
+}
+
+void KernelScene::SetSamplesPerPixel(uint32_t spp) {
+  sample_spacing_ = std::max(0.125f, 1 / std::sqrt(float(std::max(spp, 1u))));
+}
+
+void KernelScene::SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const {
+  camera_.PixelSpacing(p, n, &dpdx, &dpdy);
+  dpdx = dpdx * sample_spacing_;
+  dpdy = dpdy * sample_spacing_;
+}
+
+void KernelScene::Attribute(std::string_view name, std::span<const SurfaceLocation> at,
+                            std::span<float> rgb) const {
+  std::fill(rgb.begin(), rgb.end(), 0.0f);
+  // Points of a batch mostly share a shape: its attribute is looked up once.
+  uint32_t shape_seen = kNoShape;
+  const MeshAttribute* attribute = nullptr;
+  const TriangleMesh* mesh = nullptr;
+  for (size_t k = 0; k < at.size() && 3 * k + 2 < rgb.size(); ++k) {
+    const SurfaceLocation& where = at[k];
+    if (where.shape != shape_seen) {
+      shape_seen = where.shape;
+      attribute = nullptr;
+      if (where.shape < shapes_.size() && shapes_[where.shape].kind == Kind::kTriangles) {
+        mesh = &meshes_[shapes_[where.shape].mesh];
+        for (const MeshAttribute& a : mesh->attributes)
+          if (a.name == name) attribute = &a;
+      }
+    }
+    if (!attribute || where.primitive >= mesh->TriangleCount()) continue;
+    const uint32_t c = attribute->channels;
+    float value[3] = {0, 0, 0};
+    if (attribute->PerFace()) {
+      for (uint32_t i = 0; i < c && i < 3; ++i) value[i] = attribute->values[c * size_t(where.primitive) + i];
+    } else {
+      const uint32_t* v = &mesh->indices[3 * size_t(where.primitive)];
+      const float b[3] = {1 - where.b1 - where.b2, where.b1, where.b2};
+      for (int corner = 0; corner < 3; ++corner)
+        for (uint32_t i = 0; i < c && i < 3; ++i) value[i] += b[corner] * attribute->values[c * size_t(v[corner]) + i];
+    }
+    for (int i = 0; i < 3; ++i) rgb[3 * k + i] = c == 1 ? value[0] : value[i];
   }
 }
 

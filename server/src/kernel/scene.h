@@ -92,6 +92,11 @@ class KernelScene final : public SceneView {
     return camera_.Generate(film_x, film_y, lens_u, lens_v, time);
   }
   bool ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const override;
+  // Footprints are a film sample's spacing: a pixel's, shrunk to
+  // max(1/8, 1/√spp) of it as pbrt-v4 does, for the job's samples per pixel.
+  void SetSamplesPerPixel(uint32_t spp);
+  void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const override;
+  void Attribute(std::string_view name, std::span<const SurfaceLocation> at, std::span<float> rgb) const override;
   bool CameraHasLens() const override { return camera_.HasLens(); }
   float CameraDirectionPdf(Vec3 direction) const override { return camera_.DirectionPdf(direction); }
   uint32_t FilmWidth() const override { return width_; }
@@ -153,6 +158,7 @@ class KernelScene final : public SceneView {
   const EmbreeDevice& device_;
   Camera camera_;
   uint64_t service_handle_ = 0;
+  float sample_spacing_ = 1;
   uint32_t width_, height_;
   // Shared: a material may wrap another (normalmap).
   std::vector<std::shared_ptr<const SurfaceModel>> materials_;

@@ -205,7 +205,7 @@ grpc::Status SurfaceModelServiceImpl::Evaluate(grpc::ServerContext* context, con
     const auto uv = batch.Floats(request->uv(), {2}, "uv");
     const uint32_t n = batch.rows();
     std::vector<float> value(3 * n);
-    model.Evaluate(TransportMode(request->mode()), wi, wo, uv, value);
+    model.Evaluate(TransportMode(request->mode()), wi, wo, SurfacePoints{.uv = uv}, value);
     *reply->mutable_value() = FloatArray(value, {n, 3});
   });
 }
@@ -220,7 +220,7 @@ grpc::Status SurfaceModelServiceImpl::Sample(grpc::ServerContext* context, const
     const uint32_t n = batch.rows();
     std::vector<float> wo(3 * n), weight(3 * n), pdf(n);
     std::vector<uint32_t> flags(n);
-    model.Sample(TransportMode(request->mode()), wi, uv, u, request->allowed(), wo, weight, pdf, flags);
+    model.Sample(TransportMode(request->mode()), wi, SurfacePoints{.uv = uv}, u, request->allowed(), wo, weight, pdf, flags);
     *reply->mutable_wo() = FloatArray(wo, {n, 3});
     *reply->mutable_weight() = FloatArray(weight, {n, 3});
     *reply->mutable_pdf() = FloatArray(pdf, {n});
@@ -237,7 +237,7 @@ grpc::Status SurfaceModelServiceImpl::Pdf(grpc::ServerContext* context, const v1
     const auto uv = batch.Floats(request->uv(), {2}, "uv");
     const uint32_t n = batch.rows();
     std::vector<float> pdf(n);
-    model.Pdf(wi, wo, uv, pdf);
+    model.Pdf(wi, wo, SurfacePoints{.uv = uv}, pdf);
     *reply->mutable_pdf() = FloatArray(pdf, {n});
   });
 }
@@ -256,7 +256,7 @@ grpc::Status EmitterServiceImpl::Radiance(grpc::ServerContext* context, const v1
     const auto uv = batch.Floats(request->uv(), {2}, "uv");
     const uint32_t n = batch.rows();
     std::vector<float> radiance(3 * n);
-    emitter.Radiance(w, uv, radiance);
+    emitter.Radiance(w, SurfacePoints{.uv = uv}, radiance);
     *reply->mutable_radiance() = FloatArray(radiance, {n, 3});
   });
 }

@@ -82,6 +82,7 @@ JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::str
   if (resources.assets) assets.emplace(*resources.assets, owner);
   parts.scene = BuildScene(scene, SceneSources{components, resources.device, resources.asset_root,
                                                assets ? &*assets : nullptr, &stop});
+  parts.scene->SetSamplesPerPixel(options.spp());
   parts.transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
   const v1::ComponentSpec integrator =
       IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources));

@@ -93,7 +93,7 @@ void EmitterRadiance(const std::vector<const Emitter*>& emitters, const std::vec
       std::copy_n(&w[3 * members[j]], 3, &gw[3 * j]);
       std::copy_n(&uv[2 * members[j]], 2, &guv[2 * j]);
     }
-    emitter->Radiance(gw, guv, le);
+    emitter->Radiance(gw, SurfacePoints{.uv = guv}, le);
     for (size_t j = 0; j < m; ++j) std::copy_n(&le[3 * j], 3, &radiance[3 * members[j]]);
   }
 }

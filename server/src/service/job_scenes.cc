@@ -12,17 +12,17 @@ class ServedMaterial final : public SurfaceModel {
     SetInfo(model_.Describe());
   }
   void Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo,
-                std::span<const float> uv, std::span<float> value) const override {
-    model_.Evaluate(mode, wi, wo, uv, value);
+                const SurfacePoints& at, std::span<float> value) const override {
+    model_.Evaluate(mode, wi, wo, at, value);
   }
-  void Sample(TransportMode mode, std::span<const float> wi, std::span<const float> uv,
+  void Sample(TransportMode mode, std::span<const float> wi, const SurfacePoints& at,
               std::span<const float> uniform, uint32_t allowed, std::span<float> wo, std::span<float> weight,
               std::span<float> pdf, std::span<uint32_t> flags) const override {
-    model_.Sample(mode, wi, uv, uniform, allowed, wo, weight, pdf, flags);
+    model_.Sample(mode, wi, at, uniform, allowed, wo, weight, pdf, flags);
   }
-  void Pdf(std::span<const float> wi, std::span<const float> wo, std::span<const float> uv,
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const SurfacePoints& at,
            std::span<float> pdf) const override {
-    model_.Pdf(wi, wo, uv, pdf);
+    model_.Pdf(wi, wo, at, pdf);
   }
   uint32_t Lobes() const override { return model_.Lobes(); }
 
