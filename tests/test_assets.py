@@ -21,7 +21,7 @@ import pytest
 from conftest import small_scene
 from google.protobuf import json_format
 
-from yarf import Client, LocalServer, SceneError, transform
+from yarf import Client, LocalServer, transform
 from yarf.assets import CHUNK_BYTES, asset_chunks, sha256_of, upload_scene_assets
 from yarf.v1 import asset_pb2, render_pb2, scene_pb2
 
@@ -249,16 +249,17 @@ def test_upload_scene_assets_sends_each_missing_file_once(
     assert again == scene
 
 
-def test_upload_scene_assets_refuses_a_file_outside_the_scene_folder(
+def test_upload_scene_assets_sends_a_file_beside_the_scene_folder(
     assets_client: Client, tmp_path: Path
 ) -> None:
-    (tmp_path / "outside.obj").write_bytes(QUAD_OBJ)
+    # The client reads what its user can read; the server gets only bytes.
+    (tmp_path / "beside.obj").write_bytes(QUAD_OBJ)
     (tmp_path / "scene").mkdir()
     scene = small_scene()
-    scene.shapes.add(name="sneaky", material="grey").mesh.file = "../outside.obj"
-    with pytest.raises(SceneError, match="outside"):
-        upload_scene_assets(assets_client, scene, tmp_path / "scene")
-    assert scene.shapes[-1].mesh.file == "../outside.obj"
+    scene.shapes.add(name="beside", material="grey").mesh.file = "../beside.obj"
+    upload_scene_assets(assets_client, scene, tmp_path / "scene")
+    assert scene.shapes[-1].mesh.asset == sha256_of(QUAD_OBJ)
+    assert not scene.shapes[-1].mesh.file
 
 
 def test_yarf_render_uploads_the_mesh_files_to_a_server_without_asset_root(

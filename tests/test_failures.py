@@ -177,12 +177,13 @@ def test_scene_loader_names_a_missing_mesh_file(tmp_path: Path) -> None:
         load_scene(path)
 
 
-def test_scene_loader_refuses_a_mesh_file_outside_the_scene_folder(tmp_path: Path) -> None:
-    (tmp_path / "outside.obj").write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+def test_scene_loader_inlines_a_mesh_file_beside_the_scene_folder(tmp_path: Path) -> None:
+    triangle = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+    (tmp_path / "beside.obj").write_bytes(triangle)
     folder = tmp_path / "scene"
     folder.mkdir()
-    with pytest.raises(SceneError, match=r"\.\./outside\.obj.*outside"):
-        load_scene(scene_file_with_mesh(folder, "../outside.obj"))
+    scene = load_scene(scene_file_with_mesh(folder, "../beside.obj"))
+    assert [s.mesh.data for s in scene.shapes if s.name == "extra"] == [triangle]
 
 
 def test_cli_exits_with_an_error_naming_a_missing_mesh_file(

@@ -92,10 +92,9 @@ def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
     """Checks and hashes the mesh ``file`` and ``data`` and the texture files of
     ``scene``; raises SceneError.
 
-    Mesh files are named relative to ``base_dir`` and must stay inside it.
-    A texture's ``filename`` is relative to ``base_dir`` and may lie
-    anywhere its user can read (scenes share texture folders): only its
-    bytes reach the server. Each file is read here only to hash it (and
+    Mesh files and textures' ``filename`` are relative to ``base_dir`` and
+    may lie anywhere its user can read (scenes share mesh and texture
+    folders): only their bytes reach the server. Each file is read here only to hash it (and
     again, in chunks, if it is sent).
     """
     base = Path(base_dir).resolve()

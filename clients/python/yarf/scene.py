@@ -234,16 +234,18 @@ def _mesh_format(where: str, name: str, declared: str) -> str:
 
 
 def mesh_file_path(where: str, base: Path, name: str) -> Path:
-    """The file a mesh ``file`` names: relative to ``base`` (resolved), never outside it."""
+    """The file a mesh ``file`` names, relative to ``base`` (resolved).
+
+    It may lie beside the scene's folder ("../meshes/x.obj"): the client
+    reads what its user can read and sends the bytes; confining the paths a
+    server is sent is the server's rule.
+    """
     relative = PurePath(name)
     if not name or relative.is_absolute():
         raise SceneError(
             f"{where}: mesh file {name!r} must be a path relative to the scene's folder {base}"
         )
-    target = (base / relative).resolve()
-    if not target.is_relative_to(base):
-        raise SceneError(f"{where}: mesh file {name!r} is outside the scene's folder {base}")
-    return target
+    return (base / relative).resolve()
 
 
 def _read_mesh_file(where: str, base: Path, name: str) -> bytes:

@@ -35,9 +35,12 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   const RecursionGuard guard(nesting_, where);
   const std::string what = "material '" + type + "'";
   params.Accept({"type"});
+  // A displacement texture bumps the material made below (bumpmap); a
+  // constant displacement moves the surface without tilting it.
+  std::string bump_map;
   if (params.Has("displacement")) {
-    params.Find("displacement");
-    Warn(params.WhereIs("displacement", where), "material:displacement", "displacement is not supported: ignored");
+    const Textured displacement = TexturedFloat(params, "displacement", 0);
+    if (displacement.IsTexture()) bump_map = displacement.texture;
   }
   // A normal map: the material made below, seen through it (normalmap).
   std::string normal_map;
@@ -188,7 +191,11 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
     params.WarnUnused(diagnostics_, what);
     return it->second;
   } else {
-    Warn(where, "material:" + type, "material '" + type + "' is not supported: a grey diffuse used");
+    static const std::vector<std::string> kKnown = {
+        "interface", "none", "diffuse", "matte", "coateddiffuse", "conductor", "coatedconductor", "dielectric",
+        "thindielectric", "diffusetransmission", "mix", "measured", "hair", "subsurface"};
+    Warn(where, "material:" + type,
+         "material '" + type + "' is not supported: a grey diffuse used" + DidYouMean(type, kKnown));
     return assembly_.DefaultMaterial();
   }
   params.WarnUnused(diagnostics_, what);
@@ -200,11 +207,16 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
     const auto it = material_cache_.find(key);
     if (it != material_cache_.end()) return it->second;
   }
-  if (!normal_map.empty()) {
+  if (!normal_map.empty() || !bump_map.empty()) {
+    // As pbrt-v4, a normal map wins over a displacement.
+    if (!normal_map.empty() && !bump_map.empty())
+      Warn(params.WhereIs("displacement", where), "material:displacement-normalmap",
+           what + ": a normal map and a displacement: the displacement is ignored");
     v1::Properties wrapper;
     SetReference(wrapper, "bsdf", assembly_.AddMaterial((name.empty() ? type : name) + "-nested", class_name, std::move(props)));
-    SetReference(wrapper, "normalmap", normal_map);
-    return assembly_.AddMaterial(name.empty() ? type : name, "normalmap", std::move(wrapper));
+    const char* wrapper_class = normal_map.empty() ? "bumpmap" : "normalmap";
+    SetReference(wrapper, wrapper_class, normal_map.empty() ? bump_map : normal_map);
+    return assembly_.AddMaterial(name.empty() ? type : name, wrapper_class, std::move(wrapper));
   }
   const std::string made = assembly_.AddMaterial(name.empty() ? type : name, class_name, std::move(props));
   if (name.empty()) material_cache_[key] = made;

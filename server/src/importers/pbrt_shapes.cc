@@ -110,7 +110,9 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     Warn(where, "cylinder",
          "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads per turn");
   } else {
-    Warn(where, "shape:" + type, "shape '" + type + "' is not supported: ignored");
+    static const std::vector<std::string> kKnown = {"trianglemesh", "plymesh", "sphere", "disk", "cylinder",
+                                                    "bilinearmesh", "loopsubdiv", "curve"};
+    Warn(where, "shape:" + type, "shape '" + type + "' is not supported: ignored" + DidYouMean(type, kKnown));
     return;
   }
   if (params.Has("alpha")) {

@@ -34,20 +34,22 @@ fs::path SceneFolder::Resolve(const std::string& name, const fs::path& from_file
     candidates.push_back(fs::absolute(from_file).parent_path() / relative);
     candidates.push_back(root_ / relative);
   }
-  bool outside = false;
+  for (const fs::path& folder : search_)
+    if (!relative.is_absolute()) candidates.push_back(folder / relative);
   for (const fs::path& candidate : candidates) {
     std::error_code error;
     const fs::path canonical = fs::weakly_canonical(candidate, error);
     if (error) continue;
-    if (!Inside(canonical)) {
-      outside = true;
-      continue;
-    }
     if (!must_exist || fs::is_regular_file(canonical, error)) return canonical;
   }
-  if (outside) Fail(where, "file '" + name + "' lies outside the scene folder " + root_.string());
-  Fail(where, "file '" + name + "' not found (looked in the including file's folder and " +
-                  root_.string() + ")");
+  Fail(where, "file '" + name + "' not found (looked in the including file's folder, " + root_.string() +
+                  (search_.empty() ? std::string() : " and the scene's <path> folders") + ")");
+}
+
+void SceneFolder::AddSearchFolder(const fs::path& folder) {
+  std::error_code error;
+  const fs::path canonical = fs::weakly_canonical(fs::absolute(folder, error), error);
+  search_.push_back(error ? fs::absolute(folder).lexically_normal() : canonical);
 }
 
 std::string SceneFolder::Relative(const fs::path& file) const {

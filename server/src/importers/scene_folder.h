@@ -1,9 +1,13 @@
-// The folder of a scene file: every file the scene names (includes, meshes,
-// textures) must lie inside it, so that a scene cannot reach elsewhere.
+// The folder of a scene file, where the files a scene names (includes,
+// meshes, textures) are looked for. The importer runs as its user, who may
+// name any file they can read (Mitsuba's "../textures/wood.png"): the
+// client uploads what it reads by hash, and confining the paths a server is
+// sent is the server's rule (the kernel's scene builder).
 #pragma once
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "importers/import_error.h"
 
@@ -15,13 +19,17 @@ class SceneFolder {
   explicit SceneFolder(const std::filesystem::path& scene_file);
 
   // The file `name` refers to from `from_file`: relative to from_file's
-  // folder, else to the root. Fails (at `where`) when it is outside the
-  // root or, with must_exist, not a regular file.
+  // folder, else to the root, else to the folders added by AddSearchFolder
+  // (in order). Fails (at `where`) when, with must_exist, none is a
+  // regular file.
   std::filesystem::path Resolve(const std::string& name, const std::filesystem::path& from_file,
                                 const SourceLocation& where, bool must_exist = true) const;
 
-  // `file` (inside the root) relative to the root, '/'-separated: what
-  // Mesh.file holds.
+  // Looks for files in `folder` too (Mitsuba's <path value="..."/>).
+  void AddSearchFolder(const std::filesystem::path& folder);
+
+  // `file` relative to the root, '/'-separated (with "../" for a file
+  // outside it): what Mesh.file holds.
   std::string Relative(const std::filesystem::path& file) const;
 
   // How messages name `file`: the user's path to the scene folder joined
@@ -35,6 +43,7 @@ class SceneFolder {
 
   std::filesystem::path root_;        // canonical
   std::filesystem::path user_root_;   // as given
+  std::vector<std::filesystem::path> search_;  // absolute
 };
 
 // The bytes of a scene file (at most 1 GiB); fails at `where` otherwise.

@@ -124,9 +124,26 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     SetReference(props, "bsdf", nested);
     SetReference(props, "normalmap", normals.texture);
     return assembly_.AddMaterial(name, "normalmap", std::move(props));
-  } else if (type == "bumpmap" || type == "blendbsdf") {
+  } else if (type == "bumpmap") {
+    // The height is the nested texture, whatever its name.
+    const auto textures = p.Objects("texture");
+    if (textures.empty()) Fail(e.where, what + " needs a nested <texture> (the height)");
+    const std::string height = TextureReference(*textures.front());
+    const double scale = p.Float("scale", 1.0);
+    const std::string nested = MakeMaterial(inner(), name + "-nested");
+    if (height.empty()) {
+      Warn(e.where, "bumpmap-texture", "bumpmap: texture type '" + textures.front()->Get("type") +
+                                           "' is not supported: the nested BSDF is used unbumped");
+      return nested;
+    }
+    if (nested.empty()) return "";
+    SetReference(props, "bsdf", nested);
+    SetReference(props, "bumpmap", height);
+    SetFloat(props, "scale", scale);
+    return assembly_.AddMaterial(name, "bumpmap", std::move(props));
+  } else if (type == "blendbsdf") {
     Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' is not supported: its (first) nested BSDF is used");
-    p.Accept({"weight", "scale", "texture"});
+    p.Accept({"weight"});
     return MakeMaterial(inner(), name);
   } else if (type == "null") {
     Warn(e.where, "bsdf:null", "null BSDF: shapes using it are left out (yarf has no invisible surfaces)");

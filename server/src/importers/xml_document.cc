@@ -54,7 +54,7 @@ std::string SnakeCase(const std::string& name) {
 
 class Loader {
  public:
-  Loader(const fs::path& file, const SceneFolder& folder, const std::map<std::string, std::string>& parameters,
+  Loader(const fs::path& file, SceneFolder& folder, const std::map<std::string, std::string>& parameters,
          Diagnostics& diagnostics)
       : folder_(folder), parameters_(parameters), diagnostics_(diagnostics) {
     std::error_code error;
@@ -133,6 +133,14 @@ class Loader {
       Include(e, file, out);
       return;
     }
+    if (e.tag == "path") {
+      // A folder files are looked for in, relative to this file's folder.
+      const fs::path folder = fs::absolute(file.path).parent_path() / fs::path(e.Required("value"));
+      std::error_code error;
+      if (!fs::is_directory(folder, error)) Fail(e.where, "<path>: folder '" + e.Get("value") + "' not found");
+      folder_.AddSearchFolder(folder);
+      return;
+    }
     for (pugi::xml_node child : node.children())
       if (child.type() == pugi::node_element) Convert(child, file, e.children, depth + 1);
     out.push_back(std::move(e));
@@ -177,7 +185,7 @@ class Loader {
     return out;
   }
 
-  const SceneFolder& folder_;
+  SceneFolder& folder_;
   const std::map<std::string, std::string>& parameters_;
   std::map<std::string, std::string> defaults_;
   Diagnostics& diagnostics_;
@@ -187,7 +195,7 @@ class Loader {
 
 }  // namespace
 
-XmlElement LoadMitsubaDocument(std::string_view text, const fs::path& file, const SceneFolder& folder,
+XmlElement LoadMitsubaDocument(std::string_view text, const fs::path& file, SceneFolder& folder,
                                const std::map<std::string, std::string>& parameters, Diagnostics& diagnostics) {
   Loader loader(file, folder, parameters, diagnostics);
   XmlElement scene;

@@ -30,10 +30,10 @@ struct XmlElement {
 };
 
 // Reads `text` (the file `file`) into its <scene> element. `parameters`
-// override <default>s. Malformed XML, a missing version, an include cycle
+// override <default>s; <path> elements add search folders to `folder`. Malformed XML, a missing version, an include cycle
 // or an undefined $name fail with the file and line.
 XmlElement LoadMitsubaDocument(std::string_view text, const std::filesystem::path& file,
-                               const SceneFolder& folder, const std::map<std::string, std::string>& parameters,
+                               SceneFolder& folder, const std::map<std::string, std::string>& parameters,
                                Diagnostics& diagnostics);
 
 }  // namespace yarf::importers

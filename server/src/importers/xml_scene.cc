@@ -5,7 +5,7 @@
 namespace yarf::importers {
 
 ImportResult ImportMitsuba(std::string_view text, const std::filesystem::path& file, const ImportOptions& options) {
-  const SceneFolder folder(file);
+  SceneFolder folder(file);
   Diagnostics diagnostics;
   const XmlElement scene = LoadMitsubaDocument(text, file, folder, options.parameters, diagnostics);
   MitsubaImporter importer(folder, diagnostics);

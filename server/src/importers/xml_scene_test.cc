@@ -265,13 +265,21 @@ TEST(MitsubaImport, AMirroringSensorMirrorsTheWorldAndKeepsLitSides) {
   EXPECT_FALSE(right.flip_normals());
 }
 
+// The importer reads what its user can read: a file beside the scene's
+// folder is named relative to it (the client uploads it by hash), and a
+// <path> folder is searched as Mitsuba's file resolver does.
+TEST(MitsubaImport, NamesFilesOutsideTheSceneFolderAndSearchesPathFolders) {
+  EXPECT_EQ(Import("beside/outside.xml").scene.shapes(0).mesh().file(), "../assets/triangle.obj");
+  EXPECT_EQ(ShapeNamed(Import("beside/search_path.xml").scene, "found").mesh().file(), "../assets/triangle.obj");
+}
+
 TEST(MitsubaImport, MalformedFilesFailWithFileAndLine) {
   const std::pair<const char*, const char*> cases[] = {
       {"malformed/truncated.xml", "truncated.xml:3: malformed XML"},
       {"malformed/wrong_type.xml", "wrong_type.xml:3: <shape type=\"sphere\">: property 'radius' must be"},
       {"malformed/bad_number.xml", "bad_number.xml:3: radius: '1e999' is not a finite number"},
       {"malformed/missing_ref.xml", "missing_ref.xml:3: reference to an unknown id 'nowhere'"},
-      {"malformed/outside.xml", "outside.xml:3: file '../assets/triangle.obj' lies outside the scene folder"},
+      {"malformed/missing_path.xml", "missing_path.xml:2: <path>: folder 'nowhere' not found"},
       {"malformed/absurd.xml", "absurd.xml:3: film resolution 100000x100000 is out of range"},
       {"malformed/cycle_a.xml", "cycle_b.xml:2: include cycle"},
       {"malformed/undefined_parameter.xml", "undefined_parameter.xml:3: undefined parameter $size"},

@@ -113,7 +113,7 @@ Rgb MitsubaImporter::SpectrumValue(const XmlElement& e, bool within_emitter) {
 std::string MitsubaImporter::TextureReference(const XmlElement& e) {
   if (const auto it = textures_.find(&e); it != textures_.end()) return it->second;
   const std::string type = e.Get("type");
-  if (type != "bitmap" && type != "checkerboard") return "";
+  if (type != "bitmap" && type != "checkerboard" && type != "mesh_attribute") return "";
   const RecursionGuard guard(nesting, e.where);
   XmlPlugin plugin(e, *this);
   v1::Properties props;
@@ -125,6 +125,12 @@ std::string MitsubaImporter::TextureReference(const XmlElement& e) {
       if (plugin.Has(key)) SetString(props, key, plugin.String(key, ""));
     if (plugin.Has("raw")) SetBool(props, "raw", plugin.Boolean("raw", false));
     plugin.Accept({"format"});
+  } else if (type == "mesh_attribute") {
+    const std::string attribute = plugin.String("name", "");
+    if (!attribute.starts_with("vertex_") && !attribute.starts_with("face_"))
+      Fail(plugin.WhereIs("name"), "mesh_attribute: name must start with 'vertex_' or 'face_', got '" + attribute + "'");
+    SetString(props, "name", attribute);
+    if (plugin.Has("scale")) SetFloat(props, "scale", plugin.Float("scale", 1.0));
   } else {
     SetColour(props, "color0", plugin.TexturedColor("color0", {0.4, 0.4, 0.4}));
     SetColour(props, "color1", plugin.TexturedColor("color1", {0.2, 0.2, 0.2}));
