@@ -52,6 +52,50 @@ def uv_sphere_obj(segments: int, rings: int) -> str:
     return "\n".join(lines) + "\n"
 
 
+def uv_sphere_ply(segments: int, rings: int, *, per_face: bool) -> str:
+    """The UV sphere of uv_sphere_obj as ASCII PLY with colours: per vertex from
+    the position (vertex_color), or per face from the face's index (face_color)."""
+    vertices, faces = [], []
+    for ring in range(rings + 1):
+        theta = math.pi * ring / rings
+        for segment in range(segments + 1):
+            phi = 2 * math.pi * segment / segments
+            x, y, z = (
+                math.sin(theta) * math.cos(phi),
+                math.cos(theta),
+                math.sin(theta) * math.sin(phi),
+            )
+            colour = (
+                "" if per_face else f" {0.5 + 0.4 * x:.6f} {0.5 + 0.4 * y:.6f} {0.5 + 0.4 * z:.6f}"
+            )
+            vertices.append(f"{x:.7f} {y:.7f} {z:.7f} {x:.7f} {y:.7f} {z:.7f}{colour}")
+    row = segments + 1
+    for ring in range(rings):
+        for segment in range(segments):
+            a = ring * row + segment
+            b, c, d = a + 1, a + row, a + row + 1
+            for tri in ((a, d, b), (a, c, d)):
+                k = len(faces)
+                colour = (
+                    f" {0.2 + 0.7 * (k % 3 == 0):.1f} {0.2 + 0.6 * (k % 5 < 2):.1f} 0.3"
+                    if per_face
+                    else ""
+                )
+                faces.append(f"3 {tri[0]} {tri[1]} {tri[2]}{colour}")
+    colour_properties = "property float r\nproperty float g\nproperty float b\n"
+    header = (
+        "ply\nformat ascii 1.0\n"
+        f"element vertex {len(vertices)}\n"
+        "property float x\nproperty float y\nproperty float z\n"
+        "property float nx\nproperty float ny\nproperty float nz\n"
+        + ("" if per_face else colour_properties)
+        + f"element face {len(faces)}\nproperty list uchar int vertex_indices\n"
+        + (colour_properties if per_face else "")
+        + "end_header\n"
+    )
+    return header + "\n".join(vertices + faces) + "\n"
+
+
 def scene_xml(shape: str, *, max_depth: int = 4) -> str:
     """A lit room around one shape (XML of Mitsuba 3): a floor, an area light."""
     return f"""<scene version="3.0.0">

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from component_process import ComponentProcess
 from imagestats import block_z_test, pixel_z_test
-from surface_scenes import SPP, render_mitsuba, uv_sphere_obj, write_scene
+from surface_scenes import SPP, render_mitsuba, uv_sphere_obj, uv_sphere_ply, write_scene
 
 from yarf import Client, RenderResult, component, load_scene
 from yarf.assets import upload_scene_assets
@@ -55,6 +55,12 @@ def png(path: Path) -> None:
     tilt = np.radians(35) * np.sin(np.linspace(0, 8 * np.pi, 64, endpoint=False))
     normal = np.stack([np.sin(tilt), np.zeros_like(tilt), np.cos(tilt)], axis=-1)
     ridges = np.broadcast_to(normal, (32, 64, 3))
+    # A height map: ridges across u, and bumps across v, in 8-bit grey.
+    u, v = np.meshgrid(np.linspace(0, 1, 64, endpoint=False), np.linspace(0, 1, 32, endpoint=False))
+    height = 0.5 + 0.35 * np.sin(16 * np.pi * u) + 0.12 * np.cos(8 * np.pi * v)
+    Image.fromarray(np.round(height * 255).astype(np.uint8), mode="L").save(
+        path.with_name("height.png")
+    )
     for name, normals in (
         ("ridges.png", ridges),
         ("flat.png", np.full((4, 4, 3), [0.0, 0.0, 1.0])),
@@ -107,6 +113,23 @@ TEXTURED = {
         '<bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.7, 0.2"/>'
         "</bsdf></bsdf></bsdf></shape>"
     ),
+    # A tile facing the camera, its bumps tilted by up to ~35°: gentle enough
+    # that no view falls below a bumped facet, where Mitsuba's one-sided
+    # diffuse is black and yarf's two-sided one is not.
+    "bump map": (
+        '<shape type="rectangle"><transform name="to_world"><scale value="0.9"/>'
+        '<rotate x="1" angle="-15"/><translate y="0.1"/></transform><bsdf type="bumpmap">'
+        '<texture type="bitmap" name="height"><string name="filename" value="height.png"/>'
+        '<boolean name="raw" value="true"/></texture><float name="scale" value="0.05"/>'
+        f"{GREY}</bsdf></shape>"
+    ),
+    "checkerboard plane at grazing angles": (
+        '<shape type="rectangle"><transform name="to_world"><scale value="3"/>'
+        '<rotate x="1" angle="-90"/><translate y="-0.9"/></transform>'
+        '<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">'
+        '<rgb name="color0" value="0.9, 0.9, 0.8"/><rgb name="color1" value="0.05, 0.1, 0.2"/>'
+        '<transform name="to_uv"><scale x="24" y="24"/></transform></texture></bsdf></shape>'
+    ),
     "checkerboard at grazing angles": (
         '<shape type="sphere"><float name="radius" value="0.5"/>'
         '<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">'
@@ -115,7 +138,25 @@ TEXTURED = {
     ),
 }
 
+
+def coloured_sphere(attribute: str) -> str:
+    """The low-poly sphere (sphere.ply) whose reflectance is a mesh attribute."""
+    return (
+        '<shape type="ply"><string name="filename" value="sphere.ply"/><bsdf type="diffuse">'
+        f'<texture type="mesh_attribute" name="reflectance"><string name="name" value="{attribute}"/>'
+        "</texture></bsdf></shape>"
+    )
+
+
 SHAPES = {
+    "vertex-coloured mesh": (
+        coloured_sphere("vertex_color"),
+        {"sphere.ply": uv_sphere_ply(12, 6, per_face=False)},
+    ),
+    "face-coloured mesh": (
+        coloured_sphere("face_color"),
+        {"sphere.ply": uv_sphere_ply(12, 6, per_face=True)},
+    ),
     "smooth low-poly sphere": (low_poly_sphere(False), {"sphere.obj": LOW_POLY}),
     "faceted low-poly sphere": (low_poly_sphere(True), {"sphere.obj": LOW_POLY}),
     "cylinder": (

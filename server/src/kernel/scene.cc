@@ -323,7 +323,7 @@ void KernelScene::Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[
 }
 
 void KernelScene::SetSamplesPerPixel(uint32_t spp) {
-  sample_spacing_ = std::max(0.125f, 1 / std::sqrt(float(std::max(spp, 1u))));
+  sample_spacing_ = 1 / std::sqrt(float(std::max(spp, 1u)));
 }
 
 void KernelScene::SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const {

@@ -92,8 +92,11 @@ class KernelScene final : public SceneView {
     return camera_.Generate(film_x, film_y, lens_u, lens_v, time);
   }
   bool ConnectToCamera(Vec3 p, float lens_u, float lens_v, CameraConnection& out) const override;
-  // Footprints are a film sample's spacing: a pixel's, shrunk to
-  // max(1/8, 1/√spp) of it as pbrt-v4 does, for the job's samples per pixel.
+  // Footprints are a film sample's spacing: a pixel's over √spp for the
+  // job's samples per pixel. pbrt-v4 stops shrinking at 1/8 of a pixel;
+  // yarf does not, so that a render of many samples converges to the
+  // pixel's own integral (what a reference renders) rather than to a
+  // prefiltered texture's.
   void SetSamplesPerPixel(uint32_t spp);
   void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const override;
   void Attribute(std::string_view name, std::span<const SurfaceLocation> at, std::span<float> rgb) const override;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <array>
@@ -11,6 +12,7 @@
 #include "components/registry.h"
 #include "kernel/scene_builder.h"
 #include "yarf/error.h"
+#include "yarf/shading.h"
 
 namespace yarf {
 namespace {
@@ -211,6 +213,55 @@ TEST_F(SceneTest, InlineMeshAttributesAreChecked) {
   EXPECT_THROW(Build(scene), Error);  // 8 values, not 9
   colour->add_values(0.5f);
   EXPECT_NO_THROW(Build(scene));
+}
+
+TEST_F(SceneTest, MeshAttributesAreInterpolatedPerVertexAndConstantPerFace) {
+  v1::Scene scene = BaseScene();
+  v1::SceneShape* s = AddTriangle(scene.mutable_shapes());
+  v1::MeshAttribute* colour = s->mutable_mesh()->add_attributes();
+  colour->set_name("vertex_color");
+  colour->set_channels(3);
+  for (float v : {1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f}) colour->add_values(v);
+  v1::MeshAttribute* weight = s->mutable_mesh()->add_attributes();
+  weight->set_name("face_weight");
+  weight->set_channels(1);
+  weight->add_values(0.25f);
+  const auto kernel = Build(scene);
+  const Hit hit = Trace(*kernel, Vec3(0.2f, -0.3f, -1), Vec3(0, 0, 1));
+  ASSERT_TRUE(hit.Found());
+  const SurfaceLocation at[] = {{hit.shape, hit.primitive, hit.b1, hit.b2}, {kNoShape, 0, 0, 0}};
+  float rgb[6];
+  kernel->Attribute("vertex_color", at, rgb);
+  EXPECT_NEAR(rgb[0], 1 - hit.b1 - hit.b2, 1e-6f);
+  EXPECT_NEAR(rgb[1], hit.b1, 1e-6f);
+  EXPECT_NEAR(rgb[2], hit.b2, 1e-6f);
+  EXPECT_EQ(rgb[3] + rgb[4] + rgb[5], 0.0f);  // no shape: 0
+  kernel->Attribute("face_weight", at, rgb);
+  EXPECT_EQ(rgb[0], 0.25f);
+  EXPECT_EQ(rgb[2], 0.25f);  // one channel in all three
+  kernel->Attribute("vertex_missing", at, rgb);
+  EXPECT_EQ(rgb[0], 0.0f);
+}
+
+// A plane facing the camera at distance d: one pixel's step there is
+// d·(2·tan(fov/2)/width), shrunk by √spp, and its uv footprint follows
+// from the plane's ∂p/∂u.
+TEST_F(SceneTest, SampleSpacingIsAPixelStepAtTheHitOverRootSpp) {
+  v1::Scene scene = BaseScene();  // 8×8, fov 45, looking along +z from the origin
+  const auto kernel = Build(scene);
+  kernel->SetSamplesPerPixel(16);
+  Vec3 dpdx, dpdy;
+  kernel->SampleSpacing(Vec3(0, 0, 3), Vec3(0, 0, -1), dpdx, dpdy);
+  const float step = 3 * 2 * std::tan(22.5f * kPi / 180) / 8 / 4;
+  EXPECT_NEAR(Length(dpdx), step, 1e-5f);
+  EXPECT_NEAR(Length(dpdy), step, 1e-5f);
+  EXPECT_NEAR(std::abs(dpdx.z) + std::abs(dpdy.z), 0, 1e-6f);  // on the plane
+  float footprint[4];
+  UvFootprint(Vec3(2, 0, 0), Vec3(0, 4, 0), dpdx, dpdy, footprint);
+  EXPECT_NEAR(std::hypot(footprint[0], footprint[1]), step / (std::abs(dpdx.x) > std::abs(dpdx.y) ? 2 : 4), 1e-5f);
+  // Seen edge-on, the plane gives no footprint rather than an infinite one.
+  kernel->SampleSpacing(Vec3(0, 0, 3), Vec3(1, 0, 0), dpdx, dpdy);
+  EXPECT_EQ(Length(dpdx) + Length(dpdy), 0.0f);
 }
 
 TEST_F(SceneTest, TexturesNeedUniqueNamesAndTheirAssetsAHash) {
