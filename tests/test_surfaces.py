@@ -143,8 +143,8 @@ def coloured_sphere(attribute: str) -> str:
     """The low-poly sphere (sphere.ply) whose reflectance is a mesh attribute."""
     return (
         '<shape type="ply"><string name="filename" value="sphere.ply"/><bsdf type="diffuse">'
-        f'<texture type="mesh_attribute" name="reflectance"><string name="name" value="{attribute}"/>'
-        "</texture></bsdf></shape>"
+        '<texture type="mesh_attribute" name="reflectance">'
+        f'<string name="name" value="{attribute}"/></texture></bsdf></shape>'
     )
 
 
