@@ -231,7 +231,7 @@ def test_convert_shows_the_importers_warnings(
         ("convert", "malformed/wrong_type.xml", "wrong_type.xml:3: "),
         ("convert", "malformed/cycle_a.xml", "cycle_b.xml:2: include cycle"),
         ("render", "malformed/unterminated.pbrt", "unterminated.pbrt:3: unterminated string"),
-        ("render", "malformed/outside.pbrt", "outside.pbrt:2: file '../assets/quad.ply' lies"),
+        ("render", "malformed/missing_path.xml", "missing_path.xml:2: <path>: folder 'nowhere'"),
     ],
 )
 def test_a_malformed_scene_fails_in_one_line_with_file_and_line(
