@@ -22,13 +22,16 @@ SPP = 2_000_000 // (SIZE * SIZE)
 MITSUBA_RENDERS = 16
 
 
-def uv_sphere_obj(segments: int, rings: int) -> str:
-    """A unit UV sphere as OBJ text, with uvs and exact vertex normals.
+def uv_sphere(
+    segments: int, rings: int
+) -> tuple[list[tuple[float, float, float, float, float]], list[tuple[int, int, int]]]:
+    """A unit UV sphere: vertices (x, y, z, u, v) and triangles (0-based,
+    counter-clockwise seen from outside).
 
     Vertices are repeated along the seam (u = 0 and 1) and at the poles so
     that each corner carries its own uv, as modelling tools write them.
     """
-    lines = []
+    vertices = []
     for ring in range(rings + 1):
         theta = math.pi * ring / rings
         for segment in range(segments + 1):
@@ -38,62 +41,56 @@ def uv_sphere_obj(segments: int, rings: int) -> str:
                 math.cos(theta),
                 math.sin(theta) * math.sin(phi),
             )
-            lines.append(f"v {x:.7f} {y:.7f} {z:.7f}")
-            lines.append(f"vn {x:.7f} {y:.7f} {z:.7f}")
-            lines.append(f"vt {segment / segments:.7f} {1 - ring / rings:.7f}")
+            vertices.append((x, y, z, segment / segments, 1 - ring / rings))
     row = segments + 1
-    for ring in range(rings):
-        for segment in range(segments):
-            a = ring * row + segment + 1
-            b, c, d = a + 1, a + row, a + row + 1
-            # Counter-clockwise seen from outside.
-            for tri in ((a, b, d), (a, d, c)):
-                lines.append("f " + " ".join(f"{i}/{i}/{i}" for i in tri))
-    return "\n".join(lines) + "\n"
-
-
-def uv_sphere_ply(segments: int, rings: int, *, per_face: bool) -> str:
-    """The UV sphere of uv_sphere_obj as ASCII PLY with colours: per vertex from
-    the position (vertex_color), or per face from the face's index (face_color)."""
-    vertices, faces = [], []
-    for ring in range(rings + 1):
-        theta = math.pi * ring / rings
-        for segment in range(segments + 1):
-            phi = 2 * math.pi * segment / segments
-            x, y, z = (
-                math.sin(theta) * math.cos(phi),
-                math.cos(theta),
-                math.sin(theta) * math.sin(phi),
-            )
-            colour = (
-                "" if per_face else f" {0.5 + 0.4 * x:.6f} {0.5 + 0.4 * y:.6f} {0.5 + 0.4 * z:.6f}"
-            )
-            vertices.append(f"{x:.7f} {y:.7f} {z:.7f} {x:.7f} {y:.7f} {z:.7f}{colour}")
-    row = segments + 1
+    triangles = []
     for ring in range(rings):
         for segment in range(segments):
             a = ring * row + segment
             b, c, d = a + 1, a + row, a + row + 1
-            for tri in ((a, d, b), (a, c, d)):
-                k = len(faces)
-                colour = (
-                    f" {0.2 + 0.7 * (k % 3 == 0):.1f} {0.2 + 0.6 * (k % 5 < 2):.1f} 0.3"
-                    if per_face
-                    else ""
-                )
-                faces.append(f"3 {tri[0]} {tri[1]} {tri[2]}{colour}")
-    colour_properties = "property float r\nproperty float g\nproperty float b\n"
+            triangles += [(a, b, d), (a, d, c)]
+    return vertices, triangles
+
+
+def uv_sphere_obj(segments: int, rings: int) -> str:
+    """The UV sphere as OBJ text, with uvs and exact vertex normals."""
+    vertices, triangles = uv_sphere(segments, rings)
+    lines = []
+    for x, y, z, u, v in vertices:
+        lines += [
+            f"v {x:.7f} {y:.7f} {z:.7f}",
+            f"vn {x:.7f} {y:.7f} {z:.7f}",
+            f"vt {u:.7f} {v:.7f}",
+        ]
+    for triangle in triangles:
+        lines.append("f " + " ".join(f"{i + 1}/{i + 1}/{i + 1}" for i in triangle))
+    return "\n".join(lines) + "\n"
+
+
+def uv_sphere_ply(segments: int, rings: int, *, per_face: bool) -> str:
+    """The UV sphere as ASCII PLY with vertex normals and colours: per vertex
+    from the position (vertex_color), or per face from its index (face_color)."""
+    vertices, triangles = uv_sphere(segments, rings)
+    vertex_lines = []
+    for x, y, z, _, _ in vertices:
+        colour = "" if per_face else f" {0.5 + 0.4 * x:.6f} {0.5 + 0.4 * y:.6f} {0.5 + 0.4 * z:.6f}"
+        vertex_lines.append(f"{x:.7f} {y:.7f} {z:.7f} {x:.7f} {y:.7f} {z:.7f}{colour}")
+    face_lines = []
+    for k, (a, b, c) in enumerate(triangles):
+        colour = f" {0.2 + 0.7 * (k % 3 == 0):.1f} {0.2 + 0.6 * (k % 5 < 2):.1f} 0.3"
+        face_lines.append(f"3 {a} {b} {c}{colour if per_face else ''}")
+    colours = "property float r\nproperty float g\nproperty float b\n"
     header = (
         "ply\nformat ascii 1.0\n"
         f"element vertex {len(vertices)}\n"
         "property float x\nproperty float y\nproperty float z\n"
         "property float nx\nproperty float ny\nproperty float nz\n"
-        + ("" if per_face else colour_properties)
-        + f"element face {len(faces)}\nproperty list uchar int vertex_indices\n"
-        + (colour_properties if per_face else "")
+        + ("" if per_face else colours)
+        + f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+        + (colours if per_face else "")
         + "end_header\n"
     )
-    return header + "\n".join(vertices + faces) + "\n"
+    return header + "\n".join(vertex_lines + face_lines) + "\n"
 
 
 def scene_xml(shape: str, *, max_depth: int = 4) -> str:
