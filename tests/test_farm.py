@@ -25,6 +25,7 @@ from farm_processes import Farm, Node, find_nats_server, free_port
 from imagestats import block_z_test
 
 from yarf import Client, LocalServer, RenderResult, load_scene
+from yarf.assets import upload_scene_assets
 from yarf.farm import streams
 from yarf.farm.cache import SceneCache
 from yarf.farm.merge import ImageMerge, TaskImage
@@ -203,6 +204,42 @@ def test_two_nodes_render_the_image_of_a_single_server(farm: Farm, reference: Cl
         assert any(e["job"] in (shares, tiles) for e in node.events("task finished")), (
             f"{node.name} rendered no task"
         )
+
+
+def textured_cornell(folder: Path) -> scene_pb2.Scene:
+    """The Cornell box whose white walls read an image file beside it (tex.png)."""
+    from PIL import Image
+
+    rng = np.random.default_rng(5)
+    Image.fromarray(rng.integers(40, 230, (8, 8, 3), dtype=np.uint8)).save(folder / "tex.png")
+    scene = cornell(24)
+    texture = scene.textures.add(name="tex")
+    texture.texture.class_name = "bitmap"
+    texture.texture.properties.values["filename"].string_value = "tex.png"
+    white = next(m for m in scene.materials if m.name == "white")
+    white.properties.values["reflectance"].reference = "tex"
+    return scene
+
+
+def test_texture_files_reach_the_nodes_by_hash(
+    farm: Farm, reference: Client, tmp_path: Path
+) -> None:
+    """The client uploads to the coordinator as to a yarfd; nodes copy to theirs."""
+    farm_scene, reference_scene = textured_cornell(tmp_path), textured_cornell(tmp_path)
+    with farm.client() as client:
+        # The image and the box's meshes, once.
+        assert upload_scene_assets(client, farm_scene, tmp_path) == 1 + len(farm_scene.shapes)
+        assert upload_scene_assets(client, textured_cornell(tmp_path), tmp_path) == 0
+        assert "asset" in farm_scene.textures[0].texture.properties.values
+        farm_image = client.raw(render(client, farm_scene, 32))
+        # A scene naming an asset the farm lacks is refused at Submit.
+        farm_scene.textures[0].texture.properties.values["asset"].string_value = "ab" * 32
+        with pytest.raises(grpc.RpcError) as refused:
+            client.submit(farm_scene, 8, SEED)
+        assert refused.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert "not on this farm" in (refused.value.details() or "")
+    upload_scene_assets(reference, reference_scene, tmp_path)
+    assert_same_image(farm_image, reference.raw(render(reference, reference_scene, 32)))
 
 
 def test_results_come_as_raw_exr_and_png(farm: Farm) -> None:

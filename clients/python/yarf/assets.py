@@ -137,6 +137,20 @@ def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
     return assets
 
 
+def scene_asset_hashes(scene: scene_pb2.Scene) -> list[str]:
+    """The hashes of the uploaded assets ``scene`` names (meshes' ``asset`` and
+    textures' ``asset`` property), each once, in the order first named."""
+    hashes: dict[str, None] = {}
+    for texture in scene.textures:
+        value = texture.texture.properties.values.get("asset")
+        if value is not None and value.WhichOneof("value") == "string_value":
+            hashes[value.string_value] = None
+    for _, shape in iter_shapes(scene):
+        if shape.WhichOneof("geometry") == "mesh" and shape.mesh.WhichOneof("source") == "asset":
+            hashes[shape.mesh.asset] = None
+    return list(hashes)
+
+
 def upload_scene_assets(client: Client, scene: scene_pb2.Scene, base_dir: str | Path) -> int:
     """Makes every mesh ``file``, inline mesh ``data`` and texture file of ``scene``
     an uploaded ``asset``.

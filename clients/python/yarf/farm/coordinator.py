@@ -25,12 +25,14 @@ from nats.js import JetStreamContext
 from nats.js.errors import NotFoundError, ObjectNotFoundError
 from nats.js.kv import KeyValue
 
+from yarf.assets import scene_asset_hashes
 from yarf.farm import streams
+from yarf.farm.assets import FarmAssets
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
 from yarf.farm.store import JobRecord, JobStore
 from yarf.farm.tasks import SplitPolicy, Task, split, task_options
-from yarf.farm.validation import SubmitChecker
+from yarf.farm.validation import InvalidRequest, SubmitChecker
 from yarf.v1 import render_pb2
 
 log = logging.getLogger("yarf.farm.coordinator")
@@ -110,6 +112,8 @@ class Coordinator:
         self._js: JetStreamContext = nc.jetstream()
         self._store = store
         self._buckets = buckets
+        # Served by the coordinator's AssetService; jobs may name only what it holds.
+        self.assets = FarmAssets(buckets.assets)
         self._kv: KeyValue = buckets.jobs
         self._policy = policy
         self._retention = retention or Retention()
@@ -199,6 +203,12 @@ class Coordinator:
         """Stores and queues a job of ``owner``; raises InvalidRequest or AddressNotAllowed."""
         # yarfd's checks, which also fill in its defaults (spp, priority).
         accepted = await asyncio.to_thread(self._checker.check, request, admin=admin)
+        # As yarfd's Submit: every asset named is here already (nodes copy it from here).
+        for digest in await self.assets.missing(scene_asset_hashes(request.scene)):
+            raise InvalidRequest(
+                f"asset {digest} is not on this farm; upload it with AssetService.Upload "
+                "before submitting"
+            )
         options = accepted.options
         tasks = split(accepted, self._policy)
         scene_bytes = request.scene.SerializeToString(deterministic=True)

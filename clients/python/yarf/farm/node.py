@@ -24,13 +24,15 @@ from nats.aio.msg import Msg
 from nats.aio.subscription import Subscription
 from nats.js.errors import NotFoundError
 
+from yarf.assets import scene_asset_hashes
 from yarf.client import FINAL_STATES, MAX_MESSAGE_BYTES, array_to_numpy
 from yarf.credentials import open_aio_channel
 from yarf.farm import streams
+from yarf.farm.assets import FarmAssets
 from yarf.farm.cache import DEFAULT_CACHE_BYTES, SceneCache
 from yarf.farm.merge import TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
-from yarf.v1 import render_pb2, render_pb2_grpc, scene_pb2
+from yarf.v1 import asset_pb2_grpc, render_pb2, render_pb2_grpc, scene_pb2
 
 log = logging.getLogger("yarf.farm.node")
 
@@ -150,6 +152,8 @@ class Node:
             tls_ca=tls_ca,
         )
         self._yarfd = render_pb2_grpc.RenderServiceStub(self._channel)
+        self._yarfd_assets = asset_pb2_grpc.AssetServiceStub(self._channel)
+        self._assets = FarmAssets(buckets.assets)
         self._puller = TaskPuller(nc)
         self._wake = asyncio.Event()
         self._cancelled: set[str] = set()
@@ -310,6 +314,8 @@ class Node:
     async def _render(self, running: RunningTask) -> None:
         task = running.task
         scene = await self._load_scene(task.scene_hash)
+        # The mesh and texture files the scene names by hash, from the farm's bucket.
+        await self._assets.copy_to(self._yarfd_assets, scene_asset_hashes(scene), CALL_TIMEOUT)
         request = render_pb2.SubmitRequest(
             scene=scene, options=task.options, name=f"{task.job_id}/{task.task} {task.name}"
         )

@@ -9,12 +9,13 @@ import grpc
 
 from yarf.client import MAX_MESSAGE_BYTES, numpy_to_array
 from yarf.farm.access import Caller, Role, may_act_on
+from yarf.farm.assets import FarmAssetService
 from yarf.farm.auth import TokenCheck, TokenInterceptor, Unauthenticated
 from yarf.farm.coordinator import FINAL_STATES, Coordinator, Job, UnknownJob
 from yarf.farm.images import encode_exr, encode_png
 from yarf.farm.listen import ListenSecurity
 from yarf.farm.validation import AddressNotAllowed, InvalidRequest
-from yarf.v1 import render_pb2, render_pb2_grpc
+from yarf.v1 import asset_pb2_grpc, render_pb2, render_pb2_grpc
 
 # A serialized grpc.health.v1.HealthCheckResponse{status: SERVING}: the
 # health protocol's one message, without the grpcio-health-checking package.
@@ -142,7 +143,8 @@ async def _health_check(request: bytes, context: grpc.aio.ServicerContext) -> by
 async def start_server(
     coordinator: Coordinator, listen: str, security: ListenSecurity
 ) -> tuple[grpc.aio.Server, int]:
-    """Serves RenderService and the health check at ``listen``; returns the server and its port."""
+    """Serves RenderService, AssetService and the health check at ``listen``; returns
+    the server and its port."""
     check = TokenCheck(security.tokens)
     server = grpc.aio.server(
         interceptors=[TokenInterceptor(check)] if check.enabled else [],
@@ -157,6 +159,7 @@ async def start_server(
     render_pb2_grpc.add_RenderServiceServicer_to_server(
         FarmRenderService(coordinator, check), server
     )
+    asset_pb2_grpc.add_AssetServiceServicer_to_server(FarmAssetService(coordinator.assets), server)
     health = grpc.method_handlers_generic_handler(
         "grpc.health.v1.Health", {"Check": grpc.unary_unary_rpc_method_handler(_health_check)}
     )

@@ -31,6 +31,9 @@ RESULTS_STREAM = "YARF_RESULTS"
 # Scenes, keyed by the sha256 of the serialized yarf.v1.Scene: a scene
 # travels once however many tasks and jobs use it.
 SCENES_BUCKET = "yarf-scenes"
+# Mesh and texture files by SHA-256, uploaded through the coordinator's
+# AssetService and copied by each node to its yarfd.
+ASSETS_BUCKET = "yarf-assets"
 # Task images (npz of pixels and variance), deleted once merged; those of
 # renders discarded as duplicates expire.
 RESULTS_BUCKET = "yarf-results"
@@ -106,6 +109,7 @@ class Buckets:
     jobs: KeyValue
     scenes: ObjectStore
     results: ObjectStore
+    assets: ObjectStore
 
 
 async def _ensure_stream(js: JetStreamContext, config: StreamConfig) -> None:
@@ -210,4 +214,5 @@ async def ensure_resources(js: JetStreamContext) -> Buckets:
         jobs = await js.key_value(JOBS_BUCKET)
     scenes = await _ensure_object_store(js, SCENES_BUCKET, None)
     results = await _ensure_object_store(js, RESULTS_BUCKET, RESULTS_BUCKET_TTL)
-    return Buckets(jobs=jobs, scenes=scenes, results=results)
+    assets = await _ensure_object_store(js, ASSETS_BUCKET, None)
+    return Buckets(jobs=jobs, scenes=scenes, results=results, assets=assets)
