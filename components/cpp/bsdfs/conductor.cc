@@ -12,8 +12,8 @@
 //   material               string           default "none"
 //       A named metal of metals.h ("Ag", "Al", "Au", "Cu"), or "none": the
 //       index given by eta and k.
-//   eta                    rgb (or float)   default 0    real part η ≥ 0 of the index
-//   k                      rgb (or float)   default 1    imaginary part κ ≥ 0
+//   eta                    rgb (or float, or a texture)   default 0    real part η ≥ 0 of the index
+//   k                      rgb (or float, or a texture)   default 1    imaginary part κ ≥ 0
 //       The defaults η = 0, κ = 1 make F = 1 at every angle: a perfect
 //       mirror, as Mitsuba's material "none". Not with a named material.
 //   specular_reflectance   rgb, float or texture   default 1
@@ -54,6 +54,7 @@ class Conductor final : public yarf::DeltaSurfaceModel {
     const bool can_reflect = yarf::LobeAllowed(kMirrorLobe, allowed);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     const auto specular = specular_.At(at);
+    const auto ior = ior_.At(at);
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       if (!can_reflect || !(in.z > 0)) {
@@ -61,7 +62,7 @@ class Conductor final : public yarf::DeltaSurfaceModel {
         continue;
       }
       rows.Store(k, yarf::Reflect(in),
-                 specular[k] * yarf::microfacet::FresnelConductor(in.z, ior_.eta, ior_.k), 1.0f,
+                 specular[k] * yarf::microfacet::FresnelConductor(in.z, ior.eta[k], ior.k[k]), 1.0f,
                  kMirrorLobe);
     }
   }
@@ -69,7 +70,7 @@ class Conductor final : public yarf::DeltaSurfaceModel {
   uint32_t Lobes() const override { return kMirrorLobe; }
 
  private:
-  yarf::metals::ComplexIor ior_;
+  yarf::metals::TexturedIor ior_;
   yarf::TexturedValue specular_;
 };
 

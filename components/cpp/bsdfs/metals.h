@@ -15,9 +15,11 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "yarf/error.h"
 #include "yarf/properties.h"
+#include "yarf/texture.h"
 #include "yarf/vecmath.h"
 
 namespace yarf::metals {
@@ -49,32 +51,49 @@ inline std::string KnownNames() {
   return out;
 }
 
+// A conductor's index at the points of a surface call: constant, or
+// textured per channel.
+class TexturedIor {
+ public:
+  struct Points {
+    PointValues<Vec3> eta, k;
+  };
+  TexturedIor(TexturedValue eta, TexturedValue k) : eta_(std::move(eta)), k_(std::move(k)) {}
+  Points At(const SurfacePoints& at) const { return {eta_.At(at), k_.At(at)}; }
+
+ private:
+  TexturedValue eta_, k_;
+};
+
 // The complex index a conductor's properties give: 'material' names a
-// metal (default "none"), or 'eta' and 'k' (rgb or float; defaults 0 and
-// 1, a perfect mirror) give it directly; the two ways exclude each other,
-// as in Mitsuba. η and κ must be ≥ 0 and not both 0 in any channel.
-inline ComplexIor ReadConductorIor(const Properties& props) {
+// metal (default "none"), or 'eta' and 'k' (rgb, float or a texture;
+// defaults 0 and 1, a perfect mirror) give it directly; the two ways
+// exclude each other, as in Mitsuba. Constant η and κ must be ≥ 0 and
+// not both 0 in any channel; textured ones are clamped to [0, 10⁴] (both
+// 0 reflects everything, as κ → 0 with η → 0 does).
+inline TexturedIor ReadConductorIor(const Properties& props) {
   const std::string material = props.String("material", "none");
   if (material != "none") {
     if (props.Has("eta") || props.Has("k"))
       throw Error("properties 'material' and 'eta'/'k' exclude each other: name a metal or "
                   "give its index");
     for (const NamedMetal& metal : kMetals)
-      if (material == metal.name) return metal.ior;
+      if (material == metal.name) return {TexturedValue(metal.ior.eta), TexturedValue(metal.ior.k)};
     throw Error("property 'material': unknown metal \"" + material + "\" (known: " +
                 KnownNames() + ")");
   }
-  const ComplexIor ior = {props.Color("eta", kPerfectMirror.eta),
-                          props.Color("k", kPerfectMirror.k)};
+  constexpr float kLargest = 1e4f;
+  TexturedValue eta = TexturedValue::Color(props, "eta", kPerfectMirror.eta, /*unit=*/false);
+  TexturedValue k = TexturedValue::Color(props, "k", kPerfectMirror.k, /*unit=*/false);
   for (int c = 0; c < 3; ++c) {
-    if (!(ior.eta[c] >= 0.0f && std::isfinite(ior.eta[c])))
+    if (eta.IsConstant() && !(eta.Constant()[c] >= 0.0f && std::isfinite(eta.Constant()[c])))
       throw Error("property 'eta' must be finite and ≥ 0 in every channel");
-    if (!(ior.k[c] >= 0.0f && std::isfinite(ior.k[c])))
+    if (k.IsConstant() && !(k.Constant()[c] >= 0.0f && std::isfinite(k.Constant()[c])))
       throw Error("property 'k' must be finite and ≥ 0 in every channel");
-    if (ior.eta[c] == 0.0f && ior.k[c] == 0.0f)
+    if (eta.IsConstant() && k.IsConstant() && eta.Constant()[c] == 0.0f && k.Constant()[c] == 0.0f)
       throw Error("properties 'eta' and 'k' are both 0 in a channel: no such conductor");
   }
-  return ior;
+  return {eta.Clamped(0, kLargest), k.Clamped(0, kLargest)};
 }
 
 }  // namespace yarf::metals

@@ -20,7 +20,7 @@
 //       the shading frame's x and y, instead of alpha (both or neither)
 //   distribution           string                  default "ggx"    the only one
 //   material               string                  default "none"   a named metal (metals.h)
-//   eta, k                 rgb (or float)          default 0, 1     complex index η + iκ, with
+//   eta, k                 rgb, float or texture   default 0, 1     complex index η + iκ, with
 //       material "none" (the defaults make F = 1: a perfect mirror)
 //   specular_reflectance   rgb, float or texture   default 1        R, per channel in [0, 1]
 // A texture's values are clamped: α to ≥ 10⁻⁴ (microfacet.h), R to [0, 1].
@@ -60,8 +60,9 @@ class RoughConductor final : public yarf::SurfaceModel {
                 const yarf::SurfacePoints& at, std::span<float> value) const override {
     const auto roughness = roughness_.At(at);
     const auto specular = specular_.At(at);
+    const auto ior = ior_.At(at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
-      return Value(roughness[k], specular[k], in, out);
+      return Value(roughness[k], specular[k], {ior.eta[k], ior.k[k]}, in, out);
     });
   }
 
@@ -73,6 +74,7 @@ class RoughConductor final : public yarf::SurfaceModel {
     const bool can_reflect = yarf::LobeAllowed(kLobe, allowed);
     const auto roughnesses = roughness_.At(at);
     const auto specular = specular_.At(at);
+    const auto ior = ior_.At(at);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
@@ -91,7 +93,7 @@ class RoughConductor final : public yarf::SurfaceModel {
         rows.StoreNoSample(k);
         continue;
       }
-      rows.Store(k, out, Value(roughness, specular[k], in, out) * (out.z / density), density,
+      rows.Store(k, out, Value(roughness, specular[k], {ior.eta[k], ior.k[k]}, in, out) * (out.z / density), density,
                  kLobe);
     }
   }
@@ -106,12 +108,12 @@ class RoughConductor final : public yarf::SurfaceModel {
   uint32_t Lobes() const override { return kLobe; }
 
  private:
-  Vec3 Value(mf::Roughness roughness, Vec3 specular, Vec3 wi, Vec3 wo) const {
+  static Vec3 Value(mf::Roughness roughness, Vec3 specular, yarf::metals::ComplexIor ior, Vec3 wi, Vec3 wo) {
     if (!(wi.z > 0 && wo.z > 0)) return Vec3();
     const Vec3 h = yarf::Normalize(wi + wo);
     const float d = yarf::GgxDistribution(h, roughness.alpha_x, roughness.alpha_y);
     const float g = mf::SmithG2(wi, wo, roughness.alpha_x, roughness.alpha_y);
-    const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(wi, h), ior_.eta, ior_.k);
+    const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(wi, h), ior.eta, ior.k);
     return specular * fresnel * (d * g / (4.0f * wi.z * wo.z));
   }
 
@@ -125,7 +127,7 @@ class RoughConductor final : public yarf::SurfaceModel {
   }
 
   mf::TexturedRoughness roughness_;
-  yarf::metals::ComplexIor ior_;
+  yarf::metals::TexturedIor ior_;
   yarf::TexturedValue specular_;
 };
 

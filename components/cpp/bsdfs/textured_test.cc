@@ -229,6 +229,19 @@ TEST_F(TexturedParameterTest, RoughnessTextureActsAsTheConstantAtEachPoint) {
   ExpectActsAsItsValueAtEachPoint({"phong", "exponent", TwoCells(5.0f, 200.0f), {}});
 }
 
+TEST_F(TexturedParameterTest, ConductorIndexTexturesActAsTheConstantsAtEachPoint) {
+  // η from 0.2 to 2.2 and κ from 1 to 5 over uv: Fresnel factors of every tint.
+  const auto eta = ColourTexture([](float u, float v) { return std::vector<float>{0.2f + 2 * u, 0.5f + v, 1.3f}; });
+  const auto k = ColourTexture([](float u, float v) { return std::vector<float>{1 + 4 * v, 2 + u, 3.5f}; });
+  Properties given_k, given_eta;
+  given_k.Set("k", Rgb{Vec3(3, 2.5f, 2)});
+  given_eta.Set("eta", Rgb{Vec3(0.3f, 0.9f, 1.1f)});
+  for (const char* model : {"conductor", "roughconductor"}) {
+    ExpectActsAsItsValueAtEachPoint({model, "eta", eta, given_k});
+    ExpectActsAsItsValueAtEachPoint({model, "k", k, given_eta});
+  }
+}
+
 TEST_F(TexturedParameterTest, RoughnessTextureChangesTheLobeBetweenCells) {
   Properties props;
   SetTexture(props, "alpha", TwoCells(0.05f, 0.4f));

@@ -120,8 +120,8 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
       }
       SetString(props, "material", metal);
     } else {
-      SetRgb(props, "eta", Colour(params, prefix + "eta", {0.2, 0.92, 1.1}, SpectrumUse::kReflectance, where));
-      SetRgb(props, "k", Colour(params, prefix + "k", {3.9, 2.45, 2.14}, SpectrumUse::kReflectance, where));
+      SetColour(props, "eta", TexturedColour(params, prefix + "eta", {0.2, 0.92, 1.1}, SpectrumUse::kReflectance, where));
+      SetColour(props, "k", TexturedColour(params, prefix + "k", {3.9, 2.45, 2.14}, SpectrumUse::kReflectance, where));
     }
     if (u == 0 && v == 0) return std::string("conductor");
     if (u == v)

@@ -153,8 +153,8 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     class_name = type;
     if (p.Has("eta") || p.Has("k")) {
       if (p.Has("material")) Fail(e.where, what + ": give material or eta and k, not both");
-      SetRgb(props, "eta", p.Color("eta", {0, 0, 0}));
-      SetRgb(props, "k", p.Color("k", {1, 1, 1}));
+      SetColour(props, "eta", p.TexturedColor("eta", {0, 0, 0}));
+      SetColour(props, "k", p.TexturedColor("k", {1, 1, 1}));
     } else {
       SetString(props, "material", KnownMetal(p.String("material", "none"), p.WhereIs("material")));
     }
