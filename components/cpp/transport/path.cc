@@ -97,13 +97,15 @@ class PathTracer final : public Transport {
     const bool may_scatter = length_.max_depth < 0 || depth < length_.max_depth;
     std::vector<Vertex> vertices;
     std::vector<uint32_t> vertex_material;
+    vertices.reserve(active.size());
+    vertex_material.reserve(active.size());
     std::vector<uint32_t> emitted;  // indices into active/hits
     for (size_t k = 0; k < active.size(); ++k) {
       const Hit& hit = hits[k];
       if (!hit.Found()) continue;
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
       if (!may_scatter || paths[active[k]].last) continue;
-      vertices.push_back({active[k], ShadingPointOf(scene, hit, rays[k]), rays[k].time});
+      vertices.emplace_back(active[k], ShadingPointOf(scene, hit, rays[k]), rays[k].time);
       vertex_material.push_back(scene.MaterialOf(hit.shape));
     }
     AddEmission(scene, paths, active, rays, hits, emitted);

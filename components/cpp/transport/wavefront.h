@@ -22,9 +22,12 @@ namespace yarf {
 // directions in the shading frame (ShadingFrame); leaving the surface and
 // telling its sides apart go by the geometric normal ng.
 // What a surface call knows of a point besides directions: one row of its
-// SurfacePoints (the footprint and ∂p/∂u, ∂p/∂v zero where unknown).
+// SurfacePoints.
 struct SurfaceSite {
   float u = 0, v = 0;
+  // On a surface with a parameterisation of its own (Hit::parameterised):
+  // then the footprint, position and frame below are known.
+  bool parameterised = false;
   float footprint[4] = {0, 0, 0, 0};
   Vec3 position;
   Vec3 dpdu, dpdv;  // in the local shading frame
@@ -44,30 +47,51 @@ struct SurfaceSite {
   }
 };
 
-// The SurfacePoints of a batch of sites, owning its arrays.
+// The SurfacePoints of a batch of at most `capacity` sites, owning its
+// arrays (this runs for every surface call of every bounce): uv and
+// locations always; footprints, positions and frames only once a site on
+// a parameterised surface is added (zero for the others), else they are
+// left empty, as unknown: what reads them (filtering, bump maps) needs a
+// parameterisation.
 class SurfaceRows {
  public:
-  SurfaceRows(const SurfaceAttributes* attributes, size_t capacity) : attributes_(attributes) {
+  SurfaceRows(const SurfaceAttributes* attributes, size_t capacity)
+      : attributes_(attributes), capacity_(capacity) {
     uv_.reserve(2 * capacity);
-    footprint_.reserve(4 * capacity);
-    position_.reserve(3 * capacity);
-    dpdu_.reserve(3 * capacity);
-    dpdv_.reserve(3 * capacity);
     location_.reserve(capacity);
   }
   void Add(const SurfaceSite& site) {
-    uv_.insert(uv_.end(), {site.u, site.v});
-    footprint_.insert(footprint_.end(), site.footprint, site.footprint + 4);
-    position_.insert(position_.end(), {site.position.x, site.position.y, site.position.z});
-    dpdu_.insert(dpdu_.end(), {site.dpdu.x, site.dpdu.y, site.dpdu.z});
-    dpdv_.insert(dpdv_.end(), {site.dpdv.x, site.dpdv.y, site.dpdv.z});
+    const size_t k = location_.size();
+    uv_.push_back(site.u);
+    uv_.push_back(site.v);
     location_.push_back(site.location);
+    if (!site.parameterised) return;
+    if (extras_.empty()) extras_.resize(kExtras * capacity_);
+    std::copy_n(site.footprint, 4, &extras_[kFootprint * capacity_ + 4 * k]);
+    site.position.Store(&extras_[kPosition * capacity_ + 3 * k]);
+    site.dpdu.Store(&extras_[kDpdu * capacity_ + 3 * k]);
+    site.dpdv.Store(&extras_[kDpdv * capacity_ + 3 * k]);
   }
-  SurfacePoints Points() const { return {uv_, footprint_, position_, dpdu_, dpdv_, location_, attributes_}; }
+  SurfacePoints Points() const {
+    SurfacePoints points{uv_, {}, {}, {}, {}, location_, attributes_};
+    if (extras_.empty()) return points;
+    const size_t n = location_.size();
+    const auto part = [&](size_t offset, size_t width) {
+      return std::span<const float>(&extras_[offset * capacity_], width * n);
+    };
+    points.footprint = part(kFootprint, 4);
+    points.position = part(kPosition, 3);
+    points.dpdu = part(kDpdu, 3);
+    points.dpdv = part(kDpdv, 3);
+    return points;
+  }
 
  private:
+  // Where each array starts in extras_, in units of `capacity` floats.
+  static constexpr size_t kFootprint = 0, kPosition = 4, kDpdu = 7, kDpdv = 10, kExtras = 13;
   const SurfaceAttributes* attributes_;
-  std::vector<float> uv_, footprint_, position_, dpdu_, dpdv_;
+  size_t capacity_;
+  std::vector<float> uv_, extras_;
   std::vector<SurfaceLocation> location_;
 };
 
@@ -80,14 +104,15 @@ struct ShadingPoint {
 };
 
 // The hit of `ray` as scattering sees it, with the texture footprint of a
-// camera sample's spacing there (SceneView::SampleSpacing) on
-// parameterised surfaces.
+// camera sample's spacing there (SceneView::SampleSpacing) on surfaces
+// with a parameterisation of their own.
 inline ShadingPoint ShadingPointOf(const SceneView& scene, const Hit& hit, const Ray& ray) {
   const Frame frame = ShadingFrame(hit);
   ShadingPoint at{ray.origin + ray.direction * hit.t, hit.normal, frame, frame.ToLocal(-ray.direction),
                   SurfaceSite::Of(hit)};
-  at.site.position = at.position;
-  if (hit.dpdu.x != 0 || hit.dpdu.y != 0 || hit.dpdu.z != 0) {
+  if (hit.parameterised) {
+    at.site.parameterised = true;
+    at.site.position = at.position;
     at.site.dpdu = frame.ToLocal(hit.dpdu);
     at.site.dpdv = frame.ToLocal(hit.dpdv);
     Vec3 dpdx, dpdy;

@@ -46,6 +46,10 @@ struct Hit {
   // its barycentric parameterisation, and zero when it has no vertex
   // normals either (nothing to orient a frame by).
   Vec3 dpdu, dpdv;
+  // Whether uv is a parameterisation of the surface's own (a mesh's uvs,
+  // an analytic shape's), not barycentrics: what texture footprints and
+  // bump maps need.
+  bool parameterised = false;
 
   bool Found() const { return shape != kNoShape; }
 };

@@ -427,6 +427,7 @@ void KernelScene::SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hi
 
 void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const {
   hit.shading_normal = hit.normal;
+  hit.parameterised = shape.kind == Kind::kSphere;
   if (shape.kind == Kind::kSphere) {
     const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
     const float r = Length(position - center);
@@ -461,6 +462,7 @@ void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit
   const Vec3 dpdu = (dp02 * dv12 - dp12 * dv02) / det, dpdv = (dp12 * du02 - dp02 * du12) / det;
   if (std::abs(det) > 1e-12f && Length(Cross(dpdu, dpdv)) > 0 && std::isfinite(Dot(dpdu, dpdv))) {
     hit.dpdu = dpdu, hit.dpdv = dpdv;
+    hit.parameterised = !mesh.uvs.empty();
   } else {
     // Degenerate uvs: any frame of the plane.
     const Frame frame(hit.normal);
