@@ -582,4 +582,17 @@ void ValidateMesh(TriangleMesh& mesh, const std::string& name) {
   RepairNormals(mesh);
 }
 
+void DropFaceNormals(TriangleMesh& mesh) {
+  if (mesh.normals.empty()) return;
+  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
+    const uint32_t* v = &mesh.indices[3 * t];
+    const Vec3 n = Cross(mesh.positions[v[1]] - mesh.positions[v[0]], mesh.positions[v[2]] - mesh.positions[v[0]]);
+    const float length = std::sqrt(Dot(n, n));
+    if (!(length > 0) || !std::isfinite(length)) continue;  // never hit
+    for (int k = 0; k < 3; ++k)
+      if (!(Dot(mesh.normals[v[k]], n) >= (1 - 1e-6f) * length)) return;
+  }
+  mesh.normals.clear();
+}
+
 }  // namespace yarf

@@ -67,4 +67,10 @@ TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const st
 // made unit length.
 void ValidateMesh(TriangleMesh& mesh, const std::string& name);
 
+// Drops vertex normals that are each triangle's own face normal (a box
+// written with one normal per face): they shade exactly as none, and
+// without them the kernel interpolates nothing. Only normals on the side
+// the winding gives count: opposite ones decide the mesh's side.
+void DropFaceNormals(TriangleMesh& mesh);
+
 }  // namespace yarf

@@ -201,6 +201,25 @@ TEST(ObjReader, ReadsUvsAndNormalsSplittingVerticesWhereCornersDiffer) {
   EXPECT_NE(ErrorOf(kObjVertices + "vt 0 0\nf 1/1 2/7 3/1\n", "obj").find("out of range"), std::string::npos);
 }
 
+TEST(Mesh, FaceNormalsAreDroppedAndOthersKept) {
+  // Two triangles of the plane z = 0, wound toward +z.
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  mesh.indices = {0, 1, 2, 0, 2, 3};
+  mesh.normals.assign(4, Vec3(0, 0, 1));
+  TriangleMesh flat = mesh;
+  DropFaceNormals(flat);
+  EXPECT_TRUE(flat.normals.empty());
+  TriangleMesh opposite = mesh;  // normals that decide the side stay
+  opposite.normals.assign(4, Vec3(0, 0, -1));
+  DropFaceNormals(opposite);
+  EXPECT_EQ(opposite.normals.size(), 4u);
+  TriangleMesh smooth = mesh;  // one tilted corner: smooth shading
+  smooth.normals[2] = Normalize(Vec3(0.1f, 0, 1));
+  DropFaceNormals(smooth);
+  EXPECT_EQ(smooth.normals.size(), 4u);
+}
+
 TEST(PlyReader, ReadsNormalsUvsColoursAndAttributesInAnyOrder) {
   const std::string ply =
       "ply\nformat ascii 1.0\n"

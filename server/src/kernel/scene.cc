@@ -90,6 +90,7 @@ uint32_t KernelScene::NewGroup() {
 }
 
 void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look) {
+  DropFaceNormals(mesh);
   RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
       geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
