@@ -214,7 +214,7 @@ class Builder {
   std::shared_ptr<const Texture> MakeTexture(const v1::SceneTexture& t) {
     const std::string what = TextureName(t);
     v1::Properties props = t.texture().properties();
-    ResolvedProperties own{resolved_.textures, {}};
+    ResolvedProperties own{resolved_.textures, {}, {}};
     auto& values = *props.mutable_values();
     if (auto it = values.find("filename"); it != values.end()) {
       if (it->second.value_case() != v1::Property::kStringValue)
