@@ -69,7 +69,7 @@ class SceneAssets:
     sources: dict[str, AssetData] = field(default_factory=dict)
     # Each mesh of the scene to rename, with its hash and format.
     meshes: list[tuple[scene_pb2.Mesh, str, str]] = field(default_factory=list)
-    # Each texture whose `filename` becomes an `asset`, with its hash.
+    # Each texture or light whose `filename` becomes an `asset`, with its hash.
     textures: list[tuple[scene_pb2.ComponentSpec, str]] = field(default_factory=list)
 
     def upload(self, client: Client) -> int:
@@ -88,6 +88,15 @@ class SceneAssets:
         return len(missing)
 
 
+def _file_components(scene: scene_pb2.Scene) -> Iterator[tuple[str, scene_pb2.ComponentSpec]]:
+    """The components of ``scene`` that may read a file of their own (textures'
+    images, environment maps), each with where it is for errors."""
+    for index, texture in enumerate(scene.textures):
+        yield f"textures[{index}] ({texture.name})", texture.texture
+    for index, light in enumerate(scene.lights):
+        yield f"lights[{index}] ({light.name or light.emitter.class_name})", light.emitter
+
+
 def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
     """Checks and hashes the mesh ``file`` and ``data`` and the texture files of
     ``scene``; raises SceneError.
@@ -100,16 +109,15 @@ def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
     base = Path(base_dir).resolve()
     assets = SceneAssets()
     hashes_of_files: dict[Path, str] = {}
-    for index, texture in enumerate(scene.textures):
-        value = texture.texture.properties.values.get("filename")
+    for where, spec in _file_components(scene):
+        value = spec.properties.values.get("filename")
         if value is None or value.WhichOneof("value") != "string_value":
             continue
-        where = f"textures[{index}] ({texture.name})"
         path = (base / value.string_value).resolve()
         if path not in hashes_of_files:
-            hashes_of_files[path] = _hash_file(where, value.string_value, path, "texture")
+            hashes_of_files[path] = _hash_file(where, value.string_value, path, "image")
         assets.sources.setdefault(hashes_of_files[path], path)
-        assets.textures.append((texture.texture, hashes_of_files[path]))
+        assets.textures.append((spec, hashes_of_files[path]))
     for where, shape in iter_shapes(scene):
         if shape.WhichOneof("geometry") != "mesh":
             continue
@@ -141,8 +149,8 @@ def scene_asset_hashes(scene: scene_pb2.Scene) -> list[str]:
     """The hashes of the uploaded assets ``scene`` names (meshes' ``asset`` and
     textures' ``asset`` property), each once, in the order first named."""
     hashes: dict[str, None] = {}
-    for texture in scene.textures:
-        value = texture.texture.properties.values.get("asset")
+    for _, spec in _file_components(scene):
+        value = spec.properties.values.get("asset")
         if value is not None and value.WhichOneof("value") == "string_value":
             hashes[value.string_value] = None
     for _, shape in iter_shapes(scene):

@@ -1,11 +1,8 @@
-// diffuse_area — uniform diffuse area light; constant — uniform environment
+// diffuse_area — uniform diffuse area light
 //
 // Emits the same radiance in every direction of the front (+z, the side
 // the shape's normal points to) of the surface it is attached to, and
-// nothing from the back, as Mitsuba's one-sided area emitter. As
-// "constant" (a Light of kind ENVIRONMENT) it lines the inside of the
-// sphere the kernel puts around the scene: the same radiance from every
-// direction.
+// nothing from the back, as Mitsuba's one-sided area emitter.
 //
 // Parameters
 //   radiance   rgb, float or texture   required
@@ -63,6 +60,4 @@ class DiffuseArea final : public yarf::Emitter {
 YARF_PLUGIN(registrar) {
   yarf::Register<DiffuseArea>(registrar, "diffuse_area", "1.0.0",
                               "One-sided diffuse area light, its radiance constant or a texture");
-  yarf::Register<DiffuseArea>(registrar, "constant", "1.0.0",
-                              "Uniform environment: the same radiance from every direction");
 }

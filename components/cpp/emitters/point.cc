@@ -1,16 +1,22 @@
-// point — an isotropic point light; directional — a light from infinitely far
+// point — an isotropic point light; directional — a light from infinitely
+// far; constant — the same radiance from every direction
 //
 // point: a light with no extent placed by the scene's Light.to_world. It
 // has no radiance, only intensity: Radiance returns I in W·sr⁻¹ toward
 // every direction, and total power is 4π·I.
 //
 // directional (a Light of kind DIRECTIONAL): Radiance returns the
-// irradiance E in W·m⁻² that a surface facing the light receives; the
-// kernel places it far away, scaled to give that irradiance.
+// irradiance E in W·m⁻² that a surface facing the light receives; it
+// travels along +z of its frame only, so the kernel never asks it for a
+// direction.
+//
+// constant (a Light of kind ENVIRONMENT): radiance L in W·m⁻²·sr⁻¹
+// arriving from every direction; directions are sampled uniformly.
 //
 // Parameters
 //   intensity    rgb (or float)   required (point)         W·sr⁻¹, per channel ≥ 0
 //   irradiance   rgb (or float)   required (directional)   W·m⁻², per channel ≥ 0
+//   radiance     rgb (or float)   required (constant)      W·m⁻²·sr⁻¹, per channel ≥ 0
 #include <cstdint>
 #include <span>
 
@@ -54,6 +60,7 @@ class IsotropicLight final : public yarf::Emitter {
 
 constexpr char kIntensity[] = "intensity";
 constexpr char kIrradiance[] = "irradiance";
+constexpr char kRadiance[] = "radiance";
 
 }  // namespace
 
@@ -62,4 +69,6 @@ YARF_PLUGIN(registrar) {
                                              "Isotropic point light of given intensity");
   yarf::Register<IsotropicLight<kIrradiance>>(registrar, "directional", "1.0.0",
                                               "Light from infinitely far, of given irradiance");
+  yarf::Register<IsotropicLight<kRadiance>>(registrar, "constant", "1.0.0",
+                                            "Uniform environment: the same radiance from every direction");
 }

@@ -100,6 +100,14 @@ class Bdpt final : public Transport {
 
   uint32_t Dimensions() const override { return kFirstBounce + 2 * kPerBounce * uint32_t(max_depth_); }
 
+  void Prepare(const SceneView& scene) override {
+    for (uint32_t l = 0; l < scene.LightCount(); ++l) {
+      const LightDirection light = scene.LightPoint(l, Vec3());
+      if (!light.emitter || light.AtInfinity())
+        throw Error("bdpt: lights at infinity (directional, constant, envmap) are not supported yet; use path");
+    }
+  }
+
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     out.splats = true;
     const size_t n = points.Count();

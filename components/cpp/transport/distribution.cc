@@ -6,7 +6,8 @@
 // one light sample (next-event estimation, no MIS) with the whole BSDF;
 // the path goes on only through non-diffuse lobes (glossy and specular),
 // so diffuse surfaces receive direct light only. Emitters count when seen
-// directly or through specular lobes, which light samples cannot reach.
+// directly or through specular lobes, which light samples cannot reach,
+// and so does the environment.
 // On models whose lobes are all diffuse or all non-diffuse, this computes
 // the path integral over E (glossy|specular)* any-lobe L: the same as the
 // path tracer with diffuse_indirect = false, by another estimator.
@@ -80,9 +81,16 @@ class DistributionRayTracer final : public Transport {
     scene.Intersect(rays, hits);
     std::vector<Vertex> vertices;
     std::vector<EmitterQuery> seen;
-    std::vector<uint32_t> seen_by;
+    std::vector<uint32_t> seen_by, escaped;
+    std::vector<Vec3> escaped_directions;
     for (size_t k = 0; k < active.size(); ++k) {
-      if (!hits[k].Found()) continue;
+      if (!hits[k].Found()) {
+        if (paths[active[k]].sees_emitters) {
+          escaped.push_back(active[k]);
+          escaped_directions.push_back(rays[k].direction);
+        }
+        continue;
+      }
       const Emitter* emitter = scene.EmitterOf(hits[k].shape);
       if (emitter && paths[active[k]].sees_emitters) {
         seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
@@ -93,6 +101,8 @@ class DistributionRayTracer final : public Transport {
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen);
     for (size_t q = 0; q < seen.size(); ++q)
       paths[seen_by[q]].radiance += paths[seen_by[q]].throughput * emitted[q].radiance;
+    const std::vector<Vec3> environment = EnvironmentAlong(scene, escaped_directions);
+    for (size_t q = 0; q < escaped.size(); ++q) paths[escaped[q]].radiance += paths[escaped[q]].throughput * environment[q];
     if (length_.max_depth >= 0 && depth >= length_.max_depth) return {};
     const uint32_t base = kTransportDimension + kPerBounce * uint32_t(depth - 1);
     SampleLights(scene, points, paths, vertices, base);
@@ -103,17 +113,22 @@ class DistributionRayTracer final : public Transport {
   void SampleLights(const SceneView& scene, const PrimarySamples& points, std::vector<Path>& paths,
                     const std::vector<Vertex>& vertices, uint32_t base) const {
     if (!scene.HasLights()) return;
-    std::vector<LightConnection> connections;
+    std::vector<const Vertex*> lit;
+    std::vector<Vec3> from;
     std::vector<uint32_t> owners;
     for (const Vertex& v : vertices) {
       if (!SamplesLights(scene.Material(v.material).Lobes())) continue;
-      const LightSample s =
-          scene.SampleLight(points.Get(v.path, base + kLightChoice), points.Get(v.path, base + kLightPosition),
-                            points.Get(v.path, base + kLightPosition + 1));
-      if (!s.emitter) continue;
-      connections.push_back(
-          {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.site, paths[v.path].ray.time, s});
+      lit.push_back(&v);
+      from.push_back(v.at.position);
       owners.push_back(v.path);
+    }
+    const std::vector<LightDirection> lights =
+        SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition);
+    std::vector<LightConnection> connections;
+    for (size_t k = 0; k < lit.size(); ++k) {
+      const Vertex& v = *lit[k];
+      connections.push_back(
+          {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.site, paths[v.path].ray.time, lights[k]});
     }
     const std::vector<Vec3> light = DirectLight(scene, connections);
     for (size_t k = 0; k < owners.size(); ++k) paths[owners[k]].radiance += paths[owners[k]].throughput * light[k];

@@ -131,7 +131,7 @@ float SceneExtent(const SceneView& scene, const std::vector<SurfacePoint>& fallb
 
 // The key of what the records depend on: the scene's shapes, their
 // materials' and emitters' responses in fixed directions, the point
-// lights, and the settings that shape a record. Not the camera.
+// lights, the environment, and the settings that shape a record. Not the camera.
 uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
   uint64_t key = Hash(uint64_t(irradiance_file::kVersion), uint64_t(Bits(settings.accuracy)),
                       uint64_t(settings.gather_rays), uint64_t(Bits(settings.min_spacing)),
@@ -164,13 +164,17 @@ uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
   }
   mix(scene.LightCount());
   for (uint32_t l = 0; l < scene.LightCount(); ++l) {
-    const LightSample s = scene.LightPoint(l, Vec3());
-    mix3(s.position), mix3(s.normal), mix(Bits(s.pdf));
+    const LightDirection s = scene.LightPoint(l, Vec3());
+    mix3(s.position), mix3(s.normal), mix3(s.direction), mix(Bits(s.pdf));
     if (s.emitter) {
       std::vector<float> radiance(3);
       s.emitter->Radiance(wo, at, radiance);
       mix3(Vec3::Load(radiance.data()));
     }
+  }
+  if (scene.HasEnvironment()) {
+    const std::vector<Vec3> directions{{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0.6f, -0.8f, 0}};
+    for (Vec3 radiance : EnvironmentAlong(scene, directions)) mix3(radiance);
   }
   return key;
 }
@@ -232,9 +236,14 @@ class IrradianceCache final : public Transport {
     scene.Intersect(rays, hits);
     std::vector<Vertex> shaded, specular;
     std::vector<EmitterQuery> seen;
-    std::vector<uint32_t> seen_by;
+    std::vector<uint32_t> seen_by, escaped;
+    std::vector<Vec3> escaped_directions;
     for (size_t k = 0; k < active.size(); ++k) {
-      if (!hits[k].Found()) continue;
+      if (!hits[k].Found()) {
+        escaped.push_back(active[k]);
+        escaped_directions.push_back(rays[k].direction);
+        continue;
+      }
       const Vertex v{active[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
       // Paths reach here from the camera or through delta lobes only, so
       // every emitter they hit counts.
@@ -247,6 +256,8 @@ class IrradianceCache final : public Transport {
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen);
     for (size_t q = 0; q < seen.size(); ++q)
       paths[seen_by[q]].radiance += paths[seen_by[q]].throughput * emitted[q].radiance;
+    const std::vector<Vec3> environment = EnvironmentAlong(scene, escaped_directions);
+    for (size_t q = 0; q < escaped.size(); ++q) paths[escaped[q]].radiance += paths[escaped[q]].throughput * environment[q];
     const uint32_t base = kTransportDimension + kPerSegment * uint32_t(depth - 1);
     Shade(scene, points, paths, shaded, base);
     if (depth >= settings_.max_depth) return {};
@@ -258,20 +269,17 @@ class IrradianceCache final : public Transport {
              const std::vector<Vertex>& vertices, uint32_t base) const {
     std::vector<LightConnection> connections;
     std::vector<uint32_t> lit;
+    std::vector<Vec3> from;
     std::vector<SurfaceQuery> diffuse;
     std::vector<Vec3> irradiance;
     std::vector<uint32_t> cached;
     for (const Vertex& v : vertices) {
       const uint32_t lobes = scene.Material(v.material).Lobes();
       if (scene.HasLights() && SamplesLights(lobes)) {
-        const LightSample s =
-            scene.SampleLight(points.Get(v.path, base + kLightChoice), points.Get(v.path, base + kLightPosition),
-                              points.Get(v.path, base + kLightPosition + 1));
-        if (s.emitter) {
-          connections.push_back(
-              {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.site, paths[v.path].ray.time, s});
-          lit.push_back(v.path);
-        }
+        connections.push_back(
+            {v.material, v.at.position, v.at.ng, v.at.frame, v.at.wi, v.at.site, paths[v.path].ray.time, {}});
+        lit.push_back(v.path);
+        from.push_back(v.at.position);
       }
       if (HasDiffuseLobe(lobes) && v.at.wi.z != 0) {
         const float side = v.at.wi.z > 0 ? 1.0f : -1.0f;
@@ -280,6 +288,9 @@ class IrradianceCache final : public Transport {
         cached.push_back(v.path);
       }
     }
+    const std::vector<LightDirection> lights =
+        SampleLightsFrom(scene, points, from, lit, base + kLightChoice, base + kLightPosition);
+    for (size_t k = 0; k < lights.size(); ++k) connections[k].light = lights[k];
     const std::vector<Vec3> direct = DirectLight(scene, connections);
     for (size_t k = 0; k < lit.size(); ++k) paths[lit[k]].radiance += paths[lit[k]].throughput * direct[k];
     const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, diffuse);

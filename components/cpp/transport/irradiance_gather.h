@@ -95,20 +95,27 @@ inline IrradianceRecord GatherRecord(const SceneView& scene, const SurfacePoint&
 
   std::vector<float> distance(rays.size(), kInfinity);
   std::vector<Vec3> radiance(rays.size());
+  // The light at each gather ray's hit: one light sample there (the
+  // emitters and the environment the rays see are direct light at p,
+  // which p's own light samples count).
   std::vector<LightConnection> connections;
   std::vector<uint32_t> lit;
+  std::vector<Vec3> from;
+  std::vector<float> u;
   for (uint32_t c = 0; c < rays.size(); ++c) {
     if (!hits[c].Found()) continue;
     distance[c] = hits[c].t;
     const uint32_t material = scene.MaterialOf(hits[c].shape);
     if (!scene.HasLights() || !SamplesLights(scene.Material(material).Lobes())) continue;
-    const LightSample s = scene.SampleLight(Uniform(kGatherSalt, index, c, 2), Uniform(kGatherSalt, index, c, 3),
-                                            Uniform(kGatherSalt, index, c, 4));
-    if (!s.emitter) continue;
     const ShadingPoint at = ShadingPointOf(scene, hits[c], rays[c]);
-    connections.push_back({material, at.position, at.ng, at.frame, at.wi, at.site, time, s});
+    connections.push_back({material, at.position, at.ng, at.frame, at.wi, at.site, time, {}});
     lit.push_back(c);
+    from.push_back(at.position);
+    for (uint32_t d = 2; d < 5; ++d) u.push_back(Uniform(kGatherSalt, index, c, d));
   }
+  std::vector<LightDirection> lights(from.size());
+  scene.SampleLightsFrom(from, u, lights);
+  for (size_t q = 0; q < lights.size(); ++q) connections[q].light = lights[q];
   const std::vector<Vec3> direct = DirectLight(scene, connections);
   for (size_t q = 0; q < lit.size(); ++q) radiance[lit[q]] = direct[q];
 

@@ -5,11 +5,13 @@
 // appears. Surfaces scatter importance (TransportMode::kImportance), so
 // glass does not scale it by 1/η². The light tracer sees no path whose
 // vertex next to the camera is specular (a mirror or glass seen directly):
-// such pixels stay black, as in every light tracer. Paths advance as a
+// such pixels stay black, as in every light tracer. An environment seen
+// directly is added by camera rays (the film coordinates), as Mitsuba's
+// particle tracer adds visible emitters. Paths advance as a
 // wavefront: each bounce calls each SurfaceModel and Emitter once.
 //
-// Primary sample space: 0–1 film (unused: the film position comes from
-// the connection), 2–3 lens, 4 time; then (6, 7) light position, (8, 9)
+// Primary sample space: 0–1 film (only for an environment seen directly:
+// elsewhere the film position comes from the connection), 2–3 lens, 4 time; then (6, 7) light position, (8, 9)
 // emission direction, (10) light choice; from 12 on, 4 per bounce: the
 // BSDF direction pair, then (lobe choice, Russian roulette).
 //
@@ -53,6 +55,7 @@ class LightTracer final : public Transport {
     std::vector<float> time(n);
     for (uint32_t i = 0; i < n; ++i) time[i] = scene.ShutterTime(points.Get(i, kTimeDimension));
     ConnectLightsToCamera(scene, points, starts, time, out);
+    if (scene.HasEnvironment()) SeeEnvironment(scene, points, time, out);
 
     std::vector<LightPath> paths(n);
     std::vector<uint32_t> active;
@@ -77,8 +80,9 @@ class LightTracer final : public Transport {
     for (uint32_t i = 0; i < starts.size(); ++i) {
       const LightSample& l = starts[i].light;
       // A point light is a delta on the film: the camera never sees it,
-      // as camera rays never hit it.
-      if (!l.emitter || !(l.pdf > 0) || l.delta_position) continue;
+      // as camera rays never hit it. A light at infinity starts from a
+      // disk that is not there to be seen (SeeEnvironment sees it).
+      if (!l.emitter || !(l.pdf > 0) || l.delta_position || l.infinite) continue;
       CameraConnection c;
       if (!scene.ConnectToCamera(l.position, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), c))
         continue;
@@ -105,6 +109,30 @@ class LightTracer final : public Transport {
     }
     SplatVisible(rays, values, [&](size_t q) { return connections[kept[q]]; },
                  [&](size_t q) { return owners[kept[q]]; }, scene, out);
+  }
+
+  // Paths of one segment from an environment: no light path reaches the
+  // camera's pinhole from infinity, so a camera ray per point (its film
+  // coordinates) splats the environment where it is seen directly. One
+  // pass of W×H points puts one such ray in each pixel on average.
+  void SeeEnvironment(const SceneView& scene, const PrimarySamples& points, const std::vector<float>& time,
+                      FilmSamples& out) const {
+    const size_t n = points.Count();
+    std::vector<Ray> rays(n);
+    std::vector<Hit> hits(n);
+    for (uint32_t i = 0; i < n; ++i)
+      rays[i] = scene.CameraRay(points.Get(i, kFilmDimension), points.Get(i, kFilmDimension + 1),
+                                points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), time[i]);
+    scene.Intersect(rays, hits);
+    std::vector<Vec3> directions;
+    std::vector<uint32_t> escaped;
+    for (uint32_t i = 0; i < n; ++i)
+      if (!hits[i].Found()) {
+        directions.push_back(rays[i].direction);
+        escaped.push_back(i);
+      }
+    const std::vector<Vec3> environment = EnvironmentAlong(scene, directions);
+    for (size_t k = 0; k < escaped.size(); ++k) AddCameraSample(scene, points, escaped[k], environment[k], out);
   }
 
   // Intersects, connects every hit to the camera, scatters; returns the

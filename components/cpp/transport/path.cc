@@ -1,7 +1,8 @@
 // path — the eye path tracer, as a batch Function over primary sample space.
 //
 // Unidirectional path tracing with next-event estimation (one light sample
-// per vertex, chosen uniformly by emitting area), multiple importance
+// per vertex: SceneView::SampleLightsFrom, spheres by solid angle, an
+// environment by its own distribution), multiple importance
 // sampling of light and BSDF samples with the power heuristic, and Russian
 // roulette. Paths advance together, one bounce at a time (a wavefront):
 // each bounce intersects all live rays as one batch and calls each
@@ -12,8 +13,9 @@
 // bounce from 6 on, laid out so that each 2-D choice gets a pair (2k, 2k+1)
 // of the sampler, the pairs low-discrepancy samplers stratify jointly:
 // light position, BSDF direction, (light choice, BSDF lobe), (Russian
-// roulette, unused). Point and spot lights are sampled by next-event
-// estimation only (nothing hits them).
+// roulette, unused). Point, spot and directional lights are sampled by
+// next-event estimation only (nothing hits them); rays that leave the
+// scene see the environment.
 //
 // Paths that scatter from a diffuse lobe may be made to end there (their
 // light from the next vertex is still counted): with diffuse_indirect
@@ -99,16 +101,20 @@ class PathTracer final : public Transport {
     std::vector<uint32_t> vertex_material;
     vertices.reserve(active.size());
     vertex_material.reserve(active.size());
-    std::vector<uint32_t> emitted;  // indices into active/hits
+    std::vector<uint32_t> emitted, escaped;  // indices into active/hits
     for (size_t k = 0; k < active.size(); ++k) {
       const Hit& hit = hits[k];
-      if (!hit.Found()) continue;
+      if (!hit.Found()) {
+        escaped.push_back(uint32_t(k));
+        continue;
+      }
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
       if (!may_scatter || paths[active[k]].last) continue;
       vertices.emplace_back(active[k], ShadingPointOf(scene, hit, rays[k]), rays[k].time);
       vertex_material.push_back(scene.MaterialOf(hit.shape));
     }
     AddEmission(scene, paths, active, rays, hits, emitted);
+    if (scene.HasEnvironment()) AddEnvironment(scene, paths, active, rays, escaped);
 
     const uint32_t base = kFirstBounceDimension + kDimensionsPerBounce * uint32_t(depth - 1);
     std::vector<uint32_t> next;
@@ -140,15 +146,24 @@ class PathTracer final : public Transport {
       for (size_t j = 0; j < m; ++j) {
         const uint32_t k = emitted[members[j]];
         Path& p = paths[active[k]];
-        float weight = 1;
-        if (!p.full_weight) {
-          const float cos_light = std::abs(w[3 * j + 2]);
-          const float light_pdf =
-              cos_light > 0 ? scene.LightPdfArea(hits[k].shape) * hits[k].t * hits[k].t / cos_light : 0;
-          weight = PowerHeuristic(p.bsdf_pdf, light_pdf);
-        }
+        const float weight = p.full_weight ? 1 : PowerHeuristic(p.bsdf_pdf, scene.LightPdfFrom(rays[k], hits[k]));
         p.radiance += p.throughput * Vec3::Load(&le[3 * j]) * weight;
       }
+    }
+  }
+
+  // The environment seen by the rays of this bounce that left the scene,
+  // weighted against light sampling.
+  void AddEnvironment(const SceneView& scene, std::vector<Path>& paths, const std::vector<uint32_t>& active,
+                      const std::vector<Ray>& rays, const std::vector<uint32_t>& escaped) const {
+    std::vector<Vec3> directions(escaped.size()), le(escaped.size());
+    std::vector<float> light_pdf(escaped.size());
+    for (size_t j = 0; j < escaped.size(); ++j) directions[j] = rays[escaped[j]].direction;
+    scene.Escaped(directions, le, light_pdf);
+    for (size_t j = 0; j < escaped.size(); ++j) {
+      Path& p = paths[active[escaped[j]]];
+      const float weight = p.full_weight ? 1 : PowerHeuristic(p.bsdf_pdf, light_pdf[j]);
+      p.radiance += p.throughput * le[j] * weight;
     }
   }
 
@@ -157,76 +172,63 @@ class PathTracer final : public Transport {
                     std::vector<Path>& paths, const std::vector<Vertex>& vertices,
                     const std::vector<uint32_t>& members, uint32_t base) const {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), wo(3 * m), f(3 * m), pdf(m);
-    std::vector<float> light_w(3 * m), light_uv(2 * m), le(3 * m), light_pdf(m);
+    std::vector<float> wi(3 * m), wo(3 * m), f(3 * m), pdf(m), le(3 * m);
     SurfaceRows rows(&scene, m);
-    std::vector<Ray> shadow(m);
+    std::vector<Vec3> from(m);
+    std::vector<uint32_t> owners(m);
+    for (size_t j = 0; j < m; ++j) {
+      from[j] = vertices[members[j]].at.position;
+      owners[j] = vertices[members[j]].path;
+    }
+    const std::vector<LightDirection> lights =
+        SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition);
     std::vector<const Emitter*> emitters(m);
-    std::vector<uint8_t> delta(m);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
-      const uint32_t path = v.path;
-      const LightSample s =
-          scene.SampleLight(points.Get(path, base + kLightChoice), points.Get(path, base + kLightPosition),
-                            points.Get(path, base + kLightPosition + 1));
-      Vec3 to_light = s.position - v.at.position;
-      const float dist = Length(to_light);
-      to_light = dist > 0 ? to_light / dist : Vec3(0, 0, 1);
-      // A point light has no area: its "pdf" per solid angle is the
-      // choice's probability times d², and nothing else can sample it.
-      const float cos_light = s.delta_position ? 1.0f : std::abs(Dot(s.normal, to_light));
-      light_pdf[j] = cos_light > 0 && dist > 0 ? s.pdf * dist * dist / cos_light : 0;
-      delta[j] = s.delta_position;
-      emitters[j] = s.emitter;
+      emitters[j] = lights[j].emitter;
       v.at.wi.Store(&wi[3 * j]);
-      v.at.frame.ToLocal(to_light).Store(&wo[3 * j]);
+      v.at.frame.ToLocal(lights[j].direction).Store(&wo[3 * j]);
       rows.Add(v.at.site);
-      Frame(s.normal).ToLocal(-to_light).Store(&light_w[3 * j]);
-      light_uv[2 * j] = s.u;
-      light_uv[2 * j + 1] = s.v;
-      shadow[j] = ShadowRay(v.at.position, v.at.ng, s.position);
-      shadow[j].time = v.time;
-      if (s.delta_position) shadow[j].tfar = std::max(0.0f, Length(s.position - shadow[j].origin));
     }
     const SurfacePoints at = rows.Points();
     model.Evaluate(TransportMode::kRadiance, wi, wo, at, f);
     model.Pdf(wi, wo, at, pdf);
-    std::vector<const Emitter*> keys = emitters;
-    for (const auto& [emitter, group] : GroupBy(keys)) {
+    for (const auto& [emitter, group] : GroupBy(emitters)) {
       if (!emitter) continue;
       const size_t g = group.size();
       std::vector<float> w(3 * g), radiance(3 * g);
       SurfaceRows light_rows(&scene, g);
       for (size_t q = 0; q < g; ++q) {
-        std::copy_n(&light_w[3 * group[q]], 3, &w[3 * q]);
-        light_rows.Add(SurfaceSite::Uv(light_uv[2 * group[q]], light_uv[2 * group[q] + 1]));
+        lights[group[q]].w.Store(&w[3 * q]);
+        light_rows.Add(SurfaceSite::Uv(lights[group[q]].u, lights[group[q]].v));
       }
       emitter->Radiance(w, light_rows.Points(), radiance);
       for (size_t q = 0; q < g; ++q) std::copy_n(&radiance[3 * q], 3, &le[3 * group[q]]);
     }
     // Trace shadow rays only for samples that would contribute.
     std::vector<Ray> rays;
-    std::vector<uint32_t> owners;
+    std::vector<uint32_t> owner_of_ray;
     std::vector<Vec3> contributions;
     for (size_t j = 0; j < m; ++j) {
-      if (!emitters[j] || light_pdf[j] <= 0) continue;
+      const LightDirection& light = lights[j];
+      if (!light.emitter || !(light.pdf > 0)) continue;
       const Vertex& v = vertices[members[j]];
       const Path& p = paths[v.path];
       const float cos_surface = std::abs(wo[3 * j + 2]);
-      const float mis = delta[j] ? 1.0f : PowerHeuristic(light_pdf[j], pdf[j]);
+      const float mis = light.delta ? 1.0f : PowerHeuristic(light.pdf, pdf[j]);
       const float shading =
           ShadingWeight(v.at.frame, v.at.ng, v.at.wi, Vec3::Load(&wo[3 * j]), TransportMode::kRadiance);
       const Vec3 c = p.throughput * Vec3::Load(&f[3 * j]) * Vec3::Load(&le[3 * j]) *
-                     (cos_surface * mis * shading / light_pdf[j]);
-      if (MaxComponent(c) <= 0) continue;
-      rays.push_back(shadow[j]);
-      owners.push_back(vertices[members[j]].path);
+                     (cos_surface * mis * shading / light.pdf);
+      if (!(MaxComponent(c) > 0)) continue;
+      rays.push_back(ShadowRayToLight(v.at.position, v.at.ng, light, v.time));
+      owner_of_ray.push_back(v.path);
       contributions.push_back(c);
     }
     std::vector<uint8_t> occluded(rays.size());
     scene.Occluded(rays, occluded);
     for (size_t q = 0; q < rays.size(); ++q)
-      if (!occluded[q]) paths[owners[q]].radiance += contributions[q];
+      if (!occluded[q]) paths[owner_of_ray[q]].radiance += contributions[q];
   }
 
   // Samples the BSDF for each vertex, extends the path, applies roulette.

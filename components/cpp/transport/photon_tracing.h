@@ -264,8 +264,9 @@ struct Walk {
 // their BSDF (radiance mode), for at most `bounces` such surfaces, and
 // returns the surface points with a diffuse lobe it reaches. Bounce b
 // uses coordinates first + 4b (direction pair, lobe). When `emitted` is
-// given, emitters hit on the way (and at the end) add their radiance,
-// times the walk's throughput, to emitted[owner].
+// given, emitters hit on the way (and at the end) and the environment seen
+// by walks that leave the scene add their radiance, times the walk's
+// throughput, to emitted[owner].
 inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const PrimarySamples& points,
                                                std::vector<Walk> walks, uint32_t first, int bounces,
                                                std::vector<Vec3>* emitted) {
@@ -287,6 +288,16 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
       const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
       for (size_t q = 0; q < lit.size(); ++q)
         (*emitted)[walks[lit[q]].owner] += walks[lit[q]].throughput * le[q].radiance;
+      std::vector<Vec3> directions;
+      std::vector<uint32_t> escaped;
+      for (size_t k = 0; k < walks.size(); ++k)
+        if (!hits[k].Found()) {
+          directions.push_back(rays[k].direction);
+          escaped.push_back(uint32_t(k));
+        }
+      const std::vector<Vec3> environment = EnvironmentAlong(scene, directions);
+      for (size_t q = 0; q < escaped.size(); ++q)
+        (*emitted)[walks[escaped[q]].owner] += walks[escaped[q]].throughput * environment[q];
     }
     std::vector<ScatterQuery> queries;
     std::vector<uint32_t> scattering;
@@ -331,12 +342,18 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
 inline std::vector<Vec3> DirectLightAt(const SceneView& scene, const PrimarySamples& points,
                                        const std::vector<SurfacePoint>& at, uint32_t first) {
   if (!scene.HasLights()) return std::vector<Vec3>(at.size());
+  std::vector<Vec3> from;
+  std::vector<uint32_t> owners;
+  for (const SurfacePoint& s : at) {
+    from.push_back(s.at.position);
+    owners.push_back(s.owner);
+  }
+  const std::vector<LightDirection> lights = SampleLightsFrom(scene, points, from, owners, first + 2, first);
   std::vector<LightConnection> connections;
   connections.reserve(at.size());
-  for (const SurfacePoint& s : at) {
-    const LightSample light = scene.SampleLight(points.Get(s.owner, first + 2), points.Get(s.owner, first),
-                                                points.Get(s.owner, first + 1));
-    connections.push_back({s.material, s.at.position, s.at.ng, s.at.frame, s.at.wi, s.at.site, s.time, light});
+  for (size_t k = 0; k < at.size(); ++k) {
+    const SurfacePoint& s = at[k];
+    connections.push_back({s.material, s.at.position, s.at.ng, s.at.frame, s.at.wi, s.at.site, s.time, lights[k]});
   }
   std::vector<Vec3> direct = DirectLight(scene, connections);
   for (size_t k = 0; k < at.size(); ++k) direct[k] = direct[k] * at[k].throughput;

@@ -170,8 +170,9 @@ class Radiosity final : public Transport {
                     "diffuse reflectors only");
     }
     for (uint32_t light = 0; light < scene.LightCount(); ++light)
-      if (scene.LightPoint(light, Vec3()).delta_position)
-        throw Error("radiosity: point and spot lights are not supported, only emitting triangle surfaces");
+      if (scene.LightPoint(light, Vec3()).delta || !scene.LightPoint(light, Vec3()).emitter)
+        throw Error("radiosity: point, spot, directional and environment lights are not supported, only "
+                    "emitting triangle surfaces");
   }
 
   static double SceneArea(const SceneView& scene) {
@@ -301,10 +302,7 @@ class Radiosity final : public Transport {
                         frame.ToLocal(-rays[i].direction),
                         SurfaceSite::Uv(hits[i].u, hits[i].v),
                         rays[i].time,
-                        LightSample{}};
-      if (scene.HasLights())
-        c.light = scene.SampleLight(points.Get(i, kLightChoice), points.Get(i, kLightPosition),
-                                    points.Get(i, kLightPosition + 1));
+                        LightDirection{}};
       ScatterQuery q{c.material, c.wi, c.site};
       q.uniform[0] = points.Get(i, kGatherLobe);
       q.uniform[1] = points.Get(i, kGatherDirection);
@@ -313,6 +311,11 @@ class Radiosity final : public Transport {
       scatters.push_back(q);
       owners.push_back(i);
     }
+    std::vector<Vec3> from;
+    for (const LightConnection& c : connections) from.push_back(c.position);
+    const std::vector<LightDirection> lights =
+        SampleLightsFrom(scene, points, from, owners, kLightChoice, kLightPosition);
+    for (size_t k = 0; k < connections.size(); ++k) connections[k].light = lights[k];
     std::vector<LightConnection> lit;
     std::vector<uint32_t> lit_owners;
     for (size_t k = 0; k < connections.size(); ++k)

@@ -350,11 +350,12 @@ struct LightStart {
     const float cos = light.delta_position ? 1.0f : std::abs(Dot(light.normal, direction));
     return radiance * (cos / (light.pdf * pdf_direction));
   }
-  // The first ray, leaving the light's surface.
+  // The first ray, leaving the light's surface (a light at infinity: its
+  // disk, which no surface lies on).
   Ray FirstRay(float time) const {
     Ray ray;
-    ray.origin = light.delta_position ? light.position
-                                      : OffsetRayOrigin(light.position, light.normal, direction);
+    ray.origin = light.delta_position || light.infinite ? light.position
+                                                         : OffsetRayOrigin(light.position, light.normal, direction);
     ray.direction = direction;
     ray.time = time;
     return ray;
@@ -363,7 +364,10 @@ struct LightStart {
 
 // One light path start per point, from the given coordinates: light choice
 // `choice`, position (position, position + 1), direction (direction,
-// direction + 1). One SampleDirection and Radiance call per emitter.
+// direction + 1). One SampleDirection and Radiance call per emitter. A
+// light at infinity chooses its direction first, then its point on the
+// disk facing it (the position coordinates); a directional light has
+// one direction, its frame's +z.
 inline std::vector<LightStart> StartLightPaths(const SceneView& scene, const PrimarySamples& points,
                                                uint32_t choice, uint32_t position, uint32_t direction) {
   const size_t n = points.Count();
@@ -383,13 +387,27 @@ inline std::vector<LightStart> StartLightPaths(const SceneView& scene, const Pri
       u[2 * j + 1] = points.Get(members[j], direction + 1);
       rows.Add(SurfaceSite::Uv(starts[members[j]].light.u, starts[members[j]].light.v));
     }
-    emitter->SampleDirection(u, w, pdf);
+    if (starts[members[0]].light.delta_direction) {
+      for (size_t j = 0; j < m; ++j) w[3 * j + 2] = 1, pdf[j] = 1;
+    } else {
+      emitter->SampleDirection(u, w, pdf);
+    }
     emitter->Radiance(w, rows.Points(), radiance);
     for (size_t j = 0; j < m; ++j) {
       LightStart& s = starts[members[j]];
-      s.direction = Normalize(Frame(s.light.normal).ToWorld(Vec3::Load(&w[3 * j])));
+      const Vec3 local = Vec3::Load(&w[3 * j]);
       s.pdf_direction = pdf[j];
       s.radiance = Vec3::Load(&radiance[3 * j]);
+      if (!s.light.infinite) {
+        s.direction = Normalize(Frame(s.light.normal).ToWorld(local));
+        continue;
+      }
+      s.direction = Normalize(s.light.frame.ToWorld(local));
+      float pdf_area = 0;
+      s.light.position = scene.InfiniteLightOrigin(s.direction, points.Get(members[j], position),
+                                                   points.Get(members[j], position + 1), pdf_area);
+      s.light.normal = s.direction;
+      s.light.pdf *= pdf_area;
     }
   }
   return starts;
@@ -415,8 +433,24 @@ inline Ray RayToLens(Vec3 p, Vec3 n, Vec3 lens_point, float time) {
 
 namespace yarf {
 
-// A surface point joined to a chosen point of a light (next-event
-// estimation without MIS): directions in the vertex's local frame.
+// The shadow ray from surface point p (geometric normal ng) toward a
+// light seen from it: unbounded toward a light at infinity, up to a point
+// light itself, short of a surface light's surface.
+inline Ray ShadowRayToLight(Vec3 p, Vec3 ng, const LightDirection& light, float time) {
+  Ray ray;
+  if (light.AtInfinity()) {
+    ray.origin = OffsetRayOrigin(p, ng, light.direction);
+    ray.direction = light.direction;
+  } else {
+    ray = ShadowRay(p, ng, light.position);
+    if (light.delta) ray.tfar = std::max(0.0f, Length(light.position - ray.origin));
+  }
+  ray.time = time;
+  return ray;
+}
+
+// A surface point joined to a light seen from it (next-event estimation
+// without MIS): directions in the vertex's local frame.
 struct LightConnection {
   uint32_t material;
   Vec3 position;
@@ -425,11 +459,11 @@ struct LightConnection {
   Vec3 wi;
   SurfaceSite site;
   float time = 0;
-  LightSample light;
+  LightDirection light;
 };
 
-// f·L·|cos|·|cos'|/(d²·pdf) of each connection whose shadow ray is clear,
-// zero otherwise: one call per material and per emitter, one ray batch.
+// f·L·|cos|/pdf of each connection whose shadow ray is clear, zero
+// otherwise: one call per material and per emitter, one ray batch.
 inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<LightConnection>& connections) {
   const size_t n = connections.size();
   std::vector<SurfaceQuery> surfaces(n);
@@ -437,13 +471,9 @@ inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<L
   std::vector<Ray> shadow(n);
   for (size_t k = 0; k < n; ++k) {
     const LightConnection& c = connections[k];
-    const Vec3 to_light = Normalize(c.light.position - c.position);
-    surfaces[k] = {c.material, c.wi, c.frame.ToLocal(to_light), c.site};
-    lights[k] = {c.light.emitter, Frame(c.light.normal).ToLocal(-to_light), SurfaceSite::Uv(c.light.u, c.light.v)};
-    shadow[k] = ShadowRay(c.position, c.ng, c.light.position);
-    // A point light has no surface to stop short of.
-    if (c.light.delta_position) shadow[k].tfar = std::max(0.0f, Length(c.light.position - shadow[k].origin));
-    shadow[k].time = c.time;
+    surfaces[k] = {c.material, c.wi, c.frame.ToLocal(c.light.direction), c.site};
+    lights[k] = {c.light.emitter, c.light.w, SurfaceSite::Uv(c.light.u, c.light.v)};
+    shadow[k] = ShadowRayToLight(c.position, c.ng, c.light, c.time);
   }
   const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
   const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
@@ -452,13 +482,38 @@ inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<L
   std::vector<Vec3> out(n);
   for (size_t k = 0; k < n; ++k) {
     const LightConnection& c = connections[k];
-    const Vec3 d = c.light.position - c.position;
-    const float dist2 = Dot(d, d);
-    if (occluded[k] || !(dist2 > 0) || !(c.light.pdf > 0)) continue;
-    const float cos_light = c.light.delta_position ? 1.0f : std::abs(lights[k].w.z);
+    if (occluded[k] || !c.light.emitter || !(c.light.pdf > 0)) continue;
     const float shading = ShadingWeight(c.frame, c.ng, c.wi, surfaces[k].wo, TransportMode::kRadiance);
-    out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * cos_light * shading / (dist2 * c.light.pdf));
+    out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * shading / c.light.pdf);
   }
+  return out;
+}
+
+// The environment's radiance arriving back along rays that left the
+// scene in `directions` (zero without an environment): one call.
+inline std::vector<Vec3> EnvironmentAlong(const SceneView& scene, const std::vector<Vec3>& directions) {
+  std::vector<Vec3> radiance(directions.size());
+  if (!scene.HasEnvironment() || directions.empty()) return radiance;
+  std::vector<float> pdf(directions.size());
+  scene.Escaped(directions, radiance, pdf);
+  return radiance;
+}
+
+// The lights seen from each point, for next-event estimation: light
+// choice from coordinate `choice`, the direction from (direction,
+// direction + 1) of point owners[k].
+inline std::vector<LightDirection> SampleLightsFrom(const SceneView& scene, const PrimarySamples& points,
+                                                    const std::vector<Vec3>& from,
+                                                    const std::vector<uint32_t>& owners, uint32_t choice,
+                                                    uint32_t direction) {
+  std::vector<float> u(3 * from.size());
+  for (size_t k = 0; k < from.size(); ++k) {
+    u[3 * k] = points.Get(owners[k], choice);
+    u[3 * k + 1] = points.Get(owners[k], direction);
+    u[3 * k + 2] = points.Get(owners[k], direction + 1);
+  }
+  std::vector<LightDirection> out(from.size());
+  scene.SampleLightsFrom(from, u, out);
   return out;
 }
 

@@ -2,10 +2,12 @@
 //
 // Camera rays; at each hit the light of every light source gathered into
 // one point (LightPoint: a mesh light's centroid, a sphere's facing
-// point, a point light itself) with one shadow ray each, so shadows are
-// hard; and, on surfaces with delta lobes, both the mirror reflection and
-// the refraction traced further, each weighted by its Fresnel factor. No
-// diffuse or glossy interreflection. Everything is deterministic but the
+// point, a point light itself, a directional light's direction) with one
+// shadow ray each, so shadows are hard; and, on surfaces with delta lobes,
+// both the mirror reflection and the refraction traced further, each
+// weighted by its Fresnel factor. No diffuse or glossy interreflection;
+// an environment is seen only by the rays that leave the scene (directly
+// and in mirrors), as it has no point to gather it into. Everything is deterministic but the
 // position within the pixel, so passes only antialias.
 //
 // Rays advance level by level as a wavefront: each level intersects all
@@ -67,9 +69,14 @@ class Whitted final : public Transport {
 
     std::vector<Vertex> vertices;
     std::vector<EmitterQuery> seen;
-    std::vector<uint32_t> seen_by;
+    std::vector<uint32_t> seen_by, escaped;
+    std::vector<Vec3> escaped_directions;
     for (size_t k = 0; k < level.size(); ++k) {
-      if (!hits[k].Found()) continue;
+      if (!hits[k].Found()) {
+        escaped.push_back(uint32_t(k));
+        escaped_directions.push_back(rays[k].direction);
+        continue;
+      }
       if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
         seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
         seen_by.push_back(uint32_t(k));
@@ -80,6 +87,11 @@ class Whitted final : public Transport {
     for (size_t q = 0; q < seen.size(); ++q) {
       const Branch& b = level[seen_by[q]];
       radiance[b.point] += b.weight * emitted[q].radiance;
+    }
+    const std::vector<Vec3> environment = EnvironmentAlong(scene, escaped_directions);
+    for (size_t q = 0; q < escaped.size(); ++q) {
+      const Branch& b = level[escaped[q]];
+      radiance[b.point] += b.weight * environment[q];
     }
     if (depth >= max_depth_) return {};
     AddDirectLight(scene, level, vertices, radiance);

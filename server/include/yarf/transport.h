@@ -66,21 +66,56 @@ struct FilmSamples {
   size_t Count() const { return rgb.size(); }
 };
 
-// A point on a light, for next-event estimation or to start a light path.
+// A point on a light, to start a light path (SampleLight).
 struct LightSample {
   Vec3 position;
   // A surface's normal there; a point light's axis (+z of its frame). The
-  // emitter's local frame is Frame(normal).
+  // emitter's local frame is Frame(normal), but for lights at infinity.
   Vec3 normal;
   // Density of the choice: per unit area on a surface; for a point light
-  // (delta_position), the probability of choosing it.
+  // (delta_position), the probability of choosing it; for a light at
+  // infinity, the probability of choosing it (its disk is chosen later).
   float pdf = 0;
   bool delta_position = false;
+  // A light at infinity (constant, envmap, directional): light paths leave
+  // it from a disk facing their direction (SceneView::InfiniteLightOrigin);
+  // its emitter's local frame is `frame`.
+  bool infinite = false;
+  // A directional light: one direction only, frame.n.
+  bool delta_direction = false;
+  Frame frame{Vec3(0, 0, 1)};
   // nullptr when there was nothing to sample.
   const Emitter* emitter = nullptr;
   // The emitting shape and its surface parameters (surfaces only).
   uint32_t shape = kNoShape;
   float u = 0, v = 0;
+};
+
+// A light seen from a point p of the scene, for next-event estimation
+// (SampleLightsFrom).
+struct LightDirection {
+  // nullptr when there was nothing to sample.
+  const Emitter* emitter = nullptr;
+  // Unit, world space, from p toward the light.
+  Vec3 direction;
+  // To the light's point; kInfinity for a light at infinity.
+  float distance = 0;
+  // Density per unit solid angle at p, the choice of the light included,
+  // so that a light's contribution is always f·L·|cos|/pdf. A delta light
+  // has none: for a point or spot light it is the probability of choosing
+  // it times distance² (which turns intensity into irradiance at p), for a
+  // directional light the probability alone.
+  float pdf = 0;
+  bool delta = false;
+  // The direction the light travels toward p, in the emitter's local
+  // frame: the `w` of Emitter::Radiance.
+  Vec3 w;
+  // Finite lights: the point and its normal (a point light's axis).
+  Vec3 position, normal;
+  // The emitting shape and its surface parameters (surfaces only).
+  uint32_t shape = kNoShape;
+  float u = 0, v = 0;
+  bool AtInfinity() const { return !(distance < kInfinity); }
 };
 
 // The camera seen from a point of the scene, for paths from the lights.
@@ -109,20 +144,46 @@ class SceneView : public Intersector, public SurfaceAttributes {
   virtual uint32_t MaterialOf(uint32_t shape) const = 0;
   // nullptr when the shape does not emit.
   virtual const Emitter* EmitterOf(uint32_t shape) const = 0;
-  // Lights are the emitting shapes and the point lights.
+  // Lights are the emitting shapes, the point and spot lights and the
+  // lights at infinity (directional, and at most one environment:
+  // constant or envmap). Each is chosen with a probability: by power, or
+  // uniformly (Scene.light_sampler).
   virtual bool HasLights() const = 0;
-  // A light chosen uniformly (u_choice), then a point on it uniform in
-  // area (u0, u1).
+  // A light chosen by u_choice, then a point on it uniform in area (u0,
+  // u1), for paths that start at the lights. Lights at infinity leave
+  // their point to InfiniteLightOrigin.
   virtual LightSample SampleLight(float u_choice, float u0, float u1) const = 0;
   // The area density SampleLight has at any point of the emitting `shape`.
   virtual float LightPdfArea(uint32_t shape) const = 0;
+  // Where a light path from a light at infinity travelling along world
+  // direction d starts: a point (u0, u1) of the disk of the scene's
+  // bounding sphere facing d, and the disk's area density.
+  virtual Vec3 InfiniteLightOrigin(Vec3 d, float u0, float u1, float& pdf_area) const = 0;
+  // For each point p: a light chosen by uniform[3k] and a direction
+  // toward it from p (uniform[3k+1], uniform[3k+2]): spheres by the solid
+  // angle they subtend, triangles by area, an environment by its own
+  // SampleDirection. Batched, as an environment's emitter is called once
+  // for the whole batch.
+  virtual void SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
+                                std::span<LightDirection> out) const = 0;
+  // The solid-angle density SampleLightsFrom has, at the origin of `ray`,
+  // for the emitting surface point `hit` the ray meets.
+  virtual float LightPdfFrom(const Ray& ray, const Hit& hit) const = 0;
+  // Rays that leave the scene along `directions` (world, unit): the
+  // environment's radiance arriving back along each, and the density
+  // SampleLightsFrom has for the direction; zero without an environment.
+  virtual bool HasEnvironment() const = 0;
+  virtual void Escaped(std::span<const Vec3> directions, std::span<Vec3> radiance,
+                       std::span<float> pdf) const = 0;
   // Light `light` of LightCount() gathered into one point as seen from p,
-  // for methods that want hard shadows: a mesh light's area-weighted
-  // centroid and mean normal, with pdf = 1/area; a sphere's point facing
-  // p, with pdf = 1/(πr²), its cross-section; a point light as it is
-  // (delta_position, pdf 1).
+  // for methods that want hard shadows, with pdf as SampleLightsFrom's for
+  // a choice of probability 1: a mesh light's area-weighted centroid and
+  // mean normal, as if it had its area there; a sphere's point facing p,
+  // as if its cross-section πr² emitted there; point, spot and
+  // directional lights as they are. An environment is not gathered: it
+  // answers no emitter.
   virtual uint32_t LightCount() const = 0;
-  virtual LightSample LightPoint(uint32_t light, Vec3 seen_from) const = 0;
+  virtual LightDirection LightPoint(uint32_t light, Vec3 seen_from) const = 0;
   // The time in the shutter interval for primary coordinate u.
   virtual float ShutterTime(float u) const = 0;
   // The camera ray through film position (x, y) ∈ [0,1)² and lens (u, v)

@@ -6,7 +6,6 @@
 #include "importers/colour_checks.h"
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
-#include "importers/texture_mean.h"
 
 namespace yarf::importers {
 namespace {
@@ -115,28 +114,36 @@ void PbrtImporter::DistantLight(PbrtParams& params, const SourceLocation& where)
 
 void PbrtImporter::InfiniteLight(PbrtParams& params, const SourceLocation& where) {
   const double scale = params.Float("scale", 1), illuminance = params.Float("illuminance", -1);
-  Rgb radiance;
+  if (!(scale >= 0) || !std::isfinite(scale)) Fail(params.WhereIs("scale", where), "infinite light: scale must be >= 0");
+  bool added = false;
   if (params.Has("filename")) {
     if (params.Has("L")) Fail(params.WhereIs("L", where), "infinite light: give \"L\" or \"filename\", not both");
-    // pbrt-v4's maps are equal-area: the plain mean of the pixels is the
-    // mean over directions.
+    // pbrt-v4's maps are square, in its equal-area octahedral mapping.
     const std::string filename = params.String("filename", "");
     const auto file = folder_.Resolve(filename, origin_.file, params.WhereIs("filename", where));
-    radiance = ImageMeanColour(file, ImageEncoding::kAuto, 1.0, where) * scale;
-    Warn(where, "infinite-image",
-         "environment maps are not supported yet: an image infinite light is replaced by a uniform one of its "
-         "mean radiance");
     if (illuminance > 0)
       Warn(params.WhereIs("illuminance", where), "infinite-illuminance",
            "infinite light: illuminance of an image is not supported: scale used");
+    params.Accept({"portal"});
+    if (params.Has("portal"))
+      Warn(params.WhereIs("portal", where), "infinite-portal", "infinite light: portals are not supported: ignored");
+    v1::Properties props;
+    SetString(props, "filename", folder_.Relative(file));
+    SetFloat(props, "scale", scale);
+    SetString(props, "mapping", "equal_area");
+    params.WarnUnused(diagnostics_, "light 'infinite'");
+    added = assembly_.AddEnvironmentMap("", std::move(props), state_.ctm, where);
   } else {
-    radiance = Colour(params, "L", {1, 1, 1}, kLight, where) * scale;
+    Rgb radiance = Colour(params, "L", {1, 1, 1}, kLight, where) * scale;
     // pbrt-v4: a uniform unit-luminance sky gives illuminance π.
     if (illuminance > 0) radiance = radiance * (illuminance / M_PI);
+    radiance =
+        ClampColour(radiance, 0, 1e30, [&] { Warn(where, "negative-radiance", "negative radiance clamped to 0"); });
+    params.WarnUnused(diagnostics_, "light 'infinite'");
+    added = assembly_.AddUniformEnvironment("", radiance);
   }
-  radiance = ClampColour(radiance, 0, 1e30, [&] { Warn(where, "negative-radiance", "negative radiance clamped to 0"); });
-  params.WarnUnused(diagnostics_, "light 'infinite'");
-  assembly_.AddEnvironment("", radiance);
+  if (!added)
+    Warn(where, "second-infinite", "infinite light: yarf renders one environment map per scene: this one ignored");
 }
 
 }  // namespace yarf::importers

@@ -127,21 +127,35 @@ void SceneAssembly::AddDirectionalLight(const std::string& name, const Rgb& irra
   light_transforms_.push_back(FrameAlong(*travel));
 }
 
-void SceneAssembly::AddEnvironment(const std::string& name, const Rgb& radiance) {
-  // Two emitting spheres around the scene would hide each other: one
-  // carries the sum.
+bool SceneAssembly::AddUniformEnvironment(const std::string& name, const Rgb& radiance) {
+  if (environment_ >= 0 && !environment_radiance_) return false;
   if (environment_ < 0) {
     environment_ = scene_.lights_size();
     v1::Light& light = *scene_.add_lights();
     light.set_name(name);
     light.set_kind(v1::Light::ENVIRONMENT);
     light_transforms_.push_back(Matrix4());
+    environment_radiance_ = Rgb{0, 0, 0};
   }
-  Rgb& sum = environment_radiance_;
+  Rgb& sum = *environment_radiance_;
   sum = {sum.r + radiance.r, sum.g + radiance.g, sum.b + radiance.b};
   v1::Properties props;
   SetRgb(props, "radiance", sum);
   *scene_.mutable_lights(environment_)->mutable_emitter() = Spec("constant", std::move(props));
+  return true;
+}
+
+bool SceneAssembly::AddEnvironmentMap(const std::string& name, v1::Properties props, const Matrix4& to_world,
+                                      const SourceLocation& where) {
+  if (environment_ >= 0) return false;
+  CheckTransform(to_world, where, "environment map");
+  environment_ = scene_.lights_size();
+  v1::Light& light = *scene_.add_lights();
+  light.set_name(name);
+  light.set_kind(v1::Light::ENVIRONMENT);
+  *light.mutable_emitter() = Spec("envmap", std::move(props));
+  light_transforms_.push_back(to_world);
+  return true;
 }
 
 void SceneAssembly::SetCamera(v1::Camera camera, const Matrix4& camera_to_world, const Vec3d& source_right,
@@ -186,7 +200,6 @@ v1::Scene SceneAssembly::Finish() {
   }
   for (int i = 0; i < scene_.lights_size(); ++i) {
     v1::Light& light = *scene_.mutable_lights(i);
-    if (light.kind() == v1::Light::ENVIRONMENT) continue;  // the same from everywhere: not placed
     Matrix4 to_world = mirror_ * light_transforms_[i];
     // The mirror turns a light's direction with the world; a directional
     // light's frame is made a rotation again.

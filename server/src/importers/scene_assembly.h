@@ -4,6 +4,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -55,9 +56,15 @@ class SceneAssembly {
   // there. Fails at `where` when the direction is zero or not finite.
   void AddDirectionalLight(const std::string& name, const Rgb& irradiance, const Vec3d& direction,
                            const SourceLocation& where);
-  // A uniform environment of this radiance ("constant", kind ENVIRONMENT).
-  // Environments add up: a second one adds its radiance to the first.
-  void AddEnvironment(const std::string& name, const Rgb& radiance);
+  // A uniform environment of this radiance ("constant", kind ENVIRONMENT):
+  // a second uniform one adds its radiance to the first. yarf renders one
+  // environment: false (nothing added) after an environment map.
+  bool AddUniformEnvironment(const std::string& name, const Rgb& radiance);
+  // An environment map ("envmap" with these properties, kind ENVIRONMENT)
+  // turned by to_world; false (nothing added) when there is an
+  // environment already.
+  bool AddEnvironmentMap(const std::string& name, v1::Properties props, const Matrix4& to_world,
+                         const SourceLocation& where);
   bool HasEnvironment() const { return environment_ >= 0; }
 
   // Places the camera. `camera` carries the projection (fov, lens, clip
@@ -89,7 +96,8 @@ class SceneAssembly {
   std::vector<WorldShape> world_shapes_;   // parallel to scene_.shapes()
   std::vector<Matrix4> light_transforms_;  // parallel to scene_.lights()
   int environment_ = -1;                   // its index in scene_.lights()
-  Rgb environment_radiance_;
+  // The radiance of a uniform environment; none for a map.
+  std::optional<Rgb> environment_radiance_;
   std::vector<Matrix4> instance_transforms_;
   Matrix4 mirror_;
   bool mirrored_ = false;

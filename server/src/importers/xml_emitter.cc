@@ -1,9 +1,7 @@
 // Mitsuba emitters: area lights on shapes, point and spot lights,
-// directional lights and uniform environments; an environment map becomes
-// the uniform environment of its mean radiance.
+// directional lights, uniform environments and environment maps.
 #include "importers/colour_checks.h"
 #include "importers/properties_util.h"
-#include "importers/texture_mean.h"
 #include "importers/xml_importer.h"
 
 namespace yarf::importers {
@@ -77,25 +75,29 @@ void MitsubaImporter::Emitter(const XmlElement& e) {
   }
   if (type == "constant" || type == "envmap") {
     if (assembly_.HasEnvironment()) Fail(e.where, "only one environment emitter can be specified per scene");
-    Rgb radiance;
-    if (type == "constant") {
-      radiance = p.Color("radiance", {1, 1, 1});
-    } else {
-      if (!p.Has("filename")) Fail(e.where, "envmap needs a filename");
-      const auto file = folder_.Resolve(p.String("filename", ""), e.file, p.WhereIs("filename"));
-      radiance = ImageMeanColour(file, ImageEncoding::kAuto, 1.0, e.where, PixelWeight::kLatLong) *
-                 p.Float("scale", 1);
-      // A rotation leaves the mean as it is.
-      p.Accept({"to_world", "filter_type", "mis_compensation"});
-      Warn(e.where, "envmap-mean",
-           "environment maps are not supported yet: envmap replaced by a constant of its mean radiance");
-    }
-    radiance = ClampColour(radiance, 0, 1e30, [&] {
-      Warn(p.WhereIs("radiance"), "negative-radiance", type + " emitter: negative radiance clamped to 0");
-    });
     p.Accept({"sampling_weight"});
+    if (type == "constant") {
+      const Rgb radiance = ClampColour(p.Color("radiance", {1, 1, 1}), 0, 1e30, [&] {
+        Warn(p.WhereIs("radiance"), "negative-radiance", "constant emitter: negative radiance clamped to 0");
+      });
+      p.WarnUnused();
+      assembly_.AddUniformEnvironment(e.Get("id"), radiance);
+      return;
+    }
+    if (!p.Has("filename")) Fail(e.where, "envmap needs a filename");
+    const auto file = folder_.Resolve(p.String("filename", ""), e.file, p.WhereIs("filename"));
+    const double scale = p.Float("scale", 1);
+    if (!(scale >= 0) || !std::isfinite(scale)) Fail(p.WhereIs("scale"), "envmap: scale must be finite and >= 0");
+    if (p.Has("filter_type") && p.String("filter_type", "bilinear") != "bilinear")
+      Warn(p.WhereIs("filter_type"), "envmap-filter", "envmap: only bilinear lookups are supported: bilinear used");
+    p.Accept({"mis_compensation"});
+    v1::Properties props;
+    SetString(props, "filename", folder_.Relative(file));
+    SetFloat(props, "scale", scale);
+    SetString(props, "mapping", "latlong");
+    const Matrix4 to_world = p.Transform("to_world");
     p.WarnUnused();
-    assembly_.AddEnvironment(e.Get("id"), radiance);
+    assembly_.AddEnvironmentMap(e.Get("id"), std::move(props), to_world, e.where);
     return;
   }
   if (type == "sunsky" || type == "sky" || type == "sun" || type == "skysphere") {

@@ -9,58 +9,29 @@
 namespace yarf {
 namespace {
 
-// What the environment's sphere is made of: it absorbs everything.
-class Absorber final : public SurfaceModel {
- public:
-  void Evaluate(TransportMode, std::span<const float> wi, std::span<const float>, const SurfacePoints&,
-                std::span<float> value) const override {
-    std::fill(value.begin(), value.begin() + wi.size(), 0.0f);
-  }
-  void Sample(TransportMode, std::span<const float> wi, const SurfacePoints&, std::span<const float>, uint32_t,
-              std::span<float> wo, std::span<float> weight, std::span<float> pdf,
-              std::span<uint32_t> flags) const override {
-    const size_t n = wi.size() / 3;
-    std::fill(wo.begin(), wo.begin() + 3 * n, 0.0f);
-    std::fill(weight.begin(), weight.begin() + 3 * n, 0.0f);
-    std::fill(pdf.begin(), pdf.begin() + n, 0.0f);
-    std::fill(flags.begin(), flags.begin() + n, kScatterNone);
-  }
-  void Pdf(std::span<const float> wi, std::span<const float>, const SurfacePoints&,
-           std::span<float> pdf) const override {
-    std::fill(pdf.begin(), pdf.begin() + wi.size() / 3, 0.0f);
-  }
-  uint32_t Lobes() const override { return kScatterReflect | kScatterDiffuse; }
-};
+// How many emitter samples estimate a light's power.
+constexpr uint32_t kPowerSamples = 256;
 
-// A directional light as a spot light at `distance`, aimed at the scene:
-// intensity E·distance² inside the cone that holds the scene, nothing out.
-class FarSpotLight final : public Emitter {
- public:
-  FarSpotLight(const Emitter& irradiance, float distance, float cos_cone)
-      : irradiance_(irradiance), scale_(distance * distance), cos_cone_(cos_cone) {}
+// Point k of n in [0,1)³, well spread (a rank-1 lattice), for power
+// estimates that are the same from run to run.
+std::array<float, 3> SpreadPoint(uint32_t k, uint32_t n) {
+  const float x = (float(k) + 0.5f) / float(n);
+  const auto frac = [](double v) { return float(v - std::floor(v)); };
+  return {x, frac(k * 0.6180339887498949), frac(k * 0.7548776662466927)};
+}
 
-  void Radiance(std::span<const float> w, const SurfacePoints& at, std::span<float> radiance) const override {
-    irradiance_.Radiance(w, at, radiance);
-    for (size_t k = 0; k < w.size() / 3; ++k)
-      for (int c = 0; c < 3; ++c) radiance[3 * k + c] *= w[3 * k + 2] >= cos_cone_ ? scale_ : 0.0f;
+// The frame whose axes are to_world's images of x, y, z, made orthonormal
+// (z kept): a light's local frame.
+Frame FrameOf(const Transform& to_world) {
+  Frame frame(Normalize(to_world.Vector(Vec3(0, 0, 1))));
+  const Vec3 x = to_world.Vector(Vec3(1, 0, 0));
+  const Vec3 s = x - frame.n * Dot(frame.n, x);
+  if (Length(s) > 1e-6f * Length(x)) {
+    frame.s = Normalize(s);
+    frame.t = Cross(frame.n, frame.s);
   }
-  void SampleDirection(std::span<const float> uniform, std::span<float> w, std::span<float> pdf) const override {
-    for (size_t k = 0; k < uniform.size() / 2; ++k) {
-      SampleUniformCone(uniform[2 * k], uniform[2 * k + 1], cos_cone_).Store(&w[3 * k]);
-      pdf[k] = UniformConePdf(1.0f, cos_cone_);
-    }
-  }
-  void PdfDirection(std::span<const float> w, std::span<float> pdf) const override {
-    for (size_t k = 0; k < w.size() / 3; ++k) pdf[k] = UniformConePdf(w[3 * k + 2], cos_cone_);
-  }
-
- private:
-  const Emitter& irradiance_;
-  float scale_, cos_cone_;
-};
-
-// How far a directional light stands, in scene radii.
-constexpr float kDirectionalDistance = 1000;
+  return frame;
+}
 
 }  // namespace
 
@@ -160,57 +131,22 @@ void KernelScene::AddPlacement(uint32_t group, const Transform& to_world,
   placements_.push_back({group, to_world, to_world_end});
 }
 
-void KernelScene::AddDirectionalLight(const Emitter* emitter, Vec3 direction) {
-  directional_.emplace_back(emitter, Normalize(direction));
+void KernelScene::AddDirectionalLight(const Emitter* emitter, const Transform& to_world) {
+  Light light;
+  light.kind = LightKind::kDirectional;
+  light.emitter = emitter;
+  light.frame = FrameOf(to_world);
+  lights_.push_back(light);
 }
 
-void KernelScene::AddEnvironment(const Emitter* emitter) { environments_.push_back(emitter); }
-
-void KernelScene::AddInfiniteLights() {
-  if (directional_.empty() && environments_.empty()) return;
-  RTCBounds box;
-  rtcGetSceneBounds(groups_[kWorld].scene, &box);
-  Vec3 lower(box.lower_x, box.lower_y, box.lower_z), upper(box.upper_x, box.upper_y, box.upper_z);
-  const Vec3 eye = camera_.origin();
-  if (!(lower.x <= upper.x)) lower = upper = eye;  // an empty scene
-  const Vec3 center = (lower + upper) * 0.5f;
-  const float radius = std::max({Length(upper - center), Length(eye - center), 1e-3f});
-  for (const auto& [emitter, direction] : directional_) {
-    const float distance = kDirectionalDistance * radius;
-    emitters_.push_back(std::make_unique<FarSpotLight>(
-        *emitter, distance, std::sqrt(1 - 1 / (kDirectionalDistance * kDirectionalDistance))));
-    Light light;
-    light.first = light.end = uint32_t(emitting_.size());
-    light.emitter = emitters_.back().get();
-    light.position = center - direction * distance;
-    light.axis = direction;
-    lights_.push_back(light);
-  }
-  for (const Emitter* emitter : environments_) {
-    // Twice the radius: rays leaving the scene's surfaces never start
-    // outside it.
-    const float sphere_radius = 2 * radius;
-    RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_SPHERE_POINT);
-    auto* point = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
-                                                              4 * sizeof(float), 1));
-    center.Store(point);
-    point[3] = sphere_radius;
-    rtcCommitGeometry(geom);
-    const uint32_t id = rtcAttachGeometry(groups_[kWorld].scene, geom);
-    rtcReleaseGeometry(geom);
-    if (id != geometry_base_.size()) throw Error("environment light: unexpected Embree geometry id");
-    ShapeRecord record;
-    record.kind = Kind::kSphere;
-    record.center = center;
-    record.radius = sphere_radius;
-    record.look.name = "environment";
-    record.look.material = AddMaterial(std::make_unique<Absorber>());
-    record.look.emitter = emitter;
-    record.look.flip_normals = true;  // emitting inward
-    geometry_base_.push_back(uint32_t(shapes_.size()));
-    shapes_.push_back(record);
-  }
-  Build(groups_[kWorld].scene);
+void KernelScene::AddEnvironment(const Emitter* emitter, const Transform& to_world) {
+  if (environment_ != kNoLight) throw Error("a scene has at most one environment light");
+  Light light;
+  light.kind = LightKind::kEnvironment;
+  light.emitter = emitter;
+  light.frame = FrameOf(to_world);
+  environment_ = uint32_t(lights_.size());
+  lights_.push_back(light);
 }
 
 void KernelScene::Build(RTCScene scene) const {
@@ -228,6 +164,7 @@ void KernelScene::AddLight(const Emitter* emitter, const Transform& to_world) {
   Light light;
   light.first = light.end = uint32_t(emitting_.size());
   light.emitter = emitter;
+  light.kind = LightKind::kPoint;
   light.position = to_world.Point(Vec3(0, 0, 0));
   light.axis = Normalize(to_world.Vector(Vec3(0, 0, 1)));
   lights_.push_back(light);
@@ -273,12 +210,23 @@ void KernelScene::Commit() {
   }
   rtcSetSceneBuildQuality(groups_[kWorld].scene, RTC_BUILD_QUALITY_HIGH);
   Build(groups_[kWorld].scene);
-  AddInfiniteLights();
+  // The sphere lights at infinity shoot through holds the scene and the eye.
+  RTCBounds box;
+  rtcGetSceneBounds(groups_[kWorld].scene, &box);
+  Vec3 lower(box.lower_x, box.lower_y, box.lower_z), upper(box.upper_x, box.upper_y, box.upper_z);
+  const Vec3 eye = camera_.origin();
+  if (!(lower.x <= upper.x)) lower = upper = eye;  // an empty scene
+  bounds_center_ = (lower + upper) * 0.5f;
+  bounds_radius_ = std::max({Length(upper - bounds_center_), Length(eye - bounds_center_), 1e-3f});
+  AddSurfaceLights();
+  ChooseLightsByPower();
+}
 
-  // Surface lights follow the point lights already added, one per
-  // emitting shape placement.
+void KernelScene::AddSurfaceLights() {
+  // Surface lights follow the point and infinite lights already added,
+  // one per emitting shape placement.
   shape_light_pdf_.assign(shapes_.size(), 0.0f);
-  const size_t point_lights = lights_.size();
+  shape_light_.assign(shapes_.size(), kNoLight);
   for (uint32_t id = 0; id < shapes_.size(); ++id) {
     const ShapeRecord& s = shapes_[id];
     if (!s.look.emitter) continue;
@@ -309,10 +257,73 @@ void KernelScene::Commit() {
     if (!(light.area > 0)) continue;
     light.position = light.position / light.area;
     light.axis = Length(light.axis) > 0 ? Normalize(light.axis) : emitting_[light.first].normal;
+    shape_light_[id] = uint32_t(lights_.size());
     lights_.push_back(light);
   }
-  for (size_t l = point_lights; l < lights_.size(); ++l)
-    shape_light_pdf_[emitting_[lights_[l].first].shape] = 1.0f / (float(lights_.size()) * lights_[l].area);
+}
+
+float KernelScene::EstimatePower(const Light& light) const {
+  // Φ = ∫∫ L cos dω dA, by the emitter's own direction samples: surfaces
+  // at points uniform in area; lights at infinity through the disk of the
+  // scene's bounding sphere (as pbrt-v4 counts them).
+  const uint32_t n = light.kind == LightKind::kDirectional ? 1 : kPowerSamples;
+  std::vector<float> u(2 * n), w(3 * n), pdf(n), uv(2 * n), radiance(3 * n);
+  for (uint32_t k = 0; k < n; ++k) {
+    const auto p = SpreadPoint(k, n);
+    u[2 * k] = p[1], u[2 * k + 1] = p[2];
+    if (light.kind == LightKind::kSurface) {
+      const LightSample s = PointOnSurfaceLight(light, p[0], p[1], p[2]);
+      uv[2 * k] = s.u, uv[2 * k + 1] = s.v;
+      // Fresh numbers for the direction, unrelated to the point's.
+      u[2 * k] = SpreadPoint(k * 7 + 3, n * 7)[0], u[2 * k + 1] = SpreadPoint(k * 5 + 1, n * 5)[2];
+    }
+  }
+  if (light.kind == LightKind::kDirectional) {
+    w = {0, 0, 1};
+    pdf = {1};
+  } else {
+    light.emitter->SampleDirection(u, w, pdf);
+  }
+  SurfacePoints points;
+  points.uv = uv;
+  light.emitter->Radiance(w, points, radiance);
+  double sum = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    if (!(pdf[k] > 0)) continue;
+    const float cos = light.kind == LightKind::kSurface ? std::abs(w[3 * k + 2]) : 1.0f;
+    const double value = (double(radiance[3 * k]) + radiance[3 * k + 1] + radiance[3 * k + 2]) / 3 * cos / pdf[k];
+    if (std::isfinite(value) && value > 0) sum += value;
+  }
+  double power = sum / n;
+  if (light.kind == LightKind::kSurface) power *= light.area;
+  if (light.kind == LightKind::kDirectional || light.kind == LightKind::kEnvironment)
+    power *= kPi * double(bounds_radius_) * bounds_radius_;
+  return std::isfinite(power) ? float(power) : 0.0f;
+}
+
+void KernelScene::ChooseLightsByPower() {
+  // Every light keeps a share of a hundredth of the mean power, so that
+  // one whose estimate missed its light (a small bright texel) is still
+  // chosen sometimes.
+  std::vector<double> weight(lights_.size(), 1.0);
+  if (!uniform_light_choice_ && !lights_.empty()) {
+    double total = 0;
+    for (size_t l = 0; l < lights_.size(); ++l) total += weight[l] = EstimatePower(lights_[l]);
+    const double floor = total > 0 ? 0.01 * total / double(lights_.size()) : 1.0;
+    for (double& w : weight) w += floor;
+  }
+  double total = 0;
+  for (double w : weight) total += w;
+  double running = 0;
+  for (size_t l = 0; l < lights_.size(); ++l) {
+    lights_[l].probability = float(weight[l] / total);
+    running += weight[l];
+    lights_[l].cdf = l + 1 == lights_.size() ? 1.0f : float(running / total);
+  }
+  for (const Light& light : lights_)
+    if (light.kind == LightKind::kSurface)
+      for (uint32_t e = light.first; e < light.end; ++e)
+        shape_light_pdf_[emitting_[e].shape] = light.probability / light.area;
 }
 
 void KernelScene::Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const {
@@ -599,22 +610,19 @@ void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occlude
   shadow_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
 }
 
-LightSample KernelScene::SampleLight(float u_choice, float u0, float u1) const {
-  LightSample s;
-  if (lights_.empty()) return s;
-  // One number chooses the light and, rescaled, the primitive within it.
-  const float scaled = u_choice * float(lights_.size());
-  const size_t index = std::min(size_t(scaled), lights_.size() - 1);
-  const float u_primitive = std::min(scaled - float(index), 0x1.fffffep-1f);
+uint32_t KernelScene::PickLight(float u_choice, float& u_rest) const {
+  const auto it = std::upper_bound(lights_.begin(), lights_.end(), u_choice,
+                                   [](float u, const Light& light) { return u < light.cdf; });
+  const uint32_t index = uint32_t(std::min<size_t>(it - lights_.begin(), lights_.size() - 1));
   const Light& light = lights_[index];
+  const float below = light.cdf - light.probability;
+  u_rest = light.probability > 0 ? std::clamp((u_choice - below) / light.probability, 0.0f, 0x1.fffffep-1f) : 0.0f;
+  return index;
+}
+
+LightSample KernelScene::PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const {
+  LightSample s;
   s.emitter = light.emitter;
-  if (light.first == light.end) {
-    s.position = light.position;
-    s.normal = light.axis;
-    s.pdf = 1.0f / float(lights_.size());
-    s.delta_position = true;
-    return s;
-  }
   const auto begin = emitting_.begin() + light.first, end = emitting_.begin() + light.end;
   const auto it = std::upper_bound(begin, end, u_primitive * light.area,
                                    [](float target, const EmittingPrimitive& e) { return target < e.cdf; });
@@ -640,30 +648,231 @@ LightSample KernelScene::SampleLight(float u_choice, float u0, float u1) const {
   return s;
 }
 
-LightSample KernelScene::LightPoint(uint32_t index, Vec3 seen_from) const {
-  const Light& light = lights_[index];
+LightSample KernelScene::SampleLight(float u_choice, float u0, float u1) const {
+  if (lights_.empty()) return {};
+  float u_primitive = 0;
+  const Light& light = lights_[PickLight(u_choice, u_primitive)];
   LightSample s;
+  switch (light.kind) {
+    case LightKind::kSurface:
+      return PointOnSurfaceLight(light, u_primitive, u0, u1);
+    case LightKind::kPoint:
+      s.position = light.position;
+      s.normal = light.axis;
+      s.delta_position = true;
+      break;
+    case LightKind::kDirectional:
+    case LightKind::kEnvironment:
+      s.infinite = true;
+      s.delta_direction = light.kind == LightKind::kDirectional;
+      s.frame = light.frame;
+      s.normal = light.frame.n;
+      break;
+  }
   s.emitter = light.emitter;
-  if (light.first == light.end) {
-    s.position = light.position;
-    s.normal = light.axis;
-    s.pdf = 1;
-    s.delta_position = true;
-    return s;
+  s.pdf = light.probability;
+  return s;
+}
+
+Vec3 KernelScene::InfiniteLightOrigin(Vec3 d, float u0, float u1, float& pdf_area) const {
+  const auto [x, y] = SampleConcentricDisk(u0, u1);
+  const Frame disk(d);
+  pdf_area = 1 / (kPi * bounds_radius_ * bounds_radius_);
+  return bounds_center_ + (disk.s * x + disk.t * y - d) * bounds_radius_;
+}
+
+namespace {
+
+// Whether p lies outside a sphere (centre c, radius r) by enough that the
+// cone of directions toward it is well defined; spheres seen from inside
+// are sampled by area.
+bool OutsideSphere(Vec3 p, Vec3 c, float r) {
+  const Vec3 d = c - p;
+  return Dot(d, d) > r * r * 1.0001f;
+}
+
+// cos θmax of the cone a sphere subtends from p (outside it).
+float ConeCosine(Vec3 p, Vec3 c, float r) {
+  const Vec3 d = c - p;
+  const float sin2 = r * r / Dot(d, d);
+  return std::sqrt(std::max(0.0f, 1 - sin2));
+}
+
+}  // namespace
+
+void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
+                                   std::span<LightDirection> out) const {
+  std::vector<uint32_t> from_environment;
+  for (size_t k = 0; k < points.size(); ++k) {
+    LightDirection& s = out[k];
+    s = LightDirection{};
+    if (lights_.empty()) continue;
+    const Vec3 p = points[k];
+    const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
+    float u_primitive = 0;
+    const uint32_t index = PickLight(uniform[3 * k], u_primitive);
+    const Light& light = lights_[index];
+    s.emitter = light.emitter;
+    switch (light.kind) {
+      case LightKind::kEnvironment:
+        from_environment.push_back(uint32_t(k));
+        continue;
+      case LightKind::kDirectional:
+        s.direction = -light.frame.n;
+        s.distance = kInfinity;
+        s.pdf = light.probability;
+        s.delta = true;
+        s.w = Vec3(0, 0, 1);
+        continue;
+      case LightKind::kPoint:
+        s.position = light.position;
+        s.normal = light.axis;
+        s.delta = true;
+        break;
+      case LightKind::kSurface: {
+        const EmittingPrimitive& first = emitting_[light.first];
+        if (first.sphere && OutsideSphere(p, first.p0, first.radius)) {
+          // By the solid angle the sphere subtends (uniform in its cone),
+          // the point the direction meets on its near side.
+          const Vec3 to_center = first.p0 - p;
+          const float cos_max = ConeCosine(p, first.p0, first.radius);
+          const Vec3 dir = Frame(Normalize(to_center)).ToWorld(SampleUniformCone(u0, u1, cos_max));
+          const float b = Dot(dir, to_center), r2 = first.radius * first.radius;
+          const float t = b - std::sqrt(std::max(0.0f, r2 - (Dot(to_center, to_center) - b * b)));
+          const Vec3 radial = Normalize(p + dir * t - first.p0);
+          s.position = first.p0 + radial * first.radius;
+          s.normal = shapes_[first.shape].look.flip_normals ? -radial : radial;
+          s.shape = first.shape;
+          Hit at;
+          SphereParameters(shapes_[first.shape], radial, first.radius, at);
+          s.u = at.u, s.v = at.v;
+          s.direction = dir;
+          s.distance = Length(s.position - p);
+          s.pdf = light.probability * UniformConePdf(1, cos_max);
+          s.w = Frame(s.normal).ToLocal(-dir);
+          continue;
+        }
+        const LightSample area = PointOnSurfaceLight(light, u_primitive, u0, u1);
+        s.position = area.position;
+        s.normal = area.normal;
+        s.shape = area.shape;
+        s.u = area.u, s.v = area.v;
+        break;
+      }
+    }
+    // A point: its direction, distance and density from p.
+    const Vec3 d = s.position - p;
+    s.distance = Length(d);
+    if (!(s.distance > 0)) {
+      s.emitter = nullptr;
+      continue;
+    }
+    s.direction = d / s.distance;
+    s.w = Frame(s.normal).ToLocal(-s.direction);
+    const float d2 = s.distance * s.distance;
+    if (s.delta) {
+      s.pdf = light.probability * d2;
+    } else {
+      const float cos_light = std::abs(s.w.z);
+      s.pdf = cos_light > 0 ? shape_light_pdf_[s.shape] * d2 / cos_light : 0.0f;
+    }
   }
+  if (from_environment.empty()) return;
+  const Light& environment = lights_[environment_];
+  const size_t m = from_environment.size();
+  std::vector<float> u(2 * m), w(3 * m), pdf(m);
+  for (size_t j = 0; j < m; ++j) {
+    u[2 * j] = uniform[3 * from_environment[j] + 1];
+    u[2 * j + 1] = uniform[3 * from_environment[j] + 2];
+  }
+  environment.emitter->SampleDirection(u, w, pdf);
+  for (size_t j = 0; j < m; ++j) {
+    LightDirection& s = out[from_environment[j]];
+    s.w = Vec3::Load(&w[3 * j]);
+    s.direction = -Normalize(environment.frame.ToWorld(s.w));
+    s.distance = kInfinity;
+    s.pdf = std::isfinite(pdf[j]) ? environment.probability * pdf[j] : 0.0f;
+  }
+}
+
+float KernelScene::LightPdfFrom(const Ray& ray, const Hit& hit) const {
+  if (!hit.Found() || hit.shape >= shape_light_.size() || shape_light_[hit.shape] == kNoLight) return 0;
+  const Light& light = lights_[shape_light_[hit.shape]];
   const EmittingPrimitive& first = emitting_[light.first];
-  s.shape = first.shape;
-  if (first.sphere) {
-    const Vec3 to = seen_from - first.p0;
-    const Vec3 d = Length(to) > 0 ? Normalize(to) : Vec3(0, 0, 1);
-    s.position = first.p0 + d * first.radius;
-    s.normal = shapes_[first.shape].look.flip_normals ? -d : d;
-    s.pdf = 1 / (kPi * first.radius * first.radius);
+  if (first.sphere && OutsideSphere(ray.origin, first.p0, first.radius))
+    return light.probability * UniformConePdf(1, ConeCosine(ray.origin, first.p0, first.radius));
+  const float cos_light = std::abs(Dot(hit.normal, ray.direction));
+  return cos_light > 0 ? shape_light_pdf_[hit.shape] * hit.t * hit.t / cos_light : 0.0f;
+}
+
+void KernelScene::Escaped(std::span<const Vec3> directions, std::span<Vec3> radiance, std::span<float> pdf) const {
+  const size_t n = directions.size();
+  std::fill_n(radiance.begin(), n, Vec3());
+  std::fill_n(pdf.begin(), n, 0.0f);
+  if (environment_ == kNoLight || n == 0) return;
+  const Light& environment = lights_[environment_];
+  std::vector<float> w(3 * n), rgb(3 * n), uv(2 * n);
+  for (size_t k = 0; k < n; ++k) environment.frame.ToLocal(-directions[k]).Store(&w[3 * k]);
+  SurfacePoints points;
+  points.uv = uv;
+  environment.emitter->Radiance(w, points, rgb);
+  environment.emitter->PdfDirection(w, pdf.first(n));
+  for (size_t k = 0; k < n; ++k) {
+    radiance[k] = Vec3::Load(&rgb[3 * k]);
+    pdf[k] = std::isfinite(pdf[k]) ? pdf[k] * environment.probability : 0.0f;
+  }
+}
+
+LightDirection KernelScene::LightPoint(uint32_t index, Vec3 seen_from) const {
+  const Light& light = lights_[index];
+  LightDirection s;
+  switch (light.kind) {
+    case LightKind::kEnvironment:
+      return s;
+    case LightKind::kDirectional:
+      s.emitter = light.emitter;
+      s.direction = -light.frame.n;
+      s.distance = kInfinity;
+      s.pdf = 1;
+      s.delta = true;
+      s.w = Vec3(0, 0, 1);
+      return s;
+    case LightKind::kPoint:
+      s.position = light.position;
+      s.normal = light.axis;
+      s.delta = true;
+      break;
+    case LightKind::kSurface: {
+      const EmittingPrimitive& first = emitting_[light.first];
+      s.shape = first.shape;
+      if (first.sphere) {
+        const Vec3 to = seen_from - first.p0;
+        const Vec3 d = Length(to) > 0 ? Normalize(to) : Vec3(0, 0, 1);
+        s.position = first.p0 + d * first.radius;
+        s.normal = shapes_[first.shape].look.flip_normals ? -d : d;
+      } else {
+        s.position = light.position;
+        s.normal = light.axis;
+      }
+      break;
+    }
+  }
+  s.emitter = light.emitter;
+  const Vec3 d = s.position - seen_from;
+  s.distance = Length(d);
+  if (!(s.distance > 0)) return LightDirection{};
+  s.direction = d / s.distance;
+  s.w = Frame(s.normal).ToLocal(-s.direction);
+  const float d2 = s.distance * s.distance;
+  if (s.delta) {
+    s.pdf = d2;
     return s;
   }
-  s.position = light.position;
-  s.normal = light.axis;
-  s.pdf = 1 / light.area;
+  // As if the light's whole area (a sphere: its cross-section) emitted here.
+  const EmittingPrimitive& first = emitting_[light.first];
+  const float area = first.sphere ? kPi * first.radius * first.radius : light.area;
+  const float cos_light = std::abs(s.w.z);
+  s.pdf = cos_light > 0 ? d2 / (area * cos_light) : 0.0f;
   return s;
 }
 

@@ -57,13 +57,15 @@ class KernelScene final : public SceneView {
                     const std::optional<Transform>& to_world_end = std::nullopt);
   // A light without a surface (point, spot), placed by to_world.
   void AddLight(const Emitter* emitter, const Transform& to_world);
-  // A light from infinitely far, travelling along `direction`; its
-  // Radiance is irradiance. Placed at Commit, when the scene's extent is
-  // known, as a spot light far away aimed at the scene.
-  void AddDirectionalLight(const Emitter* emitter, Vec3 direction);
-  // The same radiance from every direction: at Commit, the inside of a
-  // sphere around the scene and the camera.
-  void AddEnvironment(const Emitter* emitter);
+  // A light at infinity whose local frame is to_world's rotation: a
+  // directional light travels along its +z and its Radiance is
+  // irradiance; an environment (at most one) sends its Radiance from
+  // every direction it answers for.
+  void AddDirectionalLight(const Emitter* emitter, const Transform& to_world);
+  void AddEnvironment(const Emitter* emitter, const Transform& to_world);
+  // How lights are chosen (at Commit): in proportion to their power, as
+  // estimated from their emitters, or uniformly.
+  void ChooseLightsUniformly(bool uniform) { uniform_light_choice_ = uniform; }
   void Commit();
 
   // Commit (the BVH builds) and every later Intersect and Occluded throw
@@ -85,8 +87,16 @@ class KernelScene final : public SceneView {
   bool HasLights() const override { return !lights_.empty(); }
   LightSample SampleLight(float u_choice, float u0, float u1) const override;
   float LightPdfArea(uint32_t shape) const override { return shape_light_pdf_[shape]; }
+  Vec3 InfiniteLightOrigin(Vec3 d, float u0, float u1, float& pdf_area) const override;
+  void SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
+                        std::span<LightDirection> out) const override;
+  float LightPdfFrom(const Ray& ray, const Hit& hit) const override;
+  bool HasEnvironment() const override { return environment_ != kNoLight; }
+  void Escaped(std::span<const Vec3> directions, std::span<Vec3> radiance, std::span<float> pdf) const override;
   uint32_t LightCount() const override { return uint32_t(lights_.size()); }
-  LightSample LightPoint(uint32_t light, Vec3 seen_from) const override;
+  LightDirection LightPoint(uint32_t light, Vec3 seen_from) const override;
+  // The probability of choosing each light (for tests and benchmarks).
+  float LightProbability(uint32_t light) const { return lights_[light].probability; }
   float ShutterTime(float u) const override { return camera_.Time(u); }
   Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v, float time) const override {
     return camera_.Generate(film_x, film_y, lens_u, lens_v, time);
@@ -153,8 +163,18 @@ class KernelScene final : public SceneView {
   // A sphere's uv and ∂p/∂u, ∂p/∂v at unit direction d from its centre
   // (world), radius r.
   static void SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hit& hit);
-  // Lights that need the scene's extent, added to the committed world.
-  void AddInfiniteLights();
+  // The lights of the emitting shapes, after the point and infinite ones.
+  void AddSurfaceLights();
+  // Each light's power estimated from its emitter, and the probabilities
+  // of choosing them.
+  void ChooseLightsByPower();
+  struct Light;
+  float EstimatePower(const Light& light) const;
+  // The light u_choice picks, and u_choice rescaled within its share.
+  uint32_t PickLight(float u_choice, float& u_rest) const;
+  // A point uniform in area on surface light `light` (u_primitive chooses
+  // its primitive).
+  LightSample PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const;
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
   float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
 
@@ -189,21 +209,34 @@ class KernelScene final : public SceneView {
     float cdf;
   };
   std::vector<EmittingPrimitive> emitting_;
-  // A light: an emitting shape's primitives [first, end) in emitting_, or
-  // a point light (first == end).
+  // A light: an emitting shape's primitives [first, end) in emitting_, a
+  // point light, or a light at infinity.
+  enum class LightKind { kSurface, kPoint, kDirectional, kEnvironment };
   struct Light {
+    LightKind kind = LightKind::kSurface;
     uint32_t first = 0, end = 0;
     float area = 0;
     const Emitter* emitter = nullptr;
     // Point lights: where they are and their axis; surfaces: the
     // area-weighted centroid and mean normal.
     Vec3 position, axis;
+    // Lights at infinity: the emitter's local frame in the world.
+    Frame frame{Vec3(0, 0, 1)};
+    // Of being chosen, and the running sum of the probabilities.
+    float probability = 0, cdf = 0;
   };
+  static constexpr uint32_t kNoLight = 0xFFFFFFFFu;
   std::vector<Light> lights_;
-  std::vector<std::pair<const Emitter*, Vec3>> directional_;
-  std::vector<const Emitter*> environments_;
-  // SampleLight's area density on each shape (0 when it does not emit).
+  uint32_t environment_ = kNoLight;
+  bool uniform_light_choice_ = false;
+  // The sphere around the scene and the camera that lights at infinity
+  // send their light paths through.
+  Vec3 bounds_center_;
+  float bounds_radius_ = 1;
+  // SampleLight's area density on each shape (0 when it does not emit),
+  // and the light each emitting shape is.
   std::vector<float> shape_light_pdf_;
+  std::vector<uint32_t> shape_light_;
   mutable std::atomic<uint64_t> closest_hit_rays_{0}, shadow_rays_{0};
   const std::atomic<bool>* stop_ = nullptr;
 };

@@ -143,11 +143,21 @@ std::string TextureName(const v1::SceneTexture& texture) {
   return "texture '" + texture.name() + "' (" + texture.texture().class_name() + ")";
 }
 
-// The property of a texture that names its file as an uploaded asset.
-const v1::Property* TextureAsset(const v1::SceneTexture& texture) {
-  const auto& values = texture.texture().properties().values();
+// The property of a component (a texture, a light's emitter) that names
+// its file as an uploaded asset.
+const v1::Property* AssetOf(const v1::ComponentSpec& spec) {
+  const auto& values = spec.properties().values();
   const auto it = values.find("asset");
   return it == values.end() ? nullptr : &it->second;
+}
+
+// The components of a scene that may read a file of their own (textures'
+// images, environment maps), each with its name for errors.
+std::vector<std::pair<std::string, const v1::ComponentSpec*>> FileComponents(const v1::Scene& scene) {
+  std::vector<std::pair<std::string, const v1::ComponentSpec*>> out;
+  for (const v1::SceneTexture& t : scene.textures()) out.emplace_back(TextureName(t), &t.texture());
+  for (int i = 0; i < scene.lights_size(); ++i) out.emplace_back(LightName(scene.lights(i), i), &scene.lights(i).emitter());
+  return out;
 }
 
 class Builder {
@@ -158,6 +168,7 @@ class Builder {
     const uint32_t w = scene_.film().width(), h = scene_.film().height();
     kernel_ = std::make_unique<KernelScene>(sources_.device, Camera(scene_.camera(), w, h), w, h);
     if (sources_.stop) kernel_->StopWhen(*sources_.stop);
+    kernel_->ChooseLightsUniformly(scene_.light_sampler() == v1::Scene::LIGHT_SAMPLER_UNIFORM);
     // In order: a texture may refer to those before it.
     for (const v1::SceneTexture& t : scene_.textures()) {
       kernel_->ThrowIfStopped();
@@ -173,16 +184,18 @@ class Builder {
     for (int i = 0; i < scene_.lights_size(); ++i) {
       const v1::Light& light = scene_.lights(i);
       const std::string what = LightName(light, i);
+      ResolvedProperties own{resolved_.textures, {}, {}};
+      const v1::Properties props = WithoutFile(light.emitter(), what, own);
       const Emitter* emitter =
-          kernel_->AddEmitter(Create<Emitter>(light.emitter().class_name(), light.emitter().properties(), light.emitter().address(), what));
+          kernel_->AddEmitter(Create<Emitter>(light.emitter().class_name(), props, light.emitter().address(), what, &own));
       const Transform to_world =
           light.has_to_world() ? FromProto(light.to_world(), what + " to_world") : Transform{};
       switch (light.kind()) {
         case v1::Light::DIRECTIONAL:
-          kernel_->AddDirectionalLight(emitter, to_world.Vector(Vec3(0, 0, 1)));
+          kernel_->AddDirectionalLight(emitter, to_world);
           break;
         case v1::Light::ENVIRONMENT:
-          kernel_->AddEnvironment(emitter);
+          kernel_->AddEnvironment(emitter, to_world);
           break;
         default:
           kernel_->AddLight(emitter, to_world);
@@ -209,23 +222,30 @@ class Builder {
     }
   }
 
-  // A texture of the scene, its file (`filename` under the asset root, or
-  // an uploaded `asset`) found for it as its `filename`.
-  std::shared_ptr<const Texture> MakeTexture(const v1::SceneTexture& t) {
-    const std::string what = TextureName(t);
-    v1::Properties props = t.texture().properties();
-    ResolvedProperties own{resolved_.textures, {}, {}};
+  // A component's properties without its file (`filename` under the asset
+  // root, or an uploaded `asset`), which `own` names for it as its
+  // `filename`.
+  v1::Properties WithoutFile(const v1::ComponentSpec& spec, const std::string& what, ResolvedProperties& own) {
+    v1::Properties props = spec.properties();
     auto& values = *props.mutable_values();
     if (auto it = values.find("filename"); it != values.end()) {
       if (it->second.value_case() != v1::Property::kStringValue)
         throw Error(what + ": property 'filename' must be a string");
-      own.files["filename"] = ConfinedPath(sources_.asset_root, it->second.string_value(), "texture file", what);
+      own.files["filename"] = ConfinedPath(sources_.asset_root, it->second.string_value(), "file", what);
       values.erase(it);
     } else if (auto asset = values.find("asset"); asset != values.end()) {
       if (!sources_.assets) throw Error(what + ": this server keeps no assets");
       own.files["filename"] = sources_.assets->FileOf(asset->second.string_value());
       values.erase(asset);
     }
+    return props;
+  }
+
+  // A texture of the scene, its file found for it.
+  std::shared_ptr<const Texture> MakeTexture(const v1::SceneTexture& t) {
+    const std::string what = TextureName(t);
+    ResolvedProperties own{resolved_.textures, {}, {}};
+    const v1::Properties props = WithoutFile(t.texture(), what, own);
     return Create<Texture>(t.texture().class_name(), props, t.texture().address(), what, &own);
   }
 
@@ -396,8 +416,8 @@ uint64_t CountPlacements(const v1::Scene& scene) {
 
 std::vector<std::string> SceneAssets(const v1::Scene& scene) {
   std::vector<std::string> hashes;
-  for (const v1::SceneTexture& t : scene.textures())
-    if (const v1::Property* asset = TextureAsset(t); asset && asset->value_case() == v1::Property::kStringValue)
+  for (const auto& [what, spec] : FileComponents(scene))
+    if (const v1::Property* asset = AssetOf(*spec); asset && asset->value_case() == v1::Property::kStringValue)
       hashes.push_back(asset->string_value());
   const auto collect = [&](const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes) {
     for (const v1::SceneShape& shape : shapes)
@@ -437,16 +457,17 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
     if (t.name().empty()) throw Error("a texture has no name");
     if (t.texture().class_name().empty()) throw Error("texture '" + t.name() + "' has no class");
     if (!textures.insert(t.name()).second) throw Error("texture '" + t.name() + "' defined twice");
-    if (const v1::Property* asset = TextureAsset(t);
-        asset && (asset->value_case() != v1::Property::kStringValue || !IsSha256(asset->string_value())))
-      throw Error(TextureName(t) + ": property 'asset' must be a SHA-256 (64 lowercase hex digits)");
   }
+  for (const auto& [what, spec] : FileComponents(scene))
+    if (const v1::Property* asset = AssetOf(*spec);
+        asset && (asset->value_case() != v1::Property::kStringValue || !IsSha256(asset->string_value())))
+      throw Error(what + ": property 'asset' must be a SHA-256 (64 lowercase hex digits)");
   ValidateShapes(scene.shapes(), materials, textures, "");
   int environments = 0;
   for (int i = 0; i < scene.lights_size(); ++i) {
     const v1::Light& light = scene.lights(i);
     if (light.emitter().class_name().empty()) throw Error(LightName(light, i) + " has no emitter class");
-    // Each environment is a sphere around the scene: two would hide each other.
+    // Rays that leave the scene see one environment.
     if (light.kind() == v1::Light::ENVIRONMENT && ++environments > 1)
       throw Error(LightName(light, i) + ": a scene has at most one ENVIRONMENT light");
     if (light.has_to_world())
@@ -457,9 +478,9 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
   if (CountPlacements(scene) > SceneLimits::kMaxPlacements)
     throw Error("instancing expands to more than " + std::to_string(SceneLimits::kMaxPlacements) + " placements");
   if (!assets) return;
-  for (const v1::SceneTexture& t : scene.textures())
-    if (const v1::Property* asset = TextureAsset(t); asset && !assets->Has(asset->string_value()))
-      throw Error(TextureName(t) + ": asset " + asset->string_value() +
+  for (const auto& [what, spec] : FileComponents(scene))
+    if (const v1::Property* asset = AssetOf(*spec); asset && !assets->Has(asset->string_value()))
+      throw Error(what + ": asset " + asset->string_value() +
                   " is not on this server; upload it with AssetService.Upload before submitting");
   RequireShapeAssets(scene.shapes(), *assets, "");
   for (const v1::Group& g : scene.groups()) RequireShapeAssets(g.shapes(), *assets, "group '" + g.name() + "' ");

@@ -212,30 +212,31 @@ grpc::Status JobSceneServiceImpl::SampleLights(grpc::ServerContext*, const v1::S
     std::vector<float> directions(3 * n), distances(n), radiance(3 * n), pdf(n), w(3 * n), uv(2 * n);
     std::vector<uint32_t> delta(n);
     std::vector<const Emitter*> emitters(n, nullptr);
+    std::vector<Vec3> from(n);
+    for (uint32_t i = 0; i < n; ++i) from[i] = Vec3::Load(&points[3 * i]);
+    std::vector<LightDirection> lights(n);
+    if (scene.HasLights()) scene.SampleLightsFrom(from, u, lights);
     for (uint32_t i = 0; i < n; ++i) {
-      if (!scene.HasLights()) break;
-      const LightSample s = scene.SampleLight(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
-      const Vec3 p = Vec3::Load(&points[3 * i]);
-      Vec3 to_light = s.position - p;
-      const float dist = Length(to_light);
-      if (!s.emitter || !(dist > 0)) continue;
-      to_light = to_light / dist;
-      // A point light: the choice's probability; an area: per solid angle.
-      const float cos_light = s.delta_position ? 1.0f : std::abs(Dot(s.normal, to_light));
-      if (cos_light <= 0) continue;
-      to_light.Store(&directions[3 * i]);
-      distances[i] = dist;
-      pdf[i] = s.delta_position ? s.pdf : s.pdf * dist * dist / cos_light;
-      delta[i] = s.delta_position;
+      const LightDirection& s = lights[i];
+      if (!s.emitter || !(s.pdf > 0)) continue;
+      s.direction.Store(&directions[3 * i]);
+      distances[i] = s.distance;
+      pdf[i] = s.pdf;
+      delta[i] = s.delta;
       emitters[i] = s.emitter;
-      Frame(s.normal).ToLocal(-to_light).Store(&w[3 * i]);
+      s.w.Store(&w[3 * i]);
       uv[2 * i] = s.u;
       uv[2 * i + 1] = s.v;
     }
     EmitterRadiance(emitters, w, uv, radiance);
+    // On the wire a point light's pdf is the choice's probability and its
+    // radiance the irradiance it gives at the point.
     for (uint32_t i = 0; i < n; ++i)
-      if (delta[i])
-        for (int c = 0; c < 3; ++c) radiance[3 * i + c] /= distances[i] * distances[i];
+      if (delta[i] && !lights[i].AtInfinity()) {
+        const float d2 = distances[i] * distances[i];
+        for (int c = 0; c < 3; ++c) radiance[3 * i + c] /= d2;
+        pdf[i] /= d2;
+      }
     *reply->mutable_directions() = FloatArray(directions, {n, 3});
     *reply->mutable_distances() = FloatArray(distances, {n});
     *reply->mutable_radiance() = FloatArray(radiance, {n, 3});
@@ -263,17 +264,34 @@ grpc::Status JobSceneServiceImpl::Emission(grpc::ServerContext*, const v1::Emiss
     const KernelScene& scene = served.scene();
     std::vector<float> w(3 * n), radiance(3 * n), pdf(n);
     std::vector<const Emitter*> emitters(n, nullptr);
+    std::vector<Vec3> escaped;
+    std::vector<uint32_t> escaped_rays;
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t shape = shape_ids[i];
-      if (shape == kNoShape) continue;
+      if (shape == kNoShape) {
+        escaped.push_back(rays[i].direction);
+        escaped_rays.push_back(i);
+        continue;
+      }
       if (shape >= scene.ShapeCount()) throw Error("hit " + std::to_string(i) + " names no shape of the scene");
       emitters[i] = scene.EmitterOf(shape);
       if (!emitters[i]) continue;
-      Frame(Vec3::Load(&normals[3 * i])).ToLocal(-rays[i].direction).Store(&w[3 * i]);
-      const float cos_light = std::abs(w[3 * i + 2]);
-      pdf[i] = cos_light > 0 ? scene.LightPdfArea(shape) * t[i] * t[i] / cos_light : 0;
+      Hit hit;
+      hit.shape = shape;
+      hit.t = t[i];
+      hit.normal = Vec3::Load(&normals[3 * i]);
+      Frame(hit.normal).ToLocal(-rays[i].direction).Store(&w[3 * i]);
+      pdf[i] = scene.LightPdfFrom(rays[i], hit);
     }
     EmitterRadiance(emitters, w, uv, radiance);
+    // Rays that left the scene: the environment and its density.
+    std::vector<Vec3> environment(escaped.size());
+    std::vector<float> environment_pdf(escaped.size());
+    scene.Escaped(escaped, environment, environment_pdf);
+    for (size_t k = 0; k < escaped.size(); ++k) {
+      environment[k].Store(&radiance[3 * escaped_rays[k]]);
+      pdf[escaped_rays[k]] = environment_pdf[k];
+    }
     *reply->mutable_radiance() = FloatArray(radiance, {n, 3});
     *reply->mutable_pdf() = FloatArray(pdf, {n});
   });
