@@ -115,7 +115,8 @@ void PbrtImporter::DistantLight(PbrtParams& params, const SourceLocation& where)
 void PbrtImporter::InfiniteLight(PbrtParams& params, const SourceLocation& where) {
   const double scale = params.Float("scale", 1), illuminance = params.Float("illuminance", -1);
   if (!(scale >= 0) || !std::isfinite(scale)) Fail(params.WhereIs("scale", where), "infinite light: scale must be >= 0");
-  bool added = false;
+  using Added = SceneAssembly::EnvironmentAdded;
+  Added added = Added::kAdded;
   if (params.Has("filename")) {
     if (params.Has("L")) Fail(params.WhereIs("L", where), "infinite light: give \"L\" or \"filename\", not both");
     // pbrt-v4's maps are square, in its equal-area octahedral mapping.
@@ -142,8 +143,11 @@ void PbrtImporter::InfiniteLight(PbrtParams& params, const SourceLocation& where
     params.WarnUnused(diagnostics_, "light 'infinite'");
     added = assembly_.AddUniformEnvironment("", radiance);
   }
-  if (!added)
+  if (added == Added::kIgnored)
     Warn(where, "second-infinite", "infinite light: yarf renders one environment map per scene: this one ignored");
+  if (added == Added::kReplacedUniform)
+    Warn(where, "infinite-replaces-uniform",
+         "infinite light: yarf renders one environment per scene: this map replaces the uniform one before it");
 }
 
 }  // namespace yarf::importers

@@ -167,16 +167,27 @@ TEST(PbrtImport, DistantLightsTurnWithTheTransformAndScaleByIlluminance) {
   ExpectNear(ToMatrix(turned.to_world()).Vector({0, 0, 1}), Vec3d{0, -1, 1} * (1 / std::sqrt(2)));
 }
 
-TEST(PbrtImport, InfiniteLightsAddUpToOneEnvironment) {
+TEST(PbrtImport, UniformInfiniteLightsAddUpAndAMapTakesTheirPlace) {
   const ImportResult result = Import("pbrt_lights.pbrt");
+  ASSERT_EQ(result.scene.lights_size(), 3);
   const v1::Light& sky = result.scene.lights(2);
   EXPECT_EQ(sky.kind(), v1::Light::ENVIRONMENT);
-  EXPECT_EQ(sky.emitter().class_name(), "constant");
-  EXPECT_FALSE(sky.has_to_world());
-  // L × scale, (0.2, 0.4, 0.6); checker.png's mean × scale, 0.5 × 3; the
-  // default white times illuminance / π, 2π / π.
-  ExpectNear(RgbProperty(sky.emitter().properties(), "radiance"), {3.7, 3.9, 4.1}, 1e-6);
-  EXPECT_TRUE(Warns(result, "pbrt_lights.pbrt:19: environment maps are not supported yet: an image infinite light"));
+  // L × scale, (0.2, 0.4, 0.6), plus the default white times illuminance
+  // / π, 2π / π: one uniform environment...
+  const v1::Scene uniform_scene = Import("pbrt_uniform_lights.pbrt").scene;
+  ASSERT_EQ(uniform_scene.lights_size(), 1);
+  const v1::Light& uniform = uniform_scene.lights(0);
+  EXPECT_EQ(uniform.emitter().class_name(), "constant");
+  ExpectNear(RgbProperty(uniform.emitter().properties(), "radiance"), {2.2, 2.4, 2.6}, 1e-6);
+  // ...which a map replaces, in pbrt-v4's equal-area mapping, turned by
+  // the transform in force.
+  EXPECT_EQ(sky.emitter().class_name(), "envmap");
+  EXPECT_EQ(StringProperty(sky.emitter().properties(), "filename"), "assets/checker.png");
+  EXPECT_EQ(StringProperty(sky.emitter().properties(), "mapping"), "equal_area");
+  EXPECT_DOUBLE_EQ(FloatProperty(sky.emitter().properties(), "scale"), 3);
+  EXPECT_TRUE(Warns(result, "pbrt_lights.pbrt:20: infinite light: yarf renders one environment per scene: this map "
+                            "replaces the uniform one before it"));
+  EXPECT_TRUE(Warns(result, "pbrt_lights.pbrt:21: infinite light: yarf renders one environment map per scene"));
   EXPECT_FALSE(Warns(result, "parameter"));
 }
 

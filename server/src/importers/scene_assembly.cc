@@ -127,8 +127,8 @@ void SceneAssembly::AddDirectionalLight(const std::string& name, const Rgb& irra
   light_transforms_.push_back(FrameAlong(*travel));
 }
 
-bool SceneAssembly::AddUniformEnvironment(const std::string& name, const Rgb& radiance) {
-  if (environment_ >= 0 && !environment_radiance_) return false;
+SceneAssembly::EnvironmentAdded SceneAssembly::AddUniformEnvironment(const std::string& name, const Rgb& radiance) {
+  if (environment_ >= 0 && !environment_radiance_) return EnvironmentAdded::kIgnored;
   if (environment_ < 0) {
     environment_ = scene_.lights_size();
     v1::Light& light = *scene_.add_lights();
@@ -142,20 +142,27 @@ bool SceneAssembly::AddUniformEnvironment(const std::string& name, const Rgb& ra
   v1::Properties props;
   SetRgb(props, "radiance", sum);
   *scene_.mutable_lights(environment_)->mutable_emitter() = Spec("constant", std::move(props));
-  return true;
+  return EnvironmentAdded::kAdded;
 }
 
-bool SceneAssembly::AddEnvironmentMap(const std::string& name, v1::Properties props, const Matrix4& to_world,
-                                      const SourceLocation& where) {
-  if (environment_ >= 0) return false;
+SceneAssembly::EnvironmentAdded SceneAssembly::AddEnvironmentMap(const std::string& name, v1::Properties props,
+                                                                 const Matrix4& to_world,
+                                                                 const SourceLocation& where) {
+  if (environment_ >= 0 && !environment_radiance_) return EnvironmentAdded::kIgnored;
   CheckTransform(to_world, where, "environment map");
-  environment_ = scene_.lights_size();
-  v1::Light& light = *scene_.add_lights();
+  const bool replaces = environment_ >= 0;
+  if (!replaces) {
+    environment_ = scene_.lights_size();
+    scene_.add_lights();
+    light_transforms_.emplace_back();
+  }
+  v1::Light& light = *scene_.mutable_lights(environment_);
   light.set_name(name);
   light.set_kind(v1::Light::ENVIRONMENT);
   *light.mutable_emitter() = Spec("envmap", std::move(props));
-  light_transforms_.push_back(to_world);
-  return true;
+  light_transforms_[environment_] = to_world;
+  environment_radiance_.reset();
+  return replaces ? EnvironmentAdded::kReplacedUniform : EnvironmentAdded::kAdded;
 }
 
 void SceneAssembly::SetCamera(v1::Camera camera, const Matrix4& camera_to_world, const Vec3d& source_right,

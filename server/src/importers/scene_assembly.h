@@ -56,15 +56,16 @@ class SceneAssembly {
   // there. Fails at `where` when the direction is zero or not finite.
   void AddDirectionalLight(const std::string& name, const Rgb& irradiance, const Vec3d& direction,
                            const SourceLocation& where);
-  // A uniform environment of this radiance ("constant", kind ENVIRONMENT):
-  // a second uniform one adds its radiance to the first. yarf renders one
-  // environment: false (nothing added) after an environment map.
-  bool AddUniformEnvironment(const std::string& name, const Rgb& radiance);
+  // yarf renders one environment: uniform ones add up, and a map takes
+  // the place of a uniform one.
+  enum class EnvironmentAdded { kAdded, kReplacedUniform, kIgnored };
+  // A uniform environment of this radiance ("constant", kind ENVIRONMENT);
+  // ignored after an environment map.
+  EnvironmentAdded AddUniformEnvironment(const std::string& name, const Rgb& radiance);
   // An environment map ("envmap" with these properties, kind ENVIRONMENT)
-  // turned by to_world; false (nothing added) when there is an
-  // environment already.
-  bool AddEnvironmentMap(const std::string& name, v1::Properties props, const Matrix4& to_world,
-                         const SourceLocation& where);
+  // turned by to_world; ignored after another map.
+  EnvironmentAdded AddEnvironmentMap(const std::string& name, v1::Properties props, const Matrix4& to_world,
+                                     const SourceLocation& where);
   bool HasEnvironment() const { return environment_ >= 0; }
 
   // Places the camera. `camera` carries the projection (fov, lens, clip

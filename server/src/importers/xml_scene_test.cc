@@ -209,20 +209,21 @@ TEST(MitsubaImport, DirectionalEmittersTravelAlongDirectionOrTheZOfToWorld) {
   EXPECT_FALSE(Warns(result, "emitter 'directional'"));  // no parameter ignored
 }
 
-TEST(MitsubaImport, EnvmapBecomesTheConstantOfItsMeanRadianceWithAWarning) {
+TEST(MitsubaImport, EnvmapBecomesAnEnvironmentMapTurnedByItsTransform) {
   const ImportResult result = Import("mitsuba_envmap.xml");
   ASSERT_EQ(result.scene.lights_size(), 1);
   const v1::Light& sky = result.scene.lights(0);
   EXPECT_EQ(sky.name(), "sky");
   EXPECT_EQ(sky.kind(), v1::Light::ENVIRONMENT);
-  EXPECT_EQ(sky.emitter().class_name(), "constant");
-  // The mean over directions of the map as Mitsuba interpolates it, times
-  // scale 2; its rotation changes nothing.
-  ExpectNear(RgbProperty(sky.emitter().properties(), "radiance"), Vec3d{4, 2, 1} * (1 - 2 / M_PI), 1e-6);
-  EXPECT_FALSE(sky.has_to_world());
-  EXPECT_TRUE(Warns(result, "mitsuba_envmap.xml:8: environment maps are not supported yet: envmap replaced by a "
-                            "constant of its mean radiance"));
-  EXPECT_FALSE(Warns(result, "parameter"));  // to_world is read, and needs nothing more
+  EXPECT_EQ(sky.emitter().class_name(), "envmap");
+  EXPECT_EQ(StringProperty(sky.emitter().properties(), "filename"), "assets/sky.pfm");
+  EXPECT_EQ(StringProperty(sky.emitter().properties(), "mapping"), "latlong");
+  EXPECT_DOUBLE_EQ(FloatProperty(sky.emitter().properties(), "scale"), 2);
+  // Turned by 90° about y (Mitsuba's world mirrored for yarf's camera
+  // frame, which leaves a rotation about the vertical a rotation).
+  ASSERT_TRUE(sky.has_to_world());
+  EXPECT_FALSE(Warns(result, "parameter"));
+  EXPECT_FALSE(Warns(result, "not supported"));
 }
 
 TEST(MitsubaImport, WithoutASensorMitsubasDefaultCameraIsUsed) {
