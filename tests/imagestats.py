@@ -108,9 +108,12 @@ def pixel_z_test(
     difference = np.asarray(pixels, np.float64) - reference
     total = np.asarray(variance, np.float64) + reference_variance
     z = np.zeros_like(difference)
-    noisy = total > 0
+    # Differences within float32 rounding of the pixel are none: a pixel
+    # that sees a constant (a uniform sky) has a variance of rounding alone.
+    rounding = np.abs(difference) <= 1e-6 * np.maximum(1.0, np.abs(reference))
+    noisy = (total > 0) & ~rounding
     z[noisy] = difference[noisy] / np.sqrt(total[noisy])
-    z[~noisy & (np.abs(difference) > 1e-6)] = np.inf
+    z[~noisy & ~rounding] = np.inf
     failing = np.argwhere(np.abs(z) >= threshold)
     order = sorted(failing.tolist(), key=lambda index: -abs(z[tuple(index)]))[:8]
     worst = "\n".join(

@@ -93,8 +93,29 @@ def uv_sphere_ply(segments: int, rings: int, *, per_face: bool) -> str:
     return header + "\n".join(vertex_lines + face_lines) + "\n"
 
 
-def scene_xml(shape: str, *, max_depth: int = 4) -> str:
-    """A lit room around one shape (XML of Mitsuba 3): a floor, an area light."""
+# The room's light: a tilted square above the shape.
+AREA_LIGHT = """<shape type="rectangle">
+    <transform name="to_world">
+      <scale value="0.8"/><rotate x="1" angle="90"/><rotate z="1" angle="25"/>
+      <translate x="1" y="3" z="1"/>
+    </transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="12, 12, 12"/></emitter>
+  </shape>"""
+# The room's floor.
+FLOOR = """<shape type="rectangle">
+    <transform name="to_world">
+      <scale value="4"/><rotate x="1" angle="-90"/><translate y="-1"/>
+    </transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+  </shape>"""
+
+
+def scene_xml(
+    shape: str, *, max_depth: int = 4, lights: str = AREA_LIGHT, floor: str = FLOOR
+) -> str:
+    """A lit room around one shape (XML of Mitsuba 3): a floor, an area light
+    (or the given lights)."""
     return f"""<scene version="3.0.0">
   <integrator type="path"><integer name="max_depth" value="{max_depth}"/></integrator>
   <sensor type="perspective">
@@ -109,31 +130,22 @@ def scene_xml(shape: str, *, max_depth: int = 4) -> str:
     </film>
   </sensor>
   {shape}
-  <shape type="rectangle">
-    <transform name="to_world">
-      <scale value="4"/><rotate x="1" angle="-90"/><translate y="-1"/>
-    </transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
-  </shape>
-  <shape type="rectangle">
-    <transform name="to_world">
-      <scale value="0.8"/><rotate x="1" angle="90"/><rotate z="1" angle="25"/>
-      <translate x="1" y="3" z="1"/>
-    </transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
-    <emitter type="area"><rgb name="radiance" value="12, 12, 12"/></emitter>
-  </shape>
+  {floor}
+  {lights}
 </scene>
 """
 
 
-def write_scene(folder: Path, shape: str, files: dict[str, str] | None = None) -> Path:
-    """Writes the scene around ``shape`` and the text files it names; returns the XML's path."""
+def write_scene(
+    folder: Path, shape: str, files: dict[str, str] | None = None, **room: str | int
+) -> Path:
+    """Writes the scene around ``shape`` (``room``: scene_xml's options) and the
+    text files it names; returns the XML's path."""
     folder.mkdir(parents=True, exist_ok=True)
     for name, text in (files or {}).items():
         (folder / name).write_text(text)
     path = folder / "scene.xml"
-    path.write_text(scene_xml(shape))
+    path.write_text(scene_xml(shape, **room))  # type: ignore[arg-type]
     return path
 
 

@@ -1,0 +1,198 @@
+"""Lights as Mitsuba 3 renders them: lights at infinity, environment maps,
+directional lights, sphere lights sampled by solid angle.
+
+Each scene is one Mitsuba XML file that yarf's importer and Mitsuba 3
+(scalar_rgb, made in the test) both read; yarf's render must pass Mitsuba's
+render-regression criterion against Mitsuba's (imagestats.pixel_z_test).
+Every transport must also see the environment: a white furnace (a diffuse
+sphere under a uniform sky reads its albedo), and agreement with the path
+tracer under an environment map (block z-test).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from imagestats import block_z_test
+from surface_scenes import SIZE, write_scene
+from test_surfaces import INDEPENDENT, assert_matches_mitsuba
+
+from yarf import Client, RenderResult, component, load_scene
+from yarf.assets import upload_scene_assets
+
+GREY = '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.8, 0.8"/></bsdf>'
+SPHERE = f'<shape type="sphere"><float name="radius" value="0.9"/>{GREY}</shape>'
+ENVMAP = (
+    '<emitter type="envmap"><string name="filename" value="sky.pfm"/>'
+    '<float name="scale" value="1.5"/>'
+    '<transform name="to_world"><rotate y="1" angle="60"/></transform></emitter>'
+)
+
+
+def write_pfm(path: Path, rgb: np.ndarray) -> None:
+    """An RGB float image as PFM (rows stored bottom to top)."""
+    height, width, _ = rgb.shape
+    with path.open("wb") as out:
+        out.write(f"PF\n{width} {height}\n-1.0\n".encode())
+        out.write(np.ascontiguousarray(rgb[::-1], dtype="<f4").tobytes())
+
+
+def sky(path: Path) -> None:
+    """A 64×32 latitude-longitude sky: blue above, brown below, and a small
+    bright sun (a few texels), so that sampling by the map matters."""
+    rows, columns = np.mgrid[0:32, 0:64]
+    elevation = 1 - (rows + 0.5) / 16  # 1 at the zenith, -1 at the nadir
+    image = np.where(
+        (elevation > 0)[..., None],
+        np.stack([0.3 + 0.2 * elevation, 0.5 + 0.2 * elevation, 0.9 + 0.1 * elevation], -1),
+        np.array([0.25, 0.18, 0.1]),
+    )
+    sun = (abs(rows - 9) <= 1) & (abs(columns - 20) <= 1)
+    image[sun] = [200.0, 180.0, 150.0]
+    write_pfm(path, image.astype(np.float32))
+
+
+LIGHTS = {
+    "constant sky": (
+        SPHERE,
+        '<emitter type="constant"><rgb name="radiance" value="0.8, 0.9, 1"/></emitter>',
+    ),
+    "directional light": (
+        SPHERE,
+        '<emitter type="directional"><vector name="direction" x="-0.3" y="-1" z="-0.5"/>'
+        '<rgb name="irradiance" value="3, 2.8, 2.5"/></emitter>',
+    ),
+    # A glossy sphere lit by a small sphere light: light samples by solid
+    # angle and BSDF samples weighted against them.
+    "sphere light on a glossy sphere": (
+        '<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="roughconductor">'
+        '<string name="material" value="Au"/><float name="alpha" value="0.15"/></bsdf></shape>',
+        '<shape type="sphere"><point name="center" x="1.2" y="1.8" z="1.5"/>'
+        '<float name="radius" value="0.25"/>'
+        '<emitter type="area"><rgb name="radiance" value="30, 30, 30"/></emitter></shape>',
+    ),
+    "envmap-lit diffuse sphere": (SPHERE, ENVMAP),
+    "envmap-lit rough conductor": (
+        '<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="roughconductor">'
+        '<string name="material" value="Cu"/><float name="alpha" value="0.2"/></bsdf></shape>',
+        ENVMAP,
+    ),
+    "envmap-lit rough dielectric": (
+        '<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="roughdielectric">'
+        '<float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/></bsdf></shape>',
+        ENVMAP,
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(LIGHTS))
+def test_light_matches_mitsuba(client: Client, tmp_path: Path, name: str) -> None:
+    shape, lights = LIGHTS[name]
+    sky(tmp_path / "sky.pfm")
+    path = write_scene(tmp_path, shape, lights=lights, max_depth=6)
+    scene = load_scene(path)
+    upload_scene_assets(client, scene, tmp_path)
+    assert_matches_mitsuba(client, scene, path, name)
+
+
+def covered_pixels(radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Masks of the pixels the scene's camera (scene_xml's: from (0, 1.5, 4)
+    toward the origin, 40° across) sees wholly on a sphere of ``radius`` at the
+    origin, and wholly beside it."""
+    eye = np.array([0.0, 1.5, 4.0])
+    forward = -eye / np.linalg.norm(eye)
+    right = np.cross(forward, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    half = math.tan(math.radians(20))
+    corners = np.linspace(-half, half, 4 * SIZE + 1)
+    x, y = np.meshgrid(corners, -corners)
+    d = forward + x[..., None] * right + y[..., None] * up
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    # |eye + t d|² = r² has a root where (d·eye)² − |eye|² + r² ≥ 0.
+    hits = (d @ eye) ** 2 - eye @ eye + radius**2 >= 0
+    # Each pixel's 5×5 corners and inner points, and a pixel's margin around
+    # them (the reconstruction filter reaches a little beyond).
+    inside = np.zeros((SIZE, SIZE), bool)
+    outside = np.zeros((SIZE, SIZE), bool)
+    for row in range(SIZE):
+        for column in range(SIZE):
+            near = hits[max(0, 4 * row - 4) : 4 * row + 9, max(0, 4 * column - 4) : 4 * column + 9]
+            inside[row, column] = near.all()
+            outside[row, column] = not near.any()
+    return inside, outside
+
+
+FURNACE_TRANSPORTS = {
+    "path": component("path"),
+    "light": component("light"),
+    "distribution": component("distribution"),
+    "irradiance_cache": component("irradiance_cache"),
+    "photon_map": component("photon_map"),
+    "sppm": component("sppm"),
+}
+
+
+@pytest.mark.parametrize("transport", list(FURNACE_TRANSPORTS))
+def test_white_furnace_under_a_uniform_sky(client: Client, tmp_path: Path, transport: str) -> None:
+    """A diffuse sphere of albedo 0.5 under a sky of radiance 1, nothing else:
+    being convex it reads 0.5 wherever it is seen, the sky 1 around it."""
+    sphere = (
+        '<shape type="sphere"><float name="radius" value="0.9"/><bsdf type="diffuse">'
+        '<rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></shape>'
+    )
+    sky_light = '<emitter type="constant"><rgb name="radiance" value="1, 1, 1"/></emitter>'
+    scene = load_scene(write_scene(tmp_path, sphere, lights=sky_light, floor="", max_depth=8))
+    result = client.render(
+        scene, spp=256, seed=5, transport=FURNACE_TRANSPORTS[transport], timeout=600
+    )
+    inside, outside = covered_pixels(0.9)
+    assert inside.sum() > 100 and outside.sum() > 100
+    for mask, expected, where in ((inside, 0.5, "on the sphere"), (outside, 1.0, "around it")):
+        values = result.pixels[mask]
+        # Density estimates blur a little; everything else is unbiased.
+        error = np.abs(values.mean(axis=0) - expected).max()
+        noise = 4 * math.sqrt(result.variance[mask].mean() / mask.sum()) + 1e-4
+        tolerance = noise + (0.01 if transport in ("photon_map", "sppm") else 0)
+        assert error < tolerance, (
+            f"{transport} {where}: mean {values.mean(axis=0)} against {expected} "
+            f"(tolerance {tolerance:.4f})"
+        )
+
+
+@pytest.mark.parametrize("transport", ["light", "photon_map", "sppm"])
+def test_transports_agree_under_an_environment_map(
+    client: Client, tmp_path: Path, transport: str
+) -> None:
+    """A diffuse sphere on a floor under the sky map: paths from the camera and
+    from the environment (its disk around the scene) estimate the same image."""
+    sky(tmp_path / "sky.pfm")
+    scene = load_scene(write_scene(tmp_path, SPHERE, lights=ENVMAP, max_depth=5))
+    upload_scene_assets(client, scene, tmp_path)
+
+    def render(name: str, spp: int, seed: int) -> RenderResult:
+        result = client.render(
+            scene,
+            spp=spp,
+            seed=seed,
+            transport=component(name, max_depth=5),
+            sampler=INDEPENDENT,
+            timeout=600,
+        )
+        assert np.isfinite(result.pixels).all()
+        return result
+
+    reference = render("path", 1024, 1)
+    other = render(transport, 1024, 2)
+    test = block_z_test(
+        other.pixels,
+        other.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"{transport} vs path under an envmap:\n{test.report()}"
