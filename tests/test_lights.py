@@ -129,6 +129,7 @@ def covered_pixels(radius: float) -> tuple[np.ndarray, np.ndarray]:
 FURNACE_TRANSPORTS = {
     "path": component("path"),
     "light": component("light"),
+    "bdpt": component("bdpt"),
     "distribution": component("distribution"),
     "irradiance_cache": component("irradiance_cache"),
     "photon_map": component("photon_map"),
@@ -163,7 +164,7 @@ def test_white_furnace_under_a_uniform_sky(client: Client, tmp_path: Path, trans
         )
 
 
-@pytest.mark.parametrize("transport", ["light", "photon_map", "sppm"])
+@pytest.mark.parametrize("transport", ["light", "bdpt", "photon_map", "sppm"])
 def test_transports_agree_under_an_environment_map(
     client: Client, tmp_path: Path, transport: str
 ) -> None:
@@ -196,3 +197,37 @@ def test_transports_agree_under_an_environment_map(
         family_alpha=1e-3,
     )
     assert not test.failing.size, f"{transport} vs path under an envmap:\n{test.report()}"
+
+
+@pytest.mark.parametrize(
+    "light", ["directional light", "sphere light on a glossy sphere", "constant sky"]
+)
+@pytest.mark.parametrize("transport", ["light", "bdpt"])
+def test_light_paths_agree_with_the_path_tracer(
+    client: Client, tmp_path: Path, transport: str, light: str
+) -> None:
+    """Light paths from a directional light (a disk of parallel rays), a sphere
+    light and a uniform sky against camera paths, on the room's floor."""
+    shape, lights = LIGHTS[light]
+    scene = load_scene(write_scene(tmp_path, shape, lights=lights, max_depth=5))
+
+    def render(name: str, spp: int, seed: int) -> RenderResult:
+        return client.render(
+            scene,
+            spp=spp,
+            seed=seed,
+            transport=component(name, max_depth=5),
+            sampler=INDEPENDENT,
+            timeout=600,
+        )
+
+    reference, other = render("path", 1024, 1), render(transport, 1024, 2)
+    test = block_z_test(
+        other.pixels,
+        other.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"{transport} vs path, {light}:\n{test.report()}"

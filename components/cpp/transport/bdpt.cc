@@ -42,10 +42,16 @@ struct Vertex {
   Kind kind = Kind::kSurface;
   // Scattered through a delta lobe (surfaces).
   bool delta = false;
-  // A light with no area (point and spot lights).
+  // A light no camera path can hit (point, spot and directional lights).
   bool delta_position = false;
+  // A light vertex at infinity: a light path's start at an environment or
+  // directional light, or where a camera path left the scene. It stands 1
+  // unit from its neighbour (as pbrt's do), so that the direction between
+  // them is what it is.
+  bool infinite = false;
   Vec3 p;
-  // The geometric normal; a point light's or the camera's axis.
+  // The geometric normal; a point light's or the camera's axis; at
+  // infinity, the direction its light travels toward the scene.
   Vec3 n;
   // Surfaces: the shading frame the surface model sees (ShadingFrame).
   Frame frame{Vec3(0, 0, 1)};
@@ -59,10 +65,17 @@ struct Vertex {
   SurfaceSite site;
   const Emitter* emitter = nullptr;
 
-  bool OnSurface() const { return kind == Kind::kSurface || (kind == Kind::kLight && !delta_position); }
+  bool OnSurface() const {
+    return kind == Kind::kSurface || (kind == Kind::kLight && !delta_position && !infinite);
+  }
   // Converts a solid-angle density of the direction from here toward
-  // `next` into an area density at next.
+  // `next` into an area density at next. A vertex at infinity is reached
+  // by a direction, whose density stays per solid angle; from one, light
+  // paths are parallel rays through a disk, whose area density the caller
+  // passes, and next sees it through its cosine alone.
   float ToArea(float pdf, const Vertex& next) const {
+    if (next.infinite) return pdf;
+    if (infinite) return next.OnSurface() ? pdf * std::abs(Dot(next.n, n)) : pdf;
     const Vec3 d = next.p - p;
     const float dist2 = Dot(d, d);
     if (!(dist2 > 0)) return 0;
@@ -91,6 +104,14 @@ struct Walker {
 
 float Remap0(float f) { return f != 0 ? f : 1; }
 
+// The area density of the points of the disk light paths from infinity
+// cross (SceneView::InfiniteLightOrigin).
+float DiskPdf(const SceneView& scene) {
+  float pdf = 0;
+  scene.InfiniteLightOrigin(Vec3(0, 0, 1), 0.5f, 0.5f, pdf);
+  return pdf;
+}
+
 class Bdpt final : public Transport {
  public:
   explicit Bdpt(const Properties& props) : max_depth_(int(props.Int("max_depth", 8))) {
@@ -99,14 +120,6 @@ class Bdpt final : public Transport {
   }
 
   uint32_t Dimensions() const override { return kFirstBounce + 2 * kPerBounce * uint32_t(max_depth_); }
-
-  void Prepare(const SceneView& scene) override {
-    for (uint32_t l = 0; l < scene.LightCount(); ++l) {
-      const LightDirection light = scene.LightPoint(l, Vec3());
-      if (!light.emitter || light.AtInfinity())
-        throw Error("bdpt: lights at infinity (directional, constant, envmap) are not supported yet; use path");
-    }
-  }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     out.splats = true;
@@ -141,7 +154,8 @@ class Bdpt final : public Transport {
         if (!s.light.emitter || !(s.light.pdf > 0)) continue;
         Vertex& l = light.at(i, 0);
         l.kind = Vertex::Kind::kLight;
-        l.delta_position = s.light.delta_position;
+        l.delta_position = s.light.delta_position || s.light.delta_direction;
+        l.infinite = s.light.infinite;
         l.p = s.light.position;
         l.n = s.light.normal;
         l.beta = Vec3(1, 1, 1) * (1.0f / s.light.pdf);
@@ -152,6 +166,16 @@ class Bdpt final : public Transport {
         light.count[i] = 1;
         if (!s.Valid()) continue;
         walkers[i] = {s.FirstRay(time[i]), s.Throughput(), s.pdf_direction};
+        if (l.infinite) {
+          // At infinity the vertex is its direction, chosen with density
+          // p_choice·p_direction per solid angle (s = 1 joins along it);
+          // its light then crosses the disk with the disk's area density.
+          const float disk = DiskPdf(scene);
+          l.pdf_fwd = s.light.pdf / disk * s.pdf_direction;
+          l.beta = Vec3(1, 1, 1) * (1.0f / l.pdf_fwd);
+          l.frame = s.light.frame;
+          walkers[i].pdf_dir = disk;
+        }
         if (MaxComponent(walkers[i].beta) > 0) active.push_back(i);
       }
       Walk(scene, points, TransportMode::kImportance, kFirstBounce + kPerBounce * uint32_t(max_depth_), light,
@@ -176,7 +200,22 @@ class Bdpt final : public Transport {
       const uint32_t base = first_dimension + kPerBounce * bounce;
       for (size_t k = 0; k < active.size(); ++k) {
         const uint32_t i = active[k];
-        if (!hits[k].Found() || paths.count[i] == paths.capacity) continue;
+        if (paths.count[i] == paths.capacity) continue;
+        if (!hits[k].Found()) {
+          // A camera path that leaves the scene ends at the environment.
+          if (mode == TransportMode::kRadiance && scene.HasEnvironment()) {
+            Vertex& v = paths.at(i, paths.count[i]++);
+            v = Vertex{};
+            v.kind = Vertex::Kind::kLight;
+            v.infinite = true;
+            v.n = -rays[k].direction;
+            v.p = rays[k].origin + rays[k].direction;
+            v.wi = v.n;
+            v.beta = walkers[i].beta;
+            v.pdf_fwd = walkers[i].pdf_dir;
+          }
+          continue;
+        }
         Vertex& prev = paths.at(i, paths.count[i] - 1);
         Vertex& v = paths.at(i, paths.count[i]++);
         v = Vertex{};
@@ -231,6 +270,8 @@ class Bdpt final : public Transport {
     uint32_t s = 0, t = 0;
     // Indices into the query lists (or none).
     uint32_t light_surface = kNone, camera_surface = kNone, emitter = kNone;
+    // s = 0 at a vertex at infinity: into the environment queries.
+    uint32_t environment = kNone;
     CameraConnection camera;  // t = 1
     static constexpr uint32_t kNone = 0xFFFFFFFFu;
   };
@@ -240,6 +281,7 @@ class Bdpt final : public Transport {
     std::vector<Join> joins;
     std::vector<SurfaceQuery> light_queries, camera_queries;
     std::vector<EmitterQuery> emitter_queries;
+    std::vector<Vec3> environment_queries;
     // Surface models see a surface vertex's shading frame; emitters the
     // geometric one.
     const auto local = [](const Vertex& v, Vec3 w) { return v.frame.ToLocal(w); };
@@ -253,6 +295,14 @@ class Bdpt final : public Transport {
           j.s = s;
           j.t = t;
           const Vertex& pt = camera.at(i, t - 1);
+          if (pt.infinite) {
+            // Only the environment itself sees a path that left the scene.
+            if (s != 0) continue;
+            j.environment = uint32_t(environment_queries.size());
+            environment_queries.push_back(-pt.n);
+            joins.push_back(j);
+            continue;
+          }
           if (s == 0) {
             if (!pt.emitter) continue;
             j.emitter = uint32_t(emitter_queries.size());
@@ -262,8 +312,9 @@ class Bdpt final : public Transport {
           }
           const Vertex& qs = light.at(i, s - 1);
           if (qs.kind == Vertex::Kind::kSurface && qs.delta) continue;
-          // A point light is a delta on the film: never seen directly.
-          if (s == 1 && t == 1 && qs.delta_position) continue;
+          // A point light is a delta on the film: never seen directly; a
+          // light at infinity is seen by the camera paths that leave.
+          if (s == 1 && t == 1 && (qs.delta_position || qs.infinite)) continue;
           if (t == 1) {
             if (!scene.ConnectToCamera(qs.p, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
                                        j.camera))
@@ -274,10 +325,12 @@ class Bdpt final : public Transport {
           const Vec3 target = t == 1 ? j.camera.lens_point : pt.p;
           const Vec3 d = target - qs.p;
           if (!(Dot(d, d) > 0)) continue;
-          const Vec3 to_pt = Normalize(d);
+          // From infinity, along the light path's own direction.
+          const Vec3 to_pt = qs.infinite ? qs.n : Normalize(d);
           if (s == 1) {
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.push_back({qs.emitter, emitter_local(qs, to_pt), qs.site});
+            emitter_queries.push_back(
+                {qs.emitter, qs.infinite ? qs.frame.ToLocal(to_pt) : emitter_local(qs, to_pt), qs.site});
           } else {
             j.light_surface = uint32_t(light_queries.size());
             light_queries.push_back({qs.material, local(qs, qs.wi), local(qs, to_pt), qs.site});
@@ -291,6 +344,10 @@ class Bdpt final : public Transport {
     const std::vector<SurfaceAnswer> at_light = EvaluateSurfaces(scene, TransportMode::kImportance, light_queries);
     const std::vector<SurfaceAnswer> at_camera = EvaluateSurfaces(scene, TransportMode::kRadiance, camera_queries);
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, emitter_queries);
+    std::vector<Vec3> environment(environment_queries.size());
+    std::vector<float> environment_pdf(environment_queries.size());
+    if (!environment_queries.empty()) scene.Escaped(environment_queries, environment, environment_pdf);
+    const float disk = DiskPdf(scene);
 
     std::vector<Ray> shadow;
     std::vector<Vec3> values;
@@ -299,18 +356,26 @@ class Bdpt final : public Transport {
     for (const Join& j : joins) {
       const Vertex& pt = camera.at(j.path, j.t - 1);
       float x = raster[2 * j.path], y = raster[2 * j.path + 1];
+      if (j.environment != Join::kNone) {
+        const Vec3 value = pt.beta * environment[j.environment];
+        if (!(MaxComponent(value) > 0)) continue;
+        out.Add(j.path, x, y, value * Weight(scene, camera, light, j, nullptr, nullptr, disk,
+                                             environment_pdf[j.environment]));
+        continue;
+      }
       if (j.s == 0) {
         const Vec3 value = pt.beta * emitted[j.emitter].radiance;
         if (!(MaxComponent(value) > 0)) continue;
-        const float weight = Weight(scene, camera, light, j, nullptr, nullptr, emitted[j.emitter].pdf_direction);
+        const float weight = Weight(scene, camera, light, j, nullptr, nullptr, emitted[j.emitter].pdf_direction, 0);
         out.Add(j.path, x, y, value * weight);
         continue;
       }
       const Vertex& qs = light.at(j.path, j.s - 1);
       const Vec3 target = j.t == 1 ? j.camera.lens_point : pt.p;
       const Vec3 d = target - qs.p;
-      const float dist2 = Dot(d, d);
-      const Vec3 to_pt = d / std::sqrt(dist2);
+      // From infinity: parallel light, no fall-off with distance.
+      const float dist2 = qs.infinite ? 1.0f : Dot(d, d);
+      const Vec3 to_pt = qs.infinite ? qs.n : d / std::sqrt(dist2);
       // Light end: the emitter's radiance with its cosine, or beta·f of a
       // surface with the shading cosine and its importance correction.
       Vec3 value = qs.beta;
@@ -333,12 +398,20 @@ class Bdpt final : public Transport {
       if (!(MaxComponent(value) > 0)) continue;
       const SurfaceAnswer* light_answer = j.s > 1 ? &at_light[j.light_surface] : nullptr;
       const SurfaceAnswer* camera_answer = j.t > 1 ? &at_camera[j.camera_surface] : nullptr;
-      const float weight = Weight(scene, camera, light, j, light_answer, camera_answer,
-                                  j.s == 1 ? emitted[j.emitter].pdf_direction : 0);
-      Ray ray = j.t == 1 ? RayToLens(qs.p, qs.OnSurface() ? qs.n : Vec3(), target, time[j.path])
-                         : (qs.OnSurface() ? ShadowRay(qs.p, qs.n, pt.p) : ShadowRay(pt.p, pt.n, qs.p));
+      const float weight =
+          Weight(scene, camera, light, j, light_answer, camera_answer,
+                 j.s == 1 ? (qs.infinite ? disk : emitted[j.emitter].pdf_direction) : 0, 0);
+      Ray ray;
+      if (qs.infinite) {
+        ray.origin = OffsetRayOrigin(pt.p, pt.n, -to_pt);
+        ray.direction = -to_pt;
+      } else if (j.t == 1) {
+        ray = RayToLens(qs.p, qs.OnSurface() ? qs.n : Vec3(), target, time[j.path]);
+      } else {
+        ray = qs.OnSurface() ? ShadowRay(qs.p, qs.n, pt.p) : ShadowRay(pt.p, pt.n, qs.p);
+        if (!qs.OnSurface()) ray.tfar = std::max(0.0f, Length(qs.p - ray.origin));
+      }
       ray.time = time[j.path];
-      if (j.t > 1 && !qs.OnSurface()) ray.tfar = std::max(0.0f, Length(qs.p - ray.origin));
       shadow.push_back(ray);
       values.push_back(value * weight);
       owners.push_back(j.path);
@@ -354,9 +427,13 @@ class Bdpt final : public Transport {
   // The power-heuristic weight of strategy (s, t) against every other way
   // of sampling the same path. `light_answer`/`camera_answer` hold the
   // connection's densities at surface endpoints; `emitter_pdf` the
-  // emitter's direction density (s = 1: toward pt; s = 0: toward pt−1).
+  // emitter's direction density (s = 1: toward pt; s = 0: toward pt−1),
+  // for a light at infinity its disk's area density; `environment_pdf`
+  // the density with which a light at infinity is chosen toward a camera
+  // path that left the scene (s = 0 there).
   float Weight(const SceneView& scene, const Subpaths& camera, const Subpaths& light, const Join& j,
-               const SurfaceAnswer* light_answer, const SurfaceAnswer* camera_answer, float emitter_pdf) const {
+               const SurfaceAnswer* light_answer, const SurfaceAnswer* camera_answer, float emitter_pdf,
+               float environment_pdf) const {
     const uint32_t s = j.s, t = j.t, i = j.path;
     // Copies of the vertices whose densities the connection changes.
     Vertex pt = camera.at(i, t - 1);
@@ -380,7 +457,7 @@ class Bdpt final : public Transport {
       if (s > 1) qs_minus.pdf_rev = qs.ToArea(light_answer->pdf_reverse, qs_minus);
     } else {
       // pt as a light sample, and pt−1 as sampled from it.
-      pt.pdf_rev = scene.LightPdfArea(pt.shape);
+      pt.pdf_rev = pt.infinite ? environment_pdf : scene.LightPdfArea(pt.shape);
       pt_minus.pdf_rev = pt.ToArea(emitter_pdf, pt_minus);
     }
     const auto camera_vertex = [&](uint32_t k) -> const Vertex& {
@@ -394,7 +471,9 @@ class Bdpt final : public Transport {
       const Vertex& v = camera_vertex(k);
       ratio *= Remap0(v.pdf_rev) / Remap0(v.pdf_fwd);
       const bool delta = (k == t - 1 ? false : v.delta) || camera_vertex(k - 1).delta;
-      if (!delta) sum += ratio * ratio;
+      // Joining a light at infinity straight to the camera is no strategy.
+      const bool impossible = k == 1 && t == 2 && s == 0 && pt.infinite;
+      if (!delta && !impossible) sum += ratio * ratio;
     }
     ratio = 1;
     for (int k = int(s) - 1; k >= 0; --k) {
