@@ -700,6 +700,12 @@ float ConeCosine(Vec3 p, Vec3 c, float r) {
 
 }  // namespace
 
+bool KernelScene::SphereByCone(const Light& light, Vec3 p) const {
+  if (spheres_by_area_ || light.kind != LightKind::kSurface) return false;
+  const EmittingPrimitive& first = emitting_[light.first];
+  return first.sphere && OutsideSphere(p, first.p0, first.radius);
+}
+
 void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
                                    std::span<LightDirection> out) const {
   std::vector<uint32_t> from_environment;
@@ -731,7 +737,7 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
         break;
       case LightKind::kSurface: {
         const EmittingPrimitive& first = emitting_[light.first];
-        if (first.sphere && OutsideSphere(p, first.p0, first.radius)) {
+        if (SphereByCone(light, p)) {
           // By the solid angle the sphere subtends (uniform in its cone),
           // the point the direction meets on its near side.
           const Vec3 to_center = first.p0 - p;
@@ -799,7 +805,7 @@ float KernelScene::LightPdfFrom(const Ray& ray, const Hit& hit) const {
   if (!hit.Found() || hit.shape >= shape_light_.size() || shape_light_[hit.shape] == kNoLight) return 0;
   const Light& light = lights_[shape_light_[hit.shape]];
   const EmittingPrimitive& first = emitting_[light.first];
-  if (first.sphere && OutsideSphere(ray.origin, first.p0, first.radius))
+  if (SphereByCone(light, ray.origin))
     return light.probability * UniformConePdf(1, ConeCosine(ray.origin, first.p0, first.radius));
   const float cos_light = std::abs(Dot(hit.normal, ray.direction));
   return cos_light > 0 ? shape_light_pdf_[hit.shape] * hit.t * hit.t / cos_light : 0.0f;

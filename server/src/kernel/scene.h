@@ -66,6 +66,9 @@ class KernelScene final : public SceneView {
   // How lights are chosen (at Commit): in proportion to their power, as
   // estimated from their emitters, or uniformly.
   void ChooseLightsUniformly(bool uniform) { uniform_light_choice_ = uniform; }
+  // How light samples from a point find sphere lights: by the solid angle
+  // they subtend (the default), or uniformly in area.
+  void SampleSpheresByArea(bool by_area) { spheres_by_area_ = by_area; }
   void Commit();
 
   // Commit (the BVH builds) and every later Intersect and Occluded throw
@@ -229,6 +232,9 @@ class KernelScene final : public SceneView {
   std::vector<Light> lights_;
   uint32_t environment_ = kNoLight;
   bool uniform_light_choice_ = false;
+  bool spheres_by_area_ = false;
+  // Whether light samples from p find the sphere light `light` by its cone.
+  bool SphereByCone(const Light& light, Vec3 p) const;
   // The sphere around the scene and the camera that lights at infinity
   // send their light paths through.
   Vec3 bounds_center_;

@@ -169,6 +169,7 @@ class Builder {
     kernel_ = std::make_unique<KernelScene>(sources_.device, Camera(scene_.camera(), w, h), w, h);
     if (sources_.stop) kernel_->StopWhen(*sources_.stop);
     kernel_->ChooseLightsUniformly(scene_.light_sampler() == v1::Scene::LIGHT_SAMPLER_UNIFORM);
+    kernel_->SampleSpheresByArea(scene_.sphere_sampling() == v1::Scene::SPHERE_SAMPLING_AREA);
     // In order: a texture may refer to those before it.
     for (const v1::SceneTexture& t : scene_.textures()) {
       kernel_->ThrowIfStopped();
