@@ -38,8 +38,10 @@ EQUAL_TIME_SECONDS = float(os.environ.get("YARF_BENCH_SECONDS", "2.0"))
 EQUAL_TIME_SEEDS = (7, 8, 9)
 
 
-def yarf_render(client: Client, spp: int, seed: int) -> tuple[np.ndarray, dict[str, float]]:
-    scene = load_scene(SCENE)
+def yarf_render(
+    client: Client, spp: int, seed: int, scene_path: Path = SCENE
+) -> tuple[np.ndarray, dict[str, float]]:
+    scene = load_scene(scene_path)
     job = client.submit(scene, spp=spp, seed=seed, name=f"bench {spp} spp")
     status = client.wait(job)
     if status.error:
@@ -59,7 +61,9 @@ def yarf_render(client: Client, spp: int, seed: int) -> tuple[np.ndarray, dict[s
     return image, stats
 
 
-def mitsuba_render(variant: str, spp: int, seed: int) -> tuple[np.ndarray, dict[str, float]]:
+def mitsuba_render(
+    variant: str, spp: int, seed: int, scene_path: Path = MITSUBA_SCENE
+) -> tuple[np.ndarray, dict[str, float]]:
     env = dict(os.environ)
     if variant.startswith("llvm"):
         env["DRJIT_LIBLLVM_PATH"] = str(LLVM)
@@ -68,7 +72,7 @@ def mitsuba_render(variant: str, spp: int, seed: int) -> tuple[np.ndarray, dict[
         command = [
             sys.executable,
             str(ROOT / "bench" / "mitsuba_render.py"),
-            str(MITSUBA_SCENE),
+            str(scene_path),
             "--variant",
             variant,
             "--spp",

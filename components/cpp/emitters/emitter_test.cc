@@ -39,14 +39,19 @@ class EmitterTest : public testing::Test {
 
   // Every emitter class, each with a valid configuration.
   std::vector<std::pair<std::string, std::unique_ptr<Emitter>>> All() const {
-    Properties area, point, spot;
+    Properties area, two_sided, sky, point, spot;
     area.Set("radiance", Rgb{Vec3(1, 2, 3)});
+    two_sided.Set("radiance", Rgb{Vec3(1, 2, 3)});
+    two_sided.Set("two_sided", true);
+    sky.Set("radiance", Rgb{Vec3(1, 2, 3)});
     point.Set("intensity", Rgb{Vec3(1, 2, 3)});
     spot.Set("intensity", Rgb{Vec3(1, 2, 3)});
     spot.Set("cutoff_angle", 30.0);
     spot.Set("beam_width", 20.0);
     std::vector<std::pair<std::string, std::unique_ptr<Emitter>>> all;
     all.emplace_back("diffuse_area", Make("diffuse_area", area));
+    all.emplace_back("diffuse_area (two-sided)", Make("diffuse_area", two_sided));
+    all.emplace_back("constant", Make("constant", sky));
     all.emplace_back("point", Make("point", point));
     all.emplace_back("spot", Make("spot", spot));
     return all;
@@ -189,6 +194,26 @@ TEST_F(EmitterTest, AreaRadianceReferringToNoTextureIsAnError) {
   EXPECT_NE(CreationError("diffuse_area", props)
                 .find("property 'radiance' refers to 'sky', which is not a texture of the scene"),
             std::string::npos);
+}
+
+}  // namespace
+}  // namespace yarf
+
+namespace yarf {
+namespace {
+
+TEST_F(EmitterTest, ATwoSidedAreaLightEmitsAlikeFromBothSides) {
+  Properties props;
+  props.Set("radiance", Rgb{Vec3(1, 2, 3)});
+  props.Set("two_sided", true);
+  const auto light = Make("diffuse_area", props);
+  for (const float z : {0.8f, -0.8f}) {
+    const Vec3 l = RadianceToward(*light, Normalize(Vec3(0.3f, 0.1f, z)));
+    EXPECT_EQ(l.x, 1.0f);
+    EXPECT_EQ(l.z, 3.0f);
+  }
+  props.Set("two_sided", false);
+  EXPECT_EQ(MaxComponent(RadianceToward(*Make("diffuse_area", props), Normalize(Vec3(0.3f, 0.1f, -0.8f)))), 0.0f);
 }
 
 }  // namespace

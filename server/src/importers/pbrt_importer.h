@@ -33,6 +33,7 @@ class PbrtImporter {
  private:
   struct AreaLight {
     Rgb radiance;
+    bool two_sided = false;
     SourceLocation where;
   };
   // What AttributeBegin saves and AttributeEnd restores.

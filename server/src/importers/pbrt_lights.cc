@@ -30,9 +30,7 @@ void PbrtImporter::AreaLightSource(const std::string& type, PbrtParams& params, 
     return;
   }
   const Rgb radiance = Colour(params, "L", {1, 1, 1}, kLight, where) * params.Float("scale", 1);
-  if (params.Bool("twosided", false))
-    Warn(params.WhereIs("twosided", where), "twosided-light",
-         "two-sided area lights are not supported: they emit from the front (normal) side only");
+  const bool two_sided = params.Bool("twosided", false);
   if (params.Has("power")) {
     params.Find("power");
     Warn(params.WhereIs("power", where), "light-power", "light power is not supported: L and scale used");
@@ -45,7 +43,7 @@ void PbrtImporter::AreaLightSource(const std::string& type, PbrtParams& params, 
   state_.area_light = AreaLight{ClampColour(radiance, 0, 1e30, [&] {
                                   Warn(where, "negative-radiance", "negative radiance clamped to 0");
                                 }),
-                                where};
+                                two_sided, where};
 }
 
 void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where) {

@@ -137,6 +137,7 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     } else {
       v1::Properties props;
       SetRgb(props, "radiance", state_.area_light->radiance);
+      if (state_.area_light->two_sided) SetBool(props, "two_sided", true);
       *shape.mutable_emitter() = Spec("diffuse_area", std::move(props));
     }
   }
