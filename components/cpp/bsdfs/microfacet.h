@@ -4,13 +4,16 @@
 // the Fresnel factor of a conductor and the hemispherical averages the
 // coated models need. Indices of refraction are read in
 // surface_properties.h.
-// GGX's D, its G1 and the sampling of visible normals are in yarf/warps.h.
+// Two distributions of microfacet normals: GGX (its D, G1 and sampling of
+// visible normals are in yarf/warps.h) and Beckmann (Mitsuba's default),
+// each anisotropic, with Smith's masking and sampling of visible normals.
 //
 // Microfacet normals m lie in the upper hemisphere (m.z > 0); +z is the
 // outside (ext_ior) side of a dielectric.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -32,10 +35,22 @@ namespace yarf::microfacet {
 // directions can resolve is a mirror in all but name.
 inline constexpr float kMinAlpha = 1e-4f;
 
-// GGX roughness along the shading frame's x (alpha_u) and y (alpha_v).
+enum class Distribution { kGgx, kBeckmann };
+
+// Roughness along the shading frame's x (alpha_u) and y (alpha_v), of
+// either distribution.
 struct Roughness {
   float alpha_x = 0.1f, alpha_y = 0.1f;
+  Distribution distribution = Distribution::kGgx;
 };
+
+// The 'distribution' property: "ggx" (the default) or "beckmann".
+inline Distribution ReadDistribution(const Properties& props) {
+  const std::string name = props.String("distribution", "ggx");
+  if (name == "ggx") return Distribution::kGgx;
+  if (name == "beckmann") return Distribution::kBeckmann;
+  throw Error("property 'distribution' must be \"ggx\" or \"beckmann\", not \"" + name + "\"");
+}
 
 inline float RequireAlpha(double alpha, const std::string& property) {
   if (!(alpha > 0.0 && std::isfinite(alpha)))
@@ -55,38 +70,38 @@ inline TexturedValue ReadAlpha(const Properties& props, const std::string& prope
 // The roughness at a call's points (TexturedRoughness::At).
 class PointRoughness {
  public:
-  PointRoughness(PointValues<float> x, PointValues<float> y) : x_(std::move(x)), y_(std::move(y)) {}
-  Roughness operator[](size_t k) const { return {x_[k], y_[k]}; }
+  PointRoughness(PointValues<float> x, PointValues<float> y, Distribution distribution)
+      : x_(std::move(x)), y_(std::move(y)), distribution_(distribution) {}
+  Roughness operator[](size_t k) const { return {x_[k], y_[k], distribution_}; }
 
  private:
   PointValues<float> x_, y_;
+  Distribution distribution_;
 };
 
 // Roughness whose α may vary over the surface (textures).
 struct TexturedRoughness {
   TexturedValue alpha_x, alpha_y;
+  Distribution distribution = Distribution::kGgx;
 
   // At the [N,2] uv of a surface call.
   PointRoughness At(const yarf::SurfacePoints& at) const {
-    return {alpha_x.FloatsAt(at), alpha_y.FloatsAt(at)};
+    return {alpha_x.FloatsAt(at), alpha_y.FloatsAt(at), distribution};
   }
 };
 
 // Reads Mitsuba's roughness properties: 'alpha' (isotropic, default
 // `fallback`), or 'alpha_u' and 'alpha_v' together when the model is
-// `anisotropic`, each a number or a texture; and 'distribution', which
-// may only name "ggx", the one distribution here (Mitsuba's default is
-// Beckmann: a scene that relies on it must say "ggx" to mean this model).
+// `anisotropic`, each a number or a texture; and 'distribution', "ggx"
+// (the default here) or "beckmann" (Mitsuba's default, which its
+// importer passes on).
 inline TexturedRoughness ReadTexturedRoughness(const Properties& props, double fallback,
                                                bool anisotropic) {
-  const std::string distribution = props.String("distribution", "ggx");
-  if (distribution != "ggx")
-    throw Error("property 'distribution' must be \"ggx\" (the only microfacet distribution), "
-                "not \"" + distribution + "\"");
+  const Distribution distribution = ReadDistribution(props);
   const bool has_u = props.Has("alpha_u"), has_v = props.Has("alpha_v");
   if (!has_u && !has_v) {
     const TexturedValue alpha = ReadAlpha(props, "alpha", fallback);
-    return {alpha, alpha};
+    return {alpha, alpha, distribution};
   }
   const std::string given = has_u ? "alpha_u" : "alpha_v";
   if (!anisotropic)
@@ -96,7 +111,7 @@ inline TexturedRoughness ReadTexturedRoughness(const Properties& props, double f
   if (!has_u || !has_v)
     throw Error(std::string("property '") + (has_u ? "alpha_v" : "alpha_u") +
                 "' is missing: anisotropic roughness needs both 'alpha_u' and 'alpha_v'");
-  return {ReadAlpha(props, "alpha_u", fallback), ReadAlpha(props, "alpha_v", fallback)};
+  return {ReadAlpha(props, "alpha_u", fallback), ReadAlpha(props, "alpha_v", fallback), distribution};
 }
 
 // The same for a model whose roughness is one number over the whole
@@ -107,7 +122,7 @@ inline Roughness ReadRoughness(const Properties& props, double fallback, bool an
     if (props.TextureOf(property))
       throw Error("property '" + std::string(property) +
                   "' must be a number: this model's roughness cannot vary over the surface");
-  return {roughness.alpha_x.Constant().x, roughness.alpha_y.Constant().x};
+  return {roughness.alpha_x.Constant().x, roughness.alpha_y.Constant().x, roughness.distribution};
 }
 
 // --- Geometry about a microfacet -------------------------------------------
@@ -131,30 +146,124 @@ inline bool RefractAbout(Vec3 wi, Vec3 m, float eta, Vec3* wt) {
   return true;
 }
 
+// --- The distributions -------------------------------------------------------
+
+// The inverse error function: Giles' single-precision approximation
+// ("Approximating the erfinv function", 2010), then one Newton step on
+// std::erf.
+inline float ErfInv(float y) {
+  y = std::clamp(y, -0.99999994f, 0.99999994f);
+  float w = -std::log((1.0f - y) * (1.0f + y)), p;
+  if (w < 5.0f) {
+    w -= 2.5f;
+    p = 2.81022636e-08f;
+    for (float c : {3.43273939e-07f, -3.5233877e-06f, -4.39150654e-06f, 0.00021858087f, -0.00125372503f,
+                    -0.00417768164f, 0.246640727f, 1.50140941f})
+      p = c + p * w;
+  } else {
+    w = std::sqrt(w) - 3.0f;
+    p = -0.000200214257f;
+    for (float c : {0.000100950558f, 0.00134934322f, -0.00367342844f, 0.00573950773f, -0.0076224613f,
+                    0.00943887047f, 1.00167406f, 2.83297682f})
+      p = c + p * w;
+  }
+  float x = p * y;
+  const float slope = 2.0f / std::sqrt(kPi) * std::exp(-x * x);
+  if (slope > 0) x -= (std::erf(x) - y) / slope;
+  return x;
+}
+
+// Beckmann's D: exp(-tan²θ (cos²φ/αx² + sin²φ/αy²)) / (π αx αy cos⁴θ).
+inline float BeckmannDistribution(Vec3 m, float alpha_x, float alpha_y) {
+  const float z2 = m.z * m.z;
+  if (!(m.z > 0)) return 0.0f;
+  const float x = m.x / alpha_x, y = m.y / alpha_y;
+  return std::exp(-(x * x + y * y) / z2) / (kPi * alpha_x * alpha_y * z2 * z2);
+}
+
+// Smith's Λ of a direction on either side, for the distribution.
+inline float SmithLambda(Vec3 w, const Roughness& r) {
+  const float z = std::abs(w.z);
+  const float ax = r.alpha_x * w.x, ay = r.alpha_y * w.y;
+  const float tangent2 = ax * ax + ay * ay;  // α(w)² tan²θ · cos²θ
+  if (z == 0) return std::numeric_limits<float>::infinity();
+  if (tangent2 == 0) return 0.0f;
+  if (r.distribution == Distribution::kGgx) return 0.5f * (std::sqrt(1.0f + tangent2 / (z * z)) - 1.0f);
+  // Beckmann: a = 1 / (α(w) tan θ).
+  const float a = z / std::sqrt(tangent2);
+  return 0.5f * (std::erf(a) - 1.0f) + std::exp(-a * a) / (2.0f * a * std::sqrt(kPi));
+}
+
+// The distribution's D (its normal distribution function).
+inline float Ndf(Vec3 m, const Roughness& r) {
+  return r.distribution == Distribution::kGgx ? GgxDistribution(m, r.alpha_x, r.alpha_y)
+                                               : BeckmannDistribution(m, r.alpha_x, r.alpha_y);
+}
+
 // --- Masking and shadowing -------------------------------------------------
 
-// GGX's G1 of a direction on either side of the surface (warps.h's
-// GgxSmithG1 of w mirrored to the upper side).
-inline float SmithG1(Vec3 w, float alpha_x, float alpha_y) {
-  return GgxSmithG1(Vec3(w.x, w.y, std::abs(w.z)), alpha_x, alpha_y);
-}
+// G1 of a direction on either side of the surface: 1 / (1 + Λ).
+inline float SmithG1(Vec3 w, const Roughness& r) { return 1.0f / (1.0f + SmithLambda(w, r)); }
 
 // Smith's joint masking-shadowing, in its height-correlated form (Heitz,
 // "Understanding the masking-shadowing function", JCGT 2014, eq. 99):
 // G2 = 1 / (1 + Λ(wi) + Λ(wo)), more accurate than the separable
 // G1(wi)·G1(wo) (which Mitsuba uses), as a microfacet seen from wi is more
 // likely seen from wo when both lie high. pbrt-v4 uses this form for
-// reflection and transmission alike, as here. With Λ(w) = (s - |wz|) /
-// (2|wz|), s = √(wz² + αx² wx² + αy² wy²), it is 2|zi||zo| / (|zo| si +
-// |zi| so), with no division by cos θ. Symmetric in wi and wo; 1 as α → 0.
-inline float SmithG2(Vec3 wi, Vec3 wo, float alpha_x, float alpha_y) {
-  const float zi = std::abs(wi.z), zo = std::abs(wo.z);
-  if (zi == 0 || zo == 0) return 0.0f;
-  const auto s = [&](Vec3 w, float z) {
-    const float ax = alpha_x * w.x, ay = alpha_y * w.y;
-    return std::sqrt(z * z + ax * ax + ay * ay);
-  };
-  return 2.0f * zi * zo / (zo * s(wi, zi) + zi * s(wo, zo));
+// reflection and transmission alike, as here. Symmetric in wi and wo; 1
+// as α → 0.
+inline float SmithG2(Vec3 wi, Vec3 wo, const Roughness& r) {
+  if (wi.z == 0 || wo.z == 0) return 0.0f;
+  return 1.0f / (1.0f + SmithLambda(wi, r) + SmithLambda(wo, r));
+}
+
+// --- Visible normals ---------------------------------------------------------
+
+// A slope (x, y) of Beckmann's unit-roughness distribution visible from a
+// direction at angle θi to the normal in the xz-plane (Heitz & d'Eon
+// 2014): x from the inverse of its CDF, found by Newton's method kept
+// inside its bracket, in the variable b = erf(x); y is Gaussian.
+inline std::array<float, 2> SampleBeckmannSlope(float cos_theta, float u0, float u1) {
+  const float sin_theta = SinFromCos(cos_theta);
+  const float tan_theta = sin_theta / std::max(cos_theta, 1e-7f);
+  const float inv_sqrt_pi = 1.0f / std::sqrt(kPi);
+  // The CDF ∝ 1 + b + tanθ/√π·exp(-x²), from b = -1 to erf(cot θ).
+  float high = tan_theta > 0 ? std::erf(1.0f / tan_theta) : 1.0f, low = -1.0f;
+  const float cot2 = tan_theta > 0 ? 1.0f / (tan_theta * tan_theta) : 0.0f;
+  const float normalisation = 1.0f / (1.0f + high + inv_sqrt_pi * tan_theta * std::exp(-cot2));
+  float b = low + u0 * (high - low);
+  for (int step = 0; step < 32; ++step) {
+    const float x = ErfInv(b);
+    const float value = normalisation * (1.0f + b + inv_sqrt_pi * tan_theta * std::exp(-x * x)) - u0;
+    if (std::abs(value) < 1e-6f) break;
+    (value > 0 ? high : low) = b;
+    const float derivative = normalisation * (1.0f - x * tan_theta);
+    const float next = derivative > 0 ? b - value / derivative : 0.5f * (low + high);
+    b = next > low && next < high ? next : 0.5f * (low + high);
+  }
+  return {ErfInv(b), ErfInv(2.0f * u1 - 1.0f)};
+}
+
+// A visible normal of the distribution seen from wi (wi.z > 0), with
+// density VisibleNormalPdf: GGX by warps.h, Beckmann by stretching wi to
+// unit roughness, sampling a slope there, and stretching back (Heitz &
+// d'Eon 2014).
+inline Vec3 SampleVisibleNormal(Vec3 wi, const Roughness& r, float u0, float u1) {
+  if (r.distribution == Distribution::kGgx) return SampleGgxVisibleNormal(wi, r.alpha_x, r.alpha_y, u0, u1);
+  const Vec3 stretched = Normalize(Vec3(r.alpha_x * wi.x, r.alpha_y * wi.y, wi.z));
+  const auto [x11, y11] = SampleBeckmannSlope(stretched.z, u0, u1);
+  const float planar = std::sqrt(stretched.x * stretched.x + stretched.y * stretched.y);
+  const float cos_phi = planar > 0 ? stretched.x / planar : 1.0f, sin_phi = planar > 0 ? stretched.y / planar : 0.0f;
+  const float x = (cos_phi * x11 - sin_phi * y11) * r.alpha_x;
+  const float y = (sin_phi * x11 + cos_phi * y11) * r.alpha_y;
+  return Normalize(Vec3(-x, -y, 1.0f));
+}
+
+// The density of visible normals, G1(wi)·max(0, wi·m)·D(m) / cos θi.
+inline float VisibleNormalPdf(Vec3 wi, Vec3 m, const Roughness& r) {
+  const float cos_wi_m = Dot(wi, m);
+  if (!(cos_wi_m > 0) || !(wi.z > 0)) return 0.0f;
+  return SmithG1(wi, r) * cos_wi_m * Ndf(m, r) / wi.z;
 }
 
 // --- Fresnel factors -------------------------------------------------------
@@ -198,25 +307,23 @@ inline float FresnelDiffuseReflectance(float eta) {
   return float(sum / kSteps);
 }
 
-// The directional albedo of an isotropic GGX dielectric interface's
+// The directional albedo of an isotropic rough dielectric interface's
 // reflection, ∫ F(wi·m) D(m) G2 / (4 cos θi cos θo) cos θo dωo at incidence
 // cos θi from the side where the relative index is eta: the mean of
 // F · G2 / G1(wi) over visible normals, on a strata × strata grid of
 // their sampling (deterministic). Normals that reflect below the horizon
 // contribute nothing.
-inline float RoughDielectricReflectance(float cos_theta, float alpha, float eta,
-                                        int strata = 64) {
+inline float RoughDielectricReflectance(float cos_theta, const Roughness& r, float eta, int strata = 64) {
   cos_theta = std::clamp(cos_theta, 1e-4f, 1.0f);
   const Vec3 wi(SinFromCos(cos_theta), 0.0f, cos_theta);
-  const float g1 = GgxSmithG1(wi, alpha, alpha);
+  const float g1 = SmithG1(wi, r);
   double sum = 0;
   for (int i = 0; i < strata; ++i)
     for (int j = 0; j < strata; ++j) {
-      const Vec3 m = SampleGgxVisibleNormal(wi, alpha, alpha, (i + 0.5f) / strata,
-                                            (j + 0.5f) / strata);
+      const Vec3 m = SampleVisibleNormal(wi, r, (i + 0.5f) / strata, (j + 0.5f) / strata);
       const Vec3 wo = ReflectAbout(wi, m);
       if (wo.z <= 0) continue;
-      sum += FresnelDielectric(Dot(wi, m), eta) * SmithG2(wi, wo, alpha, alpha) / g1;
+      sum += FresnelDielectric(Dot(wi, m), eta) * SmithG2(wi, wo, r) / g1;
     }
   return float(sum / (double(strata) * strata));
 }

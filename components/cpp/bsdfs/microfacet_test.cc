@@ -292,18 +292,45 @@ TEST_F(MicrofacetTest, NamedMetalsHaveTheirColours) {
 }
 
 TEST_F(MicrofacetTest, SmithG2LiesBetweenSeparableAndMinimum) {
+  for (const mf::Distribution d : {mf::Distribution::kGgx, mf::Distribution::kBeckmann})
   for (auto [ax, ay] : {std::pair{0.1f, 0.1f}, std::pair{0.5f, 0.5f}, std::pair{0.2f, 0.8f}})
     for (uint64_t k = 0; k < 2000; ++k) {
       const auto u = Uniform3(61, k), v = Uniform3(62, k);
       const Vec3 a = SampleUniformSphere(u[0], u[1]), b = SampleUniformSphere(v[0], v[1]);
-      const float g1a = mf::SmithG1(a, ax, ay), g1b = mf::SmithG1(b, ax, ay);
-      const float g2 = mf::SmithG2(a, b, ax, ay);
-      EXPECT_NEAR(g2, mf::SmithG2(b, a, ax, ay), 1e-6f);
+      const mf::Roughness r{ax, ay, d};
+      const float g1a = mf::SmithG1(a, r), g1b = mf::SmithG1(b, r);
+      const float g2 = mf::SmithG2(a, b, r);
+      EXPECT_NEAR(g2, mf::SmithG2(b, a, r), 1e-6f);
       EXPECT_GE(g2, g1a * g1b - 1e-6f);
       EXPECT_LE(g2, std::min(g1a, g1b) + 1e-6f);
     }
-  EXPECT_NEAR(mf::SmithG2(DirectionAt(0.3, 1.0), DirectionAt(0.6, 2.0), 1e-4f, 1e-4f), 1.0f,
+  EXPECT_NEAR(mf::SmithG2(DirectionAt(0.3, 1.0), DirectionAt(0.6, 2.0), mf::Roughness{1e-4f, 1e-4f}), 1.0f,
               1e-5f);
+}
+
+TEST_F(MicrofacetTest, BeckmannNormalsAndVisibleNormalsAreDensities) {
+  // ∫ D(m) cos θm dωm = 1, and ∫ D_wi(m) dωm = 1 for any wi: the midpoint
+  // rule over (cos θ, φ) of the upper hemisphere.
+  for (auto [ax, ay] : {std::pair{0.1f, 0.1f}, std::pair{0.4f, 0.4f}, std::pair{0.15f, 0.6f}}) {
+    const mf::Roughness r{ax, ay, mf::Distribution::kBeckmann};
+    constexpr int kRows = 4000, kCols = 256;
+    for (Vec3 wi : {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)}) {
+      double projected = 0, visible = 0;
+      for (int i = 0; i < kRows; ++i)
+        for (int j = 0; j < kCols; ++j) {
+          const float z = (i + 0.5f) / kRows, phi = (j + 0.5f) * 2 * kPi / kCols;
+          const float sin = std::sqrt(1 - z * z);
+          const Vec3 m(sin * std::cos(phi), sin * std::sin(phi), z);
+          projected += mf::Ndf(m, r) * z;
+          visible += mf::VisibleNormalPdf(wi, m, r);
+        }
+      const double cell = (1.0 / kRows) * (2 * kPi / kCols);
+      EXPECT_NEAR(projected * cell, 1.0, 2e-3) << ax << " " << ay;
+      EXPECT_NEAR(visible * cell, 1.0, 3e-3) << ax << " " << ay << ", wi " << Describe(wi);
+    }
+  }
+  for (float y : {-0.999f, -0.5f, 0.0f, 0.3f, 0.9f, 0.99999f})
+    EXPECT_NEAR(std::erf(mf::ErfInv(y)), y, 1e-6f) << y;
 }
 
 TEST_F(MicrofacetTest, RefractAboutFollowsSnell) {
@@ -359,10 +386,10 @@ TEST_F(MicrofacetTest, RoughInterfaceReflectanceTendsToFresnel) {
   for (float eta : {1.5f, 1.0f / 1.5f})
     for (float cos_theta : {1.0f, 0.7f, 0.4f, 0.1f}) {
       const float smooth = FresnelDielectric(cos_theta, eta);
-      EXPECT_NEAR(mf::RoughDielectricReflectance(cos_theta, 1e-3f, eta), smooth, 2e-3f)
+      EXPECT_NEAR(mf::RoughDielectricReflectance(cos_theta, mf::Roughness{1e-3f, 1e-3f}, eta), smooth, 2e-3f)
           << "eta " << eta << ", cos θ " << cos_theta;
       // Roughness spreads the reflection, and loses some below the horizon.
-      EXPECT_LE(mf::RoughDielectricReflectance(cos_theta, 0.5f, eta), 1.0f);
+      EXPECT_LE(mf::RoughDielectricReflectance(cos_theta, mf::Roughness{0.5f, 0.5f}, eta), 1.0f);
     }
 }
 
@@ -418,7 +445,7 @@ TEST_F(MicrofacetTest, BadPropertiesAreRejectedByName) {
   for (const char* name : {"roughconductor", "roughdielectric", "roughplastic"}) {
     expect_error(name, Props({{"alpha", -0.1}}), {"'alpha'"});
     expect_error(name, Props({{"alpha", 0.0}}), {"'alpha'"});
-    expect_error(name, Props({{"distribution", std::string("beckmann")}}), {"'distribution'"});
+    expect_error(name, Props({{"distribution", std::string("phong")}}), {"'distribution'"});
   }
   expect_error("roughconductor", Props({{"alpha_u", 0.1}}), {"'alpha_v'"});
   expect_error("roughconductor", Props({{"alpha_u", 0.1}, {"alpha_v", -2.0}}), {"'alpha_v'"});
@@ -495,11 +522,13 @@ TEST_F(ConductorTest, ReflectsExactlyWithTheConductorFresnelFactor) {
 TEST_F(RoughConductorTest, SamplesFollowPdf) {
   const std::vector<Properties> variants = {
       Props({{"alpha", 0.15}}), Props({{"alpha", 0.5}}),
-      Props({{"alpha_u", 0.1}, {"alpha_v", 0.4}, {"material", std::string("Cu")}})};
+      Props({{"alpha_u", 0.1}, {"alpha_v", 0.4}, {"material", std::string("Cu")}}),
+      Props({{"alpha", 0.3}, {"distribution", std::string("beckmann")}}),
+      Props({{"alpha_u", 0.1}, {"alpha_v", 0.4}, {"distribution", std::string("beckmann")}})};
   for (const Properties& props : variants) {
     const auto model = Make("roughconductor", props);
     for (Vec3 wi : {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)})
-      EXPECT_TRUE(SamplesFollowPdf(*model, wi, 200000, 81)) << "wi " << Describe(wi);
+      EXPECT_TRUE(SamplesFollowPdf(*model, wi, 200000, 81)) << "variant " << &props - &variants[0] << ", wi " << Describe(wi);
   }
 }
 
@@ -532,14 +561,16 @@ TEST_F(RoughConductorTest, IsReciprocalAndOneSided) {
 
 TEST_F(RoughConductorTest, ConservesEnergy) {
   const Properties mirror = Props({{"eta", 0.0}, {"k", 1.0}, {"specular_reflectance", 1.0}});
+  for (const std::string distribution : {"ggx", "beckmann"})
   for (double alpha : {0.2, 0.5, 1.0}) {
     Properties props = mirror;
     props.Set("alpha", alpha);
+    props.Set("distribution", distribution);
     const auto model = Make("roughconductor", props);
     for (Vec3 wi : Above()) {
       const Vec3 quadrature = IntegrateOverSphere(*model, wi).albedo;
       const MeanWithError sampled = MeanWeight(SampleMany(*model, wi, 50000, 87));
-      const std::string where = "alpha " + std::to_string(alpha) + ", wi " + Describe(wi);
+      const std::string where = distribution + " alpha " + std::to_string(alpha) + ", wi " + Describe(wi);
       EXPECT_LE(quadrature.x, 1.0f + 2e-3f) << where;
       EXPECT_LE(sampled.mean.x, 1.0f) << where;  // every weight F G2/G1 is ≤ 1
       EXPECT_NEAR(sampled.mean.x, quadrature.x, 5 * sampled.standard_error.x + 3e-3f) << where;
@@ -581,7 +612,8 @@ TEST_F(RoughConductorTest, ConvergesToConductorAsAlphaVanishes) {
 TEST_F(RoughDielectricTest, SamplesFollowPdf) {
   const std::vector<Properties> variants = {
       Props({{"alpha", 0.15}}), Props({{"alpha", 0.5}}),
-      Props({{"alpha_u", 0.1}, {"alpha_v", 0.3}, {"int_ior", 1.33}})};
+      Props({{"alpha_u", 0.1}, {"alpha_v", 0.3}, {"int_ior", 1.33}}),
+      Props({{"alpha", 0.25}, {"distribution", std::string("beckmann")}})};
   for (const Properties& props : variants) {
     const auto model = Make("roughdielectric", props);
     for (Vec3 wi : {Vec3(0, 0, 1), DirectionAt(0.3, 1.0), DirectionAt(0.08, 2.5),

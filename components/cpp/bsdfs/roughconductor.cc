@@ -83,8 +83,7 @@ class RoughConductor final : public yarf::SurfaceModel {
       Vec3 out;
       float density = 0;
       if (can_reflect && in.z > 0) {
-        const Vec3 m = yarf::SampleGgxVisibleNormal(in, roughness.alpha_x, roughness.alpha_y,
-                                                    u[1], u[2]);
+        const Vec3 m = mf::SampleVisibleNormal(in, roughness, u[1], u[2]);
         out = mf::ReflectAbout(in, m);
         // Density and value both from (wi, wo), as Pdf and Evaluate see them.
         density = Density(roughness, in, out);
@@ -111,8 +110,8 @@ class RoughConductor final : public yarf::SurfaceModel {
   static Vec3 Value(mf::Roughness roughness, Vec3 specular, yarf::metals::ComplexIor ior, Vec3 wi, Vec3 wo) {
     if (!(wi.z > 0 && wo.z > 0)) return Vec3();
     const Vec3 h = yarf::Normalize(wi + wo);
-    const float d = yarf::GgxDistribution(h, roughness.alpha_x, roughness.alpha_y);
-    const float g = mf::SmithG2(wi, wo, roughness.alpha_x, roughness.alpha_y);
+    const float d = mf::Ndf(h, roughness);
+    const float g = mf::SmithG2(wi, wo, roughness);
     const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(wi, h), ior.eta, ior.k);
     return specular * fresnel * (d * g / (4.0f * wi.z * wo.z));
   }
@@ -122,8 +121,7 @@ class RoughConductor final : public yarf::SurfaceModel {
   static float Density(mf::Roughness roughness, Vec3 wi, Vec3 wo) {
     if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
     const Vec3 h = yarf::Normalize(wi + wo);
-    return yarf::GgxSmithG1(wi, roughness.alpha_x, roughness.alpha_y) *
-           yarf::GgxDistribution(h, roughness.alpha_x, roughness.alpha_y) / (4.0f * wi.z);
+    return mf::SmithG1(wi, roughness) * mf::Ndf(h, roughness) / (4.0f * wi.z);
   }
 
   mf::TexturedRoughness roughness_;
@@ -136,5 +134,5 @@ class RoughConductor final : public yarf::SurfaceModel {
 YARF_PLUGIN(registrar) {
   yarf::Register<RoughConductor>(
       registrar, "roughconductor", "1.0.0",
-      "Rough conductor: GGX microfacets with a complex-index Fresnel factor (one-sided)");
+      "Rough conductor: GGX or Beckmann microfacets with a complex-index Fresnel factor (one-sided)");
 }

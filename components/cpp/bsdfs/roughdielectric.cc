@@ -103,8 +103,7 @@ class RoughDielectric final : public yarf::SurfaceModel {
       if ((can_reflect || can_refract) && in.z != 0) {
         // Normals visible from wi's side: those of -wi when it lies below.
         const Vec3 seen_from = in.z > 0 ? in : -in;
-        const Vec3 m = yarf::SampleGgxVisibleNormal(seen_from, roughness.alpha_x,
-                                                    roughness.alpha_y, u[1], u[2]);
+        const Vec3 m = mf::SampleVisibleNormal(seen_from, roughness, u[1], u[2]);
         const float fresnel = yarf::FresnelDielectric(yarf::Dot(in, m), eta_);
         const float reflect_share = can_reflect ? fresnel : 0.0f;
         const float total = reflect_share + (can_refract ? 1.0f - fresnel : 0.0f);
@@ -175,10 +174,8 @@ class RoughDielectric final : public yarf::SurfaceModel {
     if (m.z < 0) m = -m;
     const float cos_im = yarf::Dot(wi, m), cos_om = yarf::Dot(wo, m);
     if (cos_im * wi.z <= 0 || cos_om * wo.z <= 0) return false;
-    const float d = yarf::GgxDistribution(m, roughness.alpha_x, roughness.alpha_y);
-    const float visible =
-        mf::SmithG1(wi, roughness.alpha_x, roughness.alpha_y) * std::abs(cos_im) * d /
-        std::abs(wi.z);
+    const float d = mf::Ndf(m, roughness);
+    const float visible = mf::SmithG1(wi, roughness) * std::abs(cos_im) * d / std::abs(wi.z);
     if (l.reflect) {
       l.jacobian = 1.0f / (4.0f * std::abs(cos_im) * std::abs(cos_om));
       // dm/dwo = 1 / (4 |wo·m|).
@@ -190,7 +187,7 @@ class RoughDielectric final : public yarf::SurfaceModel {
       l.density = visible * l.eta * l.eta * std::abs(cos_om) * l.jacobian;
     }
     l.fresnel = yarf::FresnelDielectric(cos_im, eta_);
-    l.geometry = d * mf::SmithG2(wi, wo, roughness.alpha_x, roughness.alpha_y) *
+    l.geometry = d * mf::SmithG2(wi, wo, roughness) *
                  std::abs(cos_im) * std::abs(cos_om) / (std::abs(wi.z) * std::abs(wo.z));
     *out = l;
     return true;

@@ -72,13 +72,13 @@ class RoughPlastic final : public yarf::SurfaceModel {
                                             Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
         specular_(yarf::TexturedValue::Color(props, "specular_reflectance",
                                              Vec3(1.0f, 1.0f, 1.0f), /*unit=*/true)),
-        alpha_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/false).alpha_x),
+        roughness_(mf::ReadRoughness(props, 0.1, /*anisotropic=*/false)),
         eta_(yarf::ReadRelativeIndex(props, 1.49, 1.000277)),
-        internal_reflectance_(InternalReflectance(alpha_, eta_)),
+        internal_reflectance_(InternalReflectance(roughness_, eta_)),
         nonlinear_(props.Bool("nonlinear", false)) {
     for (int i = 0; i < kTableSize; ++i)
       transmittance_[i] =
-          1.0f - mf::RoughDielectricReflectance(float(i) / (kTableSize - 1), alpha_, eta_);
+          1.0f - mf::RoughDielectricReflectance(float(i) / (kTableSize - 1), roughness_, eta_);
   }
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
@@ -110,7 +110,7 @@ class RoughPlastic final : public yarf::SurfaceModel {
       float density = 0;
       if (in.z > 0 && (glossy || diffuse)) {
         if (pick_glossy)
-          out = mf::ReflectAbout(in, yarf::SampleGgxVisibleNormal(in, alpha_, alpha_, u[1], u[2]));
+          out = mf::ReflectAbout(in, mf::SampleVisibleNormal(in, roughness_, u[1], u[2]));
         else
           out = yarf::SampleCosineHemisphere(u[1], u[2]);
         density = Density(in, out, p_glossy);
@@ -146,7 +146,7 @@ class RoughPlastic final : public yarf::SurfaceModel {
   // on each side of s_c = 1 - 1/η², below which a smooth interface
   // reflects all (total internal reflection): the integrand's step as
   // α → 0 falls on a boundary of the rule.
-  static double InternalReflectance(float alpha, float eta) {
+  static double InternalReflectance(const mf::Roughness& roughness, float eta) {
     constexpr int kSteps = 64, kStrata = 32;
     const double critical = eta > 1.0f ? 1.0 - 1.0 / (double(eta) * eta) : 0.5;
     double sum = 0;
@@ -154,7 +154,7 @@ class RoughPlastic final : public yarf::SurfaceModel {
       for (int i = 0; i < kSteps; ++i) {
         const double s = from + (i + 0.5) * (to - from) / kSteps;
         sum += (to - from) / kSteps *
-               mf::RoughDielectricReflectance(float(std::sqrt(s)), alpha, 1.0f / eta, kStrata);
+               mf::RoughDielectricReflectance(float(std::sqrt(s)), roughness, 1.0f / eta, kStrata);
       }
     return sum;
   }
@@ -184,8 +184,8 @@ class RoughPlastic final : public yarf::SurfaceModel {
     if (glossy && local.lobes.has_specular) {
       const Vec3 h = yarf::Normalize(wi + wo);
       const float fresnel = yarf::FresnelDielectric(yarf::Dot(wi, h), eta_);
-      out += local.specular * (fresnel * yarf::GgxDistribution(h, alpha_, alpha_) *
-                          mf::SmithG2(wi, wo, alpha_, alpha_) / (4.0f * wi.z * wo.z));
+      out += local.specular * (fresnel * mf::Ndf(h, roughness_) * mf::SmithG2(wi, wo, roughness_) /
+                               (4.0f * wi.z * wo.z));
     }
     if (diffuse && local.lobes.has_diffuse)
       out += local.scaled_diffuse * (Transmittance(wi.z) * Transmittance(wo.z) * yarf::kInvPi);
@@ -199,15 +199,14 @@ class RoughPlastic final : public yarf::SurfaceModel {
     float density = (1.0f - p_glossy) * yarf::CosineHemispherePdf(wo.z);
     if (p_glossy > 0) {
       const Vec3 h = yarf::Normalize(wi + wo);
-      density += p_glossy * yarf::GgxSmithG1(wi, alpha_, alpha_) *
-                 yarf::GgxDistribution(h, alpha_, alpha_) / (4.0f * wi.z);
+      density += p_glossy * mf::SmithG1(wi, roughness_) * mf::Ndf(h, roughness_) / (4.0f * wi.z);
     }
     return density;
   }
 
   yarf::TexturedValue diffuse_;
   yarf::TexturedValue specular_;
-  float alpha_;
+  mf::Roughness roughness_;
   float eta_;
   // r̄, the interface's reflectance, from inside, of diffuse light.
   double internal_reflectance_;

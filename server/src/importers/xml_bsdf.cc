@@ -67,14 +67,15 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     if (!(v > 0 && v < 100)) Fail(p.WhereIs(key), what + ": " + key + " must lie in (0, 100)");
     SetFloat(props, key, v);
   };
-  // Mitsuba's microfacet models default to Beckmann; yarf's have one
-  // distribution of their own.
+  // Mitsuba's microfacet models default to Beckmann (yarf's to GGX).
   auto distribution = [&] {
     const std::string d = p.String("distribution", "beckmann");
-    if (d != "ggx")
-      Warn(p.WhereIs("distribution"), "distribution:" + d,
-           "microfacet distribution '" + d + "' replaced by yarf's (GGX)");
-    p.Accept({"sample_visible"});
+    if (d != "ggx" && d != "beckmann")
+      Fail(p.WhereIs("distribution"), what + ": distribution must be \"ggx\" or \"beckmann\"");
+    SetString(props, "distribution", d);
+    if (!p.Boolean("sample_visible", true))
+      Warn(p.WhereIs("sample_visible"), "sample_visible",
+           what + ": sample_visible false is not supported: visible normals are sampled");
   };
   auto alpha = [&](const std::string& key) {
     if (const Textured t = p.TexturedColor(key, {0.1, 0.1, 0.1}); t.IsTexture()) {
