@@ -185,4 +185,6 @@ def test_a_point_light_is_refused(client: Client, scene: scene_pb2.Scene) -> Non
     lit = scene_pb2.Scene()
     lit.CopyFrom(scene)
     lit.lights.add(name="bulb", emitter=component("point", intensity=rgb(1.0)))
-    assert "point and spot lights are not supported" in failure(client, lit)
+    assert "point, spot, directional and environment lights are not supported" in failure(
+        client, lit
+    )

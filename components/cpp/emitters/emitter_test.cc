@@ -2,6 +2,7 @@
 // registry as yarfd loads them: where each emits, that SampleDirection
 // agrees with PdfDirection, that each density integrates to one, and that
 // an area light's radiance may be a texture.
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../textures/temporary_folder.h"
 #include "components/registry.h"
 #include "yarf/hash.h"
 #include "yarf/surface.h"
@@ -22,7 +24,35 @@ namespace {
 
 class EmitterTest : public testing::Test {
  protected:
-  EmitterTest() { registry_.LoadDirectory(YARF_PLUGIN_DIR); }
+  EmitterTest() : folder_("yarf-emitter-test") { registry_.LoadDirectory(YARF_PLUGIN_DIR); }
+
+  // A float RGB image of `width` × `height` in the test's folder: texel
+  // (x, y) is Sky(x, y), with black texels and a bright one, so that
+  // sampling by the image matters.
+  static Vec3 Sky(int x, int y) {
+    if (x == 5 && y == 2) return Vec3(400, 300, 200);
+    if ((x + y) % 5 == 0) return Vec3();
+    return Vec3(0.1f * float(x + 1), 0.2f * float(y + 1), 0.5f);
+  }
+  std::filesystem::path WriteSky(const std::string& name, int width, int height) const {
+    std::vector<float> texels;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        for (int c = 0; c < 3; ++c) texels.push_back(Sky(x, y)[c]);
+    const std::filesystem::path path = folder_.path() / name;
+    auto out = OIIO::ImageOutput::create(path.string());
+    EXPECT_TRUE(out && out->open(path.string(), OIIO::ImageSpec(width, height, 3, OIIO::TypeFloat)));
+    EXPECT_TRUE(out->write_image(OIIO::TypeFloat, texels.data()));
+    out->close();
+    return path;
+  }
+  Properties EnvironmentMap(const std::string& mapping, int width, int height, double scale = 1) const {
+    Properties props;
+    props.Set("filename", WriteSky(mapping + ".exr", width, height));
+    props.Set("mapping", mapping);
+    props.Set("scale", scale);
+    return props;
+  }
 
   std::unique_ptr<Emitter> Make(const std::string& name, const Properties& props) const {
     return registry_.CreateAs<Emitter>(name, props);
@@ -54,9 +84,12 @@ class EmitterTest : public testing::Test {
     all.emplace_back("constant", Make("constant", sky));
     all.emplace_back("point", Make("point", point));
     all.emplace_back("spot", Make("spot", spot));
+    all.emplace_back("envmap (latlong)", Make("envmap", EnvironmentMap("latlong", 16, 8)));
+    all.emplace_back("envmap (equal_area)", Make("envmap", EnvironmentMap("equal_area", 8, 8)));
     return all;
   }
 
+  textures::TemporaryFolder folder_;
   Registry registry_;
 };
 
@@ -125,7 +158,7 @@ TEST_F(EmitterTest, SampledDirectionsCarryTheirDensity) {
 TEST_F(EmitterTest, DirectionDensitiesIntegrateToOne) {
   for (const auto& [name, emitter] : All()) {
     // Midpoint rule over (cos θ, φ), which has the solid-angle measure.
-    constexpr int kRows = 2000, kCols = 64;
+    constexpr int kRows = 2000, kCols = 1024;
     std::vector<float> w(3 * kRows * kCols), pdf(kRows * kCols);
     for (int i = 0; i < kRows; ++i)
       for (int j = 0; j < kCols; ++j) {
@@ -214,6 +247,66 @@ TEST_F(EmitterTest, ATwoSidedAreaLightEmitsAlikeFromBothSides) {
   }
   props.Set("two_sided", false);
   EXPECT_EQ(MaxComponent(RadianceToward(*Make("diffuse_area", props), Normalize(Vec3(0.3f, 0.1f, -0.8f)))), 0.0f);
+}
+
+}  // namespace
+}  // namespace yarf
+
+namespace yarf {
+namespace {
+
+TEST_F(EmitterTest, AnEnvironmentMapShowsItsTexelsWhereMitsubaAndPbrtPutThem) {
+  // Mitsuba's latitude-longitude map: texel (x, y) of a W × H image seen
+  // toward u = x / W, v = y / (H − 1), where d = (sin θ sin φ, cos θ,
+  // −sin θ cos φ) with φ = 2πu, θ = πv; w is the direction of travel, −d.
+  const auto latlong = Make("envmap", EnvironmentMap("latlong", 16, 8, 2));
+  for (const auto [x, y] : {std::pair{5, 2}, {0, 1}, {3, 6}, {15, 4}, {8, 3}}) {
+    const float phi = 2 * kPi * float(x) / 16, theta = kPi * float(y) / 7;
+    const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+    const Vec3 l = RadianceToward(*latlong, -d), expected = Sky(x, y) * 2;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(l[c], expected[c], 1e-3f * (1 + expected[c])) << x << " " << y;
+  }
+  // Halfway between two texels of a row: their mean (bilinear).
+  const float phi = 2 * kPi * 6.5f / 16, theta = kPi * 3 / 7;
+  const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+  const Vec3 mean = (Sky(6, 3) + Sky(7, 3)) * 0.5f * 2;
+  EXPECT_NEAR(RadianceToward(*latlong, -d).y, mean.y, 1e-3f);
+  // pbrt-v4's equal-area square, +z up: the centre texels look up, the
+  // corners down; each texel is seen as it is (no interpolation).
+  const auto square = Make("envmap", EnvironmentMap("equal_area", 8, 8));
+  EXPECT_EQ(RadianceToward(*square, Vec3(0, 0, -1)).x, Sky(4, 4).x);
+  // Straight down is every corner; just beside it, one.
+  EXPECT_EQ(RadianceToward(*square, Normalize(Vec3(-0.01f, -0.01f, 1))).x, Sky(7, 7).x);
+  // Near +x is just below the middle of the right edge, near +y just
+  // right of the middle of the bottom edge.
+  EXPECT_EQ(RadianceToward(*square, -Normalize(Vec3(1, 0.05f, 0.05f))).y, Sky(7, 4).y);
+  EXPECT_EQ(RadianceToward(*square, -Normalize(Vec3(0.05f, 1, 0.05f))).x, Sky(4, 7).x);
+}
+
+TEST_F(EmitterTest, AnEnvironmentMapIsSampledByItsBrightness) {
+  // The bright texel holds most of the power: most samples go there.
+  const auto latlong = Make("envmap", EnvironmentMap("latlong", 16, 8));
+  constexpr size_t kCount = 4096;
+  std::vector<float> u(2 * kCount), w(3 * kCount), pdf(kCount);
+  for (size_t k = 0; k < 2 * kCount; ++k) u[k] = ToUnitFloat(uint32_t(Hash(3, k) >> 32));
+  latlong->SampleDirection(u, w, pdf);
+  size_t near_sun = 0;
+  const float phi = 2 * kPi * 5 / 16, theta = kPi * 2 / 7;
+  const Vec3 sun(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+  for (size_t k = 0; k < kCount; ++k) near_sun += Dot(-Vec3::Load(&w[3 * k]), sun) > 0.8f;
+  EXPECT_GT(near_sun, kCount * 3 / 4);
+}
+
+TEST_F(EmitterTest, AnEnvironmentMapRefusesWhatItCannotRead) {
+  Properties props = EnvironmentMap("latlong", 16, 8);
+  props.Set("mapping", std::string("mirrorball"));
+  EXPECT_NE(CreationError("envmap", props).find("'mapping'"), std::string::npos);
+  EXPECT_NE(CreationError("envmap", EnvironmentMap("equal_area", 16, 8)).find("square"), std::string::npos);
+  Properties missing;
+  missing.Set("filename", folder_.path() / "missing.exr");
+  EXPECT_NE(CreationError("envmap", missing).find("does not exist"), std::string::npos);
+  Properties negative = EnvironmentMap("latlong", 16, 8, -1);
+  EXPECT_NE(CreationError("envmap", negative).find("'scale'"), std::string::npos);
 }
 
 }  // namespace

@@ -170,9 +170,17 @@ class Radiosity final : public Transport {
                     "diffuse reflectors only");
     }
     for (uint32_t light = 0; light < scene.LightCount(); ++light)
-      if (scene.LightPoint(light, Vec3()).delta || !scene.LightPoint(light, Vec3()).emitter)
+      if (!IsAreaLight(scene, light))
         throw Error("radiosity: point, spot, directional and environment lights are not supported, only "
                     "emitting triangle surfaces");
+  }
+
+  // LightPoint answers no emitter for an environment, and for an area
+  // light only from the point it is gathered into: two points tell.
+  static bool IsAreaLight(const SceneView& scene, uint32_t light) {
+    for (const Vec3 seen_from : {Vec3(0, 0, 0), Vec3(1, 1, 1)})
+      if (const LightDirection l = scene.LightPoint(light, seen_from); l.emitter) return !l.delta;
+    return false;
   }
 
   static double SceneArea(const SceneView& scene) {
