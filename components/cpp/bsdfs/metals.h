@@ -1,16 +1,8 @@
 // Named metals for the conductor models (conductor.cc, roughconductor.cc):
-// complex indices of refraction η + iκ as RGB triples, and the reading of
-// the 'material', 'eta' and 'k' properties Mitsuba's conductors share.
-//
-// Source of the values: the measured spectra pbrt-v4 ships for these
-// metals (src/pbrt/util/spectrum.cpp, Ag/Al/Au/Cu _eta and _k, tabulated
-// from ~300 to ~890 nm; Mitsuba ships the same data), linearly
-// interpolated at 650 nm (red), 550 nm (green) and 450 nm (blue). An RGB
-// renderer can only approximate a spectral one: three wavelengths are a
-// coarse sampling (gold's reflectance falls steeply between 550 and
-// 450 nm). Normal-incidence reflectances ((η-1)² + κ²) / ((η+1)² + κ²):
-//   Ag 0.970 0.960 0.918   Al 0.912 0.921 0.924
-//   Au 0.940 0.847 0.386   Cu 0.941 0.634 0.553
+// the reading of the 'material', 'eta' and 'k' properties Mitsuba's
+// conductors share. The metals are yarf/named_metals.h's: every one
+// Mitsuba 3 names, in the RGB Mitsuba's RGB variants convert its spectra
+// to. An RGB renderer can only approximate a spectral one.
 #pragma once
 
 #include <cmath>
@@ -18,27 +10,12 @@
 #include <utility>
 
 #include "yarf/error.h"
+#include "yarf/named_metals.h"
 #include "yarf/properties.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
 
 namespace yarf::metals {
-
-struct ComplexIor {
-  Vec3 eta, k;
-};
-
-struct NamedMetal {
-  const char* name;
-  ComplexIor ior;
-};
-
-inline constexpr NamedMetal kMetals[] = {
-    {"Ag", {{0.1394f, 0.1248f, 0.1517f}, {4.1288f, 3.3396f, 2.4704f}}},  // silver
-    {"Al", {{1.4748f, 0.9586f, 0.6180f}, {7.7941f, 6.6870f, 5.4694f}}},  // aluminium
-    {"Au", {{0.1678f, 0.3504f, 1.5085f}, {3.1378f, 2.7141f, 1.8788f}}},  // gold
-    {"Cu", {{0.2166f, 0.9582f, 1.1658f}, {3.6377f, 2.5771f, 2.3939f}}},  // copper
-};
 
 // Mitsuba's "none": η = 0, κ = 1, whose Fresnel reflectance is 1 at every
 // angle (a perfect mirror).

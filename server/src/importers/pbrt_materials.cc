@@ -9,6 +9,7 @@
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
 #include "importers/recursion_guard.h"
+#include "yarf/named_metals.h"
 
 namespace yarf::importers {
 namespace {
@@ -113,9 +114,9 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
       std::string metal = MetalName(eta_param).value_or(MetalName(k_param).value_or("Cu"));
       if ((eta_param && MetalName(eta_param) != metal) || (k_param && MetalName(k_param) != metal))
         Warn(where, "conductor-mixed", what + ": eta and k of different metals: '" + metal + "' used");
-      // The metals yarf's conductors tabulate (components/cpp/bsdfs/metals.h).
-      if (metal != "Ag" && metal != "Al" && metal != "Au" && metal != "Cu") {
-        Warn(where, "metal:" + metal, "metal '" + metal + "' is not tabulated in yarf (Ag, Al, Au, Cu): a perfect mirror used");
+      // The metals yarf's conductors know (yarf/named_metals.h).
+      if (!metals::IsNamed(metal)) {
+        Warn(where, "metal:" + metal, "metal '" + metal + "' is not among yarf's named metals: a perfect mirror used");
         metal = "none";
       }
       SetString(props, "material", metal);

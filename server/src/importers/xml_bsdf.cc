@@ -4,6 +4,7 @@
 #include "importers/colour_checks.h"
 #include "importers/properties_util.h"
 #include "importers/xml_importer.h"
+#include "yarf/named_metals.h"
 
 namespace yarf::importers {
 namespace {
@@ -15,9 +16,8 @@ constexpr double kBk7 = 1.5046, kAir = 1.000277, kPolypropylene = 1.49;
 // The metals yarf's conductors tabulate (components/cpp/bsdfs/metals.h);
 // others become a perfect mirror, with a warning.
 std::string MitsubaImporter::KnownMetal(const std::string& name, const SourceLocation& where) {
-  for (const char* known : {"none", "Ag", "Al", "Au", "Cu"})
-    if (name == known) return name;
-  Warn(where, "metal:" + name, "metal '" + name + "' is not tabulated in yarf (Ag, Al, Au, Cu): a perfect mirror used");
+  if (name == "none" || metals::IsNamed(name)) return name;
+  Warn(where, "metal:" + name, "metal '" + name + "' is not among Mitsuba's named metals: a perfect mirror used");
   return "none";
 }
 
