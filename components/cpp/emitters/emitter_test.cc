@@ -257,17 +257,17 @@ namespace {
 
 TEST_F(EmitterTest, AnEnvironmentMapShowsItsTexelsWhereMitsubaAndPbrtPutThem) {
   // Mitsuba's latitude-longitude map: texel (x, y) of a W × H image seen
-  // toward u = x / W, v = y / (H − 1), where d = (sin θ sin φ, cos θ,
+  // toward u = (x + ½) / W, v = y / (H − 1), where d = (sin θ sin φ, cos θ,
   // −sin θ cos φ) with φ = 2πu, θ = πv; w is the direction of travel, −d.
   const auto latlong = Make("envmap", EnvironmentMap("latlong", 16, 8, 2));
   for (const auto [x, y] : {std::pair{5, 2}, {0, 1}, {3, 6}, {15, 4}, {8, 3}}) {
-    const float phi = 2 * kPi * float(x) / 16, theta = kPi * float(y) / 7;
+    const float phi = 2 * kPi * (float(x) + 0.5f) / 16, theta = kPi * float(y) / 7;
     const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
     const Vec3 l = RadianceToward(*latlong, -d), expected = Sky(x, y) * 2;
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(l[c], expected[c], 1e-3f * (1 + expected[c])) << x << " " << y;
   }
   // Halfway between two texels of a row: their mean (bilinear).
-  const float phi = 2 * kPi * 6.5f / 16, theta = kPi * 3 / 7;
+  const float phi = 2 * kPi * 7 / 16, theta = kPi * 3 / 7;
   const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
   const Vec3 mean = (Sky(6, 3) + Sky(7, 3)) * 0.5f * 2;
   EXPECT_NEAR(RadianceToward(*latlong, -d).y, mean.y, 1e-3f);
@@ -291,7 +291,7 @@ TEST_F(EmitterTest, AnEnvironmentMapIsSampledByItsBrightness) {
   for (size_t k = 0; k < 2 * kCount; ++k) u[k] = ToUnitFloat(uint32_t(Hash(3, k) >> 32));
   latlong->SampleDirection(u, w, pdf);
   size_t near_sun = 0;
-  const float phi = 2 * kPi * 5 / 16, theta = kPi * 2 / 7;
+  const float phi = 2 * kPi * 5.5f / 16, theta = kPi * 2 / 7;
   const Vec3 sun(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
   for (size_t k = 0; k < kCount; ++k) near_sun += Dot(-Vec3::Load(&w[3 * k]), sun) > 0.8f;
   EXPECT_GT(near_sun, kCount * 3 / 4);

@@ -12,18 +12,19 @@
 //   scale      float    default 1  multiplies the radiance
 //   mapping    string   default "latlong"
 //       "latlong" (Mitsuba): u = atan2(d.x, −d.z) / 2π, v = acos(d.y) / π,
-//       +y up; looked up bilinearly as Mitsuba does, texel centres on the
-//       grid u·W, v·(H − 1), so the first row is the zenith and the last
-//       the nadir, and u wraps around.
+//       +y up; looked up bilinearly as Mitsuba 3 does: texel (x, y) of a
+//       W × H image sits at u = (x + ½) / W, v = y / (H − 1), so the first
+//       row is the zenith and the last the nadir, and u wraps around.
 //       "equal_area" (pbrt-v4): Clarberg's equal-area octahedral map of
 //       the sphere onto a square image, +z up, looked up at the nearest
 //       texel as pbrt-v4 does.
 //
 // Directions are sampled from a piecewise-constant distribution over the
 // image's cells (sin θ-weighted for latlong, whose cells are not of equal
-// solid angle). A cell's weight is the largest luminance among the
-// texels its radiance interpolates, so the density is positive wherever
-// the radiance is.
+// solid angle; its cells are shifted half a texel in u, to span the
+// interval between two columns). A cell's weight is the largest
+// luminance among the texels its radiance interpolates, so the density
+// is positive wherever the radiance is.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -96,8 +97,8 @@ class EnvironmentMap final : public yarf::Emitter {
     const size_t count = uniform.size() / 2;
     for (size_t k = 0; k < count; ++k) {
       float cell_pdf = 0;
-      const auto [u, v] = cells_.Sample(uniform[2 * k], uniform[2 * k + 1], cell_pdf);
-      const Vec3 toward = Direction(u, v);
+      const auto [cell_u, v] = cells_.Sample(uniform[2 * k], uniform[2 * k + 1], cell_pdf);
+      const Vec3 toward = Direction(FromCells(cell_u), v);
       (-toward).Store(&w[3 * k]);
       pdf[k] = DirectionPdf(cell_pdf, toward);
     }
@@ -108,7 +109,7 @@ class EnvironmentMap final : public yarf::Emitter {
     for (size_t k = 0; k < count; ++k) {
       const Vec3 toward = -Vec3::Load(&w[3 * k]);
       const auto [u, v] = ImageUv(toward);
-      pdf[k] = DirectionPdf(cells_.Pdf(u, v), toward);
+      pdf[k] = DirectionPdf(cells_.Pdf(ToCells(u), v), toward);
     }
   }
 
@@ -119,6 +120,18 @@ class EnvironmentMap final : public yarf::Emitter {
     float u = std::atan2(d.x, -d.z) / (2 * kPi);
     u -= std::floor(u);
     return {u, std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi};
+  }
+
+  // The cells' u from the image's and back: latlong cells start at the
+  // first texel column's centre.
+  float CellShift() const { return equal_area_ ? 0.0f : 0.5f / float(image_.width); }
+  float ToCells(float u) const {
+    const float shifted = u - CellShift();
+    return shifted - std::floor(shifted);
+  }
+  float FromCells(float u) const {
+    const float shifted = u + CellShift();
+    return shifted - std::floor(shifted);
   }
 
   Vec3 Direction(float u, float v) const {
@@ -140,9 +153,9 @@ class EnvironmentMap final : public yarf::Emitter {
     return image_.channels == 3 ? Vec3(t[0], t[1], t[2]) : Vec3(t[0], t[0], t[0]);
   }
 
-  // Continuous texel coordinates of uv: texel (x, y) sits at (x, y).
+  // Continuous texel coordinates of latlong uv: texel (x, y) sits at (x, y).
   std::array<float, 2> TexelPosition(float u, float v) const {
-    return {u * float(image_.width), v * float(image_.height - 1)};
+    return {u * float(image_.width) - 0.5f, v * float(image_.height - 1)};
   }
 
   Vec3 Lookup(Vec3 d) const {
@@ -153,10 +166,10 @@ class EnvironmentMap final : public yarf::Emitter {
       return Texel(x, y);
     }
     const auto [px, py] = TexelPosition(u, v);
-    const int x0 = std::clamp(int(px), 0, image_.width - 1);
+    const int x0 = (int(std::floor(px)) + image_.width) % image_.width;
     const int y0 = std::clamp(int(py), 0, std::max(0, image_.height - 2));
     const int x1 = (x0 + 1) % image_.width, y1 = std::min(y0 + 1, image_.height - 1);
-    const float fx = std::clamp(px - float(x0), 0.0f, 1.0f), fy = std::clamp(py - float(y0), 0.0f, 1.0f);
+    const float fx = std::clamp(px - std::floor(px), 0.0f, 1.0f), fy = std::clamp(py - float(y0), 0.0f, 1.0f);
     return (Texel(x0, y0) * (1 - fx) + Texel(x1, y0) * fx) * (1 - fy) +
            (Texel(x0, y1) * (1 - fx) + Texel(x1, y1) * fx) * fy;
   }
@@ -171,7 +184,8 @@ class EnvironmentMap final : public yarf::Emitter {
         if (equal_area_) {
           weight = yarf::Luminance(Texel(x, y));
         } else {
-          // The texels the bilinear lookup reads inside this cell.
+          // The texels the bilinear lookup reads inside this cell:
+          // columns x and x + 1, the rows its v interval spans.
           const float v0 = float(y) / float(height), v1 = float(y + 1) / float(height);
           const int first = int(std::floor(TexelPosition(0, v0)[1]));
           const int last = std::min(height - 1, int(std::ceil(TexelPosition(0, v1)[1])));
