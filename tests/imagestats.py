@@ -71,8 +71,10 @@ def block_z_test(
     z = np.zeros_like(difference)
     noisy = block_variance > 0
     z[noisy] = difference[noisy] / np.sqrt(block_variance[noisy])
-    # Blocks without noise in either image (nothing visible) must agree exactly.
-    z[~noisy & (difference != 0)] = np.inf
+    # Blocks without noise in either image (nothing visible) must agree; a
+    # float32 variance underflows to 0 below pixel values of about 1e-19,
+    # so differences under 1e-12, invisible at any exposure, count as none.
+    z[~noisy & (np.abs(difference) > 1e-12)] = np.inf
     alpha = 1.0 - (1.0 - family_alpha) ** (1.0 / z.size)
     threshold = NormalDist().inv_cdf(1.0 - alpha / 2.0)
     return ZTest(z, threshold, means, reference_means)
