@@ -356,7 +356,10 @@ def test_point_and_spot_lights_agree_across_unbiased_methods(client: Client) -> 
         name: client.render(
             scene, spp=spp, seed=seed, sampler=independent, transport=component(name, max_depth=5)
         )
-        for name, spp, seed in (("path", 256, 1), ("light", 128, 2), ("bdpt", 64, 3))
+        # The light tracer reaches the box's corners through rare, large
+        # contributions (light bounced off the walls into a shadow): enough
+        # samples that its variance estimate holds them.
+        for name, spp, seed in (("path", 256, 1), ("light", 256, 2), ("bdpt", 64, 3))
     }
     reference = results["path"]
     assert reference.pixels.mean() > 0.01
