@@ -7,7 +7,8 @@
 - The Veach MIS scene's per-pixel variance at equal spp with sphere lights
   sampled by solid angle against by area.
 - A many-light scene (100 small sphere lights of unequal power over a
-  floor) at equal spp: RMSE with lights chosen uniformly against by power.
+  floor) at equal spp: RMSE with lights chosen uniformly, by power, and by
+  the light BVH (power, distance and orientation, as pbrt-v4's default).
 
 Ratios are of figures measured in this run on this machine (its CPU is
 printed). Results also go to out/bench/lights.json.
@@ -196,6 +197,7 @@ def main() -> None:
         for name, choice in (
             ("uniform", lights.LIGHT_SAMPLER_UNIFORM),
             ("power", lights.LIGHT_SAMPLER_POWER),
+            ("bvh", lights.LIGHT_SAMPLER_BVH),
         ):
             lights.light_sampler = choice
             image, _, _ = yarf_render(client, lights, 16, 3, INDEPENDENT)
@@ -203,6 +205,7 @@ def main() -> None:
         report["many_lights_rmse_16spp"] = {
             **errors,
             "power_vs_uniform": errors["power"] / errors["uniform"],
+            "bvh_vs_uniform": errors["bvh"] / errors["uniform"],
         }
 
     out = ROOT / "out" / "bench"
@@ -225,7 +228,7 @@ def main() -> None:
     m = report["many_lights_rmse_16spp"]
     print(
         f"many lights, 16 spp RMSE: uniform {m['uniform']:.5f}, power {m['power']:.5f} "
-        f"({m['power_vs_uniform']:.3f}x)"
+        f"({m['power_vs_uniform']:.3f}x), bvh {m['bvh']:.5f} ({m['bvh_vs_uniform']:.3f}x)"
     )
     print(f"written {out / 'lights.json'}")
 

@@ -17,11 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from imagestats import block_z_test
-from surface_scenes import SIZE, write_scene
+from surface_scenes import AREA_LIGHT, SIZE, write_scene
 from test_surfaces import INDEPENDENT, assert_matches_mitsuba
 
-from yarf import Client, RenderResult, component, load_scene
+from yarf import Client, RenderResult, component, load_scene, properties, rgb, transform
 from yarf.assets import upload_scene_assets
+from yarf.v1 import scene_pb2
 
 GREY = '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.8, 0.8"/></bsdf>'
 SPHERE = f'<shape type="sphere"><float name="radius" value="0.9"/>{GREY}</shape>'
@@ -73,6 +74,15 @@ LIGHTS = {
         '<shape type="sphere"><point name="center" x="1.2" y="1.8" z="1.5"/>'
         '<float name="radius" value="0.25"/>'
         '<emitter type="area"><rgb name="radiance" value="30, 30, 30"/></emitter></shape>',
+    ),
+    # Mitsuba's spot light: full intensity within beam_width, falling
+    # linearly in angle to cutoff_angle; the edge crosses the floor.
+    "spot light at its falloff edge": (
+        SPHERE,
+        '<emitter type="spot"><transform name="to_world">'
+        '<lookat origin="0.5, 3, 0.5" target="0, 0, 0" up="0, 0, 1"/></transform>'
+        '<rgb name="intensity" value="20, 18, 15"/><float name="cutoff_angle" value="25"/>'
+        '<float name="beam_width" value="12"/></emitter>',
     ),
     "envmap-lit diffuse sphere": (SPHERE, ENVMAP),
     "envmap-lit rough conductor": (
@@ -265,3 +275,85 @@ def test_sphere_lights_by_solid_angle_lower_the_variance(client: Client) -> None
         family_alpha=1e-3,
     )
     assert not test.failing.size, f"solid angle vs area sampling:\n{test.report()}"
+
+
+def many_lights(width: int = 64, height: int = 48) -> scene_pb2.Scene:
+    """A floor under 100 small sphere lights of equal power on a grid that
+    runs from near the camera into the distance."""
+    scene = scene_pb2.Scene()
+    scene.camera.origin.y, scene.camera.origin.z = 3.0, 9.0
+    scene.camera.up.y = 1.0
+    scene.camera.fov = 50
+    scene.film.width, scene.film.height = width, height
+    scene.materials.add(
+        name="floor", class_name="lambertian", properties=properties(reflectance=rgb(0.6))
+    )
+    scene.materials.add(
+        name="black", class_name="lambertian", properties=properties(reflectance=rgb(0))
+    )
+    floor = scene.shapes.add(name="floor", material="floor")
+    floor.rectangle.SetInParent()
+    floor.to_world.CopyFrom(
+        transform(np.array([[10, 0, 0, 0], [0, 0, 1, 0], [0, -10, 0, 0], [0, 0, 0, 1.0]]))
+    )
+    for k in range(100):
+        light = scene.shapes.add(name=f"light{k}", material="black")
+        light.sphere.center.x, light.sphere.center.y = -4.5 + (k % 10), 0.6
+        light.sphere.center.z = -4.5 + (k // 10)
+        light.sphere.radius = 0.05
+        light.emitter.CopyFrom(component("diffuse_area", radiance=rgb(40.0)))
+    return scene
+
+
+def test_a_light_bvh_finds_the_lights_near_each_point(client: Client) -> None:
+    """Many lights of equal power: chosen by power they are chosen evenly;
+    the BVH (pbrt-v4's) weighs each by its distance and orientation too,
+    which lowers the variance many times over, and both estimate the same
+    image."""
+    scene = many_lights()
+    results = {}
+    for name, choice in (("power", scene.LIGHT_SAMPLER_POWER), ("bvh", scene.LIGHT_SAMPLER_BVH)):
+        scene.light_sampler = choice
+        results[name] = client.render(
+            scene, spp=64, seed=7, sampler=INDEPENDENT, transport=component("path", max_depth=3)
+        )
+    power, bvh = results["power"], results["bvh"]
+    # The median pixel: the pixels that see a light's edge are noisy from
+    # their coverage alone, whichever light a sample chooses.
+    ratio = float(np.median(bvh.variance) / np.median(power.variance))
+    assert ratio < 0.4, f"median pixel variance with the BVH / by power: {ratio:.3f}"
+    test = block_z_test(
+        bvh.pixels, bvh.variance, power.pixels, power.variance, block=8, family_alpha=1e-3
+    )
+    assert not test.failing.size, f"bvh vs power:\n{test.report()}"
+
+
+@pytest.mark.parametrize("scene_name", ["veach-mis", "envmap and area light"])
+def test_the_light_bvh_estimates_the_same_image(
+    client: Client, tmp_path: Path, scene_name: str
+) -> None:
+    """Sphere lights of four sizes and a far fill light (the MIS scene), and
+    an environment map beside an area light (lights at infinity are chosen
+    beside the BVH): the BVH and power sampling agree within noise."""
+    if scene_name == "veach-mis":
+        scene = load_scene(
+            Path(__file__).resolve().parents[1] / "scenes" / "veach-mis" / "scene.json"
+        )
+        scene.film.width, scene.film.height = 64, 48
+    else:
+        sky(tmp_path / "sky.pfm")
+        scene = load_scene(write_scene(tmp_path, SPHERE, lights=ENVMAP + AREA_LIGHT, max_depth=4))
+        upload_scene_assets(client, scene, tmp_path)
+    results = {}
+    for name, choice in (("power", scene.LIGHT_SAMPLER_POWER), ("bvh", scene.LIGHT_SAMPLER_BVH)):
+        scene.light_sampler = choice
+        results[name] = client.render(scene, spp=256, seed=11, sampler=INDEPENDENT, timeout=600)
+    test = block_z_test(
+        results["bvh"].pixels,
+        results["bvh"].variance,
+        results["power"].pixels,
+        results["power"].variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"bvh vs power on {scene_name}:\n{test.report()}"

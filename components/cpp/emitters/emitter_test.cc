@@ -138,6 +138,28 @@ TEST_F(EmitterTest, SpotFallsOffLinearlyInAngleBetweenBeamAndCutoff) {
   EXPECT_EQ(at(120), 0.0f);
 }
 
+TEST_F(EmitterTest, SpotFallsOffAsPbrtBySmoothstepInCosine) {
+  Properties props;
+  props.Set("intensity", 4.0);
+  props.Set("cutoff_angle", 30.0);
+  props.Set("beam_width", 10.0);
+  props.Set("falloff", std::string("smoothstep"));
+  const auto emitter = Make("spot", props);
+  const auto at = [&](double degrees) {
+    const float t = float(degrees * kPi / 180);
+    return RadianceToward(*emitter, Vec3(std::sin(t), 0, std::cos(t))).x;
+  };
+  const float cos_end = std::cos(30 * kPi / 180), cos_start = std::cos(10 * kPi / 180);
+  for (const double degrees : {12.0, 20.0, 25.0, 29.0}) {
+    const float x = (std::cos(float(degrees * kPi / 180)) - cos_end) / (cos_start - cos_end);
+    EXPECT_NEAR(at(degrees), 4 * x * x * (3 - 2 * x), 1e-4f) << degrees;
+  }
+  EXPECT_EQ(at(9.9), 4.0f);
+  EXPECT_EQ(at(30.1), 0.0f);
+  props.Set("falloff", std::string("cubic"));
+  EXPECT_NE(CreationError("spot", props).find("'falloff'"), std::string::npos);
+}
+
 TEST_F(EmitterTest, SampledDirectionsCarryTheirDensity) {
   for (const auto& [name, emitter] : All()) {
     constexpr size_t kCount = 4096;

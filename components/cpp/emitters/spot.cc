@@ -1,16 +1,21 @@
 // spot — a point light shining into a cone around its +z axis
 //
-// Intensity I inside beam_width of the axis, falling linearly in angle to
-// 0 at cutoff_angle, and 0 beyond, as Mitsuba's spot light. The light's
-// frame comes from the scene's Light.to_world.
+// Intensity I inside beam_width of the axis, falling to 0 at cutoff_angle,
+// and 0 beyond. The falloff between is Mitsuba's (linear in the angle) or
+// pbrt-v4's (smoothstep in the cosine: pbrt's coneangle is cutoff_angle,
+// coneangle − conedelta is beam_width). The light's frame comes from the
+// scene's Light.to_world.
 //
 // Parameters
 //   intensity      rgb (or float)   required   W·sr⁻¹ on the axis, per channel ≥ 0
 //   cutoff_angle   float            default 20            degrees, in (0, 90]
-//   beam_width     float            default ¾·cutoff      degrees, in (0, cutoff_angle]
+//   beam_width     float            default ¾·cutoff      degrees, in [0, cutoff_angle]
+//   falloff        string           default "linear"      "linear" (Mitsuba) or
+//                                                         "smoothstep" (pbrt-v4)
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <string>
 
 #include "intensity.h"
 #include "yarf/plugin.h"
@@ -29,10 +34,14 @@ class SpotLight final : public yarf::Emitter {
         cutoff_(Radians(props.Float("cutoff_angle", 20.0))),
         beam_(props.Has("beam_width") ? Radians(props.Float("beam_width", 0.0)) : 0.75f * cutoff_),
         cos_cutoff_(std::cos(cutoff_)), cos_beam_(std::cos(beam_)) {
+    const std::string falloff = props.String("falloff", "linear");
+    if (falloff != "linear" && falloff != "smoothstep")
+      throw yarf::Error("property 'falloff' must be \"linear\" or \"smoothstep\", not \"" + falloff + "\"");
+    smoothstep_ = falloff == "smoothstep";
     if (!(cutoff_ > 0 && cutoff_ <= yarf::kPi / 2 + 1e-6f))
       throw yarf::Error("property 'cutoff_angle' must be in (0, 90] degrees");
-    if (!(beam_ > 0 && beam_ <= cutoff_))
-      throw yarf::Error("property 'beam_width' must be in (0, cutoff_angle] degrees");
+    if (!(beam_ >= 0 && beam_ <= cutoff_))
+      throw yarf::Error("property 'beam_width' must be in [0, cutoff_angle] degrees");
   }
 
   void Radiance(std::span<const float> w, const yarf::SurfacePoints& at,
@@ -60,17 +69,22 @@ class SpotLight final : public yarf::Emitter {
   float Falloff(float cos_theta) const {
     if (cos_theta <= cos_cutoff_) return 0.0f;
     if (cos_theta >= cos_beam_) return 1.0f;
+    if (smoothstep_) {
+      const float t = (cos_theta - cos_cutoff_) / (cos_beam_ - cos_cutoff_);
+      return t * t * (3 - 2 * t);
+    }
     return (cutoff_ - std::acos(cos_theta)) / (cutoff_ - beam_);
   }
 
   Vec3 intensity_;
   float cutoff_, beam_;
   float cos_cutoff_, cos_beam_;
+  bool smoothstep_ = false;
 };
 
 }  // namespace
 
 YARF_PLUGIN(registrar) {
   yarf::Register<SpotLight>(registrar, "spot", "1.0.0",
-                            "Point light shining into a cone, with a linear falloff at its edge");
+                            "Point light shining into a cone, its edge falling off as Mitsuba's or pbrt-v4's");
 }

@@ -47,6 +47,8 @@ class LightTracer final : public Transport {
     return kFirstBounce + kPerBounce * length_.Bounces();
   }
 
+  void Prepare(const SceneView& scene) override { RefuseOrthographicCamera(scene, "light"); }
+
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     out.splats = true;
     const size_t n = points.Count();

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -334,6 +335,14 @@ inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const
     for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&radiance[3 * j]), pdf[j]};
   }
   return answers;
+}
+
+// Methods that connect light paths to the camera (light tracing, bdpt)
+// cannot reach an orthographic camera, whose rays are parallel.
+inline void RefuseOrthographicCamera(const SceneView& scene, const std::string& transport) {
+  if (scene.CameraIsOrthographic())
+    throw Error(transport + ": an orthographic camera cannot be reached by light paths (its rays are parallel): "
+                "render it with path, whitted, distribution, photon_map or sppm");
 }
 
 // Where light paths start: a point on a light and a direction leaving it.

@@ -1,4 +1,10 @@
 // pbrt's Camera, Film, Sampler, PixelFilter and Integrator.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
 
@@ -13,34 +19,60 @@ constexpr int64_t kMaxDepth = 1 << 16;
 void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const SourceLocation& where) {
   if (has_camera_) Fail(where, "a second Camera");
   has_camera_ = true;
-  if (type != "perspective")
+  const bool orthographic = type == "orthographic";
+  if (type != "perspective" && !orthographic)
     Warn(where, "camera:" + type, "camera '" + type + "' is not supported: a perspective camera used");
+  // The CTM maps world to camera space; the camera names that frame.
+  const auto camera_to_world = state_.ctm.Inverse();
+  if (!camera_to_world) Fail(where, "the camera transform is singular");
   v1::Camera camera;
-  const double fov = params.Float("fov", 90);
-  if (!(fov > 0 && fov < 180)) Fail(params.WhereIs("fov", where), "fov must lie in (0, 180) degrees");
-  camera.set_fov(fov);
-  camera.set_fov_axis(v1::Camera::SMALLER);  // pbrt's fov spans the shorter image axis
+  camera.set_fov_axis(v1::Camera::SMALLER);  // pbrt's fov and screen window span the shorter image axis
+  if (orthographic) {
+    // pbrt-v4's screen window spans [-1, 1] of camera space across the
+    // shorter image axis, unless given; the camera transform scales it.
+    camera.set_model(v1::Camera::ORTHOGRAPHIC);
+    double extent = 2;
+    if (params.Has("screenwindow")) {
+      const std::vector<double> window = params.Numbers("screenwindow", {"float"});
+      if (window.size() != 4 || !(window[1] > window[0]) || !(window[3] > window[2]))
+        Fail(params.WhereIs("screenwindow", where), "screenwindow needs 4 values: xmin < xmax, ymin < ymax");
+      if (std::abs(window[0] + window[1]) > 1e-6 * (window[1] - window[0]) ||
+          std::abs(window[2] + window[3]) > 1e-6 * (window[3] - window[2]))
+        Warn(params.WhereIs("screenwindow", where), "camera:screenwindow",
+             "camera: an off-centre screenwindow is not supported: centred on the view axis");
+      extent = std::min(window[1] - window[0], window[3] - window[2]);
+    }
+    const double scale = Length(camera_to_world->Vector({1, 0, 0}));
+    if (std::abs(scale - Length(camera_to_world->Vector({0, 1, 0}))) > 1e-6 * scale)
+      Warn(where, "orthographic-stretch", "orthographic: the camera transform scales x and y differently: x used");
+    if (!(extent * scale > 0 && extent * scale < 1e30)) Fail(where, "orthographic: the view has no extent");
+    camera.set_view_size(extent * scale);
+  } else {
+    const double fov = params.Float("fov", 90);
+    if (!(fov > 0 && fov < 180)) Fail(params.WhereIs("fov", where), "fov must lie in (0, 180) degrees");
+    camera.set_fov(fov);
+  }
   const double lens_radius = params.Float("lensradius", 0);
   const double focal_distance = params.Float("focaldistance", 1e6);
   if (!(lens_radius >= 0 && lens_radius < 1e30) || !(focal_distance > 0))
     Fail(where, "need lensradius >= 0 and focaldistance > 0");
-  if (lens_radius > 0) {
+  if (lens_radius > 0 && orthographic) {
+    Warn(params.WhereIs("lensradius", where), "orthographic-lens",
+         "orthographic: a lens (depth of field) is not supported: everything in focus");
+  } else if (lens_radius > 0) {
     camera.set_model(v1::Camera::THIN_LENS);
     camera.set_lens_radius(lens_radius);
     camera.set_focus_distance(focal_distance);
   }
   for (const char* unsupported : {"screenwindow", "frameaspectratio"})
-    if (params.Has(unsupported)) {
+    if (params.Has(unsupported) && !(orthographic && std::string(unsupported) == "screenwindow")) {
       params.Find(unsupported);
       Warn(params.WhereIs(unsupported, where), std::string("camera:") + unsupported,
            std::string("camera: ") + unsupported + " is not supported: ignored");
     }
   params.Accept({"shutteropen", "shutterclose"});
-  if (type == "perspective") params.WarnUnused(diagnostics_, "camera 'perspective'");
+  if (type == "perspective" || orthographic) params.WarnUnused(diagnostics_, "camera '" + type + "'");
 
-  // The CTM maps world to camera space; the camera names that frame.
-  const auto camera_to_world = state_.ctm.Inverse();
-  if (!camera_to_world) Fail(where, "the camera transform is singular");
   coordinate_systems_["camera"] = *camera_to_world;
   assembly_.SetCamera(std::move(camera), *camera_to_world, {1, 0, 0}, where);
 }
@@ -131,20 +163,53 @@ void PbrtImporter::PixelFilter(const std::string& type, PbrtParams& params, cons
 void PbrtImporter::Integrator(const std::string& type, PbrtParams& params, const SourceLocation& where) {
   if (has_integrator_) Fail(where, "a second Integrator");
   has_integrator_ = true;
-  if (type != "path" && type != "volpath")
+  // pbrt's integrators and the yarf transport that estimates the same
+  // image; simplepath and randomwalk sample differently, to the same limit,
+  // and volpath is path where there are no media (media are warned of
+  // where the scene names them).
+  static const std::map<std::string, std::string> kTransports = {
+      {"path", "path"},  {"volpath", "path"},   {"simplepath", "path"}, {"randomwalk", "path"},
+      {"bdpt", "bdpt"},  {"lightpath", "light"}, {"sppm", "sppm"}};
+  const auto known = kTransports.find(type);
+  if (known == kTransports.end())
     Warn(where, "integrator:" + type, "integrator '" + type + "' is not available: yarf's path tracer used");
+  const std::string transport = known == kTransports.end() ? "path" : known->second;
   const int64_t max_depth = params.Integer("maxdepth", 5);
   if (max_depth < 0 || max_depth > kMaxDepth)
     Fail(params.WhereIs("maxdepth", where), "maxdepth must lie in 0 to " + std::to_string(kMaxDepth));
   if (params.Bool("regularize", false))
     Warn(params.WhereIs("regularize", where), "regularize", "path regularization is not supported: ignored");
-  params.Accept({"lightsampler"});
-  if (type == "path" || type == "volpath") params.WarnUnused(diagnostics_, "integrator '" + type + "'");
+  params.Accept({"samplelights", "samplebsdf"});
+  // pbrt-v4's light samplers are yarf's; its default is the BVH.
+  const std::string light_sampler = params.String("lightsampler", "bvh");
+  if (light_sampler == "bvh") {
+    assembly_.scene().set_light_sampler(v1::Scene::LIGHT_SAMPLER_BVH);
+  } else if (light_sampler == "power") {
+    assembly_.scene().set_light_sampler(v1::Scene::LIGHT_SAMPLER_POWER);
+  } else if (light_sampler == "uniform") {
+    assembly_.scene().set_light_sampler(v1::Scene::LIGHT_SAMPLER_UNIFORM);
+  } else {
+    Fail(params.WhereIs("lightsampler", where), "lightsampler must be \"bvh\", \"power\" or \"uniform\"");
+  }
   // pbrt counts scattering events, yarf (as Mitsuba) path segments: pbrt's
   // maxdepth 0 shows emitters only, which is yarf's max_depth 1.
   v1::Properties props;
   SetInt(props, "max_depth", max_depth + 1);
-  *assembly_.scene().mutable_transport() = Spec("path", std::move(props));
+  if (transport == "sppm") {
+    // pbrt-v4: radius is the initial search radius in scene units (default
+    // 1); photonsperiteration −1, one photon path per pixel, keeps yarf's
+    // default (the film may not be known yet), which changes noise only.
+    if (const int64_t photons = params.Integer("photonsperiteration", -1); photons > 0) {
+      if (photons > 50'000'000) Fail(params.WhereIs("photonsperiteration", where), "photonsperiteration above 5e7");
+      SetInt(props, "photons_per_pass", photons);
+    }
+    const double radius = params.Float("radius", 1);
+    if (!(radius > 0) || !std::isfinite(radius)) Fail(params.WhereIs("radius", where), "radius must be > 0");
+    SetFloat(props, "initial_radius", radius);
+    SetInt(props, "seed", params.Integer("seed", 0));
+  }
+  if (known != kTransports.end()) params.WarnUnused(diagnostics_, "integrator '" + type + "'");
+  *assembly_.scene().mutable_transport() = Spec(transport, std::move(props));
 }
 
 }  // namespace yarf::importers

@@ -61,16 +61,20 @@ void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, cons
   }
   if (type == "distant") return DistantLight(params, where);
   if (type == "infinite") return InfiniteLight(params, where);
-  const Rgb intensity = ClampColour(Colour(params, "I", {1, 1, 1}, kLight, where) * params.Float("scale", 1), 0,
-                                    1e30, [&] { Warn(where, "negative-intensity", "negative intensity clamped to 0"); });
-  if (params.Has("power")) {
-    params.Find("power");
-    Warn(params.WhereIs("power", where), "light-power", "light power is not supported: I and scale used");
-  }
+  Rgb intensity = ClampColour(Colour(params, "I", {1, 1, 1}, kLight, where) * params.Float("scale", 1), 0, 1e30,
+                              [&] { Warn(where, "negative-intensity", "negative intensity clamped to 0"); });
+  // pbrt-v4's `power` Φ scales I by Φ over the light's solid-angle
+  // integral of its falloff: 4π for a point light; for a spot light 2π of
+  // (1 − cos start) in full and half of (cos start − cos end) in the
+  // falloff (the smoothstep's mean).
+  const double power = params.Float("power", -1);
+  const auto scale_to_power = [&](double integral) {
+    if (power > 0) intensity = intensity * (power / integral);
+  };
   const Vec3d from = Point(params, "from", {0, 0, 0}, where);
   v1::Properties props;
-  SetRgb(props, "intensity", intensity);
   Matrix4 to_world = state_.ctm * Matrix4::Translate(from);
+  if (type == "point") scale_to_power(4 * M_PI);
   if (type == "spot") {
     const Vec3d to = Point(params, "to", {0, 0, 1}, where);
     const auto dir = Normalized(to - from);
@@ -84,10 +88,14 @@ void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, cons
       Warn(params.WhereIs("coneangle", where), "spot-cone", "spot light coneangle above 90 degrees clamped to 90");
       cone = 90;
     }
+    const double beam = std::max(cone - delta, 0.0);
     SetFloat(props, "cutoff_angle", cone);
-    SetFloat(props, "beam_width", std::max(cone - delta, cone * 1e-3));
-    Warn(where, "spot-falloff", "spot light falloff is linear in angle in yarf (pbrt's is smooth in cosine)");
+    SetFloat(props, "beam_width", beam);
+    SetString(props, "falloff", "smoothstep");
+    const double cos_end = std::cos(cone * M_PI / 180), cos_start = std::cos(beam * M_PI / 180);
+    scale_to_power(2 * M_PI * ((1 - cos_start) + (cos_start - cos_end) / 2));
   }
+  SetRgb(props, "intensity", intensity);
   params.WarnUnused(diagnostics_, "light '" + type + "'");
   v1::Light light;
   *light.mutable_emitter() = Spec(type, std::move(props));

@@ -46,6 +46,8 @@ class MitsubaImporter {
   // xml_sensor.cc
   void Integrator(const XmlElement& element);
   void Sensor(const XmlElement& element);
+  void SetFieldOfView(XmlPlugin& plugin, v1::Camera& camera, int64_t width, int64_t height,
+                      const SourceLocation& where);
   void Film(const XmlElement& element);
   void Sampler(const XmlElement& element);
 

@@ -1,5 +1,6 @@
 // Mitsuba's integrator, sensor, film, reconstruction filter and sampler.
 #include <cmath>
+#include <string>
 
 #include "importers/numbers.h"
 #include "importers/properties_util.h"
@@ -25,17 +26,35 @@ void MitsubaImporter::Integrator(const XmlElement& e) {
     Warn(e.where, "second-integrator", "a second <integrator> ignored");
     return;
   }
+  if (type == "moment") {
+    // Its first nested integrator renders; yarf keeps every pixel's
+    // variance anyway.
+    const auto nested = p.Objects("integrator");
+    if (nested.empty()) Fail(e.where, "integrator 'moment' needs a nested integrator");
+    if (nested.size() > 1)
+      Warn(e.where, "moment-integrators", "integrator 'moment': only its first nested integrator is rendered");
+    p.WarnUnused();
+    Integrator(*nested.front());
+    return;
+  }
   has_integrator_ = true;
   int64_t max_depth = -1;
   v1::Properties props;
+  std::string transport = "path";
   if (type == "direct") {
     max_depth = 2;
     Warn(e.where, "integrator:direct", "integrator 'direct' rendered by the path tracer with max_depth 2");
     p.Accept({"emitter_samples", "bsdf_samples", "shading_samples", "hide_emitters"});
   } else {
-    if (type != "path")
+    if (type == "ptracer") {
+      transport = "light";
+      p.Accept({"samples_per_pass"});
+    } else if (type != "path" && type != "volpath" && type != "volpathmis") {
+      // volpath is path where there are no media (media are warned of
+      // where the scene names them).
       Warn(e.where, "integrator:" + type,
            "integrator '" + type + "' is not available: yarf's path tracer used (no media, no AOVs)");
+    }
     max_depth = p.Integer("max_depth", -1);
     if (max_depth < -1 || max_depth > kMaxDepth)
       Fail(p.WhereIs("max_depth"), "max_depth must be -1 (unbounded) or 0 to " + std::to_string(kMaxDepth));
@@ -48,8 +67,9 @@ void MitsubaImporter::Integrator(const XmlElement& e) {
       Warn(p.WhereIs("hide_emitters"), "hide_emitters", "hide_emitters is not supported: emitters stay visible");
   }
   SetInt(props, "max_depth", max_depth);
-  *assembly_.scene().mutable_transport() = Spec("path", std::move(props));
-  if (type == "path" || type == "direct") p.WarnUnused();
+  *assembly_.scene().mutable_transport() = Spec(transport, std::move(props));
+  if (type == "path" || type == "direct" || type == "ptracer" || type == "volpath" || type == "volpathmis")
+    p.WarnUnused();
 }
 
 void MitsubaImporter::Sensor(const XmlElement& e) {
@@ -61,6 +81,8 @@ void MitsubaImporter::Sensor(const XmlElement& e) {
     const double radius = p.Float("aperture_radius", 0);
     if (!(radius >= 0 && radius < 1e30)) Fail(p.WhereIs("aperture_radius"), "aperture_radius must be >= 0");
     camera.set_lens_radius(radius);
+  } else if (type == "orthographic") {
+    camera.set_model(v1::Camera::ORTHOGRAPHIC);
   } else if (type != "perspective") {
     Warn(e.where, "sensor:" + type,
          "sensor '" + type + "' is not supported: a perspective camera with its placement used");
@@ -84,10 +106,44 @@ void MitsubaImporter::Sensor(const XmlElement& e) {
     Sampler(*samplers.front());
   }
 
-  // Field of view: fov along fov_axis, or a 35 mm focal length (which
-  // spans the diagonal).
+  const Matrix4 to_world = p.Transform("to_world");
+  if (type == "orthographic") {
+    // Mitsuba's orthographic sensor sees x in [-1, 1] of its own space
+    // across the film, y in proportion: its to_world's scale sets the view.
+    const double size_x = Length(to_world.Vector({1, 0, 0})), size_y = Length(to_world.Vector({0, 1, 0}));
+    if (!(size_x > 0 && size_x < 1e30)) Fail(e.where, "orthographic: to_world scales its view to nothing");
+    if (std::abs(size_x - size_y) > 1e-6 * size_x)
+      Warn(e.where, "orthographic-stretch",
+           "orthographic: to_world scales x and y differently: the view keeps the film's aspect, its x extent used");
+    camera.set_view_size(2 * size_x);
+    camera.set_fov_axis(v1::Camera::X);
+  } else {
+    SetFieldOfView(p, camera, width, height, e.where);
+  }
+
+  const double near_clip = p.Float("near_clip", 0.01), far_clip = p.Float("far_clip", 10000);
+  if (!(near_clip >= 0 && far_clip > near_clip)) Fail(e.where, "need 0 <= near_clip < far_clip");
+  camera.set_near_clip(near_clip);
+  camera.set_far_clip(far_clip);
+  const double focus = p.Float("focus_distance", far_clip);
+  if (type == "thinlens") {
+    if (!(focus > 0)) Fail(p.WhereIs("focus_distance"), "focus_distance must be positive");
+    camera.set_focus_distance(focus);
+  }
+  for (const char* offset : {"principal_point_offset_x", "principal_point_offset_y"})
+    if (p.Float(offset, 0) != 0)
+      Warn(p.WhereIs(offset), "principal-point", "principal point offsets are not supported: ignored");
+  p.Accept({"shutter_open", "shutter_close"});
+  assembly_.SetCamera(std::move(camera), to_world, {-1, 0, 0}, e.where);
+  if (type == "perspective" || type == "thinlens" || type == "orthographic") p.WarnUnused();
+}
+
+// Field of view: fov along fov_axis, or a 35 mm focal length (which
+// spans the diagonal).
+void MitsubaImporter::SetFieldOfView(XmlPlugin& p, v1::Camera& camera, int64_t width, int64_t height,
+                                     const SourceLocation& where) {
   const bool has_fov = p.Has("fov");
-  if (has_fov && p.Has("focal_length")) Fail(e.where, "give fov or focal_length, not both");
+  if (has_fov && p.Has("focal_length")) Fail(where, "give fov or focal_length, not both");
   std::string axis = p.String("fov_axis", "x");
   double fov = 0;
   if (has_fov) {
@@ -118,23 +174,6 @@ void MitsubaImporter::Sensor(const XmlElement& e) {
     Fail(p.WhereIs("fov_axis"), "fov_axis must be x, y, smaller, larger or diagonal, not '" + axis + "'");
   }
   camera.set_fov(fov);
-
-  const double near_clip = p.Float("near_clip", 0.01), far_clip = p.Float("far_clip", 10000);
-  if (!(near_clip >= 0 && far_clip > near_clip)) Fail(e.where, "need 0 <= near_clip < far_clip");
-  camera.set_near_clip(near_clip);
-  camera.set_far_clip(far_clip);
-  const double focus = p.Float("focus_distance", far_clip);
-  if (type == "thinlens") {
-    if (!(focus > 0)) Fail(p.WhereIs("focus_distance"), "focus_distance must be positive");
-    camera.set_focus_distance(focus);
-  }
-  for (const char* offset : {"principal_point_offset_x", "principal_point_offset_y"})
-    if (p.Float(offset, 0) != 0)
-      Warn(p.WhereIs(offset), "principal-point", "principal point offsets are not supported: ignored");
-  p.Accept({"shutter_open", "shutter_close"});
-  const Matrix4 to_world = p.Transform("to_world");
-  assembly_.SetCamera(std::move(camera), to_world, {-1, 0, 0}, e.where);
-  if (type == "perspective" || type == "thinlens") p.WarnUnused();
 }
 
 void MitsubaImporter::Film(const XmlElement& e) {

@@ -20,9 +20,13 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
   right_ = Normalize(right);
   up_ = Cross(right_, forward_);
 
-  if (!(camera.fov() > 0 && camera.fov() < 180))
+  orthographic_ = camera.model() == v1::Camera::ORTHOGRAPHIC;
+  if (orthographic_ && !(camera.view_size() > 0 && camera.view_size() < 1e30))
+    throw Error("camera: an orthographic view_size must be positive and finite, got " +
+                std::to_string(camera.view_size()));
+  if (!orthographic_ && !(camera.fov() > 0 && camera.fov() < 180))
     throw Error("camera: fov must lie in (0, 180) degrees, got " + std::to_string(camera.fov()));
-  const float tan_half = std::tan(float(camera.fov()) * kPi / 360.0f);
+  const float tan_half = orthographic_ ? float(camera.view_size()) / 2 : std::tan(float(camera.fov()) * kPi / 360.0f);
   const float aspect = float(width) / float(height);
   bool along_x = camera.fov_axis() == v1::Camera::X;
   if (camera.fov_axis() == v1::Camera::SMALLER) along_x = width <= height;
@@ -57,6 +61,7 @@ Vec3 Camera::LensPoint(float lens_u, float lens_v) const {
 
 bool Camera::Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float* film_x,
                      float* film_y, float* importance) const {
+  if (orthographic_) return false;
   const Vec3 lens = LensPoint(lens_u, lens_v);
   const Vec3 rel = p - origin_;
   const Vec3 local{Dot(rel, right_), Dot(rel, up_), Dot(rel, forward_)};
@@ -78,6 +83,16 @@ bool Camera::Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float
 
 void Camera::PixelSpacing(Vec3 p, Vec3 n, Vec3* dpdx, Vec3* dpdy) const {
   *dpdx = *dpdy = Vec3();
+  if (orthographic_) {
+    // Parallel rays: a pixel's step on the film, carried along the view
+    // axis onto the plane.
+    const float facing = Dot(n, forward_);
+    if (!(std::abs(facing) > 1e-6f)) return;
+    const Vec3 steps[2] = {right_ * pixel_x_, up_ * -pixel_y_};
+    Vec3* out[2] = {dpdx, dpdy};
+    for (int i = 0; i < 2; ++i) *out[i] = steps[i] - forward_ * (Dot(n, steps[i]) / facing);
+    return;
+  }
   const Vec3 rel = p - origin_;
   const float distance = Length(rel);
   if (!(distance > 0) || !std::isfinite(distance)) return;
@@ -99,6 +114,7 @@ void Camera::PixelSpacing(Vec3 p, Vec3 n, Vec3* dpdx, Vec3* dpdy) const {
 }
 
 float Camera::DirectionPdf(Vec3 direction) const {
+  if (orthographic_) return 0;
   const Vec3 d = Normalize(direction);
   const float cos_theta = Dot(d, forward_);
   if (!(cos_theta > 0)) return 0;
@@ -108,6 +124,15 @@ float Camera::DirectionPdf(Vec3 direction) const {
 }
 
 Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v, float time) const {
+  if (orthographic_) {
+    Ray ray;
+    ray.origin = origin_ + right_ * ((2 * film_x - 1) * tan_half_x_) + up_ * ((1 - 2 * film_y) * tan_half_y_);
+    ray.direction = forward_;
+    ray.tnear = near_clip_;
+    ray.tfar = far_clip_ > 0 ? far_clip_ : kInfinity;
+    ray.time = time;
+    return ray;
+  }
   // Direction in camera space (x right, y up, z forward) through the image
   // plane at z = 1.
   Vec3 dir{(2 * film_x - 1) * tan_half_x_, (1 - 2 * film_y) * tan_half_y_, 1};

@@ -1,4 +1,5 @@
-// Pinhole and thin-lens perspective cameras placed by look-at.
+// Pinhole and thin-lens perspective cameras and the orthographic camera,
+// placed by look-at.
 #pragma once
 
 #include "yarf/geometry.h"
@@ -8,18 +9,20 @@ namespace yarf {
 
 class Camera {
  public:
-  // Throws Error for a degenerate placement or a field of view outside (0, 180).
+  // Throws Error for a degenerate placement, a field of view outside (0,
+  // 180) or an orthographic view_size that is not positive.
   Camera(const v1::Camera& camera, uint32_t width, uint32_t height);
 
   // The ray through film position (x, y) ∈ [0,1)² (x right, y down) and
   // lens position (u, v) ∈ [0,1)², in world space with a unit direction.
   Ray Generate(float film_x, float film_y, float lens_u, float lens_v, float time) const;
   // Where world point p appears on the film through lens position (u, v):
-  // false when it does not. Raster positions in [0,1)².
+  // false when it does not (always, for an orthographic camera). Raster
+  // positions in [0,1)².
   bool Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float* film_x,
                float* film_y, float* importance) const;
   // 1/(A cos³θ) for a world direction leaving the lens inside the field
-  // of view, 0 outside.
+  // of view, 0 outside (and for an orthographic camera's delta).
   float DirectionPdf(Vec3 direction) const;
   // How far the ray of the next pixel over, in x and in y, lands from p on
   // the plane through p with normal n, taken from the lens centre toward p
@@ -30,6 +33,7 @@ class Camera {
   // The shutter's time for a uniform u: u·shutter.
   float Time(float u) const { return u * shutter_; }
   bool HasLens() const { return lens_radius_ > 0; }
+  bool Orthographic() const { return orthographic_; }
   Vec3 axis() const { return forward_; }
   Vec3 origin() const { return origin_; }
 
@@ -38,7 +42,10 @@ class Camera {
   Vec3 LensPoint(float lens_u, float lens_v) const;
 
   Vec3 origin_, right_, up_, forward_;
+  // Perspective: the film's half extents on the plane at distance 1;
+  // orthographic: in scene units.
   float tan_half_x_ = 0, tan_half_y_ = 0;
+  bool orthographic_ = false;
   float lens_radius_ = 0, focus_distance_ = 1;
   float near_clip_ = 0, far_clip_ = 0;
   float shutter_ = 0;

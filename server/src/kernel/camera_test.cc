@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
+
+#include "yarf/error.h"
 
 namespace yarf {
 namespace {
@@ -31,6 +34,36 @@ TEST(Camera, FilmEdgeIsHalfTheFieldOfViewAlongTheSmallerAxis) {
   EXPECT_NEAR(std::atan2(top.direction.y, top.direction.z) * 180 / kPi, 20.0, 1e-3);
   const Ray right = camera.Generate(1.0f, 0.5f, 0.5f, 0.5f, 0.0f);
   EXPECT_NEAR(std::atan2(-right.direction.x, right.direction.z), std::atan(2 * std::tan(20 * kPi / 180)), 1e-4);
+}
+
+TEST(Camera, OrthographicRaysAreParallelAcrossTheViewSize) {
+  v1::Camera spec = LookAlongZ(40);
+  spec.set_model(v1::Camera::ORTHOGRAPHIC);
+  spec.set_view_size(4);
+  spec.set_fov_axis(v1::Camera::SMALLER);
+  spec.set_near_clip(0.5);
+  const Camera camera(spec, 200, 100);  // smaller axis: y, 4 units; x spans 8
+  for (const auto [x, y] : {std::pair{0.5f, 0.5f}, {0.0f, 0.0f}, {1.0f, 1.0f}, {0.25f, 0.75f}}) {
+    const Ray r = camera.Generate(x, y, 0.3f, 0.8f, 0.0f);
+    EXPECT_NEAR(r.direction.z, 1.0f, 1e-6f);
+    // Camera x runs opposite to world x here (right = forward × up).
+    EXPECT_NEAR(r.origin.x, 1 - (2 * x - 1) * 4, 1e-5f);
+    EXPECT_NEAR(r.origin.y, (1 - 2 * y) * 2, 1e-5f);
+    EXPECT_NEAR(r.origin.z, 0.0f, 1e-6f);
+    EXPECT_FLOAT_EQ(r.tnear, 0.5f);
+  }
+  // Light paths cannot reach it: no connection, no direction density.
+  Vec3 lens;
+  float fx = 0, fy = 0, importance = 0;
+  EXPECT_FALSE(camera.Connect(Vec3(1, 0, 3), 0.5f, 0.5f, &lens, &fx, &fy, &importance));
+  EXPECT_EQ(camera.DirectionPdf(Vec3(0, 0, 1)), 0.0f);
+  // A pixel's step is the same at every depth: 8 / 200 across.
+  Vec3 dpdx, dpdy;
+  camera.PixelSpacing(Vec3(1, 0, 9), Vec3(0, 0, -1), &dpdx, &dpdy);
+  EXPECT_NEAR(Length(dpdx), 0.04f, 1e-6f);
+  EXPECT_NEAR(Length(dpdy), 0.04f, 1e-6f);
+  spec.set_view_size(0);
+  EXPECT_THROW(Camera(spec, 200, 100), Error);
 }
 
 TEST(Camera, ThinLensFocusesEveryLensPointOnTheFocalPlane) {

@@ -220,6 +220,7 @@ void KernelScene::Commit() {
   bounds_radius_ = std::max({Length(upper - bounds_center_), Length(eye - bounds_center_), 1e-3f});
   AddSurfaceLights();
   ChooseLightsByPower();
+  if (light_choice_ == LightChoice::kBvh) BuildLightBvh();
 }
 
 void KernelScene::AddSurfaceLights() {
@@ -306,9 +307,9 @@ void KernelScene::ChooseLightsByPower() {
   // one whose estimate missed its light (a small bright texel) is still
   // chosen sometimes.
   std::vector<double> weight(lights_.size(), 1.0);
-  if (!uniform_light_choice_ && !lights_.empty()) {
+  if (light_choice_ != LightChoice::kUniform && !lights_.empty()) {
     double total = 0;
-    for (size_t l = 0; l < lights_.size(); ++l) total += weight[l] = EstimatePower(lights_[l]);
+    for (size_t l = 0; l < lights_.size(); ++l) total += weight[l] = lights_[l].power = EstimatePower(lights_[l]);
     const double floor = total > 0 ? 0.01 * total / double(lights_.size()) : 1.0;
     for (double& w : weight) w += floor;
   }
@@ -620,6 +621,88 @@ uint32_t KernelScene::PickLight(float u_choice, float& u_rest) const {
   return index;
 }
 
+void KernelScene::BuildLightBvh() {
+  // Bounds of every light with a place; each light's power keeps a
+  // hundredth of the mean, as ChooseLightsByPower's shares do.
+  double total = 0;
+  for (const Light& light : lights_) total += light.power;
+  const float floor = lights_.empty() ? 0.0f : float(0.01 * total / double(lights_.size()));
+  std::vector<LightBounds> bounds(lights_.size());
+  infinite_lights_.clear();
+  for (uint32_t l = 0; l < lights_.size(); ++l) {
+    const Light& light = lights_[l];
+    LightBounds& b = bounds[l];
+    b.phi = light.power + (floor > 0 ? floor : 1.0f);
+    switch (light.kind) {
+      case LightKind::kDirectional:
+      case LightKind::kEnvironment:
+        infinite_lights_.push_back(l);
+        b.phi = 0;  // not in the BVH
+        break;
+      case LightKind::kPoint:
+        // Its emitter may be a spot: every direction, conservatively.
+        b.lower = b.upper = light.position;
+        break;
+      case LightKind::kSurface: {
+        const EmittingPrimitive& first = emitting_[light.first];
+        if (first.sphere) {
+          b.lower = first.p0 - Vec3(first.radius, first.radius, first.radius);
+          b.upper = first.p0 + Vec3(first.radius, first.radius, first.radius);
+          break;  // normals in every direction
+        }
+        b.lower = b.upper = first.p0;
+        for (uint32_t e = light.first; e < light.end; ++e)
+          for (const Vec3 v : {emitting_[e].p0, emitting_[e].p1, emitting_[e].p2}) {
+            b.lower = Vec3(std::min(b.lower.x, v.x), std::min(b.lower.y, v.y), std::min(b.lower.z, v.z));
+            b.upper = Vec3(std::max(b.upper.x, v.x), std::max(b.upper.y, v.y), std::max(b.upper.z, v.z));
+          }
+        // The cone of the triangles' normals around the mean one; an
+        // emitter may shine from both sides (two_sided), so the bound is.
+        b.w = light.axis;
+        b.cos_theta_o = 1;
+        for (uint32_t e = light.first; e < light.end; ++e)
+          b.cos_theta_o = std::min(b.cos_theta_o, Dot(b.w, emitting_[e].normal));
+        if (!(Length(b.w) > 0.5f) || !(b.cos_theta_o > -1)) b.w = Vec3(0, 0, 1), b.cos_theta_o = -1;
+        b.cos_theta_o = std::max(-1.0f, b.cos_theta_o - 1e-4f);  // rounding of the normals
+        break;
+      }
+    }
+  }
+  light_bvh_ = LightBvh(bounds);
+  const float slots = float(infinite_lights_.size()) + (light_bvh_.Empty() ? 0.0f : 1.0f);
+  infinite_probability_ = slots > 0 ? float(infinite_lights_.size()) / slots : 0.0f;
+}
+
+uint32_t KernelScene::PickLightFor(Vec3 p, float u_choice, float& u_rest, float& probability) const {
+  if (light_choice_ != LightChoice::kBvh) {
+    const uint32_t index = PickLight(u_choice, u_rest);
+    probability = lights_[index].probability;
+    return index;
+  }
+  // The lights at infinity, evenly, with the BVH as one more choice.
+  if (u_choice < infinite_probability_) {
+    const size_t count = infinite_lights_.size();
+    const float scaled = u_choice / infinite_probability_ * float(count);
+    const size_t pick = std::min(size_t(scaled), count - 1);
+    u_rest = std::clamp(scaled - float(pick), 0.0f, 0x1.fffffep-1f);
+    probability = infinite_probability_ / float(count);
+    return infinite_lights_[pick];
+  }
+  const float u = std::clamp((u_choice - infinite_probability_) / (1 - infinite_probability_), 0.0f, 0x1.fffffep-1f);
+  const auto picked = light_bvh_.Sample(p, u, u_rest);
+  if (!picked) return kNoLight;
+  probability = (1 - infinite_probability_) * picked->second;
+  return picked->first;
+}
+
+float KernelScene::ProbabilityFrom(uint32_t light, Vec3 p) const {
+  if (light_choice_ != LightChoice::kBvh) return lights_[light].probability;
+  const LightKind kind = lights_[light].kind;
+  if (kind == LightKind::kDirectional || kind == LightKind::kEnvironment)
+    return infinite_probability_ / float(infinite_lights_.size());
+  return (1 - infinite_probability_) * light_bvh_.Pmf(p, light);
+}
+
 LightSample KernelScene::PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const {
   LightSample s;
   s.emitter = light.emitter;
@@ -715,18 +798,20 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     if (lights_.empty()) continue;
     const Vec3 p = points[k];
     const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
-    float u_primitive = 0;
-    const uint32_t index = PickLight(uniform[3 * k], u_primitive);
+    float u_primitive = 0, probability = 0;
+    const uint32_t index = PickLightFor(p, uniform[3 * k], u_primitive, probability);
+    if (index == kNoLight) continue;
     const Light& light = lights_[index];
     s.emitter = light.emitter;
     switch (light.kind) {
       case LightKind::kEnvironment:
         from_environment.push_back(uint32_t(k));
+        s.pdf = probability;  // times the direction's density below
         continue;
       case LightKind::kDirectional:
         s.direction = -light.frame.n;
         s.distance = kInfinity;
-        s.pdf = light.probability;
+        s.pdf = probability;
         s.delta = true;
         s.w = Vec3(0, 0, 1);
         continue;
@@ -754,7 +839,7 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
           s.u = at.u, s.v = at.v;
           s.direction = dir;
           s.distance = Length(s.position - p);
-          s.pdf = light.probability * UniformConePdf(1, cos_max);
+          s.pdf = probability * UniformConePdf(1, cos_max);
           s.w = Frame(s.normal).ToLocal(-dir);
           continue;
         }
@@ -777,10 +862,10 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     s.w = Frame(s.normal).ToLocal(-s.direction);
     const float d2 = s.distance * s.distance;
     if (s.delta) {
-      s.pdf = light.probability * d2;
+      s.pdf = probability * d2;
     } else {
       const float cos_light = std::abs(s.w.z);
-      s.pdf = cos_light > 0 ? shape_light_pdf_[s.shape] * d2 / cos_light : 0.0f;
+      s.pdf = cos_light > 0 ? probability / light.area * d2 / cos_light : 0.0f;
     }
   }
   if (from_environment.empty()) return;
@@ -797,7 +882,7 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     s.w = Vec3::Load(&w[3 * j]);
     s.direction = -Normalize(environment.frame.ToWorld(s.w));
     s.distance = kInfinity;
-    s.pdf = std::isfinite(pdf[j]) ? environment.probability * pdf[j] : 0.0f;
+    s.pdf = std::isfinite(pdf[j]) ? s.pdf * pdf[j] : 0.0f;
   }
 }
 
@@ -805,10 +890,11 @@ float KernelScene::LightPdfFrom(const Ray& ray, const Hit& hit) const {
   if (!hit.Found() || hit.shape >= shape_light_.size() || shape_light_[hit.shape] == kNoLight) return 0;
   const Light& light = lights_[shape_light_[hit.shape]];
   const EmittingPrimitive& first = emitting_[light.first];
+  const float probability = ProbabilityFrom(shape_light_[hit.shape], ray.origin);
   if (SphereByCone(light, ray.origin))
-    return light.probability * UniformConePdf(1, ConeCosine(ray.origin, first.p0, first.radius));
+    return probability * UniformConePdf(1, ConeCosine(ray.origin, first.p0, first.radius));
   const float cos_light = std::abs(Dot(hit.normal, ray.direction));
-  return cos_light > 0 ? shape_light_pdf_[hit.shape] * hit.t * hit.t / cos_light : 0.0f;
+  return cos_light > 0 ? probability / light.area * hit.t * hit.t / cos_light : 0.0f;
 }
 
 void KernelScene::Escaped(std::span<const Vec3> directions, std::span<Vec3> radiance, std::span<float> pdf) const {
@@ -825,7 +911,7 @@ void KernelScene::Escaped(std::span<const Vec3> directions, std::span<Vec3> radi
   environment.emitter->PdfDirection(w, pdf.first(n));
   for (size_t k = 0; k < n; ++k) {
     radiance[k] = Vec3::Load(&rgb[3 * k]);
-    pdf[k] = std::isfinite(pdf[k]) ? pdf[k] * environment.probability : 0.0f;
+    pdf[k] = std::isfinite(pdf[k]) ? pdf[k] * ProbabilityFrom(environment_, Vec3()) : 0.0f;
   }
 }
 

@@ -14,6 +14,7 @@
 #include "kernel/alpha_cut.h"
 #include "kernel/camera.h"
 #include "kernel/embree_device.h"
+#include "kernel/light_bvh.h"
 #include "kernel/mesh_io.h"
 #include "yarf/texture.h"
 #include "yarf/transport.h"
@@ -64,8 +65,11 @@ class KernelScene final : public SceneView {
   void AddDirectionalLight(const Emitter* emitter, const Transform& to_world);
   void AddEnvironment(const Emitter* emitter, const Transform& to_world);
   // How lights are chosen (at Commit): in proportion to their power, as
-  // estimated from their emitters, or uniformly.
-  void ChooseLightsUniformly(bool uniform) { uniform_light_choice_ = uniform; }
+  // estimated from their emitters; uniformly; or, for light samples from a
+  // point, by a light BVH weighing power, distance and orientation (light
+  // paths start by power then).
+  enum class LightChoice { kPower, kUniform, kBvh };
+  void ChooseLights(LightChoice choice) { light_choice_ = choice; }
   // How light samples from a point find sphere lights: by the solid angle
   // they subtend (the default), or uniformly in area.
   void SampleSpheresByArea(bool by_area) { spheres_by_area_ = by_area; }
@@ -114,6 +118,7 @@ class KernelScene final : public SceneView {
   void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const override;
   void Attribute(std::string_view name, std::span<const SurfaceLocation> at, std::span<float> rgb) const override;
   bool CameraHasLens() const override { return camera_.HasLens(); }
+  bool CameraIsOrthographic() const override { return camera_.Orthographic(); }
   float CameraDirectionPdf(Vec3 direction) const override { return camera_.DirectionPdf(direction); }
   uint32_t FilmWidth() const override { return width_; }
   uint32_t FilmHeight() const override { return height_; }
@@ -175,6 +180,14 @@ class KernelScene final : public SceneView {
   float EstimatePower(const Light& light) const;
   // The light u_choice picks, and u_choice rescaled within its share.
   uint32_t PickLight(float u_choice, float& u_rest) const;
+  // The light u_choice picks for a light sample from point p, its
+  // probability, and u_choice rescaled; kNoLight when none can reach p.
+  uint32_t PickLightFor(Vec3 p, float u_choice, float& u_rest, float& probability) const;
+  // The probability PickLightFor picks `light` from p.
+  float ProbabilityFrom(uint32_t light, Vec3 p) const;
+  // The light BVH over the surface and point lights, and the lights at
+  // infinity beside it.
+  void BuildLightBvh();
   // A point uniform in area on surface light `light` (u_primitive chooses
   // its primitive).
   LightSample PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const;
@@ -227,11 +240,16 @@ class KernelScene final : public SceneView {
     Frame frame{Vec3(0, 0, 1)};
     // Of being chosen, and the running sum of the probabilities.
     float probability = 0, cdf = 0;
+    float power = 0;
   };
   static constexpr uint32_t kNoLight = 0xFFFFFFFFu;
   std::vector<Light> lights_;
   uint32_t environment_ = kNoLight;
-  bool uniform_light_choice_ = false;
+  LightChoice light_choice_ = LightChoice::kPower;
+  LightBvh light_bvh_;
+  // kBvh: the lights at infinity, chosen evenly with the BVH as one more.
+  std::vector<uint32_t> infinite_lights_;
+  float infinite_probability_ = 0;
   bool spheres_by_area_ = false;
   // Whether light samples from p find the sphere light `light` by its cone.
   bool SphereByCone(const Light& light, Vec3 p) const;

@@ -168,7 +168,16 @@ class Builder {
     const uint32_t w = scene_.film().width(), h = scene_.film().height();
     kernel_ = std::make_unique<KernelScene>(sources_.device, Camera(scene_.camera(), w, h), w, h);
     if (sources_.stop) kernel_->StopWhen(*sources_.stop);
-    kernel_->ChooseLightsUniformly(scene_.light_sampler() == v1::Scene::LIGHT_SAMPLER_UNIFORM);
+    switch (scene_.light_sampler()) {
+      case v1::Scene::LIGHT_SAMPLER_UNIFORM:
+        kernel_->ChooseLights(KernelScene::LightChoice::kUniform);
+        break;
+      case v1::Scene::LIGHT_SAMPLER_BVH:
+        kernel_->ChooseLights(KernelScene::LightChoice::kBvh);
+        break;
+      default:
+        kernel_->ChooseLights(KernelScene::LightChoice::kPower);
+    }
     kernel_->SampleSpheresByArea(scene_.sphere_sampling() == v1::Scene::SPHERE_SAMPLING_AREA);
     // In order: a texture may refer to those before it.
     for (const v1::SceneTexture& t : scene_.textures()) {
