@@ -104,51 +104,6 @@ SphereIntegrals IntegrateOverSphere(const SurfaceModel& model, Vec3 wi,
   return {pdf_sum, Vec3(float(albedo[0]), float(albedo[1]), float(albedo[2]))};
 }
 
-// --- Pearson's χ² test of sampled directions -------------------------------
-
-// The expected count of a (cos θ, φ) cell is N ∫ pdf over it, by 5-point
-// Gauss–Legendre quadrature in θ (dω = sin θ dθ dφ) on each of a few
-// slices of it, and across it in φ (all pdf values in one Pdf call). The
-// two rows at the poles, where a lobe around the normal (a refraction,
-// narrower than its microfacets' spread) lies whole, are cut in many more
-// slices.
-testing::AssertionResult DirectionsFollowPdf(const SurfaceModel& model, Vec3 wi,
-                                             const std::vector<Vec3>& directions,
-                                             int sample_count) {
-  constexpr int kSlices = 4, kPoleSlices = 32;
-  const double dz = 2.0 / kChiRows, dphi = 2 * kPiDouble / kChiCols;
-  std::vector<double> expected(kChiRows * kChiCols, 0.0);
-  std::vector<Vec3> nodes;
-  std::vector<double> weights;  // of each node: its share of N ∫ pdf dω
-  std::vector<int> cells;       // the cell of each node
-  for (int row = 0; row < kChiRows; ++row) {
-    // θ decreases as cos θ grows: the row spans θ in [theta_top, theta_bottom].
-    const double theta_top = std::acos(std::min(1.0, -1.0 + (row + 1) * dz));
-    const double theta_bottom = std::acos(std::max(-1.0, -1.0 + row * dz));
-    const int slices = row == 0 || row == kChiRows - 1 ? kPoleSlices : kSlices;
-    const double dtheta = (theta_bottom - theta_top) / slices;
-    for (int col = 0; col < kChiCols; ++col) {
-      const double phi_mid = -kPiDouble + (col + 0.5) * dphi;
-      for (int slice = 0; slice < slices; ++slice) {
-        const double theta_mid = theta_top + (slice + 0.5) * dtheta;
-        for (int s = 0; s < 5; ++s) {
-          const double theta = theta_mid + 0.5 * dtheta * kGaussNodes[s];
-          for (int t = 0; t < 5; ++t) {
-            nodes.push_back(SphericalDirection(float(std::sin(theta)), float(std::cos(theta)),
-                                               float(phi_mid + 0.5 * dphi * kGaussNodes[t])));
-            weights.push_back(sample_count * kGaussWeights[s] * kGaussWeights[t] *
-                              std::sin(theta) * (0.5 * dtheta) * (0.5 * dphi));
-            cells.push_back(row * kChiCols + col);
-          }
-        }
-      }
-    }
-  }
-  const std::vector<float> pdf = PdfBatch(model, wi, nodes);
-  for (size_t k = 0; k < nodes.size(); ++k) expected[cells[k]] += weights[k] * pdf[k];
-  return CellsFollowExpected(directions, expected);
-}
-
 // The finite-lobe samples of `count` draws at wi follow Pdf.
 testing::AssertionResult SamplesFollowPdf(const SurfaceModel& model, Vec3 wi, int count,
                                           uint64_t seed) {
@@ -1034,6 +989,63 @@ TEST_F(DiffuseTransmissionTest, SampleAgreesWithPdfEvaluateAndAlbedo) {
     EXPECT_LT(s.wo.z, 0.0f);
     ExpectVecNear(s.weight, transmittance, 1e-6f, "transmitted weight");
   }
+}
+
+// --- blend ---------------------------------------------------------------
+
+class BlendTest : public MicrofacetTest {
+ protected:
+  std::unique_ptr<SurfaceModel> Blend(std::shared_ptr<const SurfaceModel> a, std::shared_ptr<const SurfaceModel> b,
+                                      double weight) const {
+    return Make("blend", Props({{"bsdf_0", a}, {"bsdf_1", b}, {"weight", weight}}));
+  }
+  std::shared_ptr<const SurfaceModel> Diffuse(double reflectance) const {
+    return Make("lambertian", Props({{"reflectance", reflectance}}));
+  }
+};
+
+TEST_F(BlendTest, IsTheWeightedSumOfItsModels) {
+  const auto rough = std::shared_ptr<const SurfaceModel>(Make("roughconductor", Props({{"alpha", 0.3}})));
+  const auto blend = Blend(Diffuse(0.8), rough, 0.25);
+  EXPECT_EQ(blend->Lobes(), Diffuse(0.8)->Lobes() | rough->Lobes());
+  for (uint64_t k = 0; k < 200; ++k) {
+    const auto u = Uniform3(81, k);
+    const Vec3 wi = SampleCosineHemisphere(u[0], u[1]), wo = SampleUniformHemisphere(u[2], u[0]);
+    ExpectVecNear(EvaluateOne(*blend, wi, wo),
+                  EvaluateOne(*Diffuse(0.8), wi, wo) * 0.75f + EvaluateOne(*rough, wi, wo) * 0.25f, 1e-5f, "value");
+    EXPECT_NEAR(PdfOne(*blend, wi, wo), 0.75f * PdfOne(*Diffuse(0.8), wi, wo) + 0.25f * PdfOne(*rough, wi, wo),
+                1e-5f * (1 + PdfOne(*blend, wi, wo)));
+  }
+}
+
+TEST_F(BlendTest, SamplesFollowTheBlendedDensity) {
+  const auto rough = std::shared_ptr<const SurfaceModel>(Make("roughconductor", Props({{"alpha", 0.2}})));
+  const auto blend = Blend(Diffuse(0.5), rough, 0.6);
+  for (const Vec3 wi : {Vec3(0, 0, 1), Normalize(Vec3(0.6f, 0.1f, 0.4f))}) {
+    EXPECT_GT(ExpectSampleAgreesWithPdfAndEvaluate(*blend, wi, 2000, 82, TransportMode::kRadiance, "blend"), 1500);
+    std::vector<Vec3> directions;
+    for (const Scattered& s : SampleMany(*blend, wi, 100000, 83))
+      if (s.pdf > 0) directions.push_back(s.wo);
+    EXPECT_TRUE(DirectionsFollowPdf(*blend, wi, directions, 100000)) << Describe(wi);
+  }
+}
+
+TEST_F(BlendTest, AlbedoIsTheWeightedAlbedoWithDeltaLobes) {
+  // A smooth mirror (delta) and a diffuse surface: the mean weight of
+  // Sample is 0.3 · 1 + 0.7 · 0.5 at every wi.
+  const auto mirror = std::shared_ptr<const SurfaceModel>(Make("conductor"));
+  const auto blend = Blend(Diffuse(0.5), mirror, 0.3);
+  for (const Vec3 wi : {Vec3(0, 0, 1), Normalize(Vec3(0.7f, 0.0f, 0.3f))}) {
+    const MeanWithError albedo = MeanWeight(SampleMany(*blend, wi, 40000, 84));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(albedo.mean[c], 0.65f, 4 * albedo.standard_error[c] + 1e-3f);
+  }
+}
+
+TEST_F(BlendTest, RefusesAWeightOutsideTheUnitInterval) {
+  EXPECT_NE(CreationError("blend", Props({{"bsdf_0", Diffuse(0.5)}, {"bsdf_1", Diffuse(0.5)}, {"weight", 1.5}}))
+                .find("'weight'"),
+            std::string::npos);
+  EXPECT_NE(CreationError("blend", Props({{"bsdf_0", Diffuse(0.5)}})).find("'bsdf_1'"), std::string::npos);
 }
 
 }  // namespace

@@ -239,4 +239,47 @@ inline testing::AssertionResult CellsFollowExpected(const std::vector<Vec3>& dir
   return testing_support::PearsonChiSquareTest(observed, expected, kSignificance);
 }
 
+// The expected count of a (cos θ, φ) cell is N ∫ pdf over it, by 5-point
+// Gauss–Legendre quadrature in θ (dω = sin θ dθ dφ) on each of a few
+// slices of it, and across it in φ (all pdf values in one Pdf call). The
+// two rows at the poles, where a lobe around the normal (a refraction,
+// narrower than its microfacets' spread) lies whole, are cut in many more
+// slices.
+inline testing::AssertionResult DirectionsFollowPdf(const SurfaceModel& model, Vec3 wi,
+                                             const std::vector<Vec3>& directions,
+                                             int sample_count) {
+  constexpr int kSlices = 4, kPoleSlices = 32;
+  const double dz = 2.0 / kChiRows, dphi = 2 * kPiDouble / kChiCols;
+  std::vector<double> expected(kChiRows * kChiCols, 0.0);
+  std::vector<Vec3> nodes;
+  std::vector<double> weights;  // of each node: its share of N ∫ pdf dω
+  std::vector<int> cells;       // the cell of each node
+  for (int row = 0; row < kChiRows; ++row) {
+    // θ decreases as cos θ grows: the row spans θ in [theta_top, theta_bottom].
+    const double theta_top = std::acos(std::min(1.0, -1.0 + (row + 1) * dz));
+    const double theta_bottom = std::acos(std::max(-1.0, -1.0 + row * dz));
+    const int slices = row == 0 || row == kChiRows - 1 ? kPoleSlices : kSlices;
+    const double dtheta = (theta_bottom - theta_top) / slices;
+    for (int col = 0; col < kChiCols; ++col) {
+      const double phi_mid = -kPiDouble + (col + 0.5) * dphi;
+      for (int slice = 0; slice < slices; ++slice) {
+        const double theta_mid = theta_top + (slice + 0.5) * dtheta;
+        for (int s = 0; s < 5; ++s) {
+          const double theta = theta_mid + 0.5 * dtheta * kGaussNodes[s];
+          for (int t = 0; t < 5; ++t) {
+            nodes.push_back(SphericalDirection(float(std::sin(theta)), float(std::cos(theta)),
+                                               float(phi_mid + 0.5 * dphi * kGaussNodes[t])));
+            weights.push_back(sample_count * kGaussWeights[s] * kGaussWeights[t] *
+                              std::sin(theta) * (0.5 * dtheta) * (0.5 * dphi));
+            cells.push_back(row * kChiCols + col);
+          }
+        }
+      }
+    }
+  }
+  const std::vector<float> pdf = PdfBatch(model, wi, nodes);
+  for (size_t k = 0; k < nodes.size(); ++k) expected[cells[k]] += weights[k] * pdf[k];
+  return CellsFollowExpected(directions, expected);
+}
+
 }  // namespace yarf::surface_testing

@@ -184,13 +184,18 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   } else if (type == "mix") {
     const PbrtParam* materials = params.Find("materials");
     if (!materials || materials->strings.size() != 2) Fail(where, "mix needs \"string materials\" with two names");
-    const double amount = FloatOrTexture(params, "amount", 0.5);
-    const std::string chosen = materials->strings[amount <= 0.5 ? 0 : 1];
-    Warn(where, "material:mix", "mix materials replaced by the one of larger weight");
-    const auto it = named_materials_.find(chosen);
-    if (it == named_materials_.end()) Fail(where, "mix: named material '" + chosen + "' is not defined");
-    params.WarnUnused(diagnostics_, what);
-    return it->second;
+    // pbrt-v4 picks materials[1] with probability `amount` at each point:
+    // on average, the blend (1 − amount)·f₀ + amount·f₁.
+    const Textured amount = TexturedFloat(params, "amount", 0.5);
+    if (!amount.IsTexture() && !(amount.constant.r >= 0 && amount.constant.r <= 1))
+      Fail(params.WhereIs("amount", where), "mix: amount must lie in [0, 1]");
+    class_name = "blend";
+    for (int i = 0; i < 2; ++i) {
+      const auto it = named_materials_.find(materials->strings[i]);
+      if (it == named_materials_.end()) Fail(where, "mix: named material '" + materials->strings[i] + "' is not defined");
+      SetReference(props, "bsdf_" + std::to_string(i), it->second);
+    }
+    SetFloatOrTexture(props, "weight", amount);
   } else {
     static const std::vector<std::string> kKnown = {
         "interface", "none", "diffuse", "matte", "coateddiffuse", "conductor", "coatedconductor", "dielectric",

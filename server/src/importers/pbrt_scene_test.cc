@@ -127,6 +127,11 @@ TEST_F(PbrtBasic, PointAndSpotLights) {
   EXPECT_EQ(spot.emitter().class_name(), "spot");
   EXPECT_DOUBLE_EQ(FloatProperty(spot.emitter().properties(), "cutoff_angle"), 40);
   EXPECT_DOUBLE_EQ(FloatProperty(spot.emitter().properties(), "beam_width"), 30);
+  EXPECT_EQ(StringProperty(spot.emitter().properties(), "falloff"), "smoothstep");
+  // "power" 100 over 2π((1 − cos 30°) + (cos 30° − cos 40°) / 2) sr.
+  const double cos_start = std::cos(30 * M_PI / 180), cos_end = std::cos(40 * M_PI / 180);
+  const double per_sr = 100 / (2 * M_PI * ((1 - cos_start) + (cos_start - cos_end) / 2));
+  ExpectNear(RgbProperty(spot.emitter().properties(), "intensity"), {5 * per_sr, 5 * per_sr, 5 * per_sr});
   ExpectNear(ToMatrix(spot.to_world()).Point({0, 0, 0}), {0, 5, 0});
   ExpectNear(ToMatrix(spot.to_world()).Vector({0, 0, 1}), {0, -1, 0});
 }
@@ -216,7 +221,11 @@ TEST(PbrtImport, MaterialsMapToSurfaceModels) {
   EXPECT_EQ(material(5).class_name(), "thindielectric");
   EXPECT_EQ(material(6).class_name(), "plastic");  // a smooth coateddiffuse
   ExpectNear(RgbProperty(material(6).properties(), "diffuse_reflectance"), {0.2, 0.3, 0.4});
-  EXPECT_EQ(material(7).name(), "b");  // mix: the material of larger weight
+  // mix: materials[1] with probability `amount`, on average a blend.
+  EXPECT_EQ(material(7).class_name(), "blend");
+  EXPECT_EQ(material(7).properties().values().at("bsdf_0").reference(), "a");
+  EXPECT_EQ(material(7).properties().values().at("bsdf_1").reference(), "b");
+  EXPECT_NEAR(FloatProperty(material(7).properties(), "weight"), 0.8, 1e-12);
   EXPECT_EQ(material(8).name(), "default");
   EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:24: material 'hair' is not supported"));
   // Shapes of an interface material bound media only: left out.
@@ -314,6 +323,56 @@ TEST(PbrtImport, NormalMapsCutOutsCylindersAndMeshAttributes) {
   EXPECT_FLOAT_EQ(triangle.uvs(5), 1.0f);
   // A misspelt parameter is told the nearest one pbrt's material has.
   EXPECT_TRUE(Warns(result, "parameter 'reflectanse' ignored (did you mean 'reflectance'?)"));
+}
+
+}  // namespace
+}  // namespace yarf::importers
+
+namespace yarf::importers {
+namespace {
+
+using testing::IntProperty;
+using testing::FloatProperty;
+using testing::Warns;
+
+ImportResult PbrtWithIntegrator(const std::string& integrator) {
+  return ImportPbrt("Integrator " + integrator + "\nWorldBegin\nShape \"sphere\"\n", "integrator.pbrt");
+}
+
+TEST(PbrtImport, IntegratorsMapToTheTransportsThatEstimateTheirImage) {
+  for (const auto& [pbrt, yarf] : std::vector<std::pair<std::string, std::string>>{
+           {"path", "path"}, {"simplepath", "path"}, {"randomwalk", "path"}, {"volpath", "path"},
+           {"bdpt", "bdpt"}, {"lightpath", "light"}, {"sppm", "sppm"}}) {
+    const ImportResult result = PbrtWithIntegrator("\"" + pbrt + "\" \"integer maxdepth\" 7");
+    EXPECT_EQ(result.scene.transport().class_name(), yarf) << pbrt;
+    EXPECT_EQ(IntProperty(result.scene.transport().properties(), "max_depth"), 8) << pbrt;
+    EXPECT_FALSE(Warns(result, "is not available")) << pbrt;
+  }
+  // pbrt-v4's default light sampler is the BVH.
+  EXPECT_EQ(PbrtWithIntegrator("\"path\"").scene.light_sampler(), v1::Scene::LIGHT_SAMPLER_BVH);
+  EXPECT_EQ(PbrtWithIntegrator("\"path\" \"string lightsampler\" \"power\"").scene.light_sampler(),
+            v1::Scene::LIGHT_SAMPLER_POWER);
+  EXPECT_EQ(PbrtWithIntegrator("\"path\" \"string lightsampler\" \"uniform\"").scene.light_sampler(),
+            v1::Scene::LIGHT_SAMPLER_UNIFORM);
+  const ImportResult sppm =
+      PbrtWithIntegrator("\"sppm\" \"float radius\" 0.25 \"integer photonsperiteration\" 1000 \"integer seed\" 3");
+  EXPECT_DOUBLE_EQ(FloatProperty(sppm.scene.transport().properties(), "initial_radius"), 0.25);
+  EXPECT_EQ(IntProperty(sppm.scene.transport().properties(), "photons_per_pass"), 1000);
+  EXPECT_EQ(IntProperty(sppm.scene.transport().properties(), "seed"), 3);
+  const ImportResult ao = PbrtWithIntegrator("\"ambientocclusion\"");
+  EXPECT_EQ(ao.scene.transport().class_name(), "path");
+  EXPECT_TRUE(Warns(ao, "integrator 'ambientocclusion' is not available"));
+}
+
+TEST(PbrtImport, AnOrthographicCameraSpansTwoUnitsOfItsSpaceOverTheShorterAxis) {
+  // The CTM's Scale 0.5 makes camera space twice as large in the world.
+  const ImportResult result = ImportPbrt(
+      "Scale 0.5 0.5 0.5\nLookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\"\nWorldBegin\nShape \"sphere\"\n",
+      "orthographic.pbrt");
+  EXPECT_EQ(result.scene.camera().model(), v1::Camera::ORTHOGRAPHIC);
+  EXPECT_EQ(result.scene.camera().fov_axis(), v1::Camera::SMALLER);
+  EXPECT_NEAR(result.scene.camera().view_size(), 4, 1e-9);
+  EXPECT_TRUE(result.warnings.empty());
 }
 
 }  // namespace

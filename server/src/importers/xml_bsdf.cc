@@ -143,9 +143,22 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     SetFloat(props, "scale", scale);
     return assembly_.AddMaterial(name, "bumpmap", std::move(props));
   } else if (type == "blendbsdf") {
-    Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' is not supported: its (first) nested BSDF is used");
-    p.Accept({"weight"});
-    return MakeMaterial(inner(), name);
+    const auto nested = p.Objects("bsdf");
+    if (nested.size() != 2) Fail(e.where, what + " needs two nested BSDFs");
+    const Textured weight = p.TexturedColor("weight", {0.5, 0.5, 0.5});
+    if (!weight.IsTexture() && !(weight.constant.r >= 0 && weight.constant.r <= 1))
+      Fail(p.WhereIs("weight"), what + ": weight must lie in [0, 1]");
+    p.WarnUnused();
+    const std::string first = MakeMaterial(*nested[0], name + "-0"), second = MakeMaterial(*nested[1], name + "-1");
+    // A null BSDF in the blend: yarf has no partly invisible surfaces.
+    if (first.empty() || second.empty()) {
+      Warn(e.where, "blendbsdf-null", what + ": a null nested BSDF: the other one used alone");
+      return first.empty() ? second : first;
+    }
+    SetReference(props, "bsdf_0", first);
+    SetReference(props, "bsdf_1", second);
+    SetFloatOrTexture(props, "weight", weight);
+    return assembly_.AddMaterial(name, "blend", std::move(props));
   } else if (type == "null") {
     Warn(e.where, "bsdf:null", "null BSDF: shapes using it are left out (yarf has no invisible surfaces)");
     p.WarnUnused();
@@ -203,7 +216,36 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     reflectance("diffuse_reflectance", "diffuse_reflectance", {0.5, 0.5, 0.5});
     reflectance("specular_reflectance", "specular_reflectance", {0.2, 0.2, 0.2});
     SetFloat(props, "exponent", p.Float("exponent", 30));
-  } else if (type == "principled" || type == "principledthin") {
+  } else if (type == "principled") {
+    class_name = "principled";
+    reflectance("base_color", "base_color", {0.5, 0.5, 0.5});
+    // Weights in [0, 1], each a number or a texture: Mitsuba reads them
+    // unchecked, yarf's model refuses a constant outside, so clamp here.
+    for (const char* key : {"roughness", "anisotropic", "metallic", "spec_trans", "specular", "spec_tint", "sheen",
+                            "sheen_tint", "flatness", "clearcoat", "clearcoat_gloss"}) {
+      if (!p.Has(key)) continue;
+      Textured value = p.TexturedColor(key, {0, 0, 0});
+      if (!value.IsTexture())
+        value.constant = ClampColour(value.constant, 0, 1, [&] {
+          Warn(p.WhereIs(key), std::string("clamp:") + key, what + ": " + key + " clamped into [0, 1]");
+        });
+      SetFloatOrTexture(props, key, value);
+    }
+    if (p.Has("eta") && p.Has("specular"))
+      Fail(p.WhereIs("specular"), what + ": give eta or specular (the same index of refraction), not both");
+    if (p.Has("eta")) {
+      const double eta = p.Float("eta", 1.5);
+      if (!(eta > 0 && eta < 100)) Fail(p.WhereIs("eta"), what + ": eta must lie in (0, 100)");
+      SetFloat(props, "eta", eta);
+    }
+    for (const char* key : {"diffuse_reflectance_sampling_rate", "main_specular_sampling_rate",
+                            "clearcoat_sampling_rate"})
+      if (p.Has(key)) {
+        const double rate = p.Float(key, 1.0);
+        if (!(rate >= 0)) Fail(p.WhereIs(key), what + ": " + key + " must be ≥ 0");
+        SetFloat(props, key, rate);
+      }
+  } else if (type == "principledthin") {
     Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' approximated by a Lambertian of its base_color");
     class_name = "lambertian";
     reflectance("base_color", "reflectance", {0.5, 0.5, 0.5});

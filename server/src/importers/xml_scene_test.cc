@@ -305,3 +305,87 @@ TEST(Diagnostics, ReportsEachKindOfWarningOnceWithItsFirstPlace) {
 
 }  // namespace
 }  // namespace yarf::importers
+
+namespace yarf::importers {
+namespace {
+
+ImportResult MitsubaWithIntegrator(const std::string& integrator) {
+  return ImportMitsuba("<scene version=\"3.0.0\">" + integrator + "<shape type=\"sphere\"/></scene>",
+                       "scene.xml");
+}
+
+TEST(MitsubaImport, IntegratorsMapToTheTransportsThatEstimateTheirImage) {
+  const ImportResult ptracer =
+      MitsubaWithIntegrator(R"(<integrator type="ptracer"><integer name="max_depth" value="6"/></integrator>)");
+  EXPECT_EQ(ptracer.scene.transport().class_name(), "light");
+  EXPECT_EQ(testing::IntProperty(ptracer.scene.transport().properties(), "max_depth"), 6);
+  EXPECT_FALSE(testing::Warns(ptracer, "integrator"));
+  const ImportResult volpath =
+      MitsubaWithIntegrator(R"(<integrator type="volpathmis"><integer name="max_depth" value="3"/></integrator>)");
+  EXPECT_EQ(volpath.scene.transport().class_name(), "path");
+  EXPECT_EQ(testing::IntProperty(volpath.scene.transport().properties(), "max_depth"), 3);
+  EXPECT_FALSE(testing::Warns(volpath, "integrator"));
+  // moment: its nested integrator renders.
+  const ImportResult moment = MitsubaWithIntegrator(
+      R"(<integrator type="moment"><integrator type="ptracer"><integer name="max_depth" value="4"/></integrator></integrator>)");
+  EXPECT_EQ(moment.scene.transport().class_name(), "light");
+  EXPECT_EQ(testing::IntProperty(moment.scene.transport().properties(), "max_depth"), 4);
+  EXPECT_FALSE(testing::Warns(moment, "integrator"));
+}
+
+TEST(MitsubaImport, AnOrthographicSensorSpansTwoUnitsOfItsScaledSpace) {
+  const ImportResult result = ImportMitsuba(
+      R"(<scene version="3.0.0"><sensor type="orthographic"><transform name="to_world"><scale value="2"/>)"
+      R"(<lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform></sensor><shape type="sphere"/></scene>)",
+      "orthographic.xml");
+  EXPECT_EQ(result.scene.camera().model(), v1::Camera::ORTHOGRAPHIC);
+  EXPECT_EQ(result.scene.camera().fov_axis(), v1::Camera::X);
+  EXPECT_NEAR(result.scene.camera().view_size(), 4, 1e-9);
+  EXPECT_TRUE(result.warnings.empty());
+}
+
+}  // namespace
+}  // namespace yarf::importers
+
+namespace yarf::importers {
+namespace {
+
+TEST(MitsubaImport, PrincipledBecomesThePrincipledModel) {
+  const ImportResult result = ImportMitsuba(
+      R"(<scene version="3.0.0"><bsdf type="principled" id="disney"><rgb name="base_color" value="0.8, 0.2, 0.1"/>)"
+      R"(<float name="metallic" value="0.3"/><float name="roughness" value="0.4"/><float name="eta" value="1.33"/>)"
+      R"(<float name="clearcoat" value="0.5"/><float name="sheen" value="1.4"/>)"
+      R"(<float name="clearcoat_sampling_rate" value="2"/></bsdf>)"
+      R"(<shape type="sphere" id="ball"><ref id="disney"/></shape></scene>)",
+      "principled.xml");
+  const v1::Material& material = testing::MaterialOf(result.scene, testing::ShapeNamed(result.scene, "ball"));
+  EXPECT_EQ(material.class_name(), "principled");
+  const v1::Properties& props = material.properties();
+  const Vec3d base = testing::RgbProperty(props, "base_color");
+  EXPECT_NEAR(base.x, 0.8, 1e-9);
+  EXPECT_NEAR(base.y, 0.2, 1e-9);
+  EXPECT_NEAR(base.z, 0.1, 1e-9);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "metallic"), 0.3);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "roughness"), 0.4);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "eta"), 1.33);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "clearcoat"), 0.5);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "clearcoat_sampling_rate"), 2.0);
+  // Out of [0, 1]: clamped, with a warning naming the place.
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "sheen"), 1.0);
+  EXPECT_TRUE(testing::Warns(result, "principled.xml:1: bsdf 'principled': sheen clamped into [0, 1]"));
+  // Parameters left out take the model's defaults, which are Mitsuba's.
+  EXPECT_EQ(props.values().count("spec_trans"), 0u);
+  EXPECT_FALSE(testing::Warns(result, "approximated"));
+  // eta and specular are one index of refraction given twice.
+  try {
+    ImportMitsuba(R"(<scene version="3.0.0"><shape type="sphere"><bsdf type="principled">)"
+                  R"(<float name="eta" value="1.5"/><float name="specular" value="0.5"/></bsdf></shape></scene>)",
+                  "both.xml");
+    ADD_FAILURE() << "eta and specular together were accepted";
+  } catch (const ImportError& e) {
+    EXPECT_NE(std::string(e.what()).find("give eta or specular"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace yarf::importers
