@@ -7,6 +7,7 @@
 // the errors bad properties give.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -115,26 +116,49 @@ TEST_F(BitmapTextureTest, EightBitSrgbIsDecodedBeforeFiltering) {
 }
 
 TEST_F(BitmapTextureTest, FootprintSelectsTheMipLevel) {
-  // A checker of single texels: its MIP levels below the top are all 0.5.
-  constexpr int kSide = 64;
-  std::vector<float> texels(kSide * kSide);
-  for (int y = 0; y < kSide; ++y)
-    for (int x = 0; x < kSide; ++x) texels[y * kSide + x] = float((x + y) % 2);
-  const auto file = WriteImage("checker.exr", kSide, kSide, 1, texels);
-  const float u0 = 0.5f / kSide, u1 = 1.5f / kSide;  // texel centres of a 0 and a 1
+  // A bright line two texels wide down the middle of a dark 64×64 image.
+  // Level j is the box average of 2^j × 2^j texels, so at u = 1/2 (between
+  // two of its texels) its bilinear value is the mean of the 2^(j+1)
+  // columns around the middle: 2^-j, one value per level.
+  constexpr int kSide = 64, kMiddle = kSide / 2;
+  std::vector<float> texels(kSide * kSide, 0.0f);
+  for (int y = 0; y < kSide; ++y) texels[y * kSide + kMiddle - 1] = texels[y * kSide + kMiddle] = 1;
+  const auto file = WriteImage("line.exr", kSide, kSide, 1, texels);
+  const auto level = [&](int j) {  // the box filter, done here
+    const int half = 1 << j;
+    float sum = 0;
+    for (int x = kMiddle - half; x < kMiddle + half; ++x) sum += texels[x];
+    return sum / float(2 * half);
+  };
+  ASSERT_FLOAT_EQ(level(2), 0.25f);
+  // A footprint of `texels` texels along u and v, at the middle.
+  const auto at_width = [&](const Texture& texture, float texels) {
+    const float d = texels / kSide;
+    return At(texture, 0.5f, 0.5f, {d, 0, 0, d});
+  };
   for (const S filter : {"trilinear", "ewa"}) {
     const auto texture = MakeBitmap(file, With({{"filter_type", filter}}));
-    EXPECT_NEAR(At(*texture, u0, u0), 0, 1e-6) << filter;
-    EXPECT_NEAR(At(*texture, u1, u0), 1, 1e-6) << filter;
-    // A footprint 16 texels wide reads a coarse level: the mean.
-    const float wide = 16.0f / kSide;
-    EXPECT_NEAR(At(*texture, u0, u0, {wide, 0, 0, wide}), 0.5f, 1e-3) << filter;
-    EXPECT_NEAR(At(*texture, 0.3f, 0.7f, {wide, 0.2f * wide, -0.1f * wide, wide}), 0.5f, 1e-3) << filter;
-    EXPECT_NEAR(texture->Mean()[0], 0.5f, 1e-6);
+    EXPECT_NEAR(At(*texture, 0.5f, 0.5f), 1, 1e-6) << filter;
+    EXPECT_NEAR(At(*texture, 0.25f, 0.5f), 0, 1e-6) << filter;
+    EXPECT_NEAR(texture->Mean()[0], 2.0f / kSide, 1e-6) << filter;
+    // A footprint of exactly 2^j texels reads level j alone.
+    for (int j = 0; j <= 4; ++j) EXPECT_NEAR(at_width(*texture, float(1 << j)), level(j), 1e-5) << filter << j;
   }
-  // ewa follows a thin footprint along its major axis: still the mean.
+  // Between two levels trilinear blends them, OpenImageIO's way: a width
+  // of w·2^j texels, 1 < w < 2, weighs level j+1 by w − 1 (linear in the
+  // width, where pbrt's log2 w would give 0.58 at w = 1.5).
+  const auto trilinear = MakeBitmap(file, With({{"filter_type", S("trilinear")}}));
+  for (int j = 0; j <= 3; ++j)
+    for (const float w : {1.25f, 1.5f, 1.75f})
+      EXPECT_NEAR(at_width(*trilinear, w * float(1 << j)), (2 - w) * level(j) + (w - 1) * level(j + 1), 1e-5)
+          << "w = " << w << " · 2^" << j;
+  // A footprint 1 texel across the line and 16 along it: trilinear takes
+  // the level of the longer axis (level 4), ewa follows the line at the
+  // level of the shorter one (level 0) when the anisotropy allows it.
+  const std::array<float, 4> thin = {1.0f / kSide, 0, 0, 16.0f / kSide};
+  EXPECT_NEAR(At(*trilinear, 0.5f, 0.5f, thin), level(4), 1e-5);
   const auto ewa = MakeBitmap(file, With({{"filter", S("ewa")}, {"maxanisotropy", 16.0}}));
-  EXPECT_NEAR(At(*ewa, u0, u0, {16.0f / kSide, 0, 0, 1.0f / kSide}), 0.5f, 0.02f);
+  EXPECT_NEAR(At(*ewa, 0.5f, 0.5f, thin), level(0), 0.02f);
 }
 
 TEST_F(BitmapTextureTest, UvMapsMoveTheLookup) {

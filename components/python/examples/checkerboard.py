@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from yarf_component import Rgb, Texture, Transform
+from yarf_component import Rgb, SurfacePoints, Texture, Transform
 
 
 class Checkerboard(Texture):
@@ -38,8 +38,8 @@ class Checkerboard(Texture):
     def channels(self) -> int:
         return 3
 
-    def evaluate(self, uv: np.ndarray, footprint: np.ndarray) -> np.ndarray:
-        mapped = uv.astype(np.float64) @ self.linear.T + self.offset
+    def evaluate(self, at: SurfacePoints) -> np.ndarray:
+        mapped = at.uv.astype(np.float64) @ self.linear.T + self.offset
         halves = (mapped - np.floor(mapped)) > 0.5
         same = halves[:, 0] == halves[:, 1]
         return np.where(same[:, None], self.color0, self.color1).astype(np.float32)

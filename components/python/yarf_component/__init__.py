@@ -26,7 +26,7 @@ from yarf_component.surface import (
     TransportMode,
     lobe_allowed,
 )
-from yarf_component.texture import Texture
+from yarf_component.texture import SurfacePoints, Texture
 from yarf_component.transport import Transport
 
 __all__ = [
@@ -52,6 +52,7 @@ __all__ = [
     "SceneLayout",
     "SurfaceClient",
     "SurfaceModel",
+    "SurfacePoints",
     "Texture",
     "Transform",
     "Transport",

@@ -1,7 +1,11 @@
 // Remote<Texture>: values over a surface served by another process.
-// Channels and Mean are asked once, when the texture is made; Evaluate is
-// one call per batch of points.
+// Channels (with the mesh attributes the texture reads) and Mean are asked
+// once, when the texture is made; Evaluate is one call per batch of
+// points, carrying what SurfacePoints knows of them.
 #pragma once
+
+#include <string>
+#include <vector>
 
 #include "components/remote_instance.h"
 #include "yarf/texture.h"
@@ -22,6 +26,8 @@ class Remote<Texture> final : public Texture {
   std::unique_ptr<RemoteInstance> instance_;
   std::unique_ptr<v1::Texture::Stub> stub_;
   uint32_t channels_ = 0;
+  // The mesh attributes sent with every lookup (ChannelsReply.attributes).
+  std::vector<std::string> attributes_;
   std::vector<float> mean_;
 };
 
