@@ -56,6 +56,27 @@ def sky(path: Path) -> None:
     write_pfm(path, image.astype(np.float32))
 
 
+def projected_image(path: Path) -> None:
+    """An 8×8 image for the projector: red grows to the right, green down, a
+    blue border on the left column and a white texel near the top right, so
+    that a flipped or turned projection shows."""
+    rows, columns = np.mgrid[0:8, 0:8]
+    image = np.stack([(columns + 1) / 8, (rows + 1) / 8, np.full((8, 8), 0.15)], -1)
+    image[:, 0] = [0.1, 0.2, 1.0]
+    image[1, 6] = [1.0, 1.0, 1.0]
+    write_pfm(path, image.astype(np.float32))
+
+
+# Mitsuba's projector: the image's irradiance at unit distance (times π),
+# seen from above, its up along −z; over the sphere and the floor.
+PROJECTOR = (
+    '<emitter type="projector"><transform name="to_world">'
+    '<lookat origin="0.4, 3, 0.8" target="0, -0.5, 0" up="0, 0, -1"/></transform>'
+    '<texture type="bitmap" name="irradiance"><string name="filename" value="projected.pfm"/>'
+    '</texture><float name="scale" value="6"/><float name="fov" value="50"/></emitter>'
+)
+
+
 LIGHTS = {
     "constant sky": (
         SPHERE,
@@ -95,6 +116,7 @@ LIGHTS = {
         '<float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/></bsdf></shape>',
         ENVMAP,
     ),
+    "projector on a floor": (SPHERE, PROJECTOR),
 }
 
 
@@ -102,6 +124,7 @@ LIGHTS = {
 def test_light_matches_mitsuba(client: Client, tmp_path: Path, name: str) -> None:
     shape, lights = LIGHTS[name]
     sky(tmp_path / "sky.pfm")
+    projected_image(tmp_path / "projected.pfm")
     path = write_scene(tmp_path, shape, lights=lights, max_depth=6)
     scene = load_scene(path)
     upload_scene_assets(client, scene, tmp_path)
@@ -357,3 +380,38 @@ def test_the_light_bvh_estimates_the_same_image(
         family_alpha=1e-3,
     )
     assert not test.failing.size, f"bvh vs power on {scene_name}:\n{test.report()}"
+
+
+def test_large_triangle_lights_by_solid_angle_lower_the_variance(client: Client) -> None:
+    """The Cornell box's lamp seen from the tops of the walls subtends a
+    wide angle: sampled by the solid angle of its triangles (pbrt-v4's
+    spherical triangles) rather than by area, the path tracer's variance
+    falls there, and both estimate the same image."""
+    scene = load_scene(
+        Path(__file__).resolve().parents[1] / "scenes" / "cornell-box" / "scene.json"
+    )
+    scene.film.width = scene.film.height = 48
+    renders = {}
+    for name, choice in (
+        ("solid angle", scene.SPHERE_SAMPLING_SOLID_ANGLE),
+        ("area", scene.SPHERE_SAMPLING_AREA),
+    ):
+        scene.sphere_sampling = choice
+        renders[name] = client.render(
+            scene, spp=128, seed=4, sampler=INDEPENDENT, transport=component("path", max_depth=2)
+        )
+    by_angle, by_area = renders["solid angle"], renders["area"]
+    # The walls' upper parts, just below the lamp (rows 12 to 19 of 48):
+    # typically 0.4 of the variance by area.
+    band = slice(12, 20)
+    ratio = float(by_angle.variance[band].mean() / by_area.variance[band].mean())
+    assert ratio < 0.6, f"variance below the lamp, by solid angle / by area: {ratio:.3f}"
+    test = block_z_test(
+        by_angle.pixels,
+        by_angle.variance,
+        by_area.pixels,
+        by_area.variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"solid angle vs area sampling:\n{test.report()}"

@@ -54,6 +54,24 @@ class EmitterTest : public testing::Test {
     return props;
   }
 
+  // A projector of the Sky image (width × height), fov along x.
+  Properties Projector(int width, int height, double fov, double scale = 1) const {
+    Properties props;
+    props.Set("filename", WriteSky("projected_" + std::to_string(width) + "x" + std::to_string(height) + ".exr",
+                                   width, height));
+    props.Set("fov", fov);
+    props.Set("scale", scale);
+    return props;
+  }
+  // A to_world that rotates 30° about x, stretches x by 1.5 and shrinks z
+  // to 0.8, and moves the light: not rigid.
+  static Transform Stretched() {
+    const double c = std::cos(kPi / 6), s = std::sin(kPi / 6);
+    Transform t;
+    t.m = {1.5, 0, 0, 1, 0, c, -0.8 * s, 2, 0, s, 0.8 * c, 3, 0, 0, 0, 1};
+    return t;
+  }
+
   std::unique_ptr<Emitter> Make(const std::string& name, const Properties& props) const {
     return registry_.CreateAs<Emitter>(name, props);
   }
@@ -86,6 +104,12 @@ class EmitterTest : public testing::Test {
     all.emplace_back("spot", Make("spot", spot));
     all.emplace_back("envmap (latlong)", Make("envmap", EnvironmentMap("latlong", 16, 8)));
     all.emplace_back("envmap (equal_area)", Make("envmap", EnvironmentMap("equal_area", 8, 8)));
+    // Wide frusta: the midpoint rule below resolves their cells.
+    all.emplace_back("projector", Make("projector", Projector(8, 6, 100)));
+    Properties stretched = Projector(8, 6, 90);
+    stretched.Set("to_world", Stretched());
+    stretched.Set("wrap_mode", std::string("clamp"));
+    all.emplace_back("projector (stretched, clamped)", Make("projector", stretched));
     return all;
   }
 
@@ -329,6 +353,122 @@ TEST_F(EmitterTest, AnEnvironmentMapRefusesWhatItCannotRead) {
   EXPECT_NE(CreationError("envmap", missing).find("does not exist"), std::string::npos);
   Properties negative = EnvironmentMap("latlong", 16, 8, -1);
   EXPECT_NE(CreationError("envmap", negative).find("'scale'"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace yarf
+
+namespace yarf {
+namespace {
+
+// The camera-space direction toward the image point (u, v) of a projector
+// whose plane z = 1 spans tan_x × tan_y either side of its axis: Mitsuba's
+// camera space, x to the left, so u = 0 (the left column) is at +x and
+// v = 0 (the top row) at +y.
+Vec3 TowardImage(float u, float v, float tan_x, float tan_y) {
+  return Vec3((1 - 2 * u) * tan_x, (1 - 2 * v) * tan_y, 1);
+}
+
+TEST_F(EmitterTest, AProjectorShinesItsTexelsAsMitsubaDoes) {
+  // Intensity π · scale · E(u, v) / cos³θ (Mitsuba 3's projector), E looked
+  // up as its bitmap texture (texel centres at (x + ½) / W, (y + ½) / H).
+  constexpr int kWidth = 8, kHeight = 6;
+  const auto projector = Make("projector", Projector(kWidth, kHeight, 60, 2));
+  const float tan_x = std::tan(kPi / 6), tan_y = tan_x * kHeight / kWidth;
+  const auto expect_texels = [&](float u, float v, Vec3 expected, const std::string& what) {
+    const Vec3 q = TowardImage(u, v, tan_x, tan_y);
+    const float length = Length(q);
+    const Vec3 l = RadianceToward(*projector, Normalize(q));
+    expected = expected * (kPi * 2 * length * length * length);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(l[c], expected[c], 1e-4f * (1 + expected[c])) << what << " " << c;
+  };
+  // The centre: the mean of the four middle texels (bilinear).
+  expect_texels(0.5f, 0.5f, (Sky(3, 2) + Sky(4, 2) + Sky(3, 3) + Sky(4, 3)) * 0.25f, "centre");
+  // Each corner texel's centre, and the bright one.
+  for (const auto& [x, y] : {std::pair{0, 0}, {kWidth - 1, 0}, {0, kHeight - 1}, {kWidth - 1, kHeight - 1}, {5, 2}})
+    expect_texels((float(x) + 0.5f) / kWidth, (float(y) + 0.5f) / kHeight, Sky(x, y),
+                  "texel " + std::to_string(x) + ", " + std::to_string(y));
+  // Within half a texel of the frustum's corner, Mitsuba's default wrap
+  // mode "repeat" blends the four corner texels: a quarter texel in, the
+  // far ones weigh ¼ along each axis.
+  const auto row = [&](int y) { return Sky(kWidth - 1, y) * 0.25f + Sky(0, y) * 0.75f; };
+  expect_texels(0.25f / kWidth, 0.25f / kHeight, row(kHeight - 1) * 0.25f + row(0) * 0.75f, "corner");
+  // Nothing outside the frustum, sideways or behind.
+  for (const Vec3 w : {Normalize(TowardImage(-0.01f, 0.5f, tan_x, tan_y)),
+                       Normalize(TowardImage(0.5f, 1.01f, tan_x, tan_y)), Vec3(1, 0, 0), Vec3(0, 0, -1),
+                       Normalize(Vec3(0.1f, 0.1f, -1))})
+    EXPECT_EQ(MaxComponent(RadianceToward(*projector, w)), 0.0f) << w.x << " " << w.y << " " << w.z;
+}
+
+TEST_F(EmitterTest, AProjectorFollowsItsToWorldIncludingItsRoll) {
+  // The kernel hands a point light's directions in Frame(axis); the
+  // projector finds its own x and y from to_world. Looking down −y with
+  // its up along −z (a lookat from above), and stretched.
+  for (const bool stretched : {false, true}) {
+    Properties props = Projector(8, 6, 60, 1);
+    Transform to_world;
+    to_world.m = {-1, 0, 0, 0, 0, 0, -1, 3, 0, -1, 0, 0, 0, 0, 0, 1};  // x → −x, y → −z, z → −y
+    if (stretched) to_world = Stretched();
+    props.Set("to_world", to_world);
+    const auto projector = Make("projector", props);
+    const Frame frame(Normalize(to_world.Vector(Vec3(0, 0, 1))));
+    const float tan_x = std::tan(kPi / 6), tan_y = tan_x * 6 / 8;
+    for (const auto& [x, y] : {std::pair{0, 0}, {7, 0}, {5, 2}, {2, 4}}) {
+      const Vec3 q = TowardImage((float(x) + 0.5f) / 8, (float(y) + 0.5f) / 6, tan_x, tan_y);
+      const Vec3 world = to_world.Vector(q);
+      const Vec3 l = RadianceToward(*projector, frame.ToLocal(Normalize(world)));
+      // Mitsuba's π E / (z_local² · (n·d)), times the squared distance, with
+      // n = to_world's image of +z; z_local = 1 at the distance |world|.
+      const float cos_n = Dot(to_world.Vector(Vec3(0, 0, 1)), Normalize(world));
+      const float distance2 = Dot(world, world);
+      const Vec3 expected = Sky(x, y) * (kPi * distance2 / cos_n);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(l[c], expected[c], 1e-4f * (1 + expected[c])) << stretched << " " << x << " " << y;
+    }
+  }
+}
+
+TEST_F(EmitterTest, AUniformProjectorSamplesOverItsImagePlane) {
+  // A constant image: the density is 1 / (A cos³θ), A the image plane's
+  // area at unit distance; fov_axis "y" of a square image is fov along x.
+  Properties props;
+  props.Set("irradiance", Rgb{Vec3(1, 2, 3)});
+  props.Set("fov", 90.0);
+  props.Set("fov_axis", std::string("y"));
+  const auto projector = Make("projector", props);
+  const Vec3 w = Normalize(Vec3(0.5f, -0.25f, 1));
+  float dir[3], pdf = 0;
+  w.Store(dir);
+  projector->PdfDirection(dir, std::span<float>(&pdf, 1));
+  const float cos_theta = w.z;
+  EXPECT_NEAR(pdf, 1 / (4 * cos_theta * cos_theta * cos_theta), 1e-5f);
+  EXPECT_NEAR(RadianceToward(*projector, w).z, 3 * kPi / (cos_theta * cos_theta * cos_theta), 1e-4f);
+  EXPECT_EQ(MaxComponent(RadianceToward(*projector, Normalize(Vec3(1.01f, 0, 1)))), 0.0f);
+}
+
+TEST_F(EmitterTest, AProjectorRefusesBadParameters) {
+  Properties no_fov = Projector(8, 6, 60);
+  no_fov.Set("fov", 180.0);
+  EXPECT_NE(CreationError("projector", no_fov).find("'fov'"), std::string::npos);
+  Properties axis = Projector(8, 6, 60);
+  axis.Set("fov_axis", std::string("z"));
+  EXPECT_NE(CreationError("projector", axis).find("'fov_axis'"), std::string::npos);
+  Properties both = Projector(8, 6, 60);
+  both.Set("irradiance", 1.0);
+  EXPECT_NE(CreationError("projector", both).find("'irradiance'"), std::string::npos);
+  Properties wrap = Projector(8, 6, 60);
+  wrap.Set("wrap_mode", std::string("black"));
+  EXPECT_NE(CreationError("projector", wrap).find("'wrap_mode'"), std::string::npos);
+  Properties scale = Projector(8, 6, 60, -1);
+  EXPECT_NE(CreationError("projector", scale).find("'scale'"), std::string::npos);
+  Properties flat = Projector(8, 6, 60);
+  Transform degenerate;
+  degenerate.m[10] = 0;
+  flat.Set("to_world", degenerate);
+  EXPECT_NE(CreationError("projector", flat).find("'to_world'"), std::string::npos);
+  Properties missing;
+  missing.Set("fov", 30.0);
+  EXPECT_NE(CreationError("projector", missing).find("'filename'"), std::string::npos);
 }
 
 }  // namespace

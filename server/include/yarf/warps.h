@@ -189,6 +189,55 @@ inline std::array<float, 2> InvertUniformTriangle(float b0, float b1) {
   return {ClampToUnitInterval(b0 + b1), ClampToUnitInterval(2 * b1)};
 }
 
+// The solid angle of the spherical triangle of unit directions a, b, c
+// (Van Oosterom & Strackee's formula).
+inline float SphericalTriangleArea(Vec3 a, Vec3 b, Vec3 c) {
+  return std::abs(2 * std::atan2(Dot(a, Cross(b, c)), 1 + Dot(a, b) + Dot(a, c) + Dot(b, c)));
+}
+
+// Uniform in the solid angle that triangle v0 v1 v2 subtends from p
+// (Arvo 1995, in pbrt-v4's formulation): the barycentrics (of v0, v1, v2)
+// of the point the sampled direction meets, density 1/Ω in solid angle.
+// False for a triangle seen edge-on or from a vertex.
+inline bool SampleSphericalTriangle(const Vec3 v[3], Vec3 p, float u0, float u1, std::array<float, 3>& barycentrics) {
+  const Vec3 a = Normalize(v[0] - p), b = Normalize(v[1] - p), c = Normalize(v[2] - p);
+  Vec3 n_ab = Cross(a, b), n_bc = Cross(b, c), n_ca = Cross(c, a);
+  if (!(Dot(n_ab, n_ab) > 0 && Dot(n_bc, n_bc) > 0 && Dot(n_ca, n_ca) > 0)) return false;
+  n_ab = Normalize(n_ab), n_bc = Normalize(n_bc), n_ca = Normalize(n_ca);
+  const auto angle = [](Vec3 x, Vec3 y) { return std::acos(std::clamp(Dot(x, y), -1.0f, 1.0f)); };
+  // The spherical triangle's angles at a, b and c; their excess over π is
+  // its area. A sub-triangle of area u0 times that is cut off along b c.
+  const float alpha = angle(n_ab, -n_ca), beta = angle(n_bc, -n_ab), gamma = angle(n_ca, -n_bc);
+  const float area_pi = alpha + beta + gamma;
+  if (!(area_pi - kPi > 0)) return false;
+  const float sub_area_pi = kPi + u0 * (area_pi - kPi);
+  const float cos_alpha = std::cos(alpha), sin_alpha = std::sin(alpha);
+  const float sin_phi = std::sin(sub_area_pi) * cos_alpha - std::cos(sub_area_pi) * sin_alpha;
+  const float cos_phi = std::cos(sub_area_pi) * cos_alpha + std::sin(sub_area_pi) * sin_alpha;
+  const float k1 = cos_phi + cos_alpha, k2 = sin_phi - sin_alpha * Dot(a, b);
+  float cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha) / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+  cos_bp = std::clamp(std::isfinite(cos_bp) ? cos_bp : 1.0f, -1.0f, 1.0f);
+  // c' on the arc from a to c, then a direction uniform in cos along b c'.
+  const Vec3 c_off_a = Normalize(c - a * Dot(c, a));
+  const Vec3 cp = a * cos_bp + c_off_a * std::sqrt(std::max(0.0f, 1 - cos_bp * cos_bp));
+  const float cos_theta = 1 - u1 * (1 - Dot(cp, b));
+  const Vec3 across = cp - b * Dot(cp, b);
+  if (!(Dot(across, across) > 0)) return false;
+  const Vec3 w = b * cos_theta + Normalize(across) * std::sqrt(std::max(0.0f, 1 - cos_theta * cos_theta));
+  // Where w meets the triangle's plane (Möller–Trumbore's barycentrics).
+  const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0], s1 = Cross(w, e2);
+  const float divisor = Dot(s1, e1);
+  if (!(std::abs(divisor) > 0)) return false;
+  const Vec3 s = p - v[0];
+  float b1 = std::clamp(Dot(s, s1) / divisor, 0.0f, 1.0f), b2 = std::clamp(Dot(w, Cross(s, e1)) / divisor, 0.0f, 1.0f);
+  if (b1 + b2 > 1) {
+    const float sum = b1 + b2;
+    b1 /= sum, b2 /= sum;
+  }
+  barycentrics = {1 - b1 - b2, b1, b2};
+  return true;
+}
+
 // The Phong lobe: density ∝ cos^n θ around +z; cos θ = u^(1/(n+1)) inverts
 // its marginal CDF in cos θ.
 inline Vec3 SamplePhongLobe(float u0, float u1, float exponent) {

@@ -1,6 +1,7 @@
 #include "kernel/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "yarf/error.h"
@@ -703,13 +704,33 @@ float KernelScene::ProbabilityFrom(uint32_t light, Vec3 p) const {
   return (1 - infinite_probability_) * light_bvh_.Pmf(p, light);
 }
 
-LightSample KernelScene::PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const {
-  LightSample s;
-  s.emitter = light.emitter;
+uint32_t KernelScene::PickPrimitive(const Light& light, float u_primitive) const {
   const auto begin = emitting_.begin() + light.first, end = emitting_.begin() + light.end;
   const auto it = std::upper_bound(begin, end, u_primitive * light.area,
                                    [](float target, const EmittingPrimitive& e) { return target < e.cdf; });
-  const EmittingPrimitive& e = it == end ? *(end - 1) : *it;
+  return uint32_t((it == end ? end - 1 : it) - emitting_.begin());
+}
+
+float KernelScene::PrimitiveShare(const Light& light, uint32_t primitive) const {
+  const float below = primitive > light.first ? emitting_[primitive - 1].cdf : 0.0f;
+  return (emitting_[primitive].cdf - below) / light.area;
+}
+
+bool KernelScene::TriangleBySolidAngle(const EmittingPrimitive& e, Vec3 p, float& solid_angle) const {
+  // pbrt-v4's bounds: below, area sampling is as good and cheaper; above,
+  // the spherical triangle is too close to a hemisphere to sample well.
+  constexpr float kMinSolidAngle = 3e-4f, kMaxSolidAngle = 6.22f;
+  if (e.sphere || spheres_by_area_) return false;
+  const Vec3 a = e.p0 - p, b = e.p1 - p, c = e.p2 - p;
+  if (!(Length(a) > 0 && Length(b) > 0 && Length(c) > 0)) return false;
+  solid_angle = SphericalTriangleArea(Normalize(a), Normalize(b), Normalize(c));
+  return solid_angle > kMinSolidAngle && solid_angle < kMaxSolidAngle;
+}
+
+LightSample KernelScene::PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const {
+  LightSample s;
+  s.emitter = light.emitter;
+  const EmittingPrimitive& e = emitting_[PickPrimitive(light, u_primitive)];
   s.shape = e.shape;
   s.pdf = shape_light_pdf_[e.shape];
   if (e.sphere) {
@@ -843,6 +864,33 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
           s.w = Frame(s.normal).ToLocal(-dir);
           continue;
         }
+        if (!first.sphere) {
+          // A triangle that subtends a fair solid angle: uniformly in it.
+          const uint32_t picked = PickPrimitive(light, u_primitive);
+          const EmittingPrimitive& e = emitting_[picked];
+          const Vec3 corners[3] = {e.p0, e.p1, e.p2};
+          float solid_angle = 0;
+          std::array<float, 3> b;
+          if (TriangleBySolidAngle(e, p, solid_angle) && SampleSphericalTriangle(corners, p, u0, u1, b)) {
+            s.position = e.p0 * b[0] + e.p1 * b[1] + e.p2 * b[2];
+            s.normal = e.normal;
+            s.shape = e.shape;
+            float uv[2];
+            const TriangleMesh& mesh = meshes_[shapes_[e.shape].mesh];
+            TriangleUvAt(mesh.indices, mesh.uvs, e.primitive, b[1], b[2], uv);
+            s.u = uv[0], s.v = uv[1];
+            const Vec3 d = s.position - p;
+            s.distance = Length(d);
+            if (!(s.distance > 0)) {
+              s.emitter = nullptr;
+              continue;
+            }
+            s.direction = d / s.distance;
+            s.w = Frame(s.normal).ToLocal(-s.direction);
+            s.pdf = probability * PrimitiveShare(light, picked) / solid_angle;
+            continue;
+          }
+        }
         const LightSample area = PointOnSurfaceLight(light, u_primitive, u0, u1);
         s.position = area.position;
         s.normal = area.normal;
@@ -893,6 +941,12 @@ float KernelScene::LightPdfFrom(const Ray& ray, const Hit& hit) const {
   const float probability = ProbabilityFrom(shape_light_[hit.shape], ray.origin);
   if (SphereByCone(light, ray.origin))
     return probability * UniformConePdf(1, ConeCosine(ray.origin, first.p0, first.radius));
+  if (!first.sphere && light.first + hit.primitive < light.end) {
+    const uint32_t primitive = light.first + hit.primitive;
+    float solid_angle = 0;
+    if (TriangleBySolidAngle(emitting_[primitive], ray.origin, solid_angle))
+      return probability * PrimitiveShare(light, primitive) / solid_angle;
+  }
   const float cos_light = std::abs(Dot(hit.normal, ray.direction));
   return cos_light > 0 ? probability / light.area * hit.t * hit.t / cos_light : 0.0f;
 }

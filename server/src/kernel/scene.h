@@ -70,8 +70,9 @@ class KernelScene final : public SceneView {
   // paths start by power then).
   enum class LightChoice { kPower, kUniform, kBvh };
   void ChooseLights(LightChoice choice) { light_choice_ = choice; }
-  // How light samples from a point find sphere lights: by the solid angle
-  // they subtend (the default), or uniformly in area.
+  // How light samples from a point find sphere lights and triangles that
+  // subtend a fair solid angle: by that solid angle (the default), or
+  // uniformly in area.
   void SampleSpheresByArea(bool by_area) { spheres_by_area_ = by_area; }
   void Commit();
 
@@ -191,6 +192,15 @@ class KernelScene final : public SceneView {
   // A point uniform in area on surface light `light` (u_primitive chooses
   // its primitive).
   LightSample PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const;
+  struct EmittingPrimitive;
+  // The primitive of `light` u_primitive picks, in proportion to area.
+  uint32_t PickPrimitive(const Light& light, float u_primitive) const;
+  // The probability of that pick: the primitive's share of its light's area.
+  float PrimitiveShare(const Light& light, uint32_t primitive) const;
+  // Whether light samples from p find emitting triangle `e` by the solid
+  // angle it subtends (as pbrt-v4: for one neither tiny nor huge from
+  // p, unless lights are sampled by area), and that solid angle.
+  bool TriangleBySolidAngle(const EmittingPrimitive& e, Vec3 p, float& solid_angle) const;
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
   float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
 

@@ -306,5 +306,44 @@ TEST(WarpsTest, ReflectMirrorsAboutTheNormal) {
   EXPECT_EQ(r.z, w.z);
 }
 
+TEST(WarpsTest, SphericalTriangleSamplesAreUniformInItsSolidAngle) {
+  // A large triangle close to p: its solid angle matches the formula, each
+  // sample's barycentrics give a point of the triangle along its
+  // direction, and the mean of f over the samples, times Ω, is ∫ f dω as
+  // area sampling (f's cos/d² change of measure) estimates it.
+  const Vec3 v[3] = {Vec3(-1, -0.5f, 1), Vec3(1.5f, -0.8f, 0.7f), Vec3(0.2f, 1.2f, 0.9f)};
+  const Vec3 p(0.1f, 0.05f, 0);
+  const float solid_angle = SphericalTriangleArea(Normalize(v[0] - p), Normalize(v[1] - p), Normalize(v[2] - p));
+  const auto f = [](Vec3 w) { return double(w.z) * w.z + 0.5 * w.x; };
+  const Vec3 normal = Normalize(Cross(v[1] - v[0], v[2] - v[0]));
+  const double area = 0.5 * Length(Cross(v[1] - v[0], v[2] - v[0]));
+  Uniforms uniforms(0x5a);
+  double by_angle = 0, by_angle2 = 0, by_area = 0, by_area2 = 0, omega = 0;
+  constexpr int kCount = 400'000;
+  for (int k = 0; k < kCount; ++k) {
+    const float u0 = uniforms.Next(), u1 = uniforms.Next();
+    std::array<float, 3> b;
+    ASSERT_TRUE(SampleSphericalTriangle(v, p, u0, u1, b));
+    ASSERT_GE(std::min({b[0], b[1], b[2]}), 0.0f);
+    ASSERT_NEAR(b[0] + b[1] + b[2], 1.0f, 1e-5f);
+    const Vec3 w = Normalize(v[0] * b[0] + v[1] * b[1] + v[2] * b[2] - p);
+    const double x = f(w) * solid_angle;
+    by_angle += x, by_angle2 += x * x;
+    // The same integral by points uniform in area.
+    const auto a = SampleUniformTriangle(u1, u0);
+    const Vec3 q = v[0] * a[0] + v[1] * a[1] + v[2] * a[2] - p;
+    const double d2 = Dot(q, q), cos = std::abs(Dot(normal, q)) / std::sqrt(d2);
+    const double y = f(q / float(std::sqrt(d2))) * cos / d2 * area;
+    by_area += y, by_area2 += y * y;
+    omega += cos / d2 * area;
+  }
+  const auto error = [](double sum, double sum2) { return std::sqrt((sum2 / kCount - sum * sum / kCount / kCount) / kCount); };
+  EXPECT_NEAR(solid_angle, omega / kCount, 0.01 * solid_angle);
+  EXPECT_NEAR(by_angle / kCount, by_area / kCount, 4 * std::hypot(error(by_angle, by_angle2), error(by_area, by_area2)));
+  // Seen from a corner there is nothing to sample.
+  std::array<float, 3> b;
+  EXPECT_FALSE(SampleSphericalTriangle(v, v[0], 0.3f, 0.6f, b));
+}
+
 }  // namespace
 }  // namespace yarf
