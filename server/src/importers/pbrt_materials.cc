@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "importers/colour_checks.h"
 #include "importers/named_ior.h"
@@ -140,28 +142,53 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   } else if (type == "diffuse" || type == "matte") {
     class_name = "lambertian";
     reflectance(type == "matte" ? "Kd" : "reflectance", "reflectance", 0.5);
-  } else if (type == "coateddiffuse") {
-    reflectance("reflectance", "diffuse_reflectance", 0.5);
-    SetFloat(props, "int_ior", eta("eta", 1.5));
-    SetFloat(props, "ext_ior", 1.0);
-    const auto [u, v] = roughness("");
-    class_name = u == 0 && v == 0 ? "plastic" : "roughplastic";
-    if (class_name == "roughplastic") SetFloat(props, "alpha", (u + v) / 2);
-    if (u != v) Warn(where, "anisotropic-coating", what + ": anisotropic roughness replaced by its mean");
-    for (const char* key : {"thickness", "albedo", "g"})
-      if (params.Has(key)) {
-        params.Find(key);
-        Warn(params.WhereIs(key, where), std::string("coateddiffuse:") + key,
-             what + ": the coating's " + key + " is not modelled (a plastic has a clear, thin coating)");
+  } else if (type == "coateddiffuse" || type == "coatedconductor") {
+    // pbrt-v4's layered materials: the plugins of the same names take
+    // pbrt's parameter names; only what was given is passed on, so the
+    // plugins' defaults (pbrt's) apply to the rest.
+    class_name = type;
+    const bool diffuse = type == "coateddiffuse";
+    auto float_or_texture = [&](const std::string& key) {
+      if (params.Has(key)) SetFloatOrTexture(props, key, TexturedFloat(params, key, 0));
+    };
+    const std::vector<std::string> layers = diffuse ? std::vector<std::string>{""}
+                                                    : std::vector<std::string>{"interface.", "conductor."};
+    for (const std::string& prefix : layers)
+      for (const char* key : {"roughness", "uroughness", "vroughness"}) float_or_texture(prefix + key);
+    if (params.Has("remaproughness")) SetBool(props, "remaproughness", params.Bool("remaproughness", true));
+    const std::string eta_key = diffuse ? "eta" : "interface.eta";
+    if (params.Has(eta_key)) SetFloat(props, eta_key, eta(eta_key, 1.5));
+    for (const char* key : {"thickness", "g"}) float_or_texture(key);
+    if (params.Has("albedo")) reflectance("albedo", "albedo", 0);
+    for (const char* key : {"maxdepth", "nsamples"})
+      if (params.Has(key)) SetInt(props, key, params.Integer(key, 1));
+    if (diffuse) {
+      reflectance("reflectance", "reflectance", 0.5);
+    } else if (params.Has("reflectance")) {
+      if (params.Has("conductor.eta") || params.Has("conductor.k"))
+        Fail(where, what + ": give the conductor by \"reflectance\" or by \"conductor.eta\" and \"conductor.k\", not both");
+      reflectance("reflectance", "reflectance", 1);
+    } else {
+      // A named metal's spectra become yarf's RGB of it (yarf/named_metals.h).
+      for (const char* key : {"conductor.eta", "conductor.k"}) {
+        const PbrtParam* p = params.Find(key);
+        if (!p) continue;
+        if (const auto metal = MetalName(p)) {
+          const auto known = std::find_if(std::begin(metals::kMetals), std::end(metals::kMetals),
+                                          [&](const metals::NamedMetal& m) { return *metal == m.name; });
+          if (known == std::end(metals::kMetals)) {
+            Warn(p->where, "metal:" + *metal, "metal '" + *metal + "' is not among yarf's named metals: copper used");
+            continue;
+          }
+          const Vec3 v = std::string(key) == "conductor.eta" ? known->ior.eta : known->ior.k;
+          SetColour(props, key, Textured{Rgb{v.x, v.y, v.z}, ""});
+        } else {
+          SetColour(props, key, TexturedColour(params, key, {1, 1, 1}, SpectrumUse::kReflectance, where));
+        }
       }
-    params.Accept({"maxdepth", "nsamples"});
+    }
   } else if (type == "conductor") {
     class_name = conductor("");
-  } else if (type == "coatedconductor") {
-    Warn(where, "material:coatedconductor", "coatedconductor rendered as its conductor layer, without the coating");
-    params.Accept({"interface.roughness", "interface.uroughness", "interface.vroughness", "interface.eta", "thickness",
-                   "albedo", "g", "maxdepth", "nsamples"});
-    class_name = conductor("conductor.");
   } else if (type == "dielectric" || type == "thindielectric") {
     SetFloat(props, "int_ior", eta("eta", 1.5));
     SetFloat(props, "ext_ior", 1.0);

@@ -111,9 +111,9 @@ TEST_F(PbrtBasic, AreaLightBlackbodyScaledAndOrientedByN) {
   EXPECT_EQ(light.mesh().indices(2), 1u);
   EXPECT_FALSE(light.flip_normals());
   EXPECT_TRUE(Warns(result(), "blackbody spectra converted to RGB"));
-  // coateddiffuse becomes a rough plastic.
-  EXPECT_EQ(MaterialOf(scene(), light).class_name(), "roughplastic");
-  EXPECT_NEAR(FloatProperty(MaterialOf(scene(), light).properties(), "alpha"), 0.2, 1e-12);
+  // coateddiffuse is yarf's coateddiffuse, with pbrt's roughness (α = √0.04 inside the model).
+  EXPECT_EQ(MaterialOf(scene(), light).class_name(), "coateddiffuse");
+  EXPECT_NEAR(FloatProperty(MaterialOf(scene(), light).properties(), "roughness"), 0.04, 1e-12);
 }
 
 TEST_F(PbrtBasic, PointAndSpotLights) {
@@ -219,8 +219,8 @@ TEST(PbrtImport, MaterialsMapToSurfaceModels) {
   EXPECT_NEAR(FloatProperty(material(4).properties(), "alpha_v"), 0.4, 1e-12);
   EXPECT_DOUBLE_EQ(FloatProperty(material(4).properties(), "int_ior"), 1.33);
   EXPECT_EQ(material(5).class_name(), "thindielectric");
-  EXPECT_EQ(material(6).class_name(), "plastic");  // a smooth coateddiffuse
-  ExpectNear(RgbProperty(material(6).properties(), "diffuse_reflectance"), {0.2, 0.3, 0.4});
+  EXPECT_EQ(material(6).class_name(), "coateddiffuse");  // a smooth one
+  ExpectNear(RgbProperty(material(6).properties(), "reflectance"), {0.2, 0.3, 0.4});
   // mix: materials[1] with probability `amount`, on average a blend.
   EXPECT_EQ(material(7).class_name(), "blend");
   EXPECT_EQ(material(7).properties().values().at("bsdf_0").reference(), "a");
@@ -231,6 +231,46 @@ TEST(PbrtImport, MaterialsMapToSurfaceModels) {
   // Shapes of an interface material bound media only: left out.
   EXPECT_EQ(scene.shapes_size(), 9);
   EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:26: interface material"));
+}
+
+// pbrt-v4's layered materials keep their parameters' names; what is not
+// given keeps the plugins' defaults, which are pbrt's.
+TEST(PbrtImport, CoatedMaterialsMapToTheLayeredModels) {
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\n"
+      "Material \"coateddiffuse\" \"float roughness\" 0.1 \"float thickness\" 0.2 \"rgb albedo\" [0.5 0.6 0.7]\n"
+      "  \"float g\" 0.3 \"integer maxdepth\" 20 \"integer nsamples\" 2 \"float eta\" 1.4\n"
+      "Shape \"sphere\"\n"
+      "Material \"coatedconductor\" \"float interface.roughness\" 0.05 \"float conductor.roughness\" 0.2\n"
+      "  \"spectrum conductor.eta\" \"metal-Au-eta\" \"spectrum conductor.k\" \"metal-Au-k\"\n"
+      "  \"float interface.eta\" 1.6 \"bool remaproughness\" false\n"
+      "Shape \"sphere\"\n"
+      "Material \"coatedconductor\" \"rgb reflectance\" [0.9 0.8 0.7]\n"
+      "Shape \"sphere\"\n",
+      "coated.pbrt");
+  const v1::Scene& scene = result.scene;
+  const v1::Material& diffuse = MaterialOf(scene, scene.shapes(0));
+  EXPECT_EQ(diffuse.class_name(), "coateddiffuse");
+  EXPECT_NEAR(FloatProperty(diffuse.properties(), "roughness"), 0.1, 1e-12);
+  EXPECT_NEAR(FloatProperty(diffuse.properties(), "thickness"), 0.2, 1e-12);
+  EXPECT_NEAR(FloatProperty(diffuse.properties(), "g"), 0.3, 1e-12);
+  EXPECT_NEAR(FloatProperty(diffuse.properties(), "eta"), 1.4, 1e-12);
+  ExpectNear(RgbProperty(diffuse.properties(), "albedo"), {0.5, 0.6, 0.7});
+  ExpectNear(RgbProperty(diffuse.properties(), "reflectance"), {0.5, 0.5, 0.5});  // pbrt's default
+  EXPECT_EQ(IntProperty(diffuse.properties(), "maxdepth"), 20);
+  EXPECT_EQ(IntProperty(diffuse.properties(), "nsamples"), 2);
+  const v1::Material& gold = MaterialOf(scene, scene.shapes(1));
+  EXPECT_EQ(gold.class_name(), "coatedconductor");
+  EXPECT_NEAR(FloatProperty(gold.properties(), "interface.roughness"), 0.05, 1e-12);
+  EXPECT_NEAR(FloatProperty(gold.properties(), "conductor.roughness"), 0.2, 1e-12);
+  EXPECT_NEAR(FloatProperty(gold.properties(), "interface.eta"), 1.6, 1e-12);
+  EXPECT_FALSE(gold.properties().values().at("remaproughness").bool_value());
+  EXPECT_GT(RgbProperty(gold.properties(), "conductor.k").x, 1.0);  // gold's RGB, from yarf's metals
+  const v1::Material& tinted = MaterialOf(scene, scene.shapes(2));
+  EXPECT_EQ(tinted.class_name(), "coatedconductor");
+  ExpectNear(RgbProperty(tinted.properties(), "reflectance"), {0.9, 0.8, 0.7});
+  EXPECT_FALSE(Warns(result, "parameter"));
+  EXPECT_FALSE(Warns(result, "coatedconductor"));
 }
 
 TEST(PbrtImport, ObjectInstancesMapToGroupsAndInstances) {

@@ -389,3 +389,61 @@ TEST(MitsubaImport, PrincipledBecomesThePrincipledModel) {
 
 }  // namespace
 }  // namespace yarf::importers
+
+namespace yarf::importers {
+namespace {
+
+TEST(MitsubaImport, AProjectorBecomesAPositionedLightWithItsImageAndFrame) {
+  const std::string scene_file = TestScene("projector.xml").string();
+  const ImportResult result = ImportMitsuba(
+      R"(<scene version="3.0.0"><texture type="bitmap" id="slide"><string name="filename" value="assets/sky.pfm"/>)"
+      R"(<string name="wrap_mode" value="clamp"/></texture>)"
+      R"(<emitter type="projector" id="beamer"><transform name="to_world">)"
+      R"(<lookat origin="0, 3, 0" target="0, 0, 0" up="0, 0, -1"/></transform>)"
+      R"(<ref name="irradiance" id="slide"/><float name="scale" value="2"/><float name="fov" value="40"/>)"
+      R"(<string name="fov_axis" value="y"/></emitter><shape type="sphere"/></scene>)",
+      scene_file);
+  const v1::Light& light = LightNamed(result.scene, "beamer");
+  EXPECT_EQ(light.kind(), v1::Light::POSITIONED);
+  EXPECT_EQ(light.emitter().class_name(), "projector");
+  const v1::Properties& props = light.emitter().properties();
+  EXPECT_EQ(StringProperty(props, "filename"), "assets/sky.pfm");
+  EXPECT_EQ(StringProperty(props, "wrap_mode"), "clamp");
+  EXPECT_EQ(StringProperty(props, "fov_axis"), "y");
+  EXPECT_DOUBLE_EQ(FloatProperty(props, "scale"), 2);
+  EXPECT_DOUBLE_EQ(FloatProperty(props, "fov"), 40);
+  // The emitter keeps Mitsuba's to_world for its roll; the light is placed by it.
+  ASSERT_TRUE(props.values().count("to_world"));
+  const Matrix4 frame = ToMatrix(props.values().at("to_world").transform_value());
+  ExpectNear(frame.Vector({0, 0, 1}), {0, -1, 0});
+  ExpectNear(frame.Vector({0, 1, 0}), {0, 0, -1});
+  ExpectNear(ToMatrix(light.to_world()).Point({0, 0, 0}), {0, 3, 0});
+  EXPECT_FALSE(Warns(result, "parameter"));
+
+  // A 35 mm focal length spans the diagonal; bad parameters are refused.
+  const ImportResult focal = ImportMitsuba(
+      R"(<scene version="3.0.0"><emitter type="projector" id="p"><rgb name="irradiance" value="1, 2, 3"/>)"
+      R"(<string name="focal_length" value="50mm"/></emitter></scene>)",
+      scene_file);
+  const v1::Properties& constant = LightNamed(focal.scene, "p").emitter().properties();
+  EXPECT_EQ(StringProperty(constant, "fov_axis"), "diagonal");
+  EXPECT_NEAR(FloatProperty(constant, "fov"), 2 * std::atan(std::hypot(36.0, 24.0) / 100) * 180 / M_PI, 1e-9);
+  ExpectNear(RgbProperty(constant, "irradiance"), {1, 2, 3});
+  for (const auto& [body, message] : std::vector<std::pair<std::string, std::string>>{
+           {R"(<float name="fov" value="30"/>)", "give the image to project"},
+           {R"(<rgb name="irradiance" value="1"/><float name="fov" value="180"/>)", "fov must lie in (0, 180)"},
+           {R"(<rgb name="irradiance" value="1"/><float name="scale" value="-1"/>)", "scale must be finite"},
+           {R"(<texture type="checkerboard" name="irradiance"/><float name="fov" value="30"/>)",
+            "must be a bitmap texture"},
+       }) {
+    try {
+      ImportMitsuba(R"(<scene version="3.0.0"><emitter type="projector">)" + body + "</emitter></scene>", scene_file);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const ImportError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace yarf::importers
