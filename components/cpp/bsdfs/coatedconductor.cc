@@ -135,30 +135,13 @@ struct PointLayers {
   }
 };
 
-class CoatedConductor final : public yarf::SurfaceModel {
+class CoatedConductor final : public layered::LayeredSurfaceModel<CoatedConductor> {
  public:
   explicit CoatedConductor(const yarf::Properties& props)
       : index_(ReadConductorIndex(props)),
         interface_(layered::ReadPbrtRoughness(props, "interface.")),
         conductor_(layered::ReadPbrtRoughness(props, "conductor.")),
         slab_(layered::ReadSlab(props, "interface.eta")) {}
-
-  void Evaluate(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> wo,
-                const yarf::SurfacePoints& at, std::span<float> value) const override {
-    layered::EvaluateRows(LayersAt(at), mode, wi, wo, at, value);
-  }
-
-  void Sample(yarf::TransportMode mode, std::span<const float> wi, const yarf::SurfacePoints& at,
-              std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
-              std::span<float> weight, std::span<float> pdf,
-              std::span<uint32_t> flags) const override {
-    layered::SampleEach(LayersAt(at), mode, wi, at, uniform, allowed, yarf::SampleRows{wo, weight, pdf, flags});
-  }
-
-  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
-           std::span<float> pdf) const override {
-    layered::PdfRows(LayersAt(at), wi, wo, at, pdf);
-  }
 
   uint32_t Lobes() const override {
     // The walk is glossy where the slab is clear, diffuse where it
@@ -173,6 +156,9 @@ class CoatedConductor final : public yarf::SurfaceModel {
   }
 
  private:
+  friend class layered::LayeredSurfaceModel<CoatedConductor>;
+
+  // The layers at the points of a call.
   PointLayers LayersAt(const yarf::SurfacePoints& at) const {
     std::optional<yarf::PointValues<Vec3>> reflectance;
     if (index_.reflectance) reflectance = index_.reflectance->At(at);

@@ -102,29 +102,12 @@ struct PointLayers {
   }
 };
 
-class CoatedDiffuse final : public yarf::SurfaceModel {
+class CoatedDiffuse final : public layered::LayeredSurfaceModel<CoatedDiffuse> {
  public:
   explicit CoatedDiffuse(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
         roughness_(layered::ReadPbrtRoughness(props, "")),
         slab_(layered::ReadSlab(props, "eta")) {}
-
-  void Evaluate(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> wo,
-                const yarf::SurfacePoints& at, std::span<float> value) const override {
-    layered::EvaluateRows(LayersAt(at), mode, wi, wo, at, value);
-  }
-
-  void Sample(yarf::TransportMode mode, std::span<const float> wi, const yarf::SurfacePoints& at,
-              std::span<const float> uniform, uint32_t allowed, std::span<float> wo,
-              std::span<float> weight, std::span<float> pdf,
-              std::span<uint32_t> flags) const override {
-    layered::SampleEach(LayersAt(at), mode, wi, at, uniform, allowed, yarf::SampleRows{wo, weight, pdf, flags});
-  }
-
-  void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
-           std::span<float> pdf) const override {
-    layered::PdfRows(LayersAt(at), wi, wo, at, pdf);
-  }
 
   uint32_t Lobes() const override {
     return yarf::kScatterReflect | yarf::kScatterDiffuse | (roughness_.MayRough() ? yarf::kScatterGlossy : 0u) |
@@ -132,6 +115,8 @@ class CoatedDiffuse final : public yarf::SurfaceModel {
   }
 
  private:
+  friend class layered::LayeredSurfaceModel<CoatedDiffuse>;
+
   // The layers at the points of a call.
   PointLayers LayersAt(const yarf::SurfacePoints& at) const {
     return {reflectance_.At(at), roughness_.At(at), slab_.At(at), slab_};

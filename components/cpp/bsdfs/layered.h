@@ -699,4 +699,27 @@ void SampleEach(const LayersAt& layers_at, TransportMode mode, std::span<const f
   }
 }
 
+// A layered material's SurfaceModel: Model::LayersAt(at) gives the layers
+// at the points of a call, and Evaluate, Sample and Pdf walk them.
+template <typename Model>
+class LayeredSurfaceModel : public SurfaceModel {
+ public:
+  void Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo, const SurfacePoints& at,
+                std::span<float> value) const final {
+    EvaluateRows(Self().LayersAt(at), mode, wi, wo, at, value);
+  }
+  void Sample(TransportMode mode, std::span<const float> wi, const SurfacePoints& at, std::span<const float> uniform,
+              uint32_t allowed, std::span<float> wo, std::span<float> weight, std::span<float> pdf,
+              std::span<uint32_t> flags) const final {
+    SampleEach(Self().LayersAt(at), mode, wi, at, uniform, allowed, SampleRows{wo, weight, pdf, flags});
+  }
+  void Pdf(std::span<const float> wi, std::span<const float> wo, const SurfacePoints& at,
+           std::span<float> pdf) const final {
+    PdfRows(Self().LayersAt(at), wi, wo, at, pdf);
+  }
+
+ private:
+  const Model& Self() const { return static_cast<const Model&>(*this); }
+};
+
 }  // namespace yarf::layered

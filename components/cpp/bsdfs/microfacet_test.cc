@@ -59,51 +59,6 @@ Properties Props(std::initializer_list<std::pair<std::string, Properties::Value>
   return props;
 }
 
-// --- Integrals over the sphere of directions -------------------------------
-
-// Midpoint rule in (θ, φ), dω = sin θ dθ dφ: uniform in θ, so a lobe
-// around the normal spans many rows; the horizon is a row boundary.
-struct SphereGrid {
-  std::vector<Vec3> directions;
-  std::vector<double> weights;
-};
-
-const SphereGrid& Grid() {
-  static const SphereGrid grid = [] {
-    constexpr int kRows = 600, kCols = 300;
-    const double dtheta = kPiDouble / kRows, dphi = 2 * kPiDouble / kCols;
-    SphereGrid g;
-    for (int i = 0; i < kRows; ++i)
-      for (int j = 0; j < kCols; ++j) {
-        const double theta = (i + 0.5) * dtheta, phi = -kPiDouble + (j + 0.5) * dphi;
-        g.directions.push_back(
-            SphericalDirection(float(std::sin(theta)), float(std::cos(theta)), float(phi)));
-        g.weights.push_back(std::sin(theta) * dtheta * dphi);
-      }
-    return g;
-  }();
-  return grid;
-}
-
-struct SphereIntegrals {
-  double pdf = 0;  // ∫ pdf dωo
-  Vec3 albedo;     // ∫ f |cos θo| dωo
-};
-
-SphereIntegrals IntegrateOverSphere(const SurfaceModel& model, Vec3 wi,
-                                    TransportMode mode = kRadiance) {
-  const SphereGrid& grid = Grid();
-  const std::vector<float> pdf = PdfBatch(model, wi, grid.directions);
-  const std::vector<Vec3> value = EvaluateBatch(model, wi, grid.directions, mode);
-  double pdf_sum = 0, albedo[3] = {0, 0, 0};
-  for (size_t k = 0; k < pdf.size(); ++k) {
-    pdf_sum += grid.weights[k] * pdf[k];
-    for (int c = 0; c < 3; ++c)
-      albedo[c] += grid.weights[k] * value[k][c] * std::abs(grid.directions[k].z);
-  }
-  return {pdf_sum, Vec3(float(albedo[0]), float(albedo[1]), float(albedo[2]))};
-}
-
 // The finite-lobe samples of `count` draws at wi follow Pdf.
 testing::AssertionResult SamplesFollowPdf(const SurfaceModel& model, Vec3 wi, int count,
                                           uint64_t seed) {

@@ -189,6 +189,51 @@ inline MeanWithError MeanWeight(const std::vector<Scattered>& samples) {
   return {Vec3(mean[0], mean[1], mean[2]), Vec3(error[0], error[1], error[2]), produced / n};
 }
 
+// --- Integrals over the sphere of directions -------------------------------
+
+// Midpoint rule in (θ, φ), dω = sin θ dθ dφ: uniform in θ, so a lobe
+// around the normal spans many rows; the horizon is a row boundary.
+struct SphereGrid {
+  std::vector<Vec3> directions;
+  std::vector<double> weights;
+};
+
+inline const SphereGrid& Grid() {
+  static const SphereGrid grid = [] {
+    constexpr int kRows = 600, kCols = 300;
+    const double dtheta = kPiDouble / kRows, dphi = 2 * kPiDouble / kCols;
+    SphereGrid g;
+    for (int i = 0; i < kRows; ++i)
+      for (int j = 0; j < kCols; ++j) {
+        const double theta = (i + 0.5) * dtheta, phi = -kPiDouble + (j + 0.5) * dphi;
+        g.directions.push_back(
+            SphericalDirection(float(std::sin(theta)), float(std::cos(theta)), float(phi)));
+        g.weights.push_back(std::sin(theta) * dtheta * dphi);
+      }
+    return g;
+  }();
+  return grid;
+}
+
+struct SphereIntegrals {
+  double pdf = 0;  // ∫ pdf dωo
+  Vec3 albedo;     // ∫ f |cos θo| dωo
+};
+
+inline SphereIntegrals IntegrateOverSphere(const SurfaceModel& model, Vec3 wi,
+                                           TransportMode mode = TransportMode::kRadiance) {
+  const SphereGrid& grid = Grid();
+  const std::vector<float> pdf = PdfBatch(model, wi, grid.directions);
+  const std::vector<Vec3> value = EvaluateBatch(model, wi, grid.directions, mode);
+  double pdf_sum = 0, albedo[3] = {0, 0, 0};
+  for (size_t k = 0; k < pdf.size(); ++k) {
+    pdf_sum += grid.weights[k] * pdf[k];
+    for (int c = 0; c < 3; ++c)
+      albedo[c] += grid.weights[k] * value[k][c] * std::abs(grid.directions[k].z);
+  }
+  return {pdf_sum, Vec3(float(albedo[0]), float(albedo[1]), float(albedo[2]))};
+}
+
 // --- Directions and their comparison ----------------------------------------
 
 inline Vec3 DirectionAt(double cos_theta, double phi) {

@@ -820,6 +820,9 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     const Vec3 p = points[k];
     const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
     float u_primitive = 0, probability = 0;
+    // Set where a triangle is sampled by its solid angle (a density per
+    // solid angle already).
+    float solid_angle_pdf = 0;
     const uint32_t index = PickLightFor(p, uniform[3 * k], u_primitive, probability);
     if (index == kNoLight) continue;
     const Light& light = lights_[index];
@@ -879,16 +882,8 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
             const TriangleMesh& mesh = meshes_[shapes_[e.shape].mesh];
             TriangleUvAt(mesh.indices, mesh.uvs, e.primitive, b[1], b[2], uv);
             s.u = uv[0], s.v = uv[1];
-            const Vec3 d = s.position - p;
-            s.distance = Length(d);
-            if (!(s.distance > 0)) {
-              s.emitter = nullptr;
-              continue;
-            }
-            s.direction = d / s.distance;
-            s.w = Frame(s.normal).ToLocal(-s.direction);
-            s.pdf = probability * PrimitiveShare(light, picked) / solid_angle;
-            continue;
+            solid_angle_pdf = probability * PrimitiveShare(light, picked) / solid_angle;
+            break;
           }
         }
         const LightSample area = PointOnSurfaceLight(light, u_primitive, u0, u1);
@@ -911,6 +906,8 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     const float d2 = s.distance * s.distance;
     if (s.delta) {
       s.pdf = probability * d2;
+    } else if (solid_angle_pdf > 0) {
+      s.pdf = solid_angle_pdf;
     } else {
       const float cos_light = std::abs(s.w.z);
       s.pdf = cos_light > 0 ? probability / light.area * d2 / cos_light : 0.0f;
