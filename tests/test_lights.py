@@ -415,3 +415,36 @@ def test_large_triangle_lights_by_solid_angle_lower_the_variance(client: Client)
         family_alpha=1e-3,
     )
     assert not test.failing.size, f"solid angle vs area sampling:\n{test.report()}"
+
+
+@pytest.mark.parametrize("transport", ["light", "bdpt"])
+def test_light_paths_agree_at_the_border_under_a_wide_filter(
+    client: Client, tmp_path: Path, transport: str
+) -> None:
+    """Mitsuba's and pbrt's default filter is a Gaussian 1.5 pixels wide: part
+    of a border pixel's filter lies off the film, and splats there are
+    divided by the part on it, as camera samples are by their weights, so
+    light paths estimate the corners as camera paths do."""
+    shape, lights = LIGHTS["constant sky"]
+    scene = load_scene(write_scene(tmp_path, shape, lights=lights, max_depth=3))
+    scene.film.filter.kind = scene.film.filter.GAUSSIAN
+    scene.film.filter.radius = 1.5
+    renders = {
+        name: client.render(
+            scene,
+            spp=512,
+            seed=seed,
+            sampler=INDEPENDENT,
+            transport=component(name, max_depth=3),
+        )
+        for name, seed in (("path", 1), (transport, 2))
+    }
+    test = block_z_test(
+        renders[transport].pixels,
+        renders[transport].variance,
+        renders["path"].pixels,
+        renders["path"].variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, f"{transport} vs path under a Gaussian filter:\n{test.report()}"

@@ -21,11 +21,16 @@ ReconstructionFilter::ReconstructionFilter(const v1::ReconstructionFilter& filte
   radius_ = float(filter.radius() > 0 ? filter.radius() : defaults[kind_]);
   if (kind_ == v1::ReconstructionFilter::GAUSSIAN)
     gaussian_offset_ = std::exp(-radius_ * radius_ / (2 * 0.25f));
+}
+
+float ReconstructionFilter::Mass1(float centre, float lo, float hi) const {
+  lo = std::max(lo, centre - radius_), hi = std::min(hi, centre + radius_);
+  if (!(hi > lo)) return 0;
   // Midpoint rule: the weights are smooth enough for 4096 steps.
   constexpr int kSteps = 4096;
   double sum = 0;
-  for (int i = 0; i < kSteps; ++i) sum += Weight1(-radius_ + (i + 0.5f) * 2 * radius_ / kSteps);
-  integral_1d_ = float(sum * 2 * radius_ / kSteps);
+  for (int i = 0; i < kSteps; ++i) sum += Weight1(lo + (i + 0.5f) * (hi - lo) / kSteps - centre);
+  return float(sum * (hi - lo) / kSteps);
 }
 
 float ReconstructionFilter::Weight1(float d) const {
@@ -42,7 +47,18 @@ float ReconstructionFilter::Weight1(float d) const {
 }
 
 Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
-    : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {}
+    : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {
+  // Within a radius of the border a pixel's filter is cut; elsewhere whole.
+  const float r = filter_.radius(), whole = filter_.Mass1(0, -r, r);
+  const auto masses = [&](uint32_t count) {
+    std::vector<float> mass(count, whole);
+    for (uint32_t i = 0; i < count; ++i)
+      if (i + 0.5f < r || i + 0.5f + r > float(count)) mass[i] = filter_.Mass1(i + 0.5f, 0, float(count));
+    return mass;
+  };
+  column_mass_ = masses(width);
+  row_mass_ = masses(height);
+}
 
 template <typename Visit>
 void Film::ForEachPixelInFilter(float x, float y, Visit&& visit) const {
@@ -85,8 +101,8 @@ void Film::Splat(float x, float y, Vec3 value) {
     splats_.sum.assign(pixels_.size() * 3, 0.0);
     splats_.sum_sq.assign(pixels_.size() * 3, 0.0);
   }
-  const double scale = 1.0 / filter_.Integral();
   ForEachPixelInFilter(x, y, [&](size_t k, double w) {
+    const double scale = 1.0 / (double(column_mass_[k % width_]) * row_mass_[k / width_]);
     for (int c = 0; c < 3; ++c) splats_.pass[3 * k + c] += w * scale * value[c];
   });
 }

@@ -23,15 +23,15 @@ class ReconstructionFilter {
   explicit ReconstructionFilter(const v1::ReconstructionFilter& filter);
   float radius() const { return radius_; }
   float Weight(float dx, float dy) const { return Weight1(dx) * Weight1(dy); }
-  // ∫∫ Weight over the plane, in pixels².
-  float Integral() const { return integral_1d_ * integral_1d_; }
+  // ∫ of the 1-D weight around `centre` over [lo, hi]: the part of a
+  // pixel's filter that lies on the film, along one axis.
+  float Mass1(float centre, float lo, float hi) const;
 
  private:
   float Weight1(float d) const;
   v1::ReconstructionFilter::Kind kind_;
   float radius_;
   float gaussian_offset_ = 0;
-  float integral_1d_ = 1;
 };
 
 class Film {
@@ -78,6 +78,10 @@ class Film {
   uint32_t width_, height_;
   v1::ReconstructionFilter filter_spec_;  // kept for Save
   ReconstructionFilter filter_;
+  // Per column and per row, the mass of a pixel's filter on the film:
+  // splats there are divided by it, as camera samples are by their
+  // weights, so that a pixel at the border estimates its own average too.
+  std::vector<float> column_mass_, row_mass_;
   std::vector<Pixel> pixels_;
   Splats splats_;
   uint32_t passes_ = 0;

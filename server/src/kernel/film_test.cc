@@ -28,7 +28,8 @@ TEST(Film, BoxFilterAveragesTheSamplesInsideEachPixel) {
 
 TEST(Film, SplatsAreSummedPerPassAndAveragedOverPasses) {
   // One pass of width×height uniformly placed splats of value L estimates
-  // L in every pixel (away from the border, under any filter).
+  // L in every pixel under any filter, at the border too (where part of a
+  // pixel's filter lies off the film).
   for (auto kind : {v1::ReconstructionFilter::BOX, v1::ReconstructionFilter::TENT,
                     v1::ReconstructionFilter::GAUSSIAN}) {
     Film film(16, 16, Filter(kind));
@@ -42,8 +43,8 @@ TEST(Film, SplatsAreSummedPerPassAndAveragedOverPasses) {
     const std::vector<float> pixels = film.Pixels(), variances = film.Variances();
     double sum = 0, within = 0;
     int count = 0;
-    for (int y = 3; y < 13; ++y)
-      for (int x = 3; x < 13; ++x) {
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) {
         const size_t k = 3 * (size_t(y) * 16 + x);
         sum += pixels[k];
         // Each pass is a Poisson-like count: variance of the mean ≈ 2²·1/passes.
