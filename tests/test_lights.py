@@ -393,10 +393,10 @@ def test_large_triangle_lights_by_solid_angle_lower_the_variance(client: Client)
     scene.film.width = scene.film.height = 48
     renders = {}
     for name, choice in (
-        ("solid angle", scene.SPHERE_SAMPLING_SOLID_ANGLE),
-        ("area", scene.SPHERE_SAMPLING_AREA),
+        ("solid angle", scene.TRIANGLE_SAMPLING_SOLID_ANGLE),
+        ("area", scene.TRIANGLE_SAMPLING_AREA),
     ):
-        scene.sphere_sampling = choice
+        scene.triangle_sampling = choice
         renders[name] = client.render(
             scene, spp=128, seed=4, sampler=INDEPENDENT, transport=component("path", max_depth=2)
         )

@@ -180,7 +180,9 @@ void PbrtImporter::Integrator(const std::string& type, PbrtParams& params, const
   if (params.Bool("regularize", false))
     Warn(params.WhereIs("regularize", where), "regularize", "path regularization is not supported: ignored");
   params.Accept({"samplelights", "samplebsdf"});
-  // pbrt-v4's light samplers are yarf's; its default is the BVH.
+  // pbrt-v4 samples emitting triangles by their solid angle where it is
+  // fair; its light samplers are yarf's, its default the BVH.
+  assembly_.scene().set_triangle_sampling(v1::Scene::TRIANGLE_SAMPLING_SOLID_ANGLE);
   const std::string light_sampler = params.String("lightsampler", "bvh");
   if (light_sampler == "bvh") {
     assembly_.scene().set_light_sampler(v1::Scene::LIGHT_SAMPLER_BVH);

@@ -388,7 +388,9 @@ TEST(PbrtImport, IntegratorsMapToTheTransportsThatEstimateTheirImage) {
     EXPECT_EQ(IntProperty(result.scene.transport().properties(), "max_depth"), 8) << pbrt;
     EXPECT_FALSE(Warns(result, "is not available")) << pbrt;
   }
-  // pbrt-v4's default light sampler is the BVH.
+  // pbrt-v4 samples large triangles by solid angle; its default light
+  // sampler is the BVH.
+  EXPECT_EQ(PbrtWithIntegrator("\"path\"").scene.triangle_sampling(), v1::Scene::TRIANGLE_SAMPLING_SOLID_ANGLE);
   EXPECT_EQ(PbrtWithIntegrator("\"path\"").scene.light_sampler(), v1::Scene::LIGHT_SAMPLER_BVH);
   EXPECT_EQ(PbrtWithIntegrator("\"path\" \"string lightsampler\" \"power\"").scene.light_sampler(),
             v1::Scene::LIGHT_SAMPLER_POWER);

@@ -720,7 +720,7 @@ bool KernelScene::TriangleBySolidAngle(const EmittingPrimitive& e, Vec3 p, float
   // pbrt-v4's bounds: below, area sampling is as good and cheaper; above,
   // the spherical triangle is too close to a hemisphere to sample well.
   constexpr float kMinSolidAngle = 3e-4f, kMaxSolidAngle = 6.22f;
-  if (e.sphere || spheres_by_area_) return false;
+  if (e.sphere || !triangles_by_solid_angle_) return false;
   const Vec3 a = e.p0 - p, b = e.p1 - p, c = e.p2 - p;
   if (!(Length(a) > 0 && Length(b) > 0 && Length(c) > 0)) return false;
   solid_angle = SphericalTriangleArea(Normalize(a), Normalize(b), Normalize(c));

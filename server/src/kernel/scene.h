@@ -70,10 +70,12 @@ class KernelScene final : public SceneView {
   // paths start by power then).
   enum class LightChoice { kPower, kUniform, kBvh };
   void ChooseLights(LightChoice choice) { light_choice_ = choice; }
-  // How light samples from a point find sphere lights and triangles that
-  // subtend a fair solid angle: by that solid angle (the default), or
-  // uniformly in area.
+  // How light samples from a point find sphere lights: by the solid angle
+  // they subtend (the default), or uniformly in area.
   void SampleSpheresByArea(bool by_area) { spheres_by_area_ = by_area; }
+  // Whether they find triangles that subtend a fair solid angle by that
+  // solid angle (pbrt-v4), or uniformly in area (the default, Mitsuba).
+  void SampleTrianglesBySolidAngle(bool by_solid_angle) { triangles_by_solid_angle_ = by_solid_angle; }
   void Commit();
 
   // Commit (the BVH builds) and every later Intersect and Occluded throw
@@ -199,7 +201,7 @@ class KernelScene final : public SceneView {
   float PrimitiveShare(const Light& light, uint32_t primitive) const;
   // Whether light samples from p find emitting triangle `e` by the solid
   // angle it subtends (as pbrt-v4: for one neither tiny nor huge from
-  // p, unless lights are sampled by area), and that solid angle.
+  // p, when triangles are sampled so), and that solid angle.
   bool TriangleBySolidAngle(const EmittingPrimitive& e, Vec3 p, float& solid_angle) const;
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
   float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
@@ -261,6 +263,7 @@ class KernelScene final : public SceneView {
   std::vector<uint32_t> infinite_lights_;
   float infinite_probability_ = 0;
   bool spheres_by_area_ = false;
+  bool triangles_by_solid_angle_ = false;
   // Whether light samples from p find the sphere light `light` by its cone.
   bool SphereByCone(const Light& light, Vec3 p) const;
   // The sphere around the scene and the camera that lights at infinity

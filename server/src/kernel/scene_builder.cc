@@ -179,6 +179,7 @@ class Builder {
         kernel_->ChooseLights(KernelScene::LightChoice::kPower);
     }
     kernel_->SampleSpheresByArea(scene_.sphere_sampling() == v1::Scene::SPHERE_SAMPLING_AREA);
+    kernel_->SampleTrianglesBySolidAngle(scene_.triangle_sampling() == v1::Scene::TRIANGLE_SAMPLING_SOLID_ANGLE);
     // In order: a texture may refer to those before it.
     for (const v1::SceneTexture& t : scene_.textures()) {
       kernel_->ThrowIfStopped();
