@@ -34,12 +34,6 @@ using namespace surface_testing;  // NOLINT: the shared helpers, in every test
 
 constexpr TransportMode kRadiance = TransportMode::kRadiance;
 
-Properties Props(std::initializer_list<std::pair<std::string, Properties::Value>> values) {
-  Properties props;
-  for (const auto& [key, value] : values) props.Set(key, value);
-  return props;
-}
-
 struct Variant {
   std::string model, name;
   Properties props;

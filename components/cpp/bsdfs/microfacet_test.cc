@@ -53,12 +53,6 @@ std::vector<Vec3> BothSides() {
   return out;
 }
 
-Properties Props(std::initializer_list<std::pair<std::string, Properties::Value>> values) {
-  Properties props;
-  for (const auto& [key, value] : values) props.Set(key, value);
-  return props;
-}
-
 // The finite-lobe samples of `count` draws at wi follow Pdf.
 testing::AssertionResult SamplesFollowPdf(const SurfaceModel& model, Vec3 wi, int count,
                                           uint64_t seed) {

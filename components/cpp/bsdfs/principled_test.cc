@@ -34,12 +34,6 @@ using namespace surface_testing;  // NOLINT: the shared helpers, in every test
 constexpr TransportMode kRadiance = TransportMode::kRadiance;
 constexpr TransportMode kImportance = TransportMode::kImportance;
 
-Properties Props(std::initializer_list<std::pair<std::string, Properties::Value>> values) {
-  Properties props;
-  for (const auto& [key, value] : values) props.Set(key, value);
-  return props;
-}
-
 // A material of each kind, named for the messages: each lobe turned fully
 // on at least once.
 struct Variant {

@@ -63,6 +63,13 @@ class SurfacePluginTest : public testing::Test {
   Registry registry_;
 };
 
+// Properties from a list of key-value pairs.
+inline Properties Props(std::initializer_list<std::pair<std::string, Properties::Value>> values) {
+  Properties props;
+  for (const auto& [key, value] : values) props.Set(key, value);
+  return props;
+}
+
 // --- Calling the batch interface -------------------------------------------
 
 inline Vec3 EvaluateOne(const SurfaceModel& model, Vec3 wi, Vec3 wo,
