@@ -47,18 +47,7 @@ float ReconstructionFilter::Weight1(float d) const {
 }
 
 Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
-    : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {
-  // Within a radius of the border a pixel's filter is cut; elsewhere whole.
-  const float r = filter_.radius(), whole = filter_.Mass1(0, -r, r);
-  const auto masses = [&](uint32_t count) {
-    std::vector<float> mass(count, whole);
-    for (uint32_t i = 0; i < count; ++i)
-      if (i + 0.5f < r || i + 0.5f + r > float(count)) mass[i] = filter_.Mass1(i + 0.5f, 0, float(count));
-    return mass;
-  };
-  column_mass_ = masses(width);
-  row_mass_ = masses(height);
-}
+    : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {}
 
 template <typename Visit>
 void Film::ForEachPixelInFilter(float x, float y, Visit&& visit) const {
@@ -100,6 +89,19 @@ void Film::Splat(float x, float y, Vec3 value) {
     splats_.pass.assign(pixels_.size() * 3, 0.0);
     splats_.sum.assign(pixels_.size() * 3, 0.0);
     splats_.sum_sq.assign(pixels_.size() * 3, 0.0);
+  }
+  if (column_mass_.empty()) {
+    // Made at the first splat (a resumed film's too): within a radius of the
+    // border a pixel's filter is cut; elsewhere whole.
+    const float r = filter_.radius(), whole = filter_.Mass1(0, -r, r);
+    const auto masses = [&](uint32_t count) {
+      std::vector<float> mass(count, whole);
+      for (uint32_t i = 0; i < count; ++i)
+        if (i + 0.5f < r || i + 0.5f + r > float(count)) mass[i] = filter_.Mass1(i + 0.5f, 0, float(count));
+      return mass;
+    };
+    column_mass_ = masses(width_);
+    row_mass_ = masses(height_);
   }
   ForEachPixelInFilter(x, y, [&](size_t k, double w) {
     const double scale = 1.0 / (double(column_mass_[k % width_]) * row_mass_[k / width_]);

@@ -80,7 +80,8 @@ class Film {
   ReconstructionFilter filter_;
   // Per column and per row, the mass of a pixel's filter on the film:
   // splats there are divided by it, as camera samples are by their
-  // weights, so that a pixel at the border estimates its own average too.
+  // weights, so that a pixel at the border estimates its own average too
+  // (made at the first splat: films without splats need none).
   std::vector<float> column_mass_, row_mass_;
   std::vector<Pixel> pixels_;
   Splats splats_;
