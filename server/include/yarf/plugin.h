@@ -6,6 +6,7 @@
 
 #include "yarf/component.h"
 #include "yarf/math.h"
+#include "yarf/medium.h"
 #include "yarf/surface.h"
 #include "yarf/texture.h"
 #include "yarf/transport.h"
@@ -17,7 +18,7 @@ template <typename T>
 void Register(Registrar& registrar, std::string name, std::string version, std::string summary) {
   ComponentInfo info{std::move(name), std::move(version),
                      InterfacesOf<T, Function, Integrator, Sampler, Generator, RootFinder, Warp,
-                                  SurfaceModel, Emitter, Transport, Texture>(),
+                                  SurfaceModel, Emitter, Transport, Texture, Medium>(),
                      std::move(summary), ""};
   registrar.Add(std::move(info), [](const Properties& p) -> std::unique_ptr<Component> {
     return std::make_unique<T>(p);

@@ -21,6 +21,11 @@ enum ScatterFlags : uint32_t {
   kScatterDelta = 4,
   kScatterDiffuse = 8,
   kScatterGlossy = 16,
+  // Light passes straight on, unchanged (wo = -wi, weight 1): a surface
+  // that only bounds a medium (Mitsuba's null BSDF, pbrt's interface).
+  // Always with kScatterRefract | kScatterDelta, so that a method that
+  // knows nothing of media treats it as a delta transmission.
+  kScatterNull = 32,
 };
 
 // What a path carries: radiance from the lights (paths from the camera),

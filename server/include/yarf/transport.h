@@ -13,6 +13,7 @@
 
 #include "yarf/component.h"
 #include "yarf/geometry.h"
+#include "yarf/medium.h"
 #include "yarf/surface.h"
 #include "yarf/surface_points.h"
 
@@ -215,6 +216,13 @@ class SceneView : public Intersector, public SurfaceAttributes {
   virtual uint32_t ShapeCount() const = 0;
   virtual uint32_t PrimitiveCount(uint32_t shape) const = 0;
   virtual bool Triangle(uint32_t shape, uint32_t primitive, Vec3 corners[3]) const = 0;
+  // Participating media (Scene.media), numbered 0..MediumCount()-1;
+  // kNoMedium is vacuum. Methods that know media follow a ray from the
+  // camera's medium through the boundaries it crosses (MediaOf).
+  virtual uint32_t MediumCount() const { return 0; }
+  virtual const Medium& MediumAt(uint32_t medium) const = 0;
+  virtual MediumInterface MediaOf(uint32_t shape) const { return {}; }
+  virtual uint32_t CameraMedium() const { return kNoMedium; }
   // The handle under which the server's JobScene and Intersect services
   // serve this scene to out-of-process transports; 0 when not served.
   virtual uint64_t ServiceHandle() const { return 0; }

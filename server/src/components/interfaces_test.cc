@@ -7,10 +7,12 @@
 
 #include "yarf/geometry.h"
 #include "yarf/math.h"
+#include "yarf/medium.h"
 #include "yarf/surface.h"
 #include "yarf/transport.h"
 #include "yarf/v1/geometry.pb.h"
 #include "yarf/v1/math.pb.h"
+#include "yarf/v1/medium.pb.h"
 #include "yarf/v1/surface.pb.h"
 #include "yarf/v1/transport.pb.h"
 
@@ -20,7 +22,8 @@ namespace {
 const google::protobuf::ServiceDescriptor* FindService(const std::string& name) {
   // Referencing one message of each file links its descriptors in.
   for (const auto* file : {v1::EvaluateRequest::descriptor()->file(), v1::SurfaceQuery::descriptor()->file(),
-                           v1::RayBatch::descriptor()->file(), v1::TransportRequest::descriptor()->file()})
+                           v1::RayBatch::descriptor()->file(), v1::TransportRequest::descriptor()->file(),
+                           v1::PhaseQuery::descriptor()->file()})
     for (int i = 0; i < file->service_count(); ++i)
       if (file->service(i)->full_name() == name) return file->service(i);
   return nullptr;
@@ -46,6 +49,7 @@ TEST(Interfaces, MirrorTheirProtoServices) {
   ExpectMirrorsService<Emitter>();
   ExpectMirrorsService<Intersector>();
   ExpectMirrorsService<Transport>();
+  ExpectMirrorsService<Medium>();
 }
 
 }  // namespace

@@ -51,6 +51,11 @@ uint32_t KernelScene::AddMaterial(std::shared_ptr<const SurfaceModel> material) 
   return uint32_t(materials_.size() - 1);
 }
 
+uint32_t KernelScene::AddMedium(std::unique_ptr<Medium> medium) {
+  media_.push_back(std::move(medium));
+  return uint32_t(media_.size() - 1);
+}
+
 const Emitter* KernelScene::AddEmitter(std::unique_ptr<Emitter> emitter) {
   emitters_.push_back(std::move(emitter));
   return emitters_.back().get();

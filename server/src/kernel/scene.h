@@ -30,6 +30,8 @@ struct ShapeLook {
   // Meshes: the probability that a ray meets the surface at a uv (a
   // cut-out); null for an opaque one.
   std::shared_ptr<const Texture> alpha;
+  // The media the surface bounds, if it is a boundary.
+  MediumInterface media;
 };
 
 class KernelScene final : public SceneView {
@@ -45,6 +47,9 @@ class KernelScene final : public SceneView {
   // kWorld is the world itself), then placements of groups, then Commit.
   uint32_t AddMaterial(std::shared_ptr<const SurfaceModel> material);
   const Emitter* AddEmitter(std::unique_ptr<Emitter> emitter);
+  // A participating medium; returns its number.
+  uint32_t AddMedium(std::unique_ptr<Medium> medium);
+  void SetCameraMedium(uint32_t medium) { camera_medium_ = medium; }
   uint32_t NewGroup();
   // Geometry in the group's own space.
   void AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look);
@@ -125,6 +130,10 @@ class KernelScene final : public SceneView {
   float CameraDirectionPdf(Vec3 direction) const override { return camera_.DirectionPdf(direction); }
   uint32_t FilmWidth() const override { return width_; }
   uint32_t FilmHeight() const override { return height_; }
+  uint32_t MediumCount() const override { return uint32_t(media_.size()); }
+  const Medium& MediumAt(uint32_t medium) const override { return *media_.at(medium); }
+  MediumInterface MediaOf(uint32_t shape) const override { return shapes_[shape].look.media; }
+  uint32_t CameraMedium() const override { return camera_medium_; }
   uint64_t ServiceHandle() const override { return service_handle_; }
   void SetServiceHandle(uint64_t handle) { service_handle_ = handle; }
 
@@ -214,6 +223,8 @@ class KernelScene final : public SceneView {
   // Shared: a material may wrap another (normalmap).
   std::vector<std::shared_ptr<const SurfaceModel>> materials_;
   std::vector<std::unique_ptr<Emitter>> emitters_;
+  std::vector<std::unique_ptr<Medium>> media_;
+  uint32_t camera_medium_ = kNoMedium;
   std::vector<TriangleMesh> meshes_;
   // The cut-outs of meshes with an alpha texture, Embree's filter data.
   std::vector<std::unique_ptr<AlphaCut>> alpha_cuts_;

@@ -76,21 +76,28 @@ void RequireShapeAssets(const google::protobuf::RepeatedPtrField<v1::SceneShape>
   }
 }
 
-void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
-                    const std::set<std::string>& materials, const std::set<std::string>& textures,
+// The names a scene's shapes may refer to.
+struct SceneNames {
+  std::set<std::string> materials, textures, media;
+};
+
+void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes, const SceneNames& names,
                     const std::string& where) {
   for (int i = 0; i < shapes.size(); ++i) {
     const v1::SceneShape& s = shapes[i];
     const std::string what = where + ShapeName(s, i);
     if (s.geometry_case() == v1::SceneShape::GEOMETRY_NOT_SET) throw Error(what + " has no geometry");
     if (s.material().empty()) throw Error(what + " has no material");
-    if (!materials.count(s.material()))
+    if (!names.materials.count(s.material()))
       throw Error(what + " uses unknown material '" + s.material() + "'");
     if (s.has_emitter() && s.emitter().class_name().empty())
       throw Error(what + " has an emitter without a class");
-    if (!s.alpha().empty() && !textures.count(s.alpha()))
+    if (!s.alpha().empty() && !names.textures.count(s.alpha()))
       throw Error(what + ": alpha names '" + s.alpha() + "', which is not a texture of the scene");
     if (!s.alpha().empty() && s.has_sphere()) throw Error(what + ": alpha cut-outs are for meshes, not spheres");
+    for (const std::string* medium : {&s.interior(), &s.exterior()})
+      if (!medium->empty() && !names.media.count(*medium))
+        throw Error(what + ": medium '" + *medium + "' is not a medium of the scene");
     if (s.has_sphere() && !(s.sphere().radius() > 0 && std::isfinite(s.sphere().radius())))
       throw Error(what + ": sphere radius must be positive");
     if (s.has_to_world()) CheckPlacement(FromProto(s.to_world(), what + " to_world"), what);
@@ -143,20 +150,38 @@ std::string TextureName(const v1::SceneTexture& texture) {
   return "texture '" + texture.name() + "' (" + texture.texture().class_name() + ")";
 }
 
-// The property of a component (a texture, a light's emitter) that names
-// its file as an uploaded asset.
-const v1::Property* AssetOf(const v1::ComponentSpec& spec) {
-  const auto& values = spec.properties().values();
-  const auto it = values.find("asset");
-  return it == values.end() ? nullptr : &it->second;
+// Whether a component's property names a file of its own: `filename`, or
+// `NAME_filename` for components that read several (a medium's grids).
+// Such a file is read under the scene's folder; the same key with `asset`
+// for `filename` names an uploaded one instead.
+bool KeyEndsWith(const std::string& key, std::string_view word) {
+  return key == word || (key.size() > word.size() + 1 && key.ends_with(word) && key[key.size() - word.size() - 1] == '_');
+}
+bool IsFileKey(const std::string& key) { return KeyEndsWith(key, "filename"); }
+bool IsAssetKey(const std::string& key) { return KeyEndsWith(key, "asset"); }
+std::string FileKeyOfAsset(const std::string& asset_key) {
+  return asset_key.substr(0, asset_key.size() - std::string_view("asset").size()) + "filename";
 }
 
-// The components of a scene that may read a file of their own (textures'
-// images, environment maps), each with its name for errors.
+// The properties of a component that name uploaded assets.
+std::vector<std::pair<std::string, const v1::Property*>> AssetsOf(const v1::ComponentSpec& spec) {
+  std::vector<std::pair<std::string, const v1::Property*>> out;
+  for (const auto& [key, value] : spec.properties().values())
+    if (IsAssetKey(key)) out.emplace_back(key, &value);
+  return out;
+}
+
+std::string MediumName(const v1::SceneMedium& medium) {
+  return "medium '" + medium.name() + "' (" + medium.medium().class_name() + ")";
+}
+
+// The components of a scene that may read files of their own (textures'
+// images, environment maps, media's grids), each with its name for errors.
 std::vector<std::pair<std::string, const v1::ComponentSpec*>> FileComponents(const v1::Scene& scene) {
   std::vector<std::pair<std::string, const v1::ComponentSpec*>> out;
   for (const v1::SceneTexture& t : scene.textures()) out.emplace_back(TextureName(t), &t.texture());
   for (int i = 0; i < scene.lights_size(); ++i) out.emplace_back(LightName(scene.lights(i), i), &scene.lights(i).emitter());
+  for (const v1::SceneMedium& m : scene.media()) out.emplace_back(MediumName(m), &m.medium());
   return out;
 }
 
@@ -192,6 +217,13 @@ class Builder {
       resolved_.materials[m.name()] = model;
       materials_[m.name()] = kernel_->AddMaterial(std::move(model));
     }
+    for (const v1::SceneMedium& m : scene_.media()) {
+      const std::string what = MediumName(m);
+      ResolvedProperties own{resolved_.textures, {}, {}};
+      const v1::Properties props = WithoutFile(m.medium(), what, own);
+      media_[m.name()] = kernel_->AddMedium(Create<Medium>(m.medium().class_name(), props, m.medium().address(), what, &own));
+    }
+    kernel_->SetCameraMedium(MediumNumber(scene_.camera_medium()));
     for (int i = 0; i < scene_.lights_size(); ++i) {
       const v1::Light& light = scene_.lights(i);
       const std::string what = LightName(light, i);
@@ -233,21 +265,28 @@ class Builder {
     }
   }
 
-  // A component's properties without its file (`filename` under the asset
-  // root, or an uploaded `asset`), which `own` names for it as its
-  // `filename`.
+  // A component's properties without its files (IsFileKey, IsAssetKey),
+  // which `own` names for it by their `filename` keys.
   v1::Properties WithoutFile(const v1::ComponentSpec& spec, const std::string& what, ResolvedProperties& own) {
     v1::Properties props = spec.properties();
     auto& values = *props.mutable_values();
-    if (auto it = values.find("filename"); it != values.end()) {
-      if (it->second.value_case() != v1::Property::kStringValue)
-        throw Error(what + ": property 'filename' must be a string");
-      own.files["filename"] = ConfinedPath(sources_.asset_root, it->second.string_value(), "file", what);
-      values.erase(it);
-    } else if (auto asset = values.find("asset"); asset != values.end()) {
-      if (!sources_.assets) throw Error(what + ": this server keeps no assets");
-      own.files["filename"] = sources_.assets->FileOf(asset->second.string_value());
-      values.erase(asset);
+    for (auto it = values.begin(); it != values.end();) {
+      const std::string& key = it->first;
+      if (IsFileKey(key)) {
+        if (it->second.value_case() != v1::Property::kStringValue)
+          throw Error(what + ": property '" + key + "' must be a string");
+        if (own.files.count(key)) throw Error(what + ": a file and an asset are both given for '" + key + "'");
+        own.files[key] = ConfinedPath(sources_.asset_root, it->second.string_value(), "file", what);
+      } else if (IsAssetKey(key)) {
+        if (!sources_.assets) throw Error(what + ": this server keeps no assets");
+        const std::string file_key = FileKeyOfAsset(key);
+        if (own.files.count(file_key)) throw Error(what + ": a file and an asset are both given for '" + file_key + "'");
+        own.files[file_key] = sources_.assets->FileOf(it->second.string_value());
+      } else {
+        ++it;
+        continue;
+      }
+      it = values.erase(it);
     }
     return props;
   }
@@ -270,6 +309,8 @@ class Builder {
       look.name = s.name().empty() ? what : s.name();
       look.material = materials_.at(s.material());
       look.flip_normals = s.flip_normals();
+      if (!s.interior().empty() || !s.exterior().empty())
+        look.media = {MediumNumber(s.interior()), MediumNumber(s.exterior()), true};
       if (!s.alpha().empty()) {
         const auto alpha = resolved_.textures.find(s.alpha());
         if (alpha == resolved_.textures.end()) throw Error(what + ": alpha names no texture of the scene");
@@ -378,7 +419,11 @@ class Builder {
   const v1::Scene& scene_;
   const SceneSources& sources_;
   std::unique_ptr<KernelScene> kernel_;
+  // A medium by name; kNoMedium for none.
+  uint32_t MediumNumber(const std::string& name) const { return name.empty() ? kNoMedium : media_.at(name); }
+
   std::map<std::string, uint32_t> materials_;
+  std::map<std::string, uint32_t> media_;
   std::map<std::string, std::pair<const v1::Group*, uint32_t>> groups_;
   // The scene's textures, for the materials and emitters that refer to them.
   ResolvedProperties resolved_;
@@ -428,8 +473,8 @@ uint64_t CountPlacements(const v1::Scene& scene) {
 std::vector<std::string> SceneAssets(const v1::Scene& scene) {
   std::vector<std::string> hashes;
   for (const auto& [what, spec] : FileComponents(scene))
-    if (const v1::Property* asset = AssetOf(*spec); asset && asset->value_case() == v1::Property::kStringValue)
-      hashes.push_back(asset->string_value());
+    for (const auto& [key, asset] : AssetsOf(*spec))
+      if (asset->value_case() == v1::Property::kStringValue) hashes.push_back(asset->string_value());
   const auto collect = [&](const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes) {
     for (const v1::SceneShape& shape : shapes)
       if (shape.has_mesh() && shape.mesh().has_asset()) hashes.push_back(shape.mesh().asset());
@@ -457,23 +502,29 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
   ReconstructionFilter{film.filter()};
   if (!scene.has_camera()) throw Error("scene has no camera");
   Camera(scene.camera(), film.width(), film.height());
-  std::set<std::string> materials;
+  SceneNames names;
   for (const v1::Material& m : scene.materials()) {
     if (m.name().empty()) throw Error("a material has no name");
     if (m.class_name().empty()) throw Error("material '" + m.name() + "' has no class");
-    if (!materials.insert(m.name()).second) throw Error("material '" + m.name() + "' defined twice");
+    if (!names.materials.insert(m.name()).second) throw Error("material '" + m.name() + "' defined twice");
   }
-  std::set<std::string> textures;
   for (const v1::SceneTexture& t : scene.textures()) {
     if (t.name().empty()) throw Error("a texture has no name");
     if (t.texture().class_name().empty()) throw Error("texture '" + t.name() + "' has no class");
-    if (!textures.insert(t.name()).second) throw Error("texture '" + t.name() + "' defined twice");
+    if (!names.textures.insert(t.name()).second) throw Error("texture '" + t.name() + "' defined twice");
   }
+  for (const v1::SceneMedium& m : scene.media()) {
+    if (m.name().empty()) throw Error("a medium has no name");
+    if (m.medium().class_name().empty()) throw Error("medium '" + m.name() + "' has no class");
+    if (!names.media.insert(m.name()).second) throw Error("medium '" + m.name() + "' defined twice");
+  }
+  if (!scene.camera_medium().empty() && !names.media.count(scene.camera_medium()))
+    throw Error("camera_medium '" + scene.camera_medium() + "' is not a medium of the scene");
   for (const auto& [what, spec] : FileComponents(scene))
-    if (const v1::Property* asset = AssetOf(*spec);
-        asset && (asset->value_case() != v1::Property::kStringValue || !IsSha256(asset->string_value())))
-      throw Error(what + ": property 'asset' must be a SHA-256 (64 lowercase hex digits)");
-  ValidateShapes(scene.shapes(), materials, textures, "");
+    for (const auto& [key, asset] : AssetsOf(*spec))
+      if (asset->value_case() != v1::Property::kStringValue || !IsSha256(asset->string_value()))
+        throw Error(what + ": property '" + key + "' must be a SHA-256 (64 lowercase hex digits)");
+  ValidateShapes(scene.shapes(), names, "");
   int environments = 0;
   for (int i = 0; i < scene.lights_size(); ++i) {
     const v1::Light& light = scene.lights(i);
@@ -485,14 +536,15 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
       CheckPlacement(FromProto(light.to_world(), LightName(light, i) + " to_world"), LightName(light, i));
   }
   for (const v1::Group& g : scene.groups())
-    ValidateShapes(g.shapes(), materials, textures, "group '" + g.name() + "' ");
+    ValidateShapes(g.shapes(), names, "group '" + g.name() + "' ");
   if (CountPlacements(scene) > SceneLimits::kMaxPlacements)
     throw Error("instancing expands to more than " + std::to_string(SceneLimits::kMaxPlacements) + " placements");
   if (!assets) return;
   for (const auto& [what, spec] : FileComponents(scene))
-    if (const v1::Property* asset = AssetOf(*spec); asset && !assets->Has(asset->string_value()))
-      throw Error(what + ": asset " + asset->string_value() +
-                  " is not on this server; upload it with AssetService.Upload before submitting");
+    for (const auto& [key, asset] : AssetsOf(*spec))
+      if (!assets->Has(asset->string_value()))
+        throw Error(what + ": asset " + asset->string_value() +
+                    " is not on this server; upload it with AssetService.Upload before submitting");
   RequireShapeAssets(scene.shapes(), *assets, "");
   for (const v1::Group& g : scene.groups()) RequireShapeAssets(g.shapes(), *assets, "group '" + g.name() + "' ");
 }

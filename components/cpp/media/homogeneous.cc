@@ -1,0 +1,74 @@
+// homogeneous — a medium with the same coefficients everywhere (pbrt-v4's
+// "homogeneous", Mitsuba 3's "homogeneous" once its σ_t and albedo are
+// split into σ_a and σ_s).
+//
+// Its majorant is its own extinction, so null-scattering tracking never
+// meets a null collision in it.
+//
+// Properties:
+//   sigma_a    rgb (or float)   default 0   absorption, per unit length, ≥ 0
+//   sigma_s    rgb (or float)   default 0   scattering, per unit length, ≥ 0
+//   scale      float            default 1   multiplies both, ≥ 0
+//   emission   rgb (or float)   default 0   radiance emitted where it absorbs (pbrt's Le), ≥ 0
+//   g, g2, blend                            the phase function (phase.h)
+#include <algorithm>
+
+#include "phase.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+Vec3 NonNegativeColor(const Properties& props, const char* key) {
+  const Vec3 c = props.Color(key, Vec3(0, 0, 0));
+  if (!(c.x >= 0 && c.y >= 0 && c.z >= 0 && MaxComponent(c) < kInfinity))
+    throw Error(std::string("property '") + key + "' must be finite and non-negative");
+  return c;
+}
+
+float Scale(const Properties& props) {
+  const float scale = float(props.Float("scale", 1));
+  if (!(scale >= 0 && scale < kInfinity)) throw Error("property 'scale' must be finite and non-negative");
+  return scale;
+}
+
+class Homogeneous final : public UniformPhaseMedium {
+ public:
+  explicit Homogeneous(const Properties& props)
+      : UniformPhaseMedium(props),
+        sigma_a_(NonNegativeColor(props, "sigma_a") * Scale(props)),
+        sigma_s_(NonNegativeColor(props, "sigma_s") * Scale(props)),
+        emission_(NonNegativeColor(props, "emission")) {}
+
+  void Majorants(std::span<const float> origin, std::span<const float> direction, std::span<const float> tmax,
+                 MajorantSegments& out) const override {
+    out.Clear();
+    const Vec3 sigma_t = sigma_a_ + sigma_s_;
+    for (size_t i = 0; i < tmax.size(); ++i) {
+      if (MaxComponent(sigma_t) > 0 && tmax[i] > 0) out.segments.push_back({0, tmax[i], sigma_t});
+      out.offsets.push_back(uint32_t(out.segments.size()));
+    }
+  }
+
+  void Coefficients(std::span<const float> position, std::span<float> sigma_a, std::span<float> sigma_s,
+                    std::span<float> emission) const override {
+    for (size_t k = 0; 3 * k < position.size(); ++k) {
+      sigma_a_.Store(&sigma_a[3 * k]);
+      sigma_s_.Store(&sigma_s[3 * k]);
+      emission_.Store(&emission[3 * k]);
+    }
+  }
+
+  bool Emits() const override { return MaxComponent(emission_) > 0 && MaxComponent(sigma_a_) > 0; }
+
+ private:
+  Vec3 sigma_a_, sigma_s_, emission_;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::Homogeneous>(registrar, "homogeneous", "1.0.0",
+                                    "a medium with the same absorption, scattering and phase function everywhere");
+}
