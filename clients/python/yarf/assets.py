@@ -69,8 +69,9 @@ class SceneAssets:
     sources: dict[str, AssetData] = field(default_factory=dict)
     # Each mesh of the scene to rename, with its hash and format.
     meshes: list[tuple[scene_pb2.Mesh, str, str]] = field(default_factory=list)
-    # Each texture or light whose `filename` becomes an `asset`, with its hash.
-    textures: list[tuple[scene_pb2.ComponentSpec, str]] = field(default_factory=list)
+    # Each component file (a texture's or light's `filename`, a medium's
+    # `NAME_filename`) that becomes an `asset`: the component, the key and the hash.
+    files: list[tuple[scene_pb2.ComponentSpec, str, str]] = field(default_factory=list)
 
     def upload(self, client: Client) -> int:
         """Asks the server once which hashes it lacks, sends only those, then names
@@ -81,20 +82,42 @@ class SceneAssets:
         for mesh, digest, mesh_format in self.meshes:
             mesh.asset = digest  # clears `file` or `data` (same oneof)
             mesh.format = mesh_format
-        for texture, digest in self.textures:
-            values = texture.properties.values
-            del values["filename"]
-            values["asset"].string_value = digest
+        for spec, key, digest in self.files:
+            values = spec.properties.values
+            del values[key]
+            values[asset_key_of(key)].string_value = digest
         return len(missing)
 
 
 def _file_components(scene: scene_pb2.Scene) -> Iterator[tuple[str, scene_pb2.ComponentSpec]]:
-    """The components of ``scene`` that may read a file of their own (textures'
-    images, environment maps), each with where it is for errors."""
+    """The components of ``scene`` that may read files of their own (textures'
+    images, environment maps, media's grids), each with where it is for errors."""
     for index, texture in enumerate(scene.textures):
         yield f"textures[{index}] ({texture.name})", texture.texture
     for index, light in enumerate(scene.lights):
         yield f"lights[{index}] ({light.name or light.emitter.class_name})", light.emitter
+    for index, medium in enumerate(scene.media):
+        yield f"media[{index}] ({medium.name})", medium.medium
+
+
+def _is_key(key: str, word: str) -> bool:
+    return key == word or key.endswith("_" + word)
+
+
+def is_file_key(key: str) -> bool:
+    """Whether a component's property names a file: ``filename``, or
+    ``NAME_filename`` for components that read several."""
+    return _is_key(key, "filename")
+
+
+def is_asset_key(key: str) -> bool:
+    """Whether a component's property names an uploaded asset: ``asset`` or ``NAME_asset``."""
+    return _is_key(key, "asset")
+
+
+def asset_key_of(file_key: str) -> str:
+    """The ``asset`` key that stands for a file key."""
+    return file_key[: -len("filename")] + "asset"
 
 
 def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
@@ -110,14 +133,14 @@ def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
     assets = SceneAssets()
     hashes_of_files: dict[Path, str] = {}
     for where, spec in _file_components(scene):
-        value = spec.properties.values.get("filename")
-        if value is None or value.WhichOneof("value") != "string_value":
-            continue
-        path = (base / value.string_value).resolve()
-        if path not in hashes_of_files:
-            hashes_of_files[path] = _hash_file(where, value.string_value, path, "image")
-        assets.sources.setdefault(hashes_of_files[path], path)
-        assets.textures.append((spec, hashes_of_files[path]))
+        for key, value in spec.properties.values.items():
+            if not is_file_key(key) or value.WhichOneof("value") != "string_value":
+                continue
+            path = (base / value.string_value).resolve()
+            if path not in hashes_of_files:
+                hashes_of_files[path] = _hash_file(where, value.string_value, path, "file")
+            assets.sources.setdefault(hashes_of_files[path], path)
+            assets.files.append((spec, key, hashes_of_files[path]))
     for where, shape in iter_shapes(scene):
         if shape.WhichOneof("geometry") != "mesh":
             continue
@@ -150,9 +173,9 @@ def scene_asset_hashes(scene: scene_pb2.Scene) -> list[str]:
     textures' ``asset`` property), each once, in the order first named."""
     hashes: dict[str, None] = {}
     for _, spec in _file_components(scene):
-        value = spec.properties.values.get("asset")
-        if value is not None and value.WhichOneof("value") == "string_value":
-            hashes[value.string_value] = None
+        for key, value in spec.properties.values.items():
+            if is_asset_key(key) and value.WhichOneof("value") == "string_value":
+                hashes[value.string_value] = None
     for _, shape in iter_shapes(scene):
         if shape.WhichOneof("geometry") == "mesh" and shape.mesh.WhichOneof("source") == "asset":
             hashes[shape.mesh.asset] = None

@@ -1,0 +1,617 @@
+// volpath — volumetric path tracing with null scattering, as pbrt-v4's
+// VolPathIntegrator (after Miller, Georgiev & Jarosz 2019).
+//
+// In a medium, collisions are drawn by delta tracking against the
+// medium's majorants in one channel, the hero, chosen per path; every
+// channel's density is kept as a ratio (pbrt-v4's r_u and r_l), and each
+// contribution is divided by their mean over channels: the balance
+// heuristic over hero channels, so a σ_t that differs per channel is
+// sampled well by one of them and never averaged away. At a real
+// scattering vertex (a medium's collision or a surface) the tracer
+// samples a light — its shadow ray through media by ratio tracking and
+// through null boundaries — and the phase function or BSDF, the two
+// combined by the balance heuristic. Null boundaries (the `null`
+// material) are stepped through without counting a bounce.
+//
+// Paths advance together, one segment at a time: each segment intersects
+// all live rays as one batch, walks each medium's rays together (one
+// Majorants call, then one Coefficients call per round of tentative
+// collisions), and calls each SurfaceModel, Emitter and phase function
+// once per batch.
+//
+// Primary sample space: as `path` (8 coordinates per scattering vertex
+// from 6 on: light position, scattering direction, light choice, lobe,
+// roulette); the walks through media draw from a hash of the path's
+// coordinates, as do vertices beyond the 64th.
+//
+// Properties (as `path`):
+//   int max_depth  longest path in segments, Mitsuba's convention: 1 shows
+//                  emitters only, 2 direct light; medium collisions count
+//                  as vertices, null boundaries not; -1 (default) unbounded.
+//   int rr_depth   vertices after which Russian roulette may end paths (5).
+
+#include <algorithm>
+#include <bit>
+#include <vector>
+
+#include "null_tracking.h"
+#include "wavefront.h"
+#include "yarf/plugin.h"
+
+namespace yarf {
+namespace {
+
+constexpr uint32_t kFirstBounceDimension = kTransportDimension;
+constexpr uint32_t kDimensionsPerBounce = 8;
+// Offsets within a vertex's dimensions.
+constexpr uint32_t kLightPosition = 0, kScatterDirection = 2, kLightChoice = 4, kScatterLobe = 5, kRoulette = 6;
+// Vertices with primary-sample coordinates of their own.
+constexpr int kPrimaryVertices = 64;
+
+struct VolPath {
+  Ray ray;
+  uint32_t medium = kNoMedium;
+  Vec3 beta{1, 1, 1};
+  // Densities of the path so far in each channel, relative to the hero's:
+  // by the unidirectional sampling that made it (r_u), and as if its last
+  // vertex had been found by light sampling (r_l).
+  Vec3 r_u{1, 1, 1}, r_l{1, 1, 1};
+  Vec3 radiance;
+  // Real scattering vertices so far.
+  int depth = 0;
+  // Emission found next takes full weight: the camera ray, a delta lobe.
+  bool specular = true;
+  // The last real scattering vertex, where light samples were taken.
+  Vec3 scatter_point;
+  uint32_t hero = 0;
+  WalkRandom random;
+};
+
+// A light sample from a vertex, before its shadow ray's transmittance.
+struct LightLink {
+  uint32_t path;
+  Ray ray;
+  uint32_t medium;
+  // beta·f·L (a phase function's p·L), without transmittance or weight.
+  Vec3 unweighted;
+  // The path's r_u at the vertex, the light's density (its choice
+  // included) and the scattering's density for the same direction.
+  Vec3 r_path;
+  float light_pdf = 0, scatter_pdf = 0;
+  bool delta = false;
+};
+
+// Transmittance of a shadow ray and its channels' density ratios.
+struct ShadowTransmittance {
+  Vec3 value{1, 1, 1}, r_u{1, 1, 1}, r_l{1, 1, 1};
+};
+
+// A point scattered in a medium.
+struct MediumVertex {
+  uint32_t path;
+  Vec3 position;
+};
+
+// A surface hit that scatters.
+struct SurfaceVertex {
+  uint32_t path;
+  uint32_t shape;
+  ShadingPoint at;
+};
+
+uint32_t FloatBits(float f) { return std::bit_cast<uint32_t>(f); }
+
+class VolPathTracer final : public Transport {
+ public:
+  explicit VolPathTracer(const Properties& props) : length_(props) {}
+
+  uint32_t Dimensions() const override {
+    return kFirstBounceDimension + kDimensionsPerBounce * std::min<uint32_t>(length_.Bounces(), kPrimaryVertices);
+  }
+
+  void Prepare(const SceneView& scene) override {
+    null_boundaries_ = false;
+    for (uint32_t m = 0; m < scene.MaterialCount(); ++m)
+      null_boundaries_ |= (scene.Material(m).Lobes() & kScatterNull) != 0;
+  }
+
+  void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    const size_t n = points.Count();
+    std::vector<VolPath> paths(n);
+    std::vector<uint32_t> active;
+    active.reserve(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      VolPath& p = paths[i];
+      p.ray = CameraRayOf(scene, points, i);
+      p.scatter_point = p.ray.origin;
+      p.medium = scene.CameraMedium();
+      p.random.seed = Hash(FloatBits(points.Get(i, 0)), FloatBits(points.Get(i, 1)), FloatBits(points.Get(i, 2)),
+                           FloatBits(points.Get(i, 3)), FloatBits(points.Get(i, 4)), FloatBits(points.Get(i, 5)));
+      p.hero = std::min(2u, uint32_t(3 * p.random.Next()));
+      active.push_back(i);
+    }
+    if (length_.max_depth != 0)
+      while (!active.empty()) active = Segment(scene, points, paths, active);
+    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, paths[i].radiance, out);
+  }
+
+ private:
+  bool MayScatter(const VolPath& p) const { return length_.max_depth < 0 || p.depth + 1 < length_.max_depth; }
+
+  // Coordinate `offset` of the path's current vertex.
+  static float Uniform(const PrimarySamples& points, uint32_t i, VolPath& p, uint32_t offset) {
+    if (p.depth >= kPrimaryVertices) return p.random.Next();
+    return points.Get(i, kFirstBounceDimension + kDimensionsPerBounce * uint32_t(p.depth) + offset);
+  }
+
+  // Russian roulette on the path's weight relative to its density (pbrt-v4's β/mean r_u).
+  bool Survives(const PrimarySamples& points, uint32_t i, VolPath& p) const {
+    if (p.depth < length_.rr_depth) return true;
+    const float mean = ChannelMean(p.r_u);
+    const float survive = mean > 0 ? std::min(MaxComponent(p.beta) / mean, 0.95f) : 0.0f;
+    if (!(Uniform(points, i, p, kRoulette) < survive)) return false;
+    p.beta *= 1.0f / survive;
+    return true;
+  }
+
+  // Advances every path in `active` by one segment; returns those that go on.
+  std::vector<uint32_t> Segment(const SceneView& scene, const PrimarySamples& points, std::vector<VolPath>& paths,
+                                const std::vector<uint32_t>& active) const {
+    const size_t count = active.size();
+    std::vector<Ray> rays(count);
+    std::vector<Hit> hits(count);
+    for (size_t k = 0; k < count; ++k) rays[k] = paths[active[k]].ray;
+    scene.Intersect(rays, hits);
+
+    // Through the media: each path scatters, is absorbed or reaches its hit.
+    std::vector<uint8_t> at_surface(count, 1);
+    std::vector<MediumVertex> scattered;
+    std::vector<uint32_t> keys(count);
+    for (size_t k = 0; k < count; ++k) keys[k] = paths[active[k]].medium;
+    for (const auto& [medium, members] : GroupBy(keys)) {
+      if (medium == kNoMedium) continue;
+      std::vector<Walk> walks(members.size());
+      for (size_t j = 0; j < members.size(); ++j) {
+        VolPath& p = paths[active[members[j]]];
+        walks[j] = {p.ray, hits[members[j]].t, p.hero, &p.random};
+      }
+      std::vector<uint8_t> reached;
+      const std::vector<Vec3> transmittance =
+          TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t j, const Collision& c) {
+            return Collide(paths[active[members[j]]], active[members[j]], c, scattered);
+          });
+      for (size_t j = 0; j < members.size(); ++j) {
+        VolPath& p = paths[active[members[j]]];
+        at_surface[members[j]] = reached[j];
+        if (!reached[j]) continue;
+        const Vec3 t = transmittance[j];
+        const float hero = t[int(p.hero)];
+        if (!(hero > 0)) {
+          at_surface[members[j]] = 0;
+          continue;
+        }
+        p.beta *= t / hero;
+        p.r_u *= t / hero;
+        p.r_l *= t / hero;
+      }
+    }
+
+    std::vector<uint32_t> next;
+    std::vector<LightLink> links;
+    ScatterInMedia(scene, points, paths, scattered, links, next);
+
+    std::vector<uint32_t> escaped, emitted;
+    std::vector<SurfaceVertex> vertices;
+    for (size_t k = 0; k < count; ++k) {
+      if (!at_surface[k]) continue;
+      const uint32_t i = active[k];
+      VolPath& p = paths[i];
+      const Hit& hit = hits[k];
+      if (!hit.Found()) {
+        escaped.push_back(uint32_t(k));
+        continue;
+      }
+      if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
+      const Vec3 position = rays[k].origin + rays[k].direction * hit.t;
+      if (scene.Material(scene.MaterialOf(hit.shape)).Lobes() & kScatterNull) {
+        // A boundary only: on through it, no bounce counted.
+        p.medium = scene.MediaOf(hit.shape).Beyond(p.ray.direction, hit.normal, p.medium);
+        Redirect(p.ray, position, hit.normal, p.ray.direction);
+        next.push_back(i);
+        continue;
+      }
+      if (!MayScatter(p)) continue;
+      vertices.push_back({i, hit.shape, ShadingPointOf(scene, hit, rays[k])});
+    }
+    AddEmission(scene, paths, active, rays, hits, emitted);
+    if (scene.HasEnvironment()) AddEnvironment(scene, paths, active, rays, escaped);
+    ScatterAtSurfaces(scene, points, paths, vertices, links, next);
+
+    AddLightSamples(scene, paths, links);
+    return next;
+  }
+
+  // A tentative collision of path p in its medium: emission, then
+  // absorption, real scattering or a null collision, chosen by the hero
+  // channel's coefficients (pbrt-v4's VolPathIntegrator). Returns whether
+  // the walk goes on.
+  bool Collide(VolPath& p, uint32_t i, const Collision& c, std::vector<MediumVertex>& scattered) const {
+    const int h = int(p.hero);
+    const float sigma_maj = c.sigma_maj[h];
+    if (MaxComponent(c.emission) > 0) {
+      const float pdf = sigma_maj * c.transmittance_maj[h];
+      const Vec3 r_e = p.r_u * c.sigma_maj * c.transmittance_maj / pdf;
+      if (MaxComponent(r_e) > 0)
+        p.radiance += p.beta * c.transmittance_maj * c.sigma_a * c.emission / (pdf * ChannelMean(r_e));
+    }
+    const float p_absorb = c.sigma_a[h] / sigma_maj, p_scatter = c.sigma_s[h] / sigma_maj;
+    const float p_null = std::max(0.0f, 1 - p_absorb - p_scatter);
+    const float u = p.random.Next() * (p_absorb + p_scatter + p_null);
+    if (u < p_absorb) {
+      p.beta = Vec3();
+      return false;
+    }
+    if (u < p_absorb + p_scatter) {
+      const float pdf = c.transmittance_maj[h] * c.sigma_s[h];
+      p.beta *= c.transmittance_maj * c.sigma_s / pdf;
+      p.r_u *= c.transmittance_maj * c.sigma_s / pdf;
+      scattered.push_back({i, c.position});
+      return false;
+    }
+    const Vec3 sigma_n = NonNegative(c.sigma_maj - c.sigma_a - c.sigma_s);
+    const float pdf = c.transmittance_maj[h] * sigma_n[h];
+    if (!(pdf > 0)) {
+      p.beta = Vec3();
+      return false;
+    }
+    p.beta *= c.transmittance_maj * sigma_n / pdf;
+    p.r_u *= c.transmittance_maj * sigma_n / pdf;
+    p.r_l *= c.transmittance_maj * c.sigma_maj / pdf;
+    return MaxComponent(p.beta) > 0 && MaxComponent(p.r_u) > 0;
+  }
+
+  static Vec3 NonNegative(Vec3 v) { return {std::max(v.x, 0.0f), std::max(v.y, 0.0f), std::max(v.z, 0.0f)}; }
+
+  // Light samples and phase samples at the points scattered in media.
+  void ScatterInMedia(const SceneView& scene, const PrimarySamples& points, std::vector<VolPath>& paths,
+                      const std::vector<MediumVertex>& scattered, std::vector<LightLink>& links,
+                      std::vector<uint32_t>& next) const {
+    std::vector<uint32_t> keys;
+    std::vector<MediumVertex> vertices;
+    for (const MediumVertex& v : scattered) {
+      VolPath& p = paths[v.path];
+      if (!MayScatter(p)) continue;
+      p.scatter_point = v.position;
+      vertices.push_back(v);
+      keys.push_back(p.medium);
+    }
+    for (const auto& [medium_index, members] : GroupBy(keys)) {
+      const Medium& medium = scene.MediumAt(medium_index);
+      const size_t m = members.size();
+      std::vector<Vec3> from(m);
+      std::vector<uint32_t> owners(m);
+      std::vector<float> wi(3 * m), position(3 * m), u(2 * m);
+      for (size_t j = 0; j < m; ++j) {
+        const MediumVertex& v = vertices[members[j]];
+        VolPath& p = paths[v.path];
+        from[j] = v.position;
+        owners[j] = v.path;
+        (-p.ray.direction).Store(&wi[3 * j]);
+        v.position.Store(&position[3 * j]);
+        u[2 * j] = Uniform(points, v.path, p, kScatterDirection);
+        u[2 * j + 1] = Uniform(points, v.path, p, kScatterDirection + 1);
+      }
+      if (scene.HasLights()) {
+        const std::vector<LightDirection> lights = SampleLightsAt(scene, points, paths, from, owners);
+        std::vector<float> wo(3 * m), value(m), pdf(m);
+        for (size_t j = 0; j < m; ++j) lights[j].direction.Store(&wo[3 * j]);
+        medium.EvaluatePhase(wi, wo, position, value, pdf);
+        const std::vector<Vec3> le = LightRadiance(scene, lights);
+        for (size_t j = 0; j < m; ++j) {
+          const LightDirection& light = lights[j];
+          const VolPath& p = paths[owners[j]];
+          if (!light.emitter || !(light.pdf > 0) || !(value[j] > 0)) continue;
+          Ray ray;
+          ray.origin = from[j];
+          ray.direction = light.direction;
+          ray.tfar = light.AtInfinity() ? kInfinity
+                                        : (light.delta ? light.distance
+                                                       : std::max(0.0f, light.distance - SurfaceOffset(light.position)));
+          ray.time = p.ray.time;
+          links.push_back({owners[j], ray, p.medium, p.beta * le[j] * value[j], p.r_u, light.pdf, pdf[j], light.delta});
+        }
+      }
+      std::vector<float> wo(3 * m), weight(m), pdf(m);
+      medium.SamplePhase(wi, position, u, wo, weight, pdf);
+      for (size_t j = 0; j < m; ++j) {
+        VolPath& p = paths[owners[j]];
+        if (!(pdf[j] > 0) || !(weight[j] > 0)) continue;
+        p.beta *= weight[j];
+        p.r_l = p.r_u / pdf[j];
+        p.specular = false;
+        p.ray.origin = from[j];
+        p.ray.direction = Normalize(Vec3::Load(&wo[3 * j]));
+        p.ray.tnear = 0;
+        p.ray.tfar = kInfinity;
+        ++p.depth;
+        if (Survives(points, owners[j], p)) next.push_back(owners[j]);
+      }
+    }
+  }
+
+  // Light samples and BSDF samples at the surface vertices, one call per material.
+  void ScatterAtSurfaces(const SceneView& scene, const PrimarySamples& points, std::vector<VolPath>& paths,
+                         const std::vector<SurfaceVertex>& vertices, std::vector<LightLink>& links,
+                         std::vector<uint32_t>& next) const {
+    std::vector<uint32_t> keys(vertices.size());
+    for (size_t k = 0; k < vertices.size(); ++k) keys[k] = scene.MaterialOf(vertices[k].shape);
+    for (const auto& [material, members] : GroupBy(keys)) {
+      const SurfaceModel& model = scene.Material(material);
+      const size_t m = members.size();
+      std::vector<float> wi(3 * m);
+      SurfaceRows rows(&scene, m);
+      for (size_t j = 0; j < m; ++j) {
+        const SurfaceVertex& v = vertices[members[j]];
+        v.at.wi.Store(&wi[3 * j]);
+        rows.Add(v.at.site);
+        paths[v.path].scatter_point = v.at.position;
+      }
+      const SurfacePoints at = rows.Points();
+      if (scene.HasLights() && SamplesLights(model.Lobes())) {
+        std::vector<Vec3> from(m);
+        std::vector<uint32_t> owners(m);
+        for (size_t j = 0; j < m; ++j) {
+          from[j] = vertices[members[j]].at.position;
+          owners[j] = vertices[members[j]].path;
+        }
+        const std::vector<LightDirection> lights = SampleLightsAt(scene, points, paths, from, owners);
+        std::vector<float> wo(3 * m), f(3 * m), pdf(m);
+        for (size_t j = 0; j < m; ++j)
+          vertices[members[j]].at.frame.ToLocal(lights[j].direction).Store(&wo[3 * j]);
+        model.Evaluate(TransportMode::kRadiance, wi, wo, at, f);
+        model.Pdf(wi, wo, at, pdf);
+        const std::vector<Vec3> le = LightRadiance(scene, lights);
+        for (size_t j = 0; j < m; ++j) {
+          const SurfaceVertex& v = vertices[members[j]];
+          const VolPath& p = paths[v.path];
+          const LightDirection& light = lights[j];
+          if (!light.emitter || !(light.pdf > 0)) continue;
+          const Vec3 out = Vec3::Load(&wo[3 * j]);
+          const float cos = std::abs(out.z) *
+                            ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
+          const Vec3 unweighted = p.beta * Vec3::Load(&f[3 * j]) * le[j] * cos;
+          if (!(MaxComponent(unweighted) > 0)) continue;
+          const uint32_t medium = scene.MediaOf(v.shape).Beyond(light.direction, v.at.ng, p.medium);
+          links.push_back({v.path, ShadowRayToLight(v.at.position, v.at.ng, light, p.ray.time), medium, unweighted,
+                           p.r_u, light.pdf, pdf[j], light.delta});
+        }
+      }
+      std::vector<float> u(3 * m), wo(3 * m), weight(3 * m), pdf(m);
+      std::vector<uint32_t> flags(m);
+      for (size_t j = 0; j < m; ++j) {
+        const SurfaceVertex& v = vertices[members[j]];
+        VolPath& p = paths[v.path];
+        u[3 * j] = Uniform(points, v.path, p, kScatterLobe);
+        u[3 * j + 1] = Uniform(points, v.path, p, kScatterDirection);
+        u[3 * j + 2] = Uniform(points, v.path, p, kScatterDirection + 1);
+      }
+      model.Sample(TransportMode::kRadiance, wi, at, u, 0, wo, weight, pdf, flags);
+      for (size_t j = 0; j < m; ++j) {
+        const SurfaceVertex& v = vertices[members[j]];
+        VolPath& p = paths[v.path];
+        const Vec3 out = Vec3::Load(&wo[3 * j]);
+        const Vec3 w = Vec3::Load(&weight[3 * j]) *
+                       ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
+        if (!(pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
+        p.beta *= w;
+        p.r_l = p.r_u / pdf[j];
+        p.specular = (flags[j] & kScatterDelta) != 0;
+        const Vec3 direction = Normalize(v.at.frame.ToWorld(out));
+        p.medium = scene.MediaOf(v.shape).Beyond(direction, v.at.ng, p.medium);
+        Redirect(p.ray, v.at.position, v.at.ng, direction);
+        ++p.depth;
+        if (Survives(points, v.path, p)) next.push_back(v.path);
+      }
+    }
+  }
+
+  // One light chosen and sampled from each point, with the coordinates of
+  // its owner's current vertex.
+  static std::vector<LightDirection> SampleLightsAt(const SceneView& scene, const PrimarySamples& points,
+                                                    std::vector<VolPath>& paths, const std::vector<Vec3>& from,
+                                                    const std::vector<uint32_t>& owners) {
+    std::vector<float> u(3 * from.size());
+    for (size_t k = 0; k < from.size(); ++k) {
+      VolPath& p = paths[owners[k]];
+      u[3 * k] = Uniform(points, owners[k], p, kLightChoice);
+      u[3 * k + 1] = Uniform(points, owners[k], p, kLightPosition);
+      u[3 * k + 2] = Uniform(points, owners[k], p, kLightPosition + 1);
+    }
+    std::vector<LightDirection> out(from.size());
+    scene.SampleLightsFrom(from, u, out);
+    return out;
+  }
+
+  // The radiance each sampled light sends toward its point: one call per emitter.
+  static std::vector<Vec3> LightRadiance(const SceneView& scene, const std::vector<LightDirection>& lights) {
+    std::vector<EmitterQuery> queries(lights.size());
+    for (size_t k = 0; k < lights.size(); ++k)
+      queries[k] = {lights[k].emitter, lights[k].w, SurfaceSite::Uv(lights[k].u, lights[k].v)};
+    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries);
+    std::vector<Vec3> out(lights.size());
+    for (size_t k = 0; k < lights.size(); ++k) out[k] = answers[k].radiance;
+    return out;
+  }
+
+  // Emitting surfaces the rays reached, weighted against light sampling
+  // from the path's last scattering vertex.
+  void AddEmission(const SceneView& scene, std::vector<VolPath>& paths, const std::vector<uint32_t>& active,
+                   const std::vector<Ray>& rays, const std::vector<Hit>& hits,
+                   const std::vector<uint32_t>& emitted) const {
+    std::vector<EmitterQuery> queries(emitted.size());
+    for (size_t j = 0; j < emitted.size(); ++j) {
+      const Hit& hit = hits[emitted[j]];
+      queries[j] = {scene.EmitterOf(hit.shape), Frame(hit.normal).ToLocal(-rays[emitted[j]].direction),
+                    SurfaceSite::Of(hit)};
+    }
+    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries);
+    for (size_t j = 0; j < emitted.size(); ++j) {
+      const uint32_t k = emitted[j];
+      VolPath& p = paths[active[k]];
+      const Vec3 le = answers[j].radiance;
+      if (p.specular) {
+        p.radiance += p.beta * le / ChannelMean(p.r_u);
+        continue;
+      }
+      // The light's density as seen from the last scattering vertex.
+      const Vec3 position = rays[k].origin + rays[k].direction * hits[k].t;
+      Ray from{p.scatter_point, 0, rays[k].direction, kInfinity, rays[k].time};
+      Hit seen = hits[k];
+      seen.t = Length(position - p.scatter_point);
+      const Vec3 r_l = p.r_l * scene.LightPdfFrom(from, seen);
+      p.radiance += p.beta * le / ChannelMean(p.r_u + r_l);
+    }
+  }
+
+  // The environment seen by the rays that left the scene.
+  void AddEnvironment(const SceneView& scene, std::vector<VolPath>& paths, const std::vector<uint32_t>& active,
+                      const std::vector<Ray>& rays, const std::vector<uint32_t>& escaped) const {
+    std::vector<Vec3> directions(escaped.size()), le(escaped.size());
+    std::vector<float> light_pdf(escaped.size());
+    for (size_t j = 0; j < escaped.size(); ++j) directions[j] = rays[escaped[j]].direction;
+    scene.Escaped(directions, le, light_pdf);
+    for (size_t j = 0; j < escaped.size(); ++j) {
+      VolPath& p = paths[active[escaped[j]]];
+      const Vec3 r = p.specular ? p.r_u : p.r_u + p.r_l * light_pdf[j];
+      p.radiance += p.beta * le[j] / ChannelMean(r);
+    }
+  }
+
+  // Adds the light samples whose shadow rays get through, weighted.
+  void AddLightSamples(const SceneView& scene, std::vector<VolPath>& paths, const std::vector<LightLink>& links) const {
+    const std::vector<ShadowTransmittance> through = Transmittances(scene, paths, links);
+    for (size_t k = 0; k < links.size(); ++k) {
+      const LightLink& link = links[k];
+      const ShadowTransmittance& t = through[k];
+      if (!(MaxComponent(t.value) > 0)) continue;
+      const Vec3 r_l = link.r_path * t.r_l * link.light_pdf;
+      const Vec3 r_u = link.r_path * t.r_u * link.scatter_pdf;
+      const float mean = ChannelMean(link.delta ? r_l : r_l + r_u);
+      if (mean > 0) paths[link.path].radiance += link.unweighted * t.value / mean;
+    }
+  }
+
+  // The transmittance of each link's shadow ray: through media by ratio
+  // tracking, through null boundaries, zero at anything else.
+  std::vector<ShadowTransmittance> Transmittances(const SceneView& scene, std::vector<VolPath>& paths,
+                                                  const std::vector<LightLink>& links) const {
+    const size_t n = links.size();
+    std::vector<ShadowTransmittance> out(n);
+    if (scene.MediumCount() == 0 && !null_boundaries_) {
+      std::vector<Ray> rays(n);
+      for (size_t k = 0; k < n; ++k) rays[k] = links[k].ray;
+      std::vector<uint8_t> occluded(n);
+      scene.Occluded(rays, occluded);
+      for (size_t k = 0; k < n; ++k)
+        if (occluded[k]) out[k].value = Vec3();
+      return out;
+    }
+    std::vector<Ray> rays(n);
+    std::vector<uint32_t> medium(n), active;
+    std::vector<WalkRandom> random(n);
+    for (uint32_t k = 0; k < n; ++k) {
+      rays[k] = links[k].ray;
+      medium[k] = links[k].medium;
+      random[k].seed = Hash(paths[links[k].path].random.seed, uint32_t(paths[links[k].path].depth), k);
+      active.push_back(k);
+    }
+    while (!active.empty()) {
+      std::vector<Ray> batch(active.size());
+      std::vector<Hit> hits(active.size());
+      for (size_t j = 0; j < active.size(); ++j) batch[j] = rays[active[j]];
+      scene.Intersect(batch, hits);
+      std::vector<uint32_t> keys(active.size());
+      for (size_t j = 0; j < active.size(); ++j) {
+        const Hit& hit = hits[j];
+        const bool blocked = hit.Found() && !(scene.Material(scene.MaterialOf(hit.shape)).Lobes() & kScatterNull);
+        if (blocked) out[active[j]].value = Vec3();
+        keys[j] = blocked ? kNoMedium : medium[active[j]];
+      }
+      for (const auto& [medium_index, members] : GroupBy(keys)) {
+        if (medium_index == kNoMedium) continue;
+        std::vector<Walk> walks(members.size());
+        for (size_t q = 0; q < members.size(); ++q) {
+          const uint32_t k = active[members[q]];
+          const Ray& ray = rays[k];
+          walks[q] = {ray, hits[members[q]].Found() ? hits[members[q]].t : ray.tfar, paths[links[k].path].hero,
+                      &random[k]};
+        }
+        std::vector<uint8_t> reached;
+        const std::vector<Vec3> transmittance = TrackMajorants(
+            scene.MediumAt(medium_index), walks, reached, [&](size_t q, const Collision& c) {
+              return RatioTrack(out[active[members[q]]], walks[q].hero, c, random[active[members[q]]]);
+            });
+        for (size_t q = 0; q < members.size(); ++q) {
+          ShadowTransmittance& t = out[active[members[q]]];
+          const float hero = transmittance[q][int(walks[q].hero)];
+          if (!reached[q] || !(hero > 0)) {
+            t.value = Vec3();
+            continue;
+          }
+          t.value *= transmittance[q] / hero;
+          t.r_u *= transmittance[q] / hero;
+          t.r_l *= transmittance[q] / hero;
+        }
+      }
+      // On through null boundaries, to the light.
+      std::vector<uint32_t> next;
+      for (size_t j = 0; j < active.size(); ++j) {
+        const uint32_t k = active[j];
+        const Hit& hit = hits[j];
+        if (!hit.Found() || !(MaxComponent(out[k].value) > 0)) continue;
+        Ray& ray = rays[k];
+        const Vec3 position = ray.origin + ray.direction * hit.t;
+        const Vec3 origin = OffsetRayOrigin(position, hit.normal, ray.direction);
+        const float left = ray.tfar - Dot(origin - ray.origin, ray.direction);
+        if (!(left > 0)) continue;
+        medium[k] = scene.MediaOf(hit.shape).Beyond(ray.direction, hit.normal, medium[k]);
+        ray.origin = origin;
+        ray.tfar = left;
+        next.push_back(k);
+      }
+      active.swap(next);
+    }
+    return out;
+  }
+
+  // A collision on a shadow ray: its null part goes on (ratio tracking,
+  // with pbrt-v4's roulette once little is left). Returns whether it does.
+  static bool RatioTrack(ShadowTransmittance& t, uint32_t hero, const Collision& c, WalkRandom& random) {
+    const int h = int(hero);
+    const Vec3 sigma_n = NonNegative(c.sigma_maj - c.sigma_a - c.sigma_s);
+    const float pdf = c.transmittance_maj[h] * c.sigma_maj[h];
+    t.value *= c.transmittance_maj * sigma_n / pdf;
+    t.r_l *= c.transmittance_maj * c.sigma_maj / pdf;
+    t.r_u *= c.transmittance_maj * sigma_n / pdf;
+    const Vec3 estimate = t.value / ChannelMean(t.r_l + t.r_u);
+    if (MaxComponent(estimate) < 0.05f) {
+      if (random.Next() < 0.75f) {
+        t.value = Vec3();
+      } else {
+        t.value *= 1 / 0.25f;
+      }
+    }
+    return MaxComponent(t.value) > 0;
+  }
+
+  PathLength length_;
+  bool null_boundaries_ = false;
+};
+
+}  // namespace
+}  // namespace yarf
+
+YARF_PLUGIN(registrar) {
+  yarf::Register<yarf::VolPathTracer>(registrar, "volpath",
+                                      "1.0.0", "volumetric path tracer: null-scattering media, light sampling and MIS");
+}

@@ -1,0 +1,197 @@
+"""Participating media: volpath against what can be computed by hand.
+
+- Transmittance: light through a slab of medium bounded by null
+  boundaries is attenuated by exp(-σ_t d) per channel, for camera rays
+  (delta tracking) and for shadow rays (ratio tracking).
+- A white furnace: a camera inside a scattering-only medium (albedo 1)
+  under a sky of radiance 1 sees 1 everywhere, whatever σ_s per channel
+  and the phase function.
+- Single scattering from a point light in a homogeneous medium equals a
+  1-D quadrature along the camera ray.
+- Without media, volpath and path estimate the same image.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from imagestats import block_z_test
+from scipy import integrate
+
+from yarf import Client, component, properties, rgb, transform, vec3
+from yarf.v1 import scene_pb2
+
+
+def box(shape: scene_pb2.SceneShape, lo: tuple[float, float, float], hi: tuple[float, float, float]) -> None:
+    """Makes ``shape`` the axis-aligned box [lo, hi], normals outward."""
+    corners = [
+        (hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2])
+        for i in range(8)
+    ]
+    faces = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    shape.mesh.positions.extend(c for corner in corners for c in corner)
+    for a, b, c, d in faces:
+        shape.mesh.indices.extend((a, b, c, a, c, d))
+
+
+def medium(scene: scene_pb2.Scene, name: str, **values: object) -> None:
+    scene.media.add(name=name, medium=component("homogeneous", **values))
+
+
+def orthographic_scene(size: int = 8) -> scene_pb2.Scene:
+    """An orthographic camera looking down -z at a unit emitter far behind
+    a slab z ∈ [-1, 1] of medium "fog" bounded by a null box."""
+    scene = scene_pb2.Scene()
+    scene.camera.model = scene_pb2.Camera.ORTHOGRAPHIC
+    scene.camera.view_size = 2.0
+    scene.camera.origin.CopyFrom(vec3(0, 0, 5))
+    scene.camera.target.CopyFrom(vec3(0, 0, 0))
+    scene.camera.up.CopyFrom(vec3(0, 1, 0))
+    scene.film.width = scene.film.height = size
+    scene.materials.add(name="black", class_name="lambertian", properties=properties(reflectance=rgb(0)))
+    scene.materials.add(name="boundary", class_name="null")
+    light = scene.shapes.add(name="light", material="black")
+    light.rectangle.SetInParent()
+    light.to_world.CopyFrom(transform(np.diag([4.0, 4.0, 1.0, 1.0]) + np.array([[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, -3], [0, 0, 0, 0]])))
+    light.emitter.CopyFrom(component("diffuse_area", radiance=rgb(1.0)))
+    slab = scene.shapes.add(name="slab", material="boundary", interior="fog")
+    box(slab, (-5, -5, -1), (5, 5, 1))
+    return scene
+
+
+SIGMA_A = (0.2, 0.5, 0.05)
+SIGMA_S = (0.3, 0.0, 0.6)
+
+
+def test_camera_rays_are_attenuated_by_exp_minus_sigma_t_d(client: Client) -> None:
+    """max_depth 1 counts what is seen directly: a collision that scatters
+    ends the path, so the light reads exp(-σ_t·2) per channel, through two
+    null boundaries that count no bounce."""
+    scene = orthographic_scene()
+    medium(scene, "fog", sigma_a=rgb(*SIGMA_A), sigma_s=rgb(*SIGMA_S))
+    result = client.render(scene, spp=4096, seed=1, transport=component("volpath", max_depth=1), timeout=300)
+    expected = np.exp(-2 * (np.array(SIGMA_A) + np.array(SIGMA_S)))
+    mean = result.pixels.reshape(-1, 3).mean(axis=0)
+    noise = np.sqrt(result.variance.reshape(-1, 3).mean(axis=0) / result.pixels[..., 0].size)
+    assert np.all(np.abs(mean - expected) < 5 * noise + 1e-4), (mean, expected, noise)
+
+
+def lit_floor_scene(size: int = 8) -> scene_pb2.Scene:
+    """A grey floor z = 0 lit from straight above by a directional light of
+    irradiance 1 whose light crosses a slab z ∈ [1, 1.5] of "fog"; the camera
+    sits under the slab, so only shadow rays cross it."""
+    scene = scene_pb2.Scene()
+    scene.camera.origin.CopyFrom(vec3(0, -1, 0.5))
+    scene.camera.target.CopyFrom(vec3(0, 0, 0))
+    scene.camera.up.CopyFrom(vec3(0, 0, 1))
+    scene.camera.fov = 30
+    scene.film.width = scene.film.height = size
+    scene.materials.add(name="grey", class_name="lambertian", properties=properties(reflectance=rgb(0.5)))
+    scene.materials.add(name="boundary", class_name="null")
+    floor = scene.shapes.add(name="floor", material="grey")
+    floor.rectangle.SetInParent()
+    floor.to_world.CopyFrom(transform(np.diag([10.0, 10.0, 1.0, 1.0])))
+    slab = scene.shapes.add(name="slab", material="boundary", interior="fog")
+    box(slab, (-20, -20, 1), (20, 20, 1.5))
+    sun = scene.lights.add(name="sun", kind=scene_pb2.Light.DIRECTIONAL)
+    sun.emitter.CopyFrom(component("directional", irradiance=rgb(1.0)))
+    sun.to_world.CopyFrom(transform(np.diag([1.0, -1.0, -1.0, 1.0])))
+    return scene
+
+
+def test_shadow_rays_are_attenuated_by_exp_minus_sigma_t_d(client: Client) -> None:
+    """Direct light only (max_depth 2): the floor reads ρ/π·E·exp(-σ_t·0.5)."""
+    scene = lit_floor_scene()
+    medium(scene, "fog", sigma_a=rgb(*SIGMA_A), sigma_s=rgb(*SIGMA_S))
+    result = client.render(scene, spp=2048, seed=2, transport=component("volpath", max_depth=2), timeout=300)
+    expected = 0.5 / math.pi * np.exp(-0.5 * (np.array(SIGMA_A) + np.array(SIGMA_S)))
+    mean = result.pixels.reshape(-1, 3).mean(axis=0)
+    noise = np.sqrt(result.variance.reshape(-1, 3).mean(axis=0) / result.pixels[..., 0].size)
+    assert np.all(np.abs(mean - expected) < 5 * noise + 1e-5), (mean, expected, noise)
+
+
+@pytest.mark.parametrize(
+    "sigma_s, g",
+    [((1.0, 1.0, 1.0), 0.0), ((0.5, 1.0, 2.0), 0.0), ((0.8, 0.3, 1.5), 0.7)],
+    ids=["grey isotropic", "per-channel isotropic", "per-channel forward"],
+)
+def test_white_furnace_in_a_scattering_medium(
+    client: Client, sigma_s: tuple[float, float, float], g: float
+) -> None:
+    """Inside a sphere of a medium that only scatters, under a sky of radiance
+    1, every path ends in the sky with its weight kept: every pixel reads 1
+    in every channel, however differently the channels scatter."""
+    scene = scene_pb2.Scene()
+    scene.camera.origin.CopyFrom(vec3(0, 0, 0))
+    scene.camera.target.CopyFrom(vec3(0, 0, -1))
+    scene.camera.up.CopyFrom(vec3(0, 1, 0))
+    scene.camera.fov = 60
+    scene.film.width = scene.film.height = 8
+    scene.materials.add(name="boundary", class_name="null")
+    ball = scene.shapes.add(name="ball", material="boundary", interior="fog")
+    ball.sphere.radius = 3.0
+    scene.camera_medium = "fog"
+    medium(scene, "fog", sigma_s=rgb(*sigma_s), g=g)
+    sky = scene.lights.add(name="sky", kind=scene_pb2.Light.ENVIRONMENT)
+    sky.emitter.CopyFrom(component("constant", radiance=rgb(1.0)))
+    result = client.render(scene, spp=1024, seed=3, transport=component("volpath"), timeout=300)
+    mean = result.pixels.reshape(-1, 3).mean(axis=0)
+    noise = np.sqrt(result.variance.reshape(-1, 3).mean(axis=0) / result.pixels[..., 0].size)
+    assert np.all(np.abs(mean - 1) < 5 * noise + 1e-4), (mean, noise)
+
+
+def test_single_scattering_matches_a_quadrature(client: Client) -> None:
+    """A camera in an unbounded homogeneous medium looks past a point light:
+    with paths of two segments, each pixel's radiance is
+    ∫ e^{-σ_t t} σ_s p(θ) I e^{-σ_t d} / d² dt along its ray."""
+    sigma_a, sigma_s, g, intensity = 0.05, 0.4, 0.5, 10.0
+    scene = scene_pb2.Scene()
+    scene.camera.origin.CopyFrom(vec3(0, 0, 0))
+    scene.camera.target.CopyFrom(vec3(0, 0, -1))
+    scene.camera.up.CopyFrom(vec3(0, 1, 0))
+    scene.camera.fov = 0.5
+    scene.film.width = scene.film.height = 1
+    scene.camera_medium = "fog"
+    medium(scene, "fog", sigma_a=rgb(sigma_a), sigma_s=rgb(sigma_s), g=g)
+    light = scene.lights.add(name="bulb")
+    light.emitter.CopyFrom(component("point", intensity=rgb(intensity)))
+    light_position = np.array([0.6, 0.0, -2.0])
+    light.to_world.CopyFrom(transform(np.eye(4) + np.pad(light_position[:, None], ((0, 1), (3, 0)))))
+    result = client.render(scene, spp=65536, seed=4, transport=component("volpath", max_depth=2), timeout=300)
+
+    sigma_t = sigma_a + sigma_s
+
+    def integrand(t: float) -> float:
+        point = np.array([0.0, 0.0, -t])
+        to_light = light_position - point
+        d = float(np.linalg.norm(to_light))
+        # μ: cosine between the light's travel (point - light) and the ray's
+        # way back toward the camera (+z).
+        mu = float(np.dot(-to_light / d, [0.0, 0.0, 1.0]))
+        phase = (1 - g * g) / (4 * math.pi * (1 + g * g - 2 * g * mu) ** 1.5)
+        return math.exp(-sigma_t * t) * sigma_s * phase * intensity * math.exp(-sigma_t * d) / d**2
+
+    expected, _ = integrate.quad(integrand, 0, 200, points=[2.0], limit=400)
+    value = result.pixels[0, 0]
+    noise = math.sqrt(result.variance[0, 0].max())
+    assert np.all(np.abs(value - expected) < 5 * noise + 2e-3 * expected), (value, expected, noise)
+
+
+def test_without_media_volpath_estimates_what_path_does(client: Client, cornell_box: scene_pb2.Scene) -> None:
+    scene = scene_pb2.Scene()
+    scene.CopyFrom(cornell_box)
+    scene.film.width, scene.film.height = 32, 32
+    reference = client.render(scene, spp=256, seed=5, transport=component("path"), timeout=300)
+    result = client.render(scene, spp=256, seed=6, transport=component("volpath"), timeout=300)
+    test = block_z_test(
+        result.pixels, result.variance, reference.pixels, reference.variance, block=4, family_alpha=1e-3
+    )
+    assert not test.failing.size, test.report()
+
+
+def test_an_unknown_medium_is_refused_at_submit(client: Client) -> None:
+    scene = orthographic_scene()
+    with pytest.raises(Exception, match="medium 'fog' is not a medium of the scene"):
+        client.render(scene, spp=1, transport=component("volpath"), timeout=60)
