@@ -14,7 +14,7 @@ import numbers
 import os
 import shutil
 import subprocess
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path, PurePath
 
@@ -53,6 +53,7 @@ PropertyValue = (
     | component_pb2.Vec3
     | component_pb2.Rgb
     | component_pb2.Transform
+    | component_pb2.FloatArray
 )
 
 
@@ -275,6 +276,11 @@ def transform(matrix: Sequence[float] | Sequence[Sequence[float]]) -> component_
     return component_pb2.Transform(m=values)
 
 
+def float_array(values: Iterable[float]) -> component_pb2.FloatArray:
+    """A FloatArray (e.g. a grid's voxels given inline) from any iterable of numbers."""
+    return component_pb2.FloatArray(values=[float(v) for v in values])
+
+
 def _as_row(row: float | Sequence[float]) -> Sequence[float]:
     return [row] if isinstance(row, numbers.Real) else row
 
@@ -297,6 +303,8 @@ def property_value(value: PropertyValue) -> component_pb2.Property:
         return component_pb2.Property(rgb_value=value)
     if isinstance(value, component_pb2.Transform):
         return component_pb2.Property(transform_value=value)
+    if isinstance(value, component_pb2.FloatArray):
+        return component_pb2.Property(float_array_value=value)
     raise TypeError(f"no Property type for {type(value).__name__}")
 
 

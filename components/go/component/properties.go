@@ -238,6 +238,8 @@ func kindOf(value any) string {
 		return "transform"
 	case *yarfv1.Property_Reference:
 		return "reference"
+	case *yarfv1.Property_FloatArrayValue:
+		return "float array"
 	default:
 		return fmt.Sprintf("%T", value)
 	}

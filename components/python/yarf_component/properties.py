@@ -2,8 +2,8 @@
 
 Values arrive as Python values: float, int, bool and str as themselves, a
 vec3 and an rgb as a tuple of 3 floats, a transform as a 4x4 float64 numpy
-array, a reference as str. Each is checked against the annotation of the
-parameter it fills:
+array, a float array as a 1-D float32 numpy array, a reference as str. Each
+is checked against the annotation of the parameter it fills:
 
     float          a float, or an int
     int, bool      exactly that
@@ -11,7 +11,8 @@ parameter it fills:
     Rgb            an rgb, or a float or int f as grey (f, f, f)
     Vec3           a vec3
     tuple[...]     a vec3 or an rgb
-    Transform, np.ndarray   a transform
+    Transform      a transform
+    np.ndarray     a transform or a float array
     Literal[...]   one of the values listed
     X | Y          whichever arm accepts it
 A parameter without annotation takes any value. A key no parameter reads
@@ -56,6 +57,7 @@ KIND_NAMES = {
     "rgb_value": "rgb",
     "transform_value": "transform",
     "reference": "reference",
+    "float_array_value": "float array",
 }
 
 
@@ -91,6 +93,8 @@ def natural_value(key: str, prop: component_pb2.Property) -> tuple[str, object]:
         if m.size != 16:
             raise PropertyError(f"property '{key}': a transform has 16 values, not {m.size}")
         return kind, m.reshape(4, 4)
+    if kind == "float_array_value":
+        return kind, np.array(prop.float_array_value.values, dtype=np.float32)
     raise PropertyError(f"property '{key}' has no value")
 
 
@@ -145,7 +149,8 @@ def fit(annotation: object, kind: str, value: object) -> object:
         return value
     if (annotation is tuple or origin is tuple) and kind in ("vec3_value", "rgb_value"):
         return value
-    if (annotation is np.ndarray or origin is np.ndarray) and kind == "transform_value":
+    array_kinds = ("transform_value", "float_array_value")
+    if (annotation is np.ndarray or origin is np.ndarray) and kind in array_kinds:
         return value
     if annotation in (float, int, bool, str, tuple, np.ndarray) or origin in (tuple, np.ndarray):
         raise _Mismatch

@@ -35,7 +35,7 @@ class Properties {
   // set directly.
   using Value = std::variant<double, int64_t, bool, std::string, Vec3, Rgb, Transform, Reference,
                              std::shared_ptr<const Texture>, std::shared_ptr<const SurfaceModel>,
-                             std::filesystem::path>;
+                             std::filesystem::path, std::vector<float>>;
 
   void Set(const std::string& key, Value value) { values_[key] = std::move(value); }
   bool Has(const std::string& key) const { return values_.count(key) != 0; }
@@ -107,6 +107,14 @@ class Properties {
   }
   Transform Matrix(const std::string& key, const Transform& fallback) const {
     return Has(key) ? Get<Transform>(key, Find(key), "transform") : fallback;
+  }
+  // A required list of numbers (proto FloatArray).
+  const std::vector<float>& FloatArray(const std::string& key) const {
+    return Get<std::vector<float>>(key, Find(key), "float array");
+  }
+  // Whether `key` holds a list of numbers (without reading it).
+  bool HasFloatArray(const std::string& key) const {
+    return Has(key) && std::holds_alternative<std::vector<float>>(values_.at(key));
   }
 
   // The file property `key` names, as the server resolved it: a readable

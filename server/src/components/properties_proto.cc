@@ -47,6 +47,11 @@ Properties FromProto(const v1::Properties& properties) {
       case v1::Property::kReference:
         out.Set(key, Reference{value.reference()});
         break;
+      case v1::Property::kFloatArrayValue: {
+        const auto& values = value.float_array_value().values();
+        out.Set(key, std::vector<float>(values.begin(), values.end()));
+        break;
+      }
       default:
         throw Error("property '" + key + "' has no value");
     }
