@@ -13,24 +13,12 @@
 //   g, g2, blend                            the phase function (phase.h)
 #include <algorithm>
 
+#include "coefficients.h"
 #include "phase.h"
 #include "yarf/plugin.h"
 
 namespace yarf {
 namespace {
-
-Vec3 NonNegativeColor(const Properties& props, const char* key) {
-  const Vec3 c = props.Color(key, Vec3(0, 0, 0));
-  if (!(c.x >= 0 && c.y >= 0 && c.z >= 0 && MaxComponent(c) < kInfinity))
-    throw Error(std::string("property '") + key + "' must be finite and non-negative");
-  return c;
-}
-
-float Scale(const Properties& props) {
-  const float scale = float(props.Float("scale", 1));
-  if (!(scale >= 0 && scale < kInfinity)) throw Error("property 'scale' must be finite and non-negative");
-  return scale;
-}
 
 class Homogeneous final : public UniformPhaseMedium {
  public:
