@@ -20,7 +20,8 @@ APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
   libembree-dev libtbb-dev libopenimageio-dev openimageio-tools \
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc \
   libgtest-dev libtinyobjloader-dev libpugixml-dev zlib1g-dev clang-14 libclang-rt-14-dev \
-  curl ca-certificates libnanoflann-dev libsqlite3-dev libssl-dev openssl nats-server chromium
+  curl ca-certificates libnanoflann-dev libsqlite3-dev libssl-dev openssl nats-server chromium \
+  libopenvdb-dev libboost-dev
 # Mitsuba's LLVM variant, for the benchmark only.
 BENCH_APT_PACKAGES := libllvm19
 
