@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "importers/matrix.h"
 #include "importers/spectrum.h"
@@ -17,6 +18,14 @@ inline void SetInt(v1::Properties& p, const std::string& name, int64_t v) { Slot
 inline void SetBool(v1::Properties& p, const std::string& name, bool v) { Slot(p, name).set_bool_value(v); }
 inline void SetString(v1::Properties& p, const std::string& name, const std::string& v) {
   Slot(p, name).set_string_value(v);
+}
+inline void SetVec3(v1::Properties& p, const std::string& name, const Vec3d& v) {
+  v1::Vec3& out = *Slot(p, name).mutable_vec3_value();
+  out.set_x(v.x), out.set_y(v.y), out.set_z(v.z);
+}
+// A list of numbers (bulk data: single precision).
+inline void SetFloats(v1::Properties& p, const std::string& name, const std::vector<double>& values) {
+  Slot(p, name).mutable_float_array_value()->mutable_values()->Add(values.begin(), values.end());
 }
 inline void SetRgb(v1::Properties& p, const std::string& name, const Rgb& c) {
   v1::Rgb& rgb = *Slot(p, name).mutable_rgb_value();

@@ -75,6 +75,21 @@ std::string SceneAssembly::AddTexture(const std::string& name, v1::ComponentSpec
   return t.name();
 }
 
+std::string SceneAssembly::NullMaterial() {
+  if (null_material_.empty()) null_material_ = AddMaterial("null", "null", {});
+  return null_material_;
+}
+
+std::string SceneAssembly::AddMedium(const std::string& name, v1::ComponentSpec medium,
+                                     const std::optional<Matrix4>& to_world, const SourceLocation& where) {
+  if (to_world) CheckTransform(*to_world, where, "medium");
+  v1::SceneMedium& m = *scene_.add_media();
+  m.set_name(UniqueName(medium_names_, name.empty() ? "medium" : name));
+  *m.mutable_medium() = std::move(medium);
+  medium_transforms_.push_back(to_world);
+  return m.name();
+}
+
 void SceneAssembly::AddShape(v1::SceneShape shape, const Matrix4& to_world, bool flip, NormalRule rule,
                              const SourceLocation& where, const std::string& group) {
   CheckTransform(to_world, where, "shape");
@@ -213,6 +228,9 @@ v1::Scene SceneAssembly::Finish() {
     if (light.kind() == v1::Light::DIRECTIONAL) to_world = FrameAlong(*Normalized(to_world.Vector({0, 0, 1})));
     SetTransform(to_world, light.mutable_to_world(), [&] { light.clear_to_world(); });
   }
+  for (int i = 0; i < scene_.media_size(); ++i)
+    if (const std::optional<Matrix4>& to_world = medium_transforms_[i]; to_world && !(mirror_ * *to_world).IsIdentity())
+      SetTransform(*scene_.mutable_media(i)->mutable_medium()->mutable_properties(), "to_world", mirror_ * *to_world);
   for (int i = 0; i < scene_.instances_size(); ++i) {
     v1::Instance& instance = *scene_.mutable_instances(i);
     SetTransform(mirror_ * instance_transforms_[i], instance.mutable_to_world(),

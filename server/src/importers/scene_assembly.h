@@ -39,6 +39,18 @@ class SceneAssembly {
   // Adds a texture (Scene.textures) after those it may refer to; returns
   // its name: `name`, made unique if taken.
   std::string AddTexture(const std::string& name, v1::ComponentSpec texture);
+  // The material of class "null": a medium boundary that does not scatter.
+  std::string NullMaterial();
+
+  // Adds a participating medium (Scene.media); returns its name: `name`,
+  // made unique if taken. A medium placed in space (a grid's unit cube)
+  // gives its `to_world`, which Finish sets as its property "to_world"
+  // after the world's mirror. Fails at `where` when it is singular.
+  std::string AddMedium(const std::string& name, v1::ComponentSpec medium, const std::optional<Matrix4>& to_world,
+                        const SourceLocation& where);
+  bool HasMedia() const { return scene_.media_size() > 0; }
+  // Names the medium the camera sits in ("" is vacuum).
+  void SetCameraMedium(const std::string& name) { scene_.set_camera_medium(name); }
 
   // Adds a shape to the world (empty `group`) or to a group. `flip` is the
   // source's own "flip normals" / "reverse orientation" state. Fails at
@@ -92,6 +104,9 @@ class SceneAssembly {
   v1::Scene scene_;
   std::set<std::string> material_names_;
   std::set<std::string> texture_names_;
+  std::set<std::string> medium_names_;
+  std::string null_material_;
+  std::vector<std::optional<Matrix4>> medium_transforms_;  // parallel to scene_.media()
   std::map<std::string, int> group_index_;
   std::string default_material_;
   std::vector<WorldShape> world_shapes_;   // parallel to scene_.shapes()
