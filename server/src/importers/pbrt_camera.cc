@@ -73,6 +73,11 @@ void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const Sou
   params.Accept({"shutteropen", "shutterclose"});
   if (type == "perspective" || orthographic) params.WarnUnused(diagnostics_, "camera '" + type + "'");
 
+  // pbrt-v4's camera sits in the outside medium of the MediumInterface in force.
+  if (!state_.outside_medium.empty()) {
+    assembly_.SetCameraMedium(state_.outside_medium);
+    medium_uses_.emplace_back(state_.outside_medium, state_.medium_where);
+  }
   coordinate_systems_["camera"] = *camera_to_world;
   assembly_.SetCamera(std::move(camera), *camera_to_world, {1, 0, 0}, where);
 }
@@ -163,10 +168,12 @@ void PbrtImporter::PixelFilter(const std::string& type, PbrtParams& params, cons
 void PbrtImporter::Integrator(const std::string& type, PbrtParams& params, const SourceLocation& where) {
   if (has_integrator_) Fail(where, "a second Integrator");
   has_integrator_ = true;
+  integrator_type_ = type;
+  integrator_where_ = where;
   // pbrt's integrators and the yarf transport that estimates the same
   // image; simplepath and randomwalk sample differently, to the same limit,
-  // and volpath is path where there are no media (media are warned of
-  // where the scene names them).
+  // and volpath is path where there are no media (volpath where there are:
+  // ChooseVolumetricTransport).
   static const std::map<std::string, std::string> kTransports = {
       {"path", "path"},  {"volpath", "path"},   {"simplepath", "path"}, {"randomwalk", "path"},
       {"bdpt", "bdpt"},  {"lightpath", "light"}, {"sppm", "sppm"}};

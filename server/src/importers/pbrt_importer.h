@@ -1,6 +1,7 @@
 // The pbrt-v4 importer's state, shared by the files that map each kind of
 // directive (pbrt_scene.cc, pbrt_camera.cc, pbrt_materials.cc,
-// pbrt_textures.cc, pbrt_spectra.cc, pbrt_shapes.cc, pbrt_lights.cc).
+// pbrt_textures.cc, pbrt_spectra.cc, pbrt_shapes.cc, pbrt_lights.cc,
+// pbrt_media.cc).
 #pragma once
 
 #include <filesystem>
@@ -42,6 +43,10 @@ class PbrtImporter {
     bool reverse_orientation = false;
     std::string material;  // yarf material; "" is the default, kInterface none
     std::optional<AreaLight> area_light;
+    // MediumInterface: pbrt's names of the media inside and outside the
+    // shapes that follow ("" is vacuum), and where it was given.
+    std::string inside_medium, outside_medium;
+    SourceLocation medium_where;
   };
   static constexpr const char* kInterface = "\x01interface";
 
@@ -81,6 +86,17 @@ class PbrtImporter {
   // pbrt_shapes.cc
   void Shape(const std::string& type, PbrtParams& params, const SourceLocation& where);
 
+  // pbrt_media.cc: MakeNamedMedium, and the media shapes and the camera
+  // name, resolved once every medium is known (pbrt-v4 resolves them at
+  // the end too).
+  void MakeNamedMedium(const std::string& name, PbrtParams& params, const SourceLocation& where);
+  // The shape bounds the media of the MediumInterface in force, if they
+  // differ (pbrt-v4's medium transition); a pbrt name for now.
+  void SetMedia(v1::SceneShape& shape);
+  void ResolveMedia();
+  // Transport: volpath for pbrt's volpath where the scene has media.
+  void ChooseVolumetricTransport();
+
   // pbrt_lights.cc
   void LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void AreaLightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
@@ -96,6 +112,12 @@ class PbrtImporter {
   std::vector<Matrix4> transforms_;  // TransformBegin saves
   std::map<std::string, Matrix4> coordinate_systems_;
   std::map<std::string, std::string> named_materials_;  // pbrt name → yarf material
+  // pbrt's named media → the yarf medium made ("" for one left out).
+  std::map<std::string, std::string> media_;
+  // Each medium a shape or the camera names, and where.
+  std::vector<std::pair<std::string, SourceLocation>> medium_uses_;
+  std::string integrator_type_;  // pbrt's, for media
+  SourceLocation integrator_where_;
   std::map<std::string, std::string> material_cache_;   // content → yarf material
   // pbrt texture name → what it became: a scene texture and its mean.
   std::map<std::string, Textured> spectrum_textures_;

@@ -136,7 +136,8 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
 
   std::string class_name;
   if (type == "interface" || type == "none" || type == "") {
-    Warn(where, "material:interface", "interface material: shapes using it are left out (yarf has no media)");
+    // Medium boundaries that do not scatter ("null"); shapes that bound
+    // no medium are left out (pbrt-v4 skips them).
     params.WarnUnused(diagnostics_, what);
     return kInterface;
   } else if (type == "diffuse" || type == "matte") {

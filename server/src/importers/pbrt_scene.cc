@@ -186,18 +186,21 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
       for (std::optional<PbrtToken> t = tokens.Next(); !t || t->kind != PbrtToken::kClose; t = tokens.Next())
         if (!t) Fail(where, "unclosed '[' in Option");
     Warn(where, "Option:" + option, "Option \"" + option + "\" ignored");
-  } else if (name == "Accelerator" || name == "ColorSpace" || name == "MakeNamedMedium" ||
-             name == "MediumInterface") {
-    // A quoted argument (MediumInterface: one or two) and parameters; none
-    // changes the image yarf can make, except media, which yarf has not.
+  } else if (name == "Accelerator" || name == "ColorSpace") {
+    // A quoted argument and parameters; neither changes the image yarf can make.
     Quoted(tokens, where);
-    if (name == "MediumInterface" && tokens.Peek() && tokens.Peek()->kind == PbrtToken::kString &&
-        tokens.Peek()->text.find(' ') == std::string::npos)
-      tokens.Next();
     PbrtParams params = PbrtParams::Parse(tokens);
-    if (name != "Accelerator")
-      Warn(where, name, name + " is not supported: ignored" +
-                            std::string(name == "ColorSpace" ? " (colours are read as sRGB)" : ""));
+    if (name == "ColorSpace") Warn(where, name, "ColorSpace is not supported: ignored (colours are read as sRGB)");
+  } else if (name == "MakeNamedMedium") {
+    const std::string medium = Quoted(tokens, where);
+    PbrtParams params = PbrtParams::Parse(tokens);
+    MakeNamedMedium(medium, params, where);
+  } else if (name == "MediumInterface") {
+    // "inside" "outside", or one name for both; an attribute, as the material.
+    state_.inside_medium = Quoted(tokens, where);
+    state_.outside_medium = state_.inside_medium;
+    if (tokens.Peek() && tokens.Peek()->kind == PbrtToken::kString) state_.outside_medium = Quoted(tokens, where);
+    state_.medium_where = where;
   } else if (name == "Material") {
     before_world(true);
     const std::string type = Quoted(tokens, where);
@@ -270,9 +273,10 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
 ImportResult PbrtImporter::Finish() {
   if (!object_.empty()) Fail(object_where_, "ObjectBegin \"" + object_ + "\" is never ended");
   if (!has_camera_) {
-    // pbrt's default camera sits at the origin looking down +z.
+    // pbrt's default camera sits at the origin looking down +z, in vacuum.
     PbrtParams none;
     state_.ctm = Matrix4();
+    state_.outside_medium.clear();
     Camera("perspective", none, origin_);
   }
   if (!has_film_) {
@@ -291,6 +295,8 @@ ImportResult PbrtImporter::Finish() {
     PbrtParams none;
     Integrator("volpath", none, origin_);
   }
+  ResolveMedia();
+  ChooseVolumetricTransport();
   ImportResult result;
   result.scene = assembly_.Finish();
   result.sample_count = sample_count_;

@@ -25,7 +25,14 @@ void OrientByNormals(const std::vector<double>& p, const std::vector<double>& n,
 }  // namespace
 
 void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const SourceLocation& where) {
-  if (state_.material == kInterface) return;  // invisible boundaries of media: warned at the material
+  // pbrt-v4 skips surfaces of the interface material where no medium changes.
+  const bool interface = state_.material == kInterface;
+  auto interface_light = [&] {
+    if (interface && state_.area_light)
+      Warn(state_.area_light->where, "interface-area-light",
+           "area light on a shape of the interface material ignored (as pbrt-v4 does)");
+  };
+  if (interface && state_.inside_medium == state_.outside_medium) return interface_light();
   v1::SceneShape shape;
   Matrix4 to_world = state_.ctm;
   NormalRule rule = NormalRule::kTransformed;
@@ -129,9 +136,14 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
   }
   params.WarnUnused(diagnostics_, what);
 
-  shape.set_material(state_.material.empty() ? assembly_.DefaultMaterial() : state_.material);
+  shape.set_material(interface                 ? assembly_.NullMaterial()
+                     : state_.material.empty() ? assembly_.DefaultMaterial()
+                                               : state_.material);
+  SetMedia(shape);
   if (state_.area_light) {
-    if (!object_.empty()) {
+    if (interface) {
+      interface_light();
+    } else if (!object_.empty()) {
       Warn(state_.area_light->where, "instanced-area-light",
            "area lights in object instances are not supported (as in pbrt): emission ignored");
     } else {

@@ -4,12 +4,14 @@ set(YARF_IMPORTER_SOURCES
   diagnostics.cc
   import.cc
   matrix.cc
+  measured_media.cc
   mesh_shapes.cc
   named_ior.cc
   numbers.cc
   pbrt_camera.cc
   pbrt_lights.cc
   pbrt_materials.cc
+  pbrt_media.cc
   pbrt_params.cc
   pbrt_scene.cc
   pbrt_shapes.cc
