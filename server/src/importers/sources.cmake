@@ -24,9 +24,11 @@ set(YARF_IMPORTER_SOURCES
   spectrum.cc
   spectrum_tables.cc
   texture_mean.cc
+  volume_file.cc
   xml_bsdf.cc
   xml_document.cc
   xml_emitter.cc
+  xml_medium.cc
   xml_plugin.cc
   xml_scene.cc
   xml_sensor.cc

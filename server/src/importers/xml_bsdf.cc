@@ -44,7 +44,8 @@ std::string MitsubaImporter::MaskAlpha(const XmlElement& bsdf) {
   return alpha;
 }
 
-// Returns the material's name, or "" for a null BSDF (an invisible surface).
+// Returns the material's name, or "" for a null BSDF (a surface that does
+// not scatter).
 std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string& name) {
   const RecursionGuard guard(nesting, e.where);
   XmlPlugin p(e, *this);
@@ -160,7 +161,7 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     SetFloatOrTexture(props, "weight", weight);
     return assembly_.AddMaterial(name, "blend", std::move(props));
   } else if (type == "null") {
-    Warn(e.where, "bsdf:null", "null BSDF: shapes using it are left out (yarf has no invisible surfaces)");
+    // The shape decides: a "null" boundary, or left out (MitsubaImporter::Shape).
     p.WarnUnused();
     return "";
   } else if (type == "conductor" || type == "roughconductor") {

@@ -91,6 +91,7 @@ v1::ComponentSpec Projector(MitsubaImporter& importer, XmlPlugin& p, const Matri
 
 v1::ComponentSpec MitsubaImporter::AreaEmitter(const XmlElement& e) {
   XmlPlugin p(e, *this);
+  p.Objects("medium");  // where a light sits: yarf follows media from the camera
   Textured radiance = p.TexturedColor("radiance", {1, 1, 1});
   if (!radiance.IsTexture())
     radiance.constant = ClampColour(radiance.constant, 0, 1e30, [&] {
@@ -105,6 +106,7 @@ v1::ComponentSpec MitsubaImporter::AreaEmitter(const XmlElement& e) {
 
 void MitsubaImporter::Emitter(const XmlElement& e) {
   XmlPlugin p(e, *this);
+  p.Objects("medium");  // where a light sits: yarf follows media from the camera
   const std::string& type = p.type();
   if (type == "point" || type == "spot") {
     const Rgb intensity = ClampColour(p.Color("intensity", {1, 1, 1}), 0, 1e30, [&] {

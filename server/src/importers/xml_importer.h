@@ -1,6 +1,6 @@
 // The Mitsuba 3 importer's state, shared by the files that map each kind
 // of plugin (xml_sensor.cc, xml_bsdf.cc, xml_shape.cc, xml_emitter.cc,
-// xml_texture.cc).
+// xml_texture.cc, xml_medium.cc).
 #pragma once
 
 #include <map>
@@ -59,6 +59,11 @@ class MitsubaImporter {
   std::string MaskAlpha(const XmlElement& bsdf);
   std::string KnownMetal(const std::string& name, const SourceLocation& where);
 
+  // xml_medium.cc: the medium a <medium> becomes, made once per element:
+  // its name in Scene.media, or "" for one left out (vacuum).
+  std::string Medium(const XmlElement& element);
+  std::string MakeMedium(const XmlElement& element);
+
   // xml_shape.cc
   void Shape(const XmlElement& element, const std::string& group);
   void ShapeGroup(const XmlElement& element);
@@ -78,6 +83,9 @@ class MitsubaImporter {
   std::set<const XmlElement*> attached_emitters_;
   std::map<const XmlElement*, std::string> materials_;
   std::map<const XmlElement*, std::string> textures_;
+  std::map<const XmlElement*, std::string> media_;
+  std::string integrator_type_ = "path";  // Mitsuba's, for media
+  SourceLocation integrator_where_;
   std::set<std::string> groups_made_;
 
  public:

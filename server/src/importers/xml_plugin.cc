@@ -220,6 +220,14 @@ std::vector<const XmlElement*> XmlPlugin::Objects(const std::string& tag) {
   return out;
 }
 
+const XmlElement* XmlPlugin::Object(const std::string& name) {
+  if (!Has(name)) return nullptr;
+  const XmlElement* e = named_.at(name);
+  if (Contains(kPropertyTags, e->tag)) return nullptr;
+  used_.insert(name);
+  return e;
+}
+
 void XmlPlugin::Accept(std::initializer_list<const char*> names) {
   for (const char* name : names) used_.insert(name), asked_.insert(name);
 }

@@ -58,6 +58,9 @@ class XmlPlugin {
   // Nested plugins with this tag (written inline or by <ref>), in order;
   // named ones too.
   std::vector<const XmlElement*> Objects(const std::string& tag);
+  // The nested plugin (<medium>, <volume>...) given under this name, or
+  // nullptr when the name is absent or holds a value (<float>, <rgb>...).
+  const XmlElement* Object(const std::string& name);
   // Marks a property as read without reading it (accepted, no effect).
   void Accept(std::initializer_list<const char*> names);
 

@@ -56,6 +56,15 @@ ImportResult MitsubaImporter::Run(const XmlElement& scene) {
     v1::Properties p;
     SetInt(p, "max_depth", -1);
     *assembly_.scene().mutable_transport() = Spec("path", std::move(p));
+    integrator_where_ = scene.where;
+  }
+  if (assembly_.HasMedia()) {
+    if (integrator_type_ == "volpath" || integrator_type_ == "volpathmis")
+      assembly_.scene().mutable_transport()->set_class_name("volpath");
+    else
+      Warn(integrator_where_, "integrator-media",
+           "integrator '" + integrator_type_ +
+               "' does not render participating media: they are ignored (Mitsuba's \"volpath\" renders them)");
   }
   ImportResult result;
   result.scene = assembly_.Finish();
@@ -80,13 +89,13 @@ void MitsubaImporter::TopLevel(const XmlElement& e) {
       Shape(e, "");
   } else if (e.tag == "emitter") {
     if (type != "area") Emitter(e);
-  } else if (e.tag == "bsdf" || e.tag == "texture" || e.tag == "spectrum" || e.tag == "rgb") {
+  } else if (e.tag == "bsdf" || e.tag == "texture" || e.tag == "spectrum" || e.tag == "rgb" || e.tag == "medium" ||
+             e.tag == "phase" || e.tag == "volume") {
+    // Made where they are referred to.
     if (!e.Attribute("id"))
       Warn(e.where, "unused:" + e.tag, "<" + e.tag + "> without an id is never used: ignored");
   } else if (e.tag == "alias") {
     // indexed in Run
-  } else if (e.tag == "medium" || e.tag == "phase" || e.tag == "volume") {
-    Warn(e.where, "tag:" + e.tag, "participating media are not supported: <" + e.tag + "> ignored");
   } else {
     Warn(e.where, "tag:" + e.tag, "<" + e.tag + "> ignored here");
   }

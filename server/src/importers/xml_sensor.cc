@@ -38,6 +38,8 @@ void MitsubaImporter::Integrator(const XmlElement& e) {
     return;
   }
   has_integrator_ = true;
+  integrator_type_ = type;
+  integrator_where_ = e.where;
   int64_t max_depth = -1;
   v1::Properties props;
   std::string transport = "path";
@@ -50,8 +52,8 @@ void MitsubaImporter::Integrator(const XmlElement& e) {
       transport = "light";
       p.Accept({"samples_per_pass"});
     } else if (type != "path" && type != "volpath" && type != "volpathmis") {
-      // volpath is path where there are no media (media are warned of
-      // where the scene names them).
+      // volpath is path where there are no media (and volpath where there
+      // are: Run).
       Warn(e.where, "integrator:" + type,
            "integrator '" + type + "' is not available: yarf's path tracer used (no media, no AOVs)");
     }
@@ -134,6 +136,9 @@ void MitsubaImporter::Sensor(const XmlElement& e) {
     if (p.Float(offset, 0) != 0)
       Warn(p.WhereIs(offset), "principal-point", "principal point offsets are not supported: ignored");
   p.Accept({"shutter_open", "shutter_close"});
+  const auto media = p.Objects("medium");
+  if (media.size() > 1) Fail(media[1]->where, "a sensor sits in one medium");
+  if (!media.empty()) assembly_.SetCameraMedium(Medium(*media.front()));
   assembly_.SetCamera(std::move(camera), to_world, {-1, 0, 0}, e.where);
   if (type == "perspective" || type == "thinlens" || type == "orthographic") p.WarnUnused();
 }

@@ -90,13 +90,29 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
   const Matrix4 to_world = p.Transform("to_world") * cylinder_frame;
   const bool flip = p.Boolean("flip_normals", false);
 
+  // The media either side: the interior against the normal.
+  for (const char* side : {"interior", "exterior"}) {
+    const XmlElement* medium = p.Object(side);
+    if (!medium) continue;
+    if (medium->tag != "medium")
+      Fail(medium->where, p.Describe() + ": '" + side + "' must be a <medium>, not <" + medium->tag + ">");
+    const std::string name = Medium(*medium);
+    std::string(side) == "interior" ? shape.set_interior(name) : shape.set_exterior(name);
+  }
+  const auto emitters = p.Objects("emitter");
   const auto bsdfs = p.Objects("bsdf");
   if (bsdfs.size() > 1) Fail(bsdfs[1]->where, "a shape takes one BSDF");
-  const std::string material = bsdfs.empty() ? assembly_.DefaultMaterial() : Material(*bsdfs.front());
+  std::string material = bsdfs.empty() ? assembly_.DefaultMaterial() : Material(*bsdfs.front());
   if (material.empty()) {
-    p.Objects("emitter");
-    p.WarnUnused();
-    return;  // a null BSDF: invisible in Mitsuba, left out here
+    // A null BSDF: a medium boundary or an emitter that does not scatter;
+    // a surface that is neither is invisible, and left out.
+    const bool emits = std::any_of(emitters.begin(), emitters.end(),
+                                   [](const XmlElement* emitter) { return emitter->Get("type") == "area"; });
+    if (shape.interior().empty() && shape.exterior().empty() && !emits) {
+      p.WarnUnused();
+      return;
+    }
+    material = assembly_.NullMaterial();
   }
   shape.set_material(material);
   if (const std::string alpha = bsdfs.empty() ? "" : MaskAlpha(*bsdfs.front()); !alpha.empty()) {
@@ -105,7 +121,7 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     else
       shape.set_alpha(alpha);
   }
-  for (const XmlElement* emitter : p.Objects("emitter")) {
+  for (const XmlElement* emitter : emitters) {
     if (emitter->Get("type") != "area") {
       Warn(emitter->where, "shape-emitter:" + emitter->Get("type"),
            "emitter '" + emitter->Get("type") + "' attached to a shape ignored (only area emitters can be)");
