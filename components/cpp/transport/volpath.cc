@@ -34,8 +34,7 @@
 #include <bit>
 #include <vector>
 
-#include "null_tracking.h"
-#include "wavefront.h"
+#include "medium_transport.h"
 #include "yarf/plugin.h"
 
 namespace yarf {
@@ -48,14 +47,9 @@ constexpr uint32_t kLightPosition = 0, kScatterDirection = 2, kLightChoice = 4, 
 // Vertices with primary-sample coordinates of their own.
 constexpr int kPrimaryVertices = 64;
 
-struct VolPath {
+struct VolPath : SpectralPath {
   Ray ray;
   uint32_t medium = kNoMedium;
-  Vec3 beta{1, 1, 1};
-  // Densities of the path so far in each channel, relative to the hero's:
-  // by the unidirectional sampling that made it (r_u), and as if its last
-  // vertex had been found by light sampling (r_l).
-  Vec3 r_u{1, 1, 1}, r_l{1, 1, 1};
   Vec3 radiance;
   // Real scattering vertices so far.
   int depth = 0;
@@ -63,8 +57,6 @@ struct VolPath {
   bool specular = true;
   // The last real scattering vertex, where light samples were taken.
   Vec3 scatter_point;
-  uint32_t hero = 0;
-  WalkRandom random;
 };
 
 // A light sample from a vertex, before its shadow ray's transmittance.
@@ -79,11 +71,6 @@ struct LightLink {
   Vec3 r_path;
   float light_pdf = 0, scatter_pdf = 0;
   bool delta = false;
-};
-
-// Transmittance of a shadow ray and its channels' density ratios.
-struct ShadowTransmittance {
-  Vec3 value{1, 1, 1}, r_u{1, 1, 1}, r_l{1, 1, 1};
 };
 
 // A point scattered in a medium.
@@ -109,11 +96,7 @@ class VolPathTracer final : public Transport {
     return kFirstBounceDimension + kDimensionsPerBounce * std::min<uint32_t>(length_.Bounces(), kPrimaryVertices);
   }
 
-  void Prepare(const SceneView& scene) override {
-    null_boundaries_ = false;
-    for (uint32_t m = 0; m < scene.MaterialCount(); ++m)
-      null_boundaries_ |= (scene.Material(m).Lobes() & kScatterNull) != 0;
-  }
+  void Prepare(const SceneView& scene) override { null_boundaries_ = HasNullBoundaries(scene); }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     const size_t n = points.Count();
@@ -127,7 +110,7 @@ class VolPathTracer final : public Transport {
       p.medium = scene.CameraMedium();
       p.random.seed = Hash(FloatBits(points.Get(i, 0)), FloatBits(points.Get(i, 1)), FloatBits(points.Get(i, 2)),
                            FloatBits(points.Get(i, 3)), FloatBits(points.Get(i, 4)), FloatBits(points.Get(i, 5)));
-      p.hero = std::min(2u, uint32_t(3 * p.random.Next()));
+      p.ChooseHero();
       active.push_back(i);
     }
     if (length_.max_depth != 0)
@@ -183,16 +166,7 @@ class VolPathTracer final : public Transport {
       for (size_t j = 0; j < members.size(); ++j) {
         VolPath& p = paths[active[members[j]]];
         at_surface[members[j]] = reached[j];
-        if (!reached[j]) continue;
-        const Vec3 t = transmittance[j];
-        const float hero = t[int(p.hero)];
-        if (!(hero > 0)) {
-          at_surface[members[j]] = 0;
-          continue;
-        }
-        p.beta *= t / hero;
-        p.r_u *= t / hero;
-        p.r_l *= t / hero;
+        if (reached[j] && !p.Pass(transmittance[j])) at_surface[members[j]] = 0;
       }
     }
 
@@ -213,7 +187,7 @@ class VolPathTracer final : public Transport {
       }
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
       const Vec3 position = rays[k].origin + rays[k].direction * hit.t;
-      if (scene.Material(scene.MaterialOf(hit.shape)).Lobes() & kScatterNull) {
+      if (IsNullBoundary(scene, hit.shape)) {
         // A boundary only: on through it, no bounce counted.
         p.medium = scene.MediaOf(hit.shape).Beyond(p.ray.direction, hit.normal, p.medium);
         Redirect(p.ray, position, hit.normal, p.ray.direction);
@@ -231,46 +205,20 @@ class VolPathTracer final : public Transport {
     return next;
   }
 
-  // A tentative collision of path p in its medium: emission, then
-  // absorption, real scattering or a null collision, chosen by the hero
-  // channel's coefficients (pbrt-v4's VolPathIntegrator). Returns whether
-  // the walk goes on.
-  bool Collide(VolPath& p, uint32_t i, const Collision& c, std::vector<MediumVertex>& scattered) const {
+  // A tentative collision of path p in its medium: the medium's emission
+  // there, then delta tracking. Returns whether the walk goes on.
+  static bool Collide(VolPath& p, uint32_t i, const Collision& c, std::vector<MediumVertex>& scattered) {
     const int h = int(p.hero);
-    const float sigma_maj = c.sigma_maj[h];
     if (MaxComponent(c.emission) > 0) {
-      const float pdf = sigma_maj * c.transmittance_maj[h];
+      const float pdf = c.sigma_maj[h] * c.transmittance_maj[h];
       const Vec3 r_e = p.r_u * c.sigma_maj * c.transmittance_maj / pdf;
       if (MaxComponent(r_e) > 0)
         p.radiance += p.beta * c.transmittance_maj * c.sigma_a * c.emission / (pdf * ChannelMean(r_e));
     }
-    const float p_absorb = c.sigma_a[h] / sigma_maj, p_scatter = c.sigma_s[h] / sigma_maj;
-    const float p_null = std::max(0.0f, 1 - p_absorb - p_scatter);
-    const float u = p.random.Next() * (p_absorb + p_scatter + p_null);
-    if (u < p_absorb) {
-      p.beta = Vec3();
-      return false;
-    }
-    if (u < p_absorb + p_scatter) {
-      const float pdf = c.transmittance_maj[h] * c.sigma_s[h];
-      p.beta *= c.transmittance_maj * c.sigma_s / pdf;
-      p.r_u *= c.transmittance_maj * c.sigma_s / pdf;
-      scattered.push_back({i, c.position});
-      return false;
-    }
-    const Vec3 sigma_n = NonNegative(c.sigma_maj - c.sigma_a - c.sigma_s);
-    const float pdf = c.transmittance_maj[h] * sigma_n[h];
-    if (!(pdf > 0)) {
-      p.beta = Vec3();
-      return false;
-    }
-    p.beta *= c.transmittance_maj * sigma_n / pdf;
-    p.r_u *= c.transmittance_maj * sigma_n / pdf;
-    p.r_l *= c.transmittance_maj * c.sigma_maj / pdf;
-    return MaxComponent(p.beta) > 0 && MaxComponent(p.r_u) > 0;
+    const CollisionEvent event = DeltaTrack(p, c);
+    if (event == CollisionEvent::kScatter) scattered.push_back({i, c.position});
+    return event == CollisionEvent::kNull;
   }
-
-  static Vec3 NonNegative(Vec3 v) { return {std::max(v.x, 0.0f), std::max(v.y, 0.0f), std::max(v.z, 0.0f)}; }
 
   // Light samples and phase samples at the points scattered in media.
   void ScatterInMedia(const SceneView& scene, const PrimarySamples& points, std::vector<VolPath>& paths,
@@ -489,7 +437,12 @@ class VolPathTracer final : public Transport {
 
   // Adds the light samples whose shadow rays get through, weighted.
   void AddLightSamples(const SceneView& scene, std::vector<VolPath>& paths, const std::vector<LightLink>& links) const {
-    const std::vector<ShadowTransmittance> through = Transmittances(scene, paths, links);
+    std::vector<ShadowWalk> shadows(links.size());
+    for (size_t k = 0; k < links.size(); ++k) {
+      const VolPath& p = paths[links[k].path];
+      shadows[k] = {links[k].ray, links[k].medium, p.hero, Hash(p.random.seed, uint32_t(p.depth), k)};
+    }
+    const std::vector<ShadowTransmittance> through = Transmittances(scene, shadows, null_boundaries_);
     for (size_t k = 0; k < links.size(); ++k) {
       const LightLink& link = links[k];
       const ShadowTransmittance& t = through[k];
@@ -499,109 +452,6 @@ class VolPathTracer final : public Transport {
       const float mean = ChannelMean(link.delta ? r_l : r_l + r_u);
       if (mean > 0) paths[link.path].radiance += link.unweighted * t.value / mean;
     }
-  }
-
-  // The transmittance of each link's shadow ray: through media by ratio
-  // tracking, through null boundaries, zero at anything else.
-  std::vector<ShadowTransmittance> Transmittances(const SceneView& scene, std::vector<VolPath>& paths,
-                                                  const std::vector<LightLink>& links) const {
-    const size_t n = links.size();
-    std::vector<ShadowTransmittance> out(n);
-    if (scene.MediumCount() == 0 && !null_boundaries_) {
-      std::vector<Ray> rays(n);
-      for (size_t k = 0; k < n; ++k) rays[k] = links[k].ray;
-      std::vector<uint8_t> occluded(n);
-      scene.Occluded(rays, occluded);
-      for (size_t k = 0; k < n; ++k)
-        if (occluded[k]) out[k].value = Vec3();
-      return out;
-    }
-    std::vector<Ray> rays(n);
-    std::vector<uint32_t> medium(n), active;
-    std::vector<WalkRandom> random(n);
-    for (uint32_t k = 0; k < n; ++k) {
-      rays[k] = links[k].ray;
-      medium[k] = links[k].medium;
-      random[k].seed = Hash(paths[links[k].path].random.seed, uint32_t(paths[links[k].path].depth), k);
-      active.push_back(k);
-    }
-    while (!active.empty()) {
-      std::vector<Ray> batch(active.size());
-      std::vector<Hit> hits(active.size());
-      for (size_t j = 0; j < active.size(); ++j) batch[j] = rays[active[j]];
-      scene.Intersect(batch, hits);
-      std::vector<uint32_t> keys(active.size());
-      for (size_t j = 0; j < active.size(); ++j) {
-        const Hit& hit = hits[j];
-        const bool blocked = hit.Found() && !(scene.Material(scene.MaterialOf(hit.shape)).Lobes() & kScatterNull);
-        if (blocked) out[active[j]].value = Vec3();
-        keys[j] = blocked ? kNoMedium : medium[active[j]];
-      }
-      for (const auto& [medium_index, members] : GroupBy(keys)) {
-        if (medium_index == kNoMedium) continue;
-        std::vector<Walk> walks(members.size());
-        for (size_t q = 0; q < members.size(); ++q) {
-          const uint32_t k = active[members[q]];
-          const Ray& ray = rays[k];
-          walks[q] = {ray, hits[members[q]].Found() ? hits[members[q]].t : ray.tfar, paths[links[k].path].hero,
-                      &random[k]};
-        }
-        std::vector<uint8_t> reached;
-        const std::vector<Vec3> transmittance = TrackMajorants(
-            scene.MediumAt(medium_index), walks, reached, [&](size_t q, const Collision& c) {
-              return RatioTrack(out[active[members[q]]], walks[q].hero, c, random[active[members[q]]]);
-            });
-        for (size_t q = 0; q < members.size(); ++q) {
-          ShadowTransmittance& t = out[active[members[q]]];
-          const float hero = transmittance[q][int(walks[q].hero)];
-          if (!reached[q] || !(hero > 0)) {
-            t.value = Vec3();
-            continue;
-          }
-          t.value *= transmittance[q] / hero;
-          t.r_u *= transmittance[q] / hero;
-          t.r_l *= transmittance[q] / hero;
-        }
-      }
-      // On through null boundaries, to the light.
-      std::vector<uint32_t> next;
-      for (size_t j = 0; j < active.size(); ++j) {
-        const uint32_t k = active[j];
-        const Hit& hit = hits[j];
-        if (!hit.Found() || !(MaxComponent(out[k].value) > 0)) continue;
-        Ray& ray = rays[k];
-        const Vec3 position = ray.origin + ray.direction * hit.t;
-        const Vec3 origin = OffsetRayOrigin(position, hit.normal, ray.direction);
-        const float left = ray.tfar - Dot(origin - ray.origin, ray.direction);
-        if (!(left > 0)) continue;
-        medium[k] = scene.MediaOf(hit.shape).Beyond(ray.direction, hit.normal, medium[k]);
-        ray.origin = origin;
-        ray.tfar = left;
-        next.push_back(k);
-      }
-      active.swap(next);
-    }
-    return out;
-  }
-
-  // A collision on a shadow ray: its null part goes on (ratio tracking,
-  // with pbrt-v4's roulette once little is left). Returns whether it does.
-  static bool RatioTrack(ShadowTransmittance& t, uint32_t hero, const Collision& c, WalkRandom& random) {
-    const int h = int(hero);
-    const Vec3 sigma_n = NonNegative(c.sigma_maj - c.sigma_a - c.sigma_s);
-    const float pdf = c.transmittance_maj[h] * c.sigma_maj[h];
-    t.value *= c.transmittance_maj * sigma_n / pdf;
-    t.r_l *= c.transmittance_maj * c.sigma_maj / pdf;
-    t.r_u *= c.transmittance_maj * sigma_n / pdf;
-    const Vec3 estimate = t.value / ChannelMean(t.r_l + t.r_u);
-    if (MaxComponent(estimate) < 0.05f) {
-      if (random.Next() < 0.75f) {
-        t.value = Vec3();
-      } else {
-        t.value *= 1 / 0.25f;
-      }
-    }
-    return MaxComponent(t.value) > 0;
   }
 
   PathLength length_;
