@@ -13,6 +13,7 @@
 #include "components/registry.h"
 #include "components/remote_classes.h"
 #include "components/remote_function.h"
+#include "components/remote_medium.h"
 #include "components/remote_sampler.h"
 #include "components/remote_surface_model.h"
 #include "components/remote_texture.h"
@@ -51,7 +52,7 @@ struct ResolvedProperties {
 template <typename I>
 constexpr bool kHasRemote = std::is_same_v<I, SurfaceModel> || std::is_same_v<I, Sampler> ||
                             std::is_same_v<I, Transport> || std::is_same_v<I, Function> ||
-                            std::is_same_v<I, Texture>;
+                            std::is_same_v<I, Texture> || std::is_same_v<I, Medium>;
 
 // `address` empty: the registry's class, or a registered remote class.
 template <typename I>
