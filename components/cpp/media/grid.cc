@@ -161,8 +161,9 @@ class GridMedium final : public UniformPhaseMedium {
 
     majorants_ = MajorantGrid(std::min(resolution[0], 16), std::min(resolution[1], 16), std::min(resolution[2], 16));
     BuildMajorants();
-    const Vec3 all_a = sigma_a_.Max(Vec3(0, 0, 0), Vec3(1, 1, 1));
-    emits_ = MaxComponent(emission_.Max(Vec3(0, 0, 0), Vec3(1, 1, 1))) > 0 && (MaxComponent(all_a) > 0 || albedo_.has_value());
+    const Vec3 most_emission = emission_.Max(Vec3(0, 0, 0), Vec3(1, 1, 1));
+    const Vec3 most_absorption = sigma_a_.Max(Vec3(0, 0, 0), Vec3(1, 1, 1));
+    emits_ = MaxComponent(most_emission) > 0 && (MaxComponent(most_absorption) > 0 || albedo_.has_value());
   }
 
   void Majorants(std::span<const float> origin, std::span<const float> direction, std::span<const float> tmax,

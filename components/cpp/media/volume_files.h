@@ -138,7 +138,8 @@ inline VolumeGrid ReadVdbFile(const std::filesystem::path& path, const std::stri
   }
   const bool is_float = base->isType<openvdb::FloatGrid>(), is_vec3 = base->isType<openvdb::Vec3SGrid>();
   if (!is_float && !is_vec3)
-    throw Error(where + ": grid '" + grid_name + "' holds " + base->valueType() + " values; a float or vec3s grid is read");
+    throw Error(where + ": grid '" + grid_name + "' holds " + base->valueType() +
+                " values; a float or vec3s grid is read");
   if (!base->transform().isLinear())
     throw Error(where + ": grid '" + grid_name + "' has a frustum transform; only linear ones are read");
   const openvdb::CoordBBox box = base->evalActiveVoxelBoundingBox();
