@@ -4,7 +4,8 @@
 // that bound the extinction and cover exactly the part of a ray in the
 // box (tight for a constant grid: exact transmittance), the albedo grid,
 // OpenVDB files where the build reads them, and an Error for every bad
-// input.
+// input. Then pbrt-v4's procedural cloud: its density within [0, 1] and
+// full below y = 0, and its one majorant over its box.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -487,9 +488,101 @@ TEST_F(GridMediumTest, OpenVdbGridIsSampledAtItsVoxelsAndPlacedByItsTransform) {
 }
 #endif
 
+class CloudMediumTest : public testing::Test {
+ protected:
+  CloudMediumTest() { registry_.LoadDirectory(YARF_PLUGIN_DIR); }
+  std::unique_ptr<Medium> Make(const Properties& props) const { return registry_.CreateAs<Medium>("cloud", props); }
+  Registry registry_;
+};
+
+TEST_F(CloudMediumTest, DensityLiesInTheUnitIntervalAndIsFullBelowZero) {
+  Properties props;
+  props.Set("p0", Vec3(-1, -0.5f, -1));
+  props.Set("p1", Vec3(1, 1.5f, 1));
+  props.Set("sigma_a", Rgb{Vec3(0.5f, 1, 2)});
+  props.Set("sigma_s", 3.0);
+  props.Set("density", 2.0);
+  props.Set("scale", 0.5);
+  const Transform to_world = Skewed();
+  props.Set("to_world", to_world);
+  const auto medium = Make(props);
+  EXPECT_FALSE(medium->Emits());
+  const Vec3 sigma_a(0.25f, 0.5f, 1), sigma_s(1.5f, 1.5f, 1.5f);
+  std::vector<float> position;
+  std::vector<Vec3> local;
+  for (int i = 0; i < 2000; ++i) {
+    // The box and a margin around it.
+    const Vec3 p(-1.2f + 2.4f * Uniform(i, 20), -0.7f + 2.4f * Uniform(i, 21), -1.2f + 2.4f * Uniform(i, 22));
+    local.push_back(p);
+    const Vec3 w = to_world.Point(p);
+    position.insert(position.end(), {w.x, w.y, w.z});
+  }
+  std::vector<float> sa(position.size()), ss(position.size()), e(position.size());
+  medium->Coefficients(position, sa, ss, e);
+  int partial = 0;
+  for (size_t k = 0; k < local.size(); ++k) {
+    const Vec3 p = local[k];
+    const float d = ss[3 * k] / sigma_s.x;
+    ASSERT_GE(d, 0);
+    ASSERT_LE(d, 1 + 1e-6f);
+    EXPECT_NEAR(sa[3 * k + 2], d * sigma_a.z, 1e-5f);
+    EXPECT_EQ(e[3 * k], 0);
+    const bool inside = std::abs(p.x) < 0.999f && std::abs(p.z) < 0.999f && p.y > -0.499f && p.y < 1.499f;
+    const bool outside = std::abs(p.x) > 1.001f || std::abs(p.z) > 1.001f || p.y < -0.501f || p.y > 1.501f;
+    if (outside) {
+      EXPECT_EQ(d, 0) << p.x << " " << p.y << " " << p.z;
+    }
+    if (inside && p.y < 0) {
+      EXPECT_NEAR(d, 1, 1e-6f);
+    }
+    partial += inside && d > 0.05f && d < 0.95f;
+  }
+  EXPECT_GT(partial, 100);  // between the two: clouds, neither empty nor full
+}
+
+TEST_F(CloudMediumTest, OneMajorantOverTheBox) {
+  Properties props;
+  props.Set("p0", Vec3(2, 1, 0));
+  props.Set("p1", Vec3(0, 0, 3));  // either corner first, as pbrt's Bounds3f takes them
+  props.Set("sigma_a", 0.5);
+  props.Set("sigma_s", Rgb{Vec3(1, 2, 3)});
+  props.Set("wispiness", 0.0);
+  props.Set("frequency", 2.0);
+  const Transform to_world = Affine(Vec3(1, 1, 1), Vec3(0, 0, 0));
+  props.Set("to_world", to_world);
+  const auto medium = Make(props);
+  // The box [0, 2]×[0, 1]×[0, 3] as the image of the unit cube, for the
+  // coverage check.
+  int segments_seen = 0;
+  CheckMajorants(*medium, Affine(Vec3(2, 1, 3), Vec3(0, 0, 0)), true, 300, 3000, &segments_seen);
+  EXPECT_GT(segments_seen, 10);  // some of the random rays do cross the box
+  const std::vector<float> origin{1, 0.5f, -1}, direction{0, 0, 1}, tmax{10};
+  MajorantSegments out;
+  medium->Majorants(origin, direction, tmax, out);
+  ASSERT_EQ(out.Of(0).size(), 1u);
+  EXPECT_NEAR(out.Of(0)[0].t0, 1, 1e-6f);
+  EXPECT_NEAR(out.Of(0)[0].t1, 4, 1e-6f);
+  EXPECT_NEAR(out.Of(0)[0].sigma_maj.z, 3.5f, 1e-6f);
+}
+
+TEST_F(CloudMediumTest, RefusesBadProperties) {
+  const auto fails = [&](const char* key, Properties::Value value) {
+    Properties props;
+    props.Set(key, std::move(value));
+    EXPECT_THROW(Make(props), Error) << key;
+  };
+  fails("p1", Vec3(1, 0, 1));  // flat against p0 = (0, 0, 0)
+  fails("sigma_s", -1.0);
+  fails("density", double(NAN));
+  fails("frequency", double(INFINITY));
+  fails("to_world", Affine(Vec3(1, 1, 0), Vec3(0, 0, 0)));
+  fails("scale", -1.0);
+}
+
 TEST(PropertiesProto, FloatArrayReachesTheComponent) {
   v1::Properties message;
-  for (float v : {0.5f, -2.0f, 3.25f}) (*message.mutable_values())["density"].mutable_float_array_value()->add_values(v);
+  for (float v : {0.5f, -2.0f, 3.25f})
+    (*message.mutable_values())["density"].mutable_float_array_value()->add_values(v);
   const Properties props = FromProto(message);
   EXPECT_TRUE(props.HasFloatArray("density"));
   EXPECT_EQ(props.FloatArray("density"), (std::vector<float>{0.5f, -2.0f, 3.25f}));
