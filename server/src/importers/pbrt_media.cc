@@ -190,16 +190,17 @@ void PbrtImporter::MakeNamedMedium(const std::string& name, PbrtParams& params, 
       SetFloats(props, "emission", le);
     }
   } else if (type == "cloud") {
-    // pbrt-v4's procedural cloud, its parameters (and defaults) as pbrt's;
-    // to_world places the medium's space.
+    // pbrt-v4's procedural cloud, its parameters (and defaults) as pbrt's
+    // (scale as its earlier CuboidMedium read it); to_world places the
+    // medium's space.
     class_name = "cloud";
     to_world = state_.ctm;
     for (const auto& [key, fallback] : {std::pair{"density", 1.0}, {"wispiness", 1.0}, {"frequency", 5.0}})
       SetFloat(props, key, params.Float(key, fallback));
     coefficient("sigma_a");
     coefficient("sigma_s");
-    SetFloat(props, "scale", params.Float("scale", 1));
-    SetFloat(props, "g", params.Float("g", 0));
+    scale();
+    phase();
     SetVec3(props, "p0", Point(params, "p0", {0, 0, 0}, where));
     SetVec3(props, "p1", Point(params, "p1", {1, 1, 1}, where));
   } else if (type == "nanovdb") {
