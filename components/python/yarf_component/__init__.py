@@ -16,6 +16,7 @@ from yarf_component.frames import Frame, normalize, reflect
 from yarf_component.job_calls import JobSceneError, Pending
 from yarf_component.job_scene import MISS, Hits, JobScene, LightSamples, Rays, SceneLayout
 from yarf_component.job_surface import SurfaceClient
+from yarf_component.medium import Medium, henyey_greenstein, sample_henyey_greenstein
 from yarf_component.numerical import Function, Integrand, Integrator, PointSource, Sampler, Warp
 from yarf_component.properties import PropertyError, Rgb, Transform, Vec3
 from yarf_component.server import Running, serve
@@ -41,6 +42,7 @@ __all__ = [
     "JobScene",
     "JobSceneError",
     "LightSamples",
+    "Medium",
     "Pending",
     "PointSource",
     "PropertyError",
@@ -59,9 +61,11 @@ __all__ = [
     "TransportMode",
     "Vec3",
     "Warp",
+    "henyey_greenstein",
     "lobe_allowed",
     "normalize",
     "reflect",
+    "sample_henyey_greenstein",
     "serve",
 ]
 

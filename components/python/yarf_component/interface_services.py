@@ -6,8 +6,16 @@ from collections.abc import Callable
 
 import grpc
 
-from yarf.v1 import math_pb2_grpc, surface_pb2_grpc, texture_pb2_grpc, transport_pb2_grpc
+from yarf.v1 import (
+    math_pb2_grpc,
+    medium_pb2_grpc,
+    surface_pb2_grpc,
+    texture_pb2_grpc,
+    transport_pb2_grpc,
+)
 from yarf_component.host import Host
+from yarf_component.medium import Medium
+from yarf_component.medium_service import MediumService
 from yarf_component.numerical import Function, Integrator, Sampler, Warp
 from yarf_component.numerical_services import (
     FunctionService,
@@ -38,6 +46,7 @@ SERVICES: dict[str, tuple[Callable[[object, grpc.Server], None], Callable[[Host]
         TransportService,
     ),
     Texture.interface_name: (texture_pb2_grpc.add_TextureServicer_to_server, TextureService),
+    Medium.interface_name: (medium_pb2_grpc.add_MediumServicer_to_server, MediumService),
 }
 
 
