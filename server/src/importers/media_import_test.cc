@@ -491,6 +491,21 @@ TEST(MitsubaMedia, NullBsdfsBoundMediaOrEmitAndAreLeftOutOtherwise) {
   EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
 }
 
+TEST(MitsubaMedia, LightsMayNameTheMediumTheySitIn) {
+  const ImportResult result = Mitsuba(
+      "<sensor type=\"perspective\"/>\n"
+      "<medium type=\"homogeneous\" id=\"fog\"><boolean name=\"sample_emitters\" value=\"false\"/></medium>\n"
+      "<emitter type=\"point\"><ref id=\"fog\"/></emitter>\n"
+      "<shape type=\"sphere\"><ref name=\"interior\" id=\"fog\"/>"
+      "<emitter type=\"area\"><ref name=\"medium\" id=\"fog\"/></emitter></shape>\n");
+  ASSERT_EQ(result.scene.lights_size(), 1);
+  EXPECT_TRUE(result.scene.shapes(0).has_emitter());
+  // Only what changes noise, not the image, is said.
+  ASSERT_EQ(result.warnings.size(), 2u);
+  EXPECT_TRUE(Warns(result, "media.xml:3: medium 'homogeneous': sample_emitters false is not supported"));
+  EXPECT_TRUE(Warns(result, "integrator 'path' does not render participating media"));
+}
+
 TEST(MitsubaMedia, BadReferencesFailWithTheirPlace) {
   EXPECT_NE(ErrorOf([] { Mitsuba("<shape type=\"sphere\"><ref name=\"interior\" id=\"fgo\"/></shape>\n"); })
                 .find("media.xml:2: reference to an unknown id 'fgo'"),
