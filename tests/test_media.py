@@ -195,3 +195,39 @@ def test_an_unknown_medium_is_refused_at_submit(client: Client) -> None:
     scene = orthographic_scene()
     with pytest.raises(Exception, match="medium 'fog' is not a medium of the scene"):
         client.render(scene, spp=1, transport=component("volpath"), timeout=60)
+
+
+def foggy_cornell_box(cornell_box: scene_pb2.Scene, size: int = 32) -> scene_pb2.Scene:
+    """The Cornell box filled with fog (a null box around the room), the
+    camera outside it in vacuum."""
+    scene = scene_pb2.Scene()
+    scene.CopyFrom(cornell_box)
+    scene.film.width, scene.film.height = size, size
+    scene.materials.add(name="boundary", class_name="null")
+    fog = scene.shapes.add(name="fog", material="boundary", interior="fog")
+    box(fog, (-5, -5, -100), (560, 553, 565))
+    medium(scene, "fog", sigma_a=rgb(0.0004, 0.0006, 0.0008), sigma_s=rgb(0.0015, 0.001, 0.0006), g=0.3)
+    return scene
+
+
+def test_light_tracer_and_volpath_agree_in_fog(client: Client, cornell_box: scene_pb2.Scene) -> None:
+    """Paths from the lights (delta-tracked, connected to the camera through
+    the fog and its boundary) and from the camera estimate the same image."""
+    scene = foggy_cornell_box(cornell_box)
+    reference = client.render(scene, spp=512, seed=7, transport=component("volpath", max_depth=6), timeout=600)
+    result = client.render(scene, spp=512, seed=8, transport=component("light", max_depth=6), timeout=600)
+    assert reference.pixels.mean() > 0.05
+    test = block_z_test(
+        result.pixels, result.variance, reference.pixels, reference.variance, block=4, family_alpha=1e-3
+    )
+    assert not test.failing.size, test.report()
+
+
+@pytest.mark.parametrize("transport", ["bdpt", "photon_map", "sppm", "whitted", "distribution"])
+def test_methods_without_media_refuse_them(client: Client, transport: str) -> None:
+    scene = orthographic_scene()
+    medium(scene, "fog", sigma_s=rgb(0.5))
+    scene.camera.model = scene_pb2.Camera.PINHOLE
+    scene.camera.fov = 40
+    with pytest.raises(Exception, match="does not render participating media"):
+        client.render(scene, spp=1, transport=component(transport), timeout=60)

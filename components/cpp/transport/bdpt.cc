@@ -121,7 +121,10 @@ class Bdpt final : public Transport {
 
   uint32_t Dimensions() const override { return kFirstBounce + 2 * kPerBounce * uint32_t(max_depth_); }
 
-  void Prepare(const SceneView& scene) override { RefuseOrthographicCamera(scene, "bdpt"); }
+  void Prepare(const SceneView& scene) override {
+    RefuseOrthographicCamera(scene, "bdpt");
+    RefuseMedia(scene, "bdpt");
+  }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     out.splats = true;

@@ -49,6 +49,7 @@ class DistributionRayTracer final : public Transport {
   explicit DistributionRayTracer(const Properties& props)
       : length_(props) {}
 
+  void Prepare(const SceneView& scene) override { RefuseMedia(scene, "distribution"); }
   uint32_t Dimensions() const override {
     return kTransportDimension + kPerBounce * length_.Bounces();
   }

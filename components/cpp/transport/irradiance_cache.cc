@@ -186,6 +186,7 @@ class IrradianceCache final : public Transport {
   uint32_t Dimensions() const override { return kTransportDimension + kPerSegment * uint32_t(settings_.max_depth); }
 
   void Prepare(const SceneView& scene) override {
+    RefuseMedia(scene, "irradiance_cache");
     const std::vector<SurfacePoint> visits = VisitPoints(scene);
     const float extent = SceneExtent(scene, visits);
     gather_ = {settings_.gather_rays, settings_.min_spacing * extent, settings_.max_spacing * extent};

@@ -69,6 +69,7 @@ class PhotonMapper final : public Transport {
   uint32_t Dimensions() const override { return GatherWalk() + 4 * uint32_t(Bounces()); }
 
   void Prepare(const SceneView& scene) override {
+    RefuseMedia(scene, "photon_map");
     PhotonShooting shooting{uint64_t(photons_), uint64_t(seed_), 0, length_.max_depth, length_.rr_depth};
     // Final gathering estimates everything leaving the gather point; at x
     // itself only the light that met a diffuse surface before is wanted.

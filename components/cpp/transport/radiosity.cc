@@ -114,6 +114,7 @@ class Radiosity final : public Transport {
   uint32_t Dimensions() const override { return final_gather_ ? kGatherLobe + 1 : kTransportDimension; }
 
   void Prepare(const SceneView& scene) override {
+    RefuseMedia(scene, "radiosity");
     RefuseNonDiffuse(scene);
     double area = max_patch_area_;
     if (subdivision_ < 0 && !(area > 0)) area = SceneArea(scene) / 1024;

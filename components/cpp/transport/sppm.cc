@@ -71,6 +71,7 @@ class StochasticProgressivePhotonMapper final : public Transport {
   uint32_t Dimensions() const override { return LightSampling() + 4; }
 
   void Prepare(const SceneView& scene) override {
+    RefuseMedia(scene, "sppm");
     std::shared_ptr<const PhotonTree> first = Shoot(scene, 0);
     if (initial_radius_ == 0) initial_radius_ = DefaultRadius(*first);
     std::promise<std::shared_ptr<const PhotonTree>> ready;

@@ -345,6 +345,14 @@ inline void RefuseOrthographicCamera(const SceneView& scene, const std::string& 
                 "render it with path, whitted, distribution, photon_map or sppm");
 }
 
+// Methods that know nothing of participating media refuse scenes that
+// have them, rather than render them as vacuum (path alone ignores them,
+// as Mitsuba's and pbrt-v4's path tracers do).
+inline void RefuseMedia(const SceneView& scene, const std::string& transport) {
+  if (scene.MediumCount() > 0)
+    throw Error(transport + " does not render participating media: render this scene with volpath or light");
+}
+
 // Where light paths start: a point on a light and a direction leaving it.
 struct LightStart {
   LightSample light;

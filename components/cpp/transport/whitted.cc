@@ -41,6 +41,7 @@ class Whitted final : public Transport {
   }
 
   uint32_t Dimensions() const override { return kTransportDimension; }
+  void Prepare(const SceneView& scene) override { RefuseMedia(scene, "whitted"); }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     const size_t n = points.Count();
