@@ -112,12 +112,17 @@ FLOOR = """<shape type="rectangle">
 
 
 def scene_xml(
-    shape: str, *, max_depth: int = 4, lights: str = AREA_LIGHT, floor: str = FLOOR
+    shape: str,
+    *,
+    max_depth: int = 4,
+    lights: str = AREA_LIGHT,
+    floor: str = FLOOR,
+    integrator: str = "path",
 ) -> str:
     """A lit room around one shape (XML of Mitsuba 3): a floor, an area light
-    (or the given lights)."""
+    (or the given lights), rendered by ``integrator``."""
     return f"""<scene version="3.0.0">
-  <integrator type="path"><integer name="max_depth" value="{max_depth}"/></integrator>
+  <integrator type="{integrator}"><integer name="max_depth" value="{max_depth}"/></integrator>
   <sensor type="perspective">
     <float name="fov" value="40"/>
     <transform name="to_world">
