@@ -21,10 +21,13 @@ from imagestats import block_z_test
 from scipy import integrate
 
 from yarf import Client, component, properties, rgb, transform, vec3
+from yarf.scene import float_array
 from yarf.v1 import scene_pb2
 
 
-def box(shape: scene_pb2.SceneShape, lo: tuple[float, float, float], hi: tuple[float, float, float]) -> None:
+def box(
+    shape: scene_pb2.SceneShape, lo: tuple[float, float, float], hi: tuple[float, float, float]
+) -> None:
     """Makes ``shape`` the axis-aligned box [lo, hi], normals outward."""
     corners = [
         (hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2])
@@ -50,11 +53,18 @@ def orthographic_scene(size: int = 8) -> scene_pb2.Scene:
     scene.camera.target.CopyFrom(vec3(0, 0, 0))
     scene.camera.up.CopyFrom(vec3(0, 1, 0))
     scene.film.width = scene.film.height = size
-    scene.materials.add(name="black", class_name="lambertian", properties=properties(reflectance=rgb(0)))
+    scene.materials.add(
+        name="black", class_name="lambertian", properties=properties(reflectance=rgb(0))
+    )
     scene.materials.add(name="boundary", class_name="null")
     light = scene.shapes.add(name="light", material="black")
     light.rectangle.SetInParent()
-    light.to_world.CopyFrom(transform(np.diag([4.0, 4.0, 1.0, 1.0]) + np.array([[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, -3], [0, 0, 0, 0]])))
+    light.to_world.CopyFrom(
+        transform(
+            np.diag([4.0, 4.0, 1.0, 1.0])
+            + np.array([[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, -3], [0, 0, 0, 0]])
+        )
+    )
     light.emitter.CopyFrom(component("diffuse_area", radiance=rgb(1.0)))
     slab = scene.shapes.add(name="slab", material="boundary", interior="fog")
     box(slab, (-5, -5, -1), (5, 5, 1))
@@ -71,7 +81,9 @@ def test_camera_rays_are_attenuated_by_exp_minus_sigma_t_d(client: Client) -> No
     null boundaries that count no bounce."""
     scene = orthographic_scene()
     medium(scene, "fog", sigma_a=rgb(*SIGMA_A), sigma_s=rgb(*SIGMA_S))
-    result = client.render(scene, spp=4096, seed=1, transport=component("volpath", max_depth=1), timeout=300)
+    result = client.render(
+        scene, spp=4096, seed=1, transport=component("volpath", max_depth=1), timeout=300
+    )
     expected = np.exp(-2 * (np.array(SIGMA_A) + np.array(SIGMA_S)))
     mean = result.pixels.reshape(-1, 3).mean(axis=0)
     noise = np.sqrt(result.variance.reshape(-1, 3).mean(axis=0) / result.pixels[..., 0].size)
@@ -88,7 +100,9 @@ def lit_floor_scene(size: int = 8) -> scene_pb2.Scene:
     scene.camera.up.CopyFrom(vec3(0, 0, 1))
     scene.camera.fov = 30
     scene.film.width = scene.film.height = size
-    scene.materials.add(name="grey", class_name="lambertian", properties=properties(reflectance=rgb(0.5)))
+    scene.materials.add(
+        name="grey", class_name="lambertian", properties=properties(reflectance=rgb(0.5))
+    )
     scene.materials.add(name="boundary", class_name="null")
     floor = scene.shapes.add(name="floor", material="grey")
     floor.rectangle.SetInParent()
@@ -105,11 +119,65 @@ def test_shadow_rays_are_attenuated_by_exp_minus_sigma_t_d(client: Client) -> No
     """Direct light only (max_depth 2): the floor reads ρ/π·E·exp(-σ_t·0.5)."""
     scene = lit_floor_scene()
     medium(scene, "fog", sigma_a=rgb(*SIGMA_A), sigma_s=rgb(*SIGMA_S))
-    result = client.render(scene, spp=2048, seed=2, transport=component("volpath", max_depth=2), timeout=300)
+    result = client.render(
+        scene, spp=2048, seed=2, transport=component("volpath", max_depth=2), timeout=300
+    )
     expected = 0.5 / math.pi * np.exp(-0.5 * (np.array(SIGMA_A) + np.array(SIGMA_S)))
     mean = result.pixels.reshape(-1, 3).mean(axis=0)
     noise = np.sqrt(result.variance.reshape(-1, 3).mean(axis=0) / result.pixels[..., 0].size)
     assert np.all(np.abs(mean - expected) < 5 * noise + 1e-5), (mean, expected, noise)
+
+
+# A density grid that varies along z only (1 × 1 × 8 voxels, trilinear
+# between voxel centres, clamped at the border): its majorants, the maxima
+# of coarse cells, exceed it almost everywhere, so tracking meets null
+# collisions.
+GRID_DENSITY = [0.2, 1.5, 0.4, 2.0, 0.1, 0.9, 3.0, 0.5]
+
+
+def grid_slab(lo: float, hi: float) -> scene_pb2.ComponentSpec:
+    """The grid over x, y ∈ [-20, 20] and z ∈ [lo, hi]."""
+    placement = np.diag([40.0, 40.0, hi - lo, 1.0])
+    placement[:3, 3] = (-20, -20, lo)
+    return component(
+        "grid",
+        density=float_array(GRID_DENSITY),
+        nx=1,
+        ny=1,
+        nz=len(GRID_DENSITY),
+        sigma_a=rgb(*SIGMA_A),
+        sigma_s=rgb(*SIGMA_S),
+        to_world=transform(placement),
+    )
+
+
+def grid_optical_depth(thickness: float) -> np.ndarray:
+    """∫ σ_t along z through the grid slab: the density is linear between
+    voxel centres and constant beyond the outer ones."""
+    n = len(GRID_DENSITY)
+    centres = (np.arange(n) + 0.5) / n
+    z = np.linspace(0, 1, 200001)
+    density = np.interp(z, centres, GRID_DENSITY)
+    mean = float(np.sum((density[1:] + density[:-1]) / 2) / (len(z) - 1))
+    return thickness * mean * (np.array(SIGMA_A) + np.array(SIGMA_S))
+
+
+@pytest.mark.parametrize("rays", ["camera rays (delta tracking)", "shadow rays (ratio tracking)"])
+def test_a_grid_attenuates_by_its_optical_depth(client: Client, rays: str) -> None:
+    if rays.startswith("camera"):
+        scene = orthographic_scene()
+        scene.media.add(name="fog", medium=grid_slab(-1, 1))
+        depth, transport = grid_optical_depth(2.0), component("volpath", max_depth=1)
+        expected = np.exp(-depth)
+    else:
+        scene = lit_floor_scene()
+        scene.media.add(name="fog", medium=grid_slab(1, 1.5))
+        depth, transport = grid_optical_depth(0.5), component("volpath", max_depth=2)
+        expected = 0.5 / math.pi * np.exp(-depth)
+    result = client.render(scene, spp=4096, seed=9, transport=transport, timeout=300)
+    mean = result.pixels.reshape(-1, 3).mean(axis=0)
+    noise = np.sqrt(result.variance.reshape(-1, 3).mean(axis=0) / result.pixels[..., 0].size)
+    assert np.all(np.abs(mean - expected) < 5 * noise + 1e-4 * expected), (mean, expected, noise)
 
 
 @pytest.mark.parametrize(
@@ -158,8 +226,12 @@ def test_single_scattering_matches_a_quadrature(client: Client) -> None:
     light = scene.lights.add(name="bulb")
     light.emitter.CopyFrom(component("point", intensity=rgb(intensity)))
     light_position = np.array([0.6, 0.0, -2.0])
-    light.to_world.CopyFrom(transform(np.eye(4) + np.pad(light_position[:, None], ((0, 1), (3, 0)))))
-    result = client.render(scene, spp=65536, seed=4, transport=component("volpath", max_depth=2), timeout=300)
+    light.to_world.CopyFrom(
+        transform(np.eye(4) + np.pad(light_position[:, None], ((0, 1), (3, 0))))
+    )
+    result = client.render(
+        scene, spp=65536, seed=4, transport=component("volpath", max_depth=2), timeout=300
+    )
 
     sigma_t = sigma_a + sigma_s
 
@@ -179,14 +251,21 @@ def test_single_scattering_matches_a_quadrature(client: Client) -> None:
     assert np.all(np.abs(value - expected) < 5 * noise + 2e-3 * expected), (value, expected, noise)
 
 
-def test_without_media_volpath_estimates_what_path_does(client: Client, cornell_box: scene_pb2.Scene) -> None:
+def test_without_media_volpath_estimates_what_path_does(
+    client: Client, cornell_box: scene_pb2.Scene
+) -> None:
     scene = scene_pb2.Scene()
     scene.CopyFrom(cornell_box)
     scene.film.width, scene.film.height = 32, 32
     reference = client.render(scene, spp=256, seed=5, transport=component("path"), timeout=300)
     result = client.render(scene, spp=256, seed=6, transport=component("volpath"), timeout=300)
     test = block_z_test(
-        result.pixels, result.variance, reference.pixels, reference.variance, block=4, family_alpha=1e-3
+        result.pixels,
+        result.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=1e-3,
     )
     assert not test.failing.size, test.report()
 
@@ -206,19 +285,32 @@ def foggy_cornell_box(cornell_box: scene_pb2.Scene, size: int = 32) -> scene_pb2
     scene.materials.add(name="boundary", class_name="null")
     fog = scene.shapes.add(name="fog", material="boundary", interior="fog")
     box(fog, (-5, -5, -100), (560, 553, 565))
-    medium(scene, "fog", sigma_a=rgb(0.0004, 0.0006, 0.0008), sigma_s=rgb(0.0015, 0.001, 0.0006), g=0.3)
+    medium(
+        scene, "fog", sigma_a=rgb(0.0004, 0.0006, 0.0008), sigma_s=rgb(0.0015, 0.001, 0.0006), g=0.3
+    )
     return scene
 
 
-def test_light_tracer_and_volpath_agree_in_fog(client: Client, cornell_box: scene_pb2.Scene) -> None:
+def test_light_tracer_and_volpath_agree_in_fog(
+    client: Client, cornell_box: scene_pb2.Scene
+) -> None:
     """Paths from the lights (delta-tracked, connected to the camera through
     the fog and its boundary) and from the camera estimate the same image."""
     scene = foggy_cornell_box(cornell_box)
-    reference = client.render(scene, spp=512, seed=7, transport=component("volpath", max_depth=6), timeout=600)
-    result = client.render(scene, spp=512, seed=8, transport=component("light", max_depth=6), timeout=600)
+    reference = client.render(
+        scene, spp=512, seed=7, transport=component("volpath", max_depth=6), timeout=600
+    )
+    result = client.render(
+        scene, spp=512, seed=8, transport=component("light", max_depth=6), timeout=600
+    )
     assert reference.pixels.mean() > 0.05
     test = block_z_test(
-        result.pixels, result.variance, reference.pixels, reference.variance, block=4, family_alpha=1e-3
+        result.pixels,
+        result.variance,
+        reference.pixels,
+        reference.variance,
+        block=4,
+        family_alpha=1e-3,
     )
     assert not test.failing.size, test.report()
 

@@ -30,7 +30,8 @@ def homogeneous(name: str, sigma_t: str, albedo: str, g: float = 0.0, scale: flo
     phase = f'<phase type="hg"><float name="g" value="{g}"/></phase>' if g else ""
     return (
         f'<medium type="homogeneous" name="{name}"><rgb name="sigma_t" value="{sigma_t}"/>'
-        f'<rgb name="albedo" value="{albedo}"/><float name="scale" value="{scale}"/>{phase}</medium>'
+        f'<rgb name="albedo" value="{albedo}"/><float name="scale" value="{scale}"/>'
+        f"{phase}</medium>"
     )
 
 
@@ -60,17 +61,25 @@ def write_vol(path: Path, values: np.ndarray) -> None:
 def grids(folder: Path) -> None:
     """A density that thickens upward and an albedo that goes from red to blue along x."""
     z, y, x = np.mgrid[0:12, 0:12, 0:12] / 11.0
-    write_vol(folder / "density.vol", (0.2 + 2.5 * y * (0.5 + 0.5 * np.sin(6 * x + 3 * z) ** 2))[..., None])
+    write_vol(
+        folder / "density.vol",
+        (0.2 + 2.5 * y * (0.5 + 0.5 * np.sin(6 * x + 3 * z) ** 2))[..., None],
+    )
     albedo = np.stack([0.9 - 0.6 * x, 0.5 + 0 * x, 0.3 + 0.6 * x], axis=-1)
     write_vol(folder / "albedo.vol", albedo)
 
 
+# Both grids fill the cube [-1.1, 1.1]³.
+GRID_PLACEMENT = (
+    '<transform name="to_world"><translate value="-0.5, -0.5, -0.5"/><scale value="2.2"/>'
+    "</transform>"
+)
 GRID = (
     '<medium type="heterogeneous" name="interior">'
     '<volume type="gridvolume" name="sigma_t"><string name="filename" value="density.vol"/>'
-    '<transform name="to_world"><translate value="-0.5, -0.5, -0.5"/><scale value="2.2"/></transform></volume>'
+    f"{GRID_PLACEMENT}</volume>"
     '<volume type="gridvolume" name="albedo"><string name="filename" value="albedo.vol"/>'
-    '<transform name="to_world"><translate value="-0.5, -0.5, -0.5"/><scale value="2.2"/></transform></volume>'
+    f"{GRID_PLACEMENT}</volume>"
     '<float name="scale" value="1.5"/></medium>'
 )
 
@@ -84,8 +93,8 @@ SCENES = {
     "fog lit by an area light": (fog_cube(FOG), {}),
     "an object inside fog": (fog_cube(FOG) + GREY_SPHERE, {}),
     "an emitter inside fog": (
-        fog_cube(FOG)
-        + '<shape type="sphere"><float name="radius" value="0.15"/><point name="center" x="0.3" y="0" z="0.2"/>'
+        fog_cube(FOG) + '<shape type="sphere"><float name="radius" value="0.15"/>'
+        '<point name="center" x="0.3" y="0" z="0.2"/>'
         '<emitter type="area"><rgb name="radiance" value="20, 15, 10"/></emitter></shape>',
         {},
     ),
@@ -98,7 +107,8 @@ SCENES = {
     ),
     "a rough dielectric filled with fog under a spot light": (
         '<shape type="sphere"><float name="radius" value="0.9"/>'
-        '<bsdf type="roughdielectric"><float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/></bsdf>'
+        '<bsdf type="roughdielectric"><float name="alpha" value="0.2"/>'
+        '<float name="int_ior" value="1.5"/></bsdf>'
         + homogeneous("interior", "1, 1, 1", "0.8, 0.8, 0.8", scale=1.2)
         + "</shape>",
         {"lights": SPOT},
