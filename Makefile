@@ -110,6 +110,7 @@ bench: build
 	$(PY) bench/render_integrators.py
 	$(PY) bench/light_transport.py
 	$(PY) bench/lights.py
+	$(PY) bench/media.py
 	$(PY) bench/remote_components.py
 	$(PY) bench/farm.py
 	$(PY) bench/soak.py

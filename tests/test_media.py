@@ -323,3 +323,26 @@ def test_methods_without_media_refuse_them(client: Client, transport: str) -> No
     scene.camera.fov = 40
     with pytest.raises(Exception, match="does not render participating media"):
         client.render(scene, spp=1, transport=component(transport), timeout=60)
+
+
+def test_the_light_tracer_refuses_media_that_emit(client: Client) -> None:
+    """Light paths start at the lights only: an emitting medium would be lost."""
+    scene = lit_floor_scene()
+    medium(scene, "fog", sigma_a=rgb(0.5), emission=rgb(2.0))
+    with pytest.raises(Exception, match="does not render media that emit light"):
+        client.render(scene, spp=1, transport=component("light"), timeout=60)
+
+
+def test_an_emitting_medium_adds_its_absorbed_share_of_its_radiance(client: Client) -> None:
+    """A slab that absorbs (σ_a) and emits Le in front of a unit emitter:
+    L = e^{-σ_a d} + Le (1 - e^{-σ_a d}) per channel, d = 2."""
+    scene = orthographic_scene()
+    sigma_a, emission = np.array([0.3, 0.8, 1.5]), np.array([2.0, 0.5, 1.0])
+    medium(scene, "fog", sigma_a=rgb(*sigma_a), emission=rgb(*emission))
+    result = client.render(
+        scene, spp=4096, seed=10, transport=component("volpath", max_depth=1), timeout=300
+    )
+    expected = np.exp(-2 * sigma_a) + emission * (1 - np.exp(-2 * sigma_a))
+    mean = result.pixels.reshape(-1, 3).mean(axis=0)
+    noise = np.sqrt(result.variance.reshape(-1, 3).mean(axis=0) / result.pixels[..., 0].size)
+    assert np.all(np.abs(mean - expected) < 5 * noise + 1e-4), (mean, expected, noise)

@@ -73,6 +73,7 @@ class LightTracer final : public Transport {
 
   void Prepare(const SceneView& scene) override {
     RefuseOrthographicCamera(scene, "light");
+    RefuseEmittingMedia(scene, "light");
     null_boundaries_ = HasNullBoundaries(scene);
   }
 

@@ -84,6 +84,14 @@ inline bool HasNullBoundaries(const SceneView& scene) {
   return false;
 }
 
+// Methods whose paths start only at the lights cannot start them in a
+// medium that emits (pbrt-v4's Le): they refuse it.
+inline void RefuseEmittingMedia(const SceneView& scene, const std::string& transport) {
+  for (uint32_t m = 0; m < scene.MediumCount(); ++m)
+    if (scene.MediumAt(m).Emits())
+      throw Error(transport + " does not render media that emit light: render this scene with volpath");
+}
+
 inline bool IsNullBoundary(const SceneView& scene, uint32_t shape) {
   return (scene.Material(scene.MaterialOf(shape)).Lobes() & kScatterNull) != 0;
 }
