@@ -17,7 +17,14 @@
 //   non-diffuse surfaces, and the global map's estimate (all its photons)
 //   where it lands; without, the global map's photons that met a diffuse
 //   surface before, estimated at x itself.
-// Each estimate is Jensen's: the k nearest photons, a cone filter of
+// In participating media (Jensen & Christensen 1998) photons are
+// delta-tracked and also stored, in a volume map, wherever they really
+// scatter; camera and gather rays are delta-tracked too, and one that
+// scatters in a medium ends there with the volume estimate: the k nearest
+// volume photons, Σ p(wi, wo)·Φ / (σ_s·(4/3)πr³), r the k-th distance
+// (photons are stored at σ_s's rate, hence the 1/σ_s). Null boundaries are
+// stepped through; media that emit light are refused.
+// Each surface estimate is Jensen's: the k nearest photons, a cone filter of
 // k = 1 (weight 1 − d/r, normalised by πr²/3, r the k-th distance), the
 // BSDF evaluated toward each photon. Every light path is counted by
 // exactly one of the terms, so the result converges to the path integral
@@ -26,7 +33,8 @@
 // Properties:
 //   int photons          photon paths shot for the global map (200000).
 //   int caustic_photons  photon paths shot for the caustic map (200000).
-//   int nearest          photons per estimate, k (64).
+//   int nearest          photons per estimate, k, on surfaces and in
+//                        media (64).
 //   bool final_gather    gather indirect light with one ray (true).
 //   int max_depth        longest path in segments, Mitsuba's convention,
 //                        for photon paths (-1, default: unbounded); it also
@@ -69,13 +77,16 @@ class PhotonMapper final : public Transport {
   uint32_t Dimensions() const override { return GatherWalk() + 4 * uint32_t(Bounces()); }
 
   void Prepare(const SceneView& scene) override {
-    RefuseMedia(scene, "photon_map");
+    RefuseEmissiveMedia(scene, "photon_map");
     PhotonShooting shooting{uint64_t(photons_), uint64_t(seed_), 0, length_.max_depth, length_.rr_depth};
     // Final gathering estimates everything leaving the gather point; at x
-    // itself only the light that met a diffuse surface before is wanted.
+    // itself only the light that met a diffuse surface (or a medium)
+    // before is wanted. Light scattered in media is all in the volume map.
     const bool all = final_gather_;
+    std::vector<Photon> volume;
     global_ = std::make_unique<PhotonTree>(ShootPhotons(
-        scene, shooting, [all](PhotonHistory h) { return all || h == PhotonHistory::kIndirect; }));
+        scene, shooting, [all](PhotonHistory h) { return all || h == PhotonHistory::kIndirect; }, &volume));
+    volume_ = std::make_unique<PhotonTree>(std::move(volume));
     shooting.paths = uint64_t(caustic_photons_);
     shooting.stream = 1;
     caustic_ = std::make_unique<PhotonTree>(
@@ -83,25 +94,30 @@ class PhotonMapper final : public Transport {
   }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
-    if (!global_ || !caustic_) throw Error("photon_map: Evaluate before Prepare");
+    if (!global_ || !caustic_ || !volume_) throw Error("photon_map: Evaluate before Prepare");
     const size_t n = points.Count();
-    std::vector<Walk> walks(n);
-    for (uint32_t i = 0; i < n; ++i) walks[i] = {i, CameraRayOf(scene, points, i)};
+    std::vector<CameraWalk> walks;
+    walks.reserve(n);
+    for (uint32_t i = 0; i < n; ++i)
+      walks.emplace_back(i, CameraRayOf(scene, points, i), Vec3(1, 1, 1), scene.CameraMedium(), WalkSeed(points, i, 0));
     std::vector<Vec3> radiance(n);
+    std::vector<VolumePoint> in_media;
     const std::vector<SurfacePoint> visible =
-        WalkToDiffuse(scene, points, std::move(walks), kTransportDimension, Bounces(), &radiance);
+        WalkToDiffuse(scene, points, std::move(walks), kTransportDimension, Bounces(), &radiance, in_media);
 
     const std::vector<Vec3> direct = DirectLightAt(scene, points, visible, LightSampling());
     const std::vector<Vec3> caustic = ConeEstimate(scene, *caustic_, visible, size_t(nearest_));
     for (size_t k = 0; k < visible.size(); ++k) radiance[visible[k].owner] += direct[k] + caustic[k];
     if (final_gather_) {
-      const std::vector<SurfacePoint> gathered = Gather(scene, points, visible);
+      const std::vector<SurfacePoint> gathered = Gather(scene, points, visible, in_media);
       const std::vector<Vec3> indirect = ConeEstimate(scene, *global_, gathered, size_t(nearest_));
       for (size_t k = 0; k < gathered.size(); ++k) radiance[gathered[k].owner] += indirect[k];
     } else {
       const std::vector<Vec3> indirect = ConeEstimate(scene, *global_, visible, size_t(nearest_));
       for (size_t k = 0; k < visible.size(); ++k) radiance[visible[k].owner] += indirect[k];
     }
+    const std::vector<Vec3> in_scattered = VolumeNearestEstimate(scene, *volume_, in_media, size_t(nearest_));
+    for (size_t k = 0; k < in_media.size(); ++k) radiance[in_media[k].owner] += in_scattered[k];
     for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, radiance[i], out);
   }
 
@@ -113,9 +129,10 @@ class PhotonMapper final : public Transport {
 
   // One BSDF-sampled ray from each visible point, followed to the
   // diffuse surface it lands on (emitters on the way are direct light or
-  // caustics, counted already).
+  // caustics, counted already) or to where it scatters in a medium (its
+  // volume estimate joins `in_media`).
   std::vector<SurfacePoint> Gather(const SceneView& scene, const PrimarySamples& points,
-                                   const std::vector<SurfacePoint>& visible) const {
+                                   const std::vector<SurfacePoint>& visible, std::vector<VolumePoint>& in_media) const {
     std::vector<ScatterQuery> queries(visible.size());
     for (size_t k = 0; k < visible.size(); ++k) {
       const SurfacePoint& s = visible[k];
@@ -125,25 +142,27 @@ class PhotonMapper final : public Transport {
       queries[k].uniform[2] = points.Get(s.owner, GatherSample() + 1);
     }
     const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
-    std::vector<Walk> walks;
+    std::vector<CameraWalk> walks;
     for (size_t k = 0; k < visible.size(); ++k) {
       const SurfacePoint& s = visible[k];
       const Vec3 weight =
           sampled[k].weight * ShadingWeight(s.at.frame, s.at.ng, s.at.wi, sampled[k].wo, TransportMode::kRadiance);
       if (!(sampled[k].pdf > 0) || !(MaxComponent(weight) > 0)) continue;
-      Walk w{s.owner, Ray{}, s.throughput * weight};
-      w.ray.time = s.time;
-      Redirect(w.ray, s.at.position, s.at.ng, Normalize(s.at.frame.ToWorld(sampled[k].wo)));
-      walks.push_back(w);
+      const Vec3 direction = Normalize(s.at.frame.ToWorld(sampled[k].wo));
+      Ray ray;
+      ray.time = s.time;
+      Redirect(ray, s.at.position, s.at.ng, direction);
+      walks.emplace_back(s.owner, ray, s.throughput * weight, s.MediumToward(scene, direction),
+                         WalkSeed(points, s.owner, 1));
     }
-    return WalkToDiffuse(scene, points, std::move(walks), GatherWalk(), Bounces(), nullptr);
+    return WalkToDiffuse(scene, points, std::move(walks), GatherWalk(), Bounces(), nullptr, in_media);
   }
 
   PathLength length_;
   int64_t photons_, caustic_photons_, nearest_;
   bool final_gather_;
   int64_t seed_;
-  std::unique_ptr<PhotonTree> global_, caustic_;
+  std::unique_ptr<PhotonTree> global_, caustic_, volume_;
 };
 
 }  // namespace

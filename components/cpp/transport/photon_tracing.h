@@ -15,11 +15,15 @@
 #include <nanoflann.hpp>
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "medium_transport.h"
 #include "wavefront.h"
 #include "yarf/hash.h"
 
@@ -81,11 +85,46 @@ constexpr uint32_t kLightChoice = 0, kLightPosition = 2, kEmission = 4, kTime = 
 constexpr int kMaxBounces = 64;
 }  // namespace photon_dims
 
+// The medium each light path starts in: the one its light's point lies
+// in, seen along the line from the camera, and on an emitting boundary
+// the one it emits into (as the light tracer's).
+inline std::vector<uint32_t> LightStartMedia(const SceneView& scene, const std::vector<LightStart>& starts,
+                                             float time) {
+  std::vector<uint32_t> media(starts.size(), kNoMedium);
+  if (scene.MediumCount() == 0) return media;
+  std::vector<Vec3> points(starts.size());
+  for (size_t i = 0; i < starts.size(); ++i) points[i] = starts[i].light.position;
+  media = MediaAt(scene, points, time);
+  for (size_t i = 0; i < starts.size(); ++i) {
+    const LightSample& l = starts[i].light;
+    if (l.shape != kNoShape) media[i] = scene.MediaOf(l.shape).Beyond(starts[i].direction, l.normal, media[i]);
+  }
+  return media;
+}
+
+// Media whose coefficients report emission would need photons emitted
+// from the volume: refused rather than rendered dark.
+inline void RefuseEmissiveMedia(const SceneView& scene, const std::string& transport) {
+  for (uint32_t m = 0; m < scene.MediumCount(); ++m)
+    if (scene.MediumAt(m).Emits())
+      throw Error(transport + " does not render media that emit light: render this scene with volpath");
+}
+
+// Null boundaries a walk may step through before it is dropped (a walk
+// caught between coincident boundaries).
+constexpr int kMaxBoundarySteps = 256;
+
 // Shoots `shooting.paths` photon paths (as a wavefront, in chunks: one
 // SurfaceModel call per material per bounce) and returns the photons
-// whose history `keep` accepts, where they landed.
+// whose history `keep` accepts, where they landed on surfaces. In media
+// photons are delta-tracked (hero channel and density ratios as
+// volpath's, their power β / mean(r_u)); with `volume` given, every real
+// scattering in a medium stores a photon there (of any history), and
+// scatters the photon on by the phase function, which makes its history
+// indirect. Null boundaries are stepped through without a bounce.
 template <typename Keep>
-std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& shooting, Keep keep) {
+std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& shooting, Keep keep,
+                                 std::vector<Photon>* volume = nullptr) {
   using namespace photon_dims;
   std::vector<Photon> stored;
   if (!scene.HasLights() || shooting.paths == 0 || shooting.max_depth == 0 || shooting.max_depth == 1)
@@ -93,46 +132,137 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
   const float scale = 1.0f / float(shooting.paths);
   const int last_bounce = shooting.max_depth < 0 ? kMaxBounces : shooting.max_depth - 1;
   constexpr uint64_t kChunk = 1 << 15;
-  struct Live {
+  struct Live : SpectralPath {
     Ray ray;
-    Vec3 power;
-    PhotonHistory history;
-    // Product of the BSDF weights so far, for roulette.
-    Vec3 carried{1, 1, 1};
+    // The light's flux along the path's start (the shooting's 1/N
+    // included); the photon's power is start · β / mean(r_u).
+    Vec3 start;
+    PhotonHistory history = PhotonHistory::kDirect;
+    uint32_t medium = kNoMedium;
+    // Real scattering vertices before the next one, plus one.
+    int bounce = 1;
+    int boundary_steps = 0;
+    Vec3 Power() const { return start * beta / ChannelMean(r_u); }
+  };
+  // Roulette on what the bounces kept of the photon's power, so that
+  // photons' powers stay alike (Jensen's "equal power" photons).
+  const auto survives = [&](Live& p, float u) {
+    if (p.bounce < shooting.rr_depth) return true;
+    const float survive = std::min(MaxComponent(p.beta / ChannelMean(p.r_u)), 0.95f);
+    if (u >= survive) return false;
+    p.beta = p.beta * (1.0f / survive);
+    return true;
   };
   for (uint64_t first = 0; first < shooting.paths; first += kChunk) {
     const size_t n = size_t(std::min(kChunk, shooting.paths - first));
     const HashedPoints points(shooting.seed, shooting.stream, first, n);
     const std::vector<LightStart> starts = StartLightPaths(scene, points, kLightChoice, kLightPosition, kEmission);
+    const std::vector<uint32_t> media = LightStartMedia(scene, starts, scene.ShutterTime(points.Get(0, kTime)));
     std::vector<Live> paths(n);
     std::vector<uint32_t> active;
     for (uint32_t i = 0; i < n; ++i) {
       if (!starts[i].Valid()) continue;
-      paths[i] = {starts[i].FirstRay(scene.ShutterTime(points.Get(i, kTime))), starts[i].Throughput() * scale,
-                  PhotonHistory::kDirect, Vec3(1, 1, 1)};
-      if (MaxComponent(paths[i].power) > 0) active.push_back(i);
+      Live& p = paths[i];
+      p.ray = starts[i].FirstRay(scene.ShutterTime(points.Get(i, kTime)));
+      p.start = starts[i].Throughput() * scale;
+      p.medium = media[i];
+      p.random.seed = Hash(shooting.seed, shooting.stream, first + i);
+      p.ChooseHero();
+      if (MaxComponent(p.start) > 0) active.push_back(i);
     }
-    for (int bounce = 1; !active.empty() && bounce <= last_bounce; ++bounce) {
+    while (!active.empty()) {
       std::vector<Ray> rays(active.size());
       std::vector<Hit> hits(active.size());
       for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
       scene.Intersect(rays, hits);
-      const uint32_t base = kFirstBounce + kPerBounce * uint32_t(bounce - 1);
+
+      // Through the media: each photon scatters, is absorbed or reaches its hit.
+      std::vector<uint8_t> at_surface(active.size(), 1);
+      std::vector<std::pair<uint32_t, Vec3>> scattered;  // path, point
+      std::vector<uint32_t> keys(active.size());
+      for (size_t k = 0; k < active.size(); ++k) keys[k] = paths[active[k]].medium;
+      for (const auto& [medium, members] : GroupBy(keys)) {
+        if (medium == kNoMedium) continue;
+        std::vector<yarf::Walk> walks(members.size());
+        for (size_t j = 0; j < members.size(); ++j) {
+          Live& p = paths[active[members[j]]];
+          walks[j] = {p.ray, hits[members[j]].Found() ? hits[members[j]].t : p.ray.tfar, p.hero, &p.random};
+        }
+        std::vector<uint8_t> reached;
+        const std::vector<Vec3> transmittance =
+            TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t j, const Collision& c) {
+              const uint32_t i = active[members[j]];
+              const CollisionEvent event = DeltaTrack(paths[i], c);
+              if (event == CollisionEvent::kScatter) scattered.emplace_back(i, c.position);
+              return event == CollisionEvent::kNull;
+            });
+        for (size_t j = 0; j < members.size(); ++j)
+          at_surface[members[j]] = reached[j] && paths[active[members[j]]].Pass(transmittance[j]);
+      }
+
+      std::vector<uint32_t> next;
+      // Photons scattered in media: stored, then scattered on by the phase
+      // function (symmetric: sampled with wi back toward the light, its
+      // wo is where the photon goes on).
+      std::vector<uint32_t> scatter_keys(scattered.size());
+      for (size_t k = 0; k < scattered.size(); ++k) scatter_keys[k] = paths[scattered[k].first].medium;
+      for (const auto& [medium_index, members] : GroupBy(scatter_keys)) {
+        std::vector<float> wi, position, u;
+        std::vector<uint32_t> owners;
+        for (uint32_t j : members) {
+          const auto& [i, at] = scattered[j];
+          Live& p = paths[i];
+          if (volume) volume->push_back({at, Vec3(), -p.ray.direction, p.Power(), p.history});
+          if (p.bounce >= last_bounce) continue;
+          const uint32_t base = kFirstBounce + kPerBounce * uint32_t(p.bounce - 1);
+          for (float v : {-p.ray.direction.x, -p.ray.direction.y, -p.ray.direction.z}) wi.push_back(v);
+          for (float v : {at.x, at.y, at.z}) position.push_back(v);
+          u.push_back(points.Get(i, base));
+          u.push_back(points.Get(i, base + 1));
+          owners.push_back(j);
+        }
+        const size_t m = owners.size();
+        std::vector<float> wo(3 * m), weight(m), pdf(m);
+        scene.MediumAt(medium_index).SamplePhase(wi, position, u, wo, weight, pdf);
+        for (size_t q = 0; q < m; ++q) {
+          const auto& [i, at] = scattered[owners[q]];
+          Live& p = paths[i];
+          if (!(pdf[q] > 0) || !(weight[q] > 0)) continue;
+          p.beta *= weight[q];
+          p.history = PhotonHistory::kIndirect;
+          p.ray.origin = at;
+          p.ray.direction = Normalize(Vec3::Load(&wo[3 * q]));
+          p.ray.tnear = 0;
+          p.ray.tfar = kInfinity;
+          const uint32_t base = kFirstBounce + kPerBounce * uint32_t(p.bounce - 1);
+          if (!survives(p, points.Get(i, base + 3))) continue;
+          ++p.bounce;
+          next.push_back(i);
+        }
+      }
+
       std::vector<ScatterQuery> queries;
-      std::vector<uint32_t> owners;
+      std::vector<uint32_t> owners, shapes;
       std::vector<ShadingPoint> shading;
       for (size_t k = 0; k < active.size(); ++k) {
-        if (!hits[k].Found()) continue;
+        if (!at_surface[k] || !hits[k].Found()) continue;
         Live& p = paths[active[k]];
+        if (IsNullBoundary(scene, hits[k].shape)) {
+          p.medium = scene.MediaOf(hits[k].shape).Beyond(rays[k].direction, hits[k].normal, p.medium);
+          Redirect(p.ray, rays[k].origin + rays[k].direction * hits[k].t, hits[k].normal, rays[k].direction);
+          if (++p.boundary_steps < kMaxBoundarySteps) next.push_back(active[k]);
+          continue;
+        }
         const Vec3 position = rays[k].origin + rays[k].direction * hits[k].t;
         const uint32_t material = scene.MaterialOf(hits[k].shape);
         const bool diffuse = StoresPhotons(scene.Material(material).Lobes());
         if (diffuse && keep(p.history)) {
           const Vec3 n = hits[k].normal;
-          stored.push_back({position, Dot(n, rays[k].direction) < 0 ? n : -n, -rays[k].direction, p.power,
+          stored.push_back({position, Dot(n, rays[k].direction) < 0 ? n : -n, -rays[k].direction, p.Power(),
                             p.history});
         }
-        if (bounce == last_bounce) continue;
+        if (p.bounce >= last_bounce) continue;
+        const uint32_t base = kFirstBounce + kPerBounce * uint32_t(p.bounce - 1);
         const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
         ScatterQuery q{material, at.wi, at.site};
         q.uniform[0] = points.Get(active[k], base + 2);
@@ -140,30 +270,26 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
         q.uniform[2] = points.Get(active[k], base + 1);
         queries.push_back(q);
         owners.push_back(active[k]);
+        shapes.push_back(hits[k].shape);
         shading.push_back(at);
         // The history after this bounce.
         if (diffuse) p.history = PhotonHistory::kIndirect;
         else if (p.history == PhotonHistory::kDirect) p.history = PhotonHistory::kCaustic;
       }
       const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kImportance, 0, queries);
-      std::vector<uint32_t> next;
       for (size_t q = 0; q < queries.size(); ++q) {
         Live& p = paths[owners[q]];
         const ShadingPoint& at = shading[q];
         const Vec3 weight =
             sampled[q].weight * ShadingWeight(at.frame, at.ng, at.wi, sampled[q].wo, TransportMode::kImportance);
         if (!(sampled[q].pdf > 0) || !(MaxComponent(weight) > 0)) continue;
-        p.power = p.power * weight;
-        p.carried = p.carried * weight;
-        Redirect(p.ray, at.position, at.ng, Normalize(at.frame.ToWorld(sampled[q].wo)));
-        // Roulette on what the bounces kept of the photon's power, so that
-        // photons' powers stay alike (Jensen's "equal power" photons).
-        if (bounce >= shooting.rr_depth) {
-          const float survive = std::min(MaxComponent(p.carried), 0.95f);
-          if (points.Get(owners[q], base + 3) >= survive) continue;
-          p.carried = p.carried * (1.0f / survive);
-          p.power = p.power * (1.0f / survive);
-        }
+        p.beta = p.beta * weight;
+        const Vec3 direction = Normalize(at.frame.ToWorld(sampled[q].wo));
+        p.medium = scene.MediaOf(shapes[q]).Beyond(direction, at.ng, p.medium);
+        Redirect(p.ray, at.position, at.ng, direction);
+        const uint32_t base = kFirstBounce + kPerBounce * uint32_t(p.bounce - 1);
+        if (!survives(p, points.Get(owners[q], base + 3))) continue;
+        ++p.bounce;
         next.push_back(owners[q]);
       }
       active = std::move(next);
@@ -244,101 +370,218 @@ class PhotonTree {
 // walk ended: where radiance toward `wi` is estimated.
 struct SurfacePoint {
   uint32_t owner;
-  // What the walk carried there (product of BSDF sample weights).
+  // What the walk carried there (product of BSDF sample weights; through
+  // media, delta tracking's β / mean(r_u)).
   Vec3 throughput;
   ShadingPoint at;
   float time = 0;
   uint32_t material = 0;
+  uint32_t shape = kNoShape;
+  // The medium the walk arrived through.
+  uint32_t medium = kNoMedium;
   // The geometric normal on the side the walk arrived from.
   Vec3 FacingNormal() const { return Dot(at.frame.ToWorld(at.wi), at.ng) >= 0 ? at.ng : -at.ng; }
+  // The medium on the side a ray leaving toward `direction` enters.
+  uint32_t MediumToward(const SceneView& scene, Vec3 direction) const {
+    return scene.MediaOf(shape).Beyond(direction, at.ng, medium);
+  }
 };
 
-// A ray on its way to a surface with a diffuse lobe.
-struct Walk {
+// A point where a camera (or gather) walk scattered in a medium: where
+// in-scattered radiance toward `wi` is estimated.
+struct VolumePoint {
+  uint32_t owner;
+  Vec3 position;
+  // Unit, back toward where the walk came from.
+  Vec3 wi;
+  // The walk's β / mean(r_u) there, divided by σ_s there (per channel;
+  // zero where σ_s is): the photons' density already carries σ_s.
+  Vec3 weight;
+  uint32_t medium;
+};
+
+// A ray on its way to a surface with a diffuse lobe (or a scattering in a
+// medium): its weight and ratios as a path through media.
+struct CameraWalk {
   uint32_t owner;
   Ray ray;
-  Vec3 throughput{1, 1, 1};
+  SpectralPath path;
+  uint32_t medium = kNoMedium;
+
+  CameraWalk(uint32_t owner, const Ray& ray, Vec3 throughput, uint32_t medium, uint64_t seed)
+      : owner(owner), ray(ray), medium(medium) {
+    path.beta = throughput;
+    path.random.seed = seed;
+    path.ChooseHero();
+  }
+  // The unbiased weight of the walk so far.
+  Vec3 Throughput() const { return path.beta / ChannelMean(path.r_u); }
 };
+
+// A seed for the walks of point i through media, from its film and lens
+// coordinates (and `purpose`, to tell the walks of one point apart).
+inline uint64_t WalkSeed(const PrimarySamples& points, uint32_t i, uint32_t purpose) {
+  const auto bits = [](float f) { return std::bit_cast<uint32_t>(f); };
+  return Hash(bits(points.Get(i, kFilmDimension)), bits(points.Get(i, kFilmDimension + 1)),
+              bits(points.Get(i, kLensDimension)), bits(points.Get(i, kLensDimension + 1)), purpose);
+}
 
 // Follows each walk through surfaces that store no photons, sampling
 // their BSDF (radiance mode), for at most `bounces` such surfaces, and
 // returns the surface points with a diffuse lobe it reaches. Bounce b
-// uses coordinates first + 4b (direction pair, lobe). When `emitted` is
+// uses coordinates first + 4b (direction pair, lobe). In media walks are
+// delta-tracked: one that scatters really ends there, in `in_media`; null
+// boundaries are stepped through without a bounce. When `emitted` is
 // given, emitters hit on the way (and at the end) and the environment seen
 // by walks that leave the scene add their radiance, times the walk's
 // throughput, to emitted[owner].
 inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const PrimarySamples& points,
-                                               std::vector<Walk> walks, uint32_t first, int bounces,
-                                               std::vector<Vec3>* emitted) {
+                                               std::vector<CameraWalk> walks, uint32_t first, int bounces,
+                                               std::vector<Vec3>* emitted, std::vector<VolumePoint>& in_media) {
   std::vector<SurfacePoint> reached;
-  for (int bounce = 0; !walks.empty(); ++bounce) {
-    std::vector<Ray> rays(walks.size());
-    std::vector<Hit> hits(walks.size());
-    for (size_t k = 0; k < walks.size(); ++k) rays[k] = walks[k].ray;
+  // Per walk: surfaces without a diffuse lobe scattered from so far, null
+  // boundaries crossed so far.
+  std::vector<int> bounce(walks.size()), steps(walks.size());
+  std::vector<uint32_t> active(walks.size());
+  for (uint32_t k = 0; k < walks.size(); ++k) active[k] = k;
+  while (!active.empty()) {
+    std::vector<Ray> rays(active.size());
+    std::vector<Hit> hits(active.size());
+    for (size_t k = 0; k < active.size(); ++k) rays[k] = walks[active[k]].ray;
     scene.Intersect(rays, hits);
+
+    std::vector<uint8_t> passed(active.size(), 1);
+    std::vector<uint32_t> keys(active.size());
+    for (size_t k = 0; k < active.size(); ++k) keys[k] = walks[active[k]].medium;
+    for (const auto& [medium, members] : GroupBy(keys)) {
+      if (medium == kNoMedium) continue;
+      std::vector<yarf::Walk> tracks(members.size());
+      for (size_t j = 0; j < members.size(); ++j) {
+        CameraWalk& w = walks[active[members[j]]];
+        tracks[j] = {w.ray, hits[members[j]].Found() ? hits[members[j]].t : w.ray.tfar, w.path.hero, &w.path.random};
+      }
+      std::vector<uint8_t> done;
+      const std::vector<Vec3> transmittance =
+          TrackMajorants(scene.MediumAt(medium), tracks, done, [&](size_t j, const Collision& c) {
+            CameraWalk& w = walks[active[members[j]]];
+            const CollisionEvent event = DeltaTrack(w.path, c);
+            if (event == CollisionEvent::kScatter) {
+              const Vec3 throughput = w.Throughput();
+              const auto per_sigma = [](float t, float sigma) { return sigma > 0 ? t / sigma : 0.0f; };
+              const Vec3 weight{per_sigma(throughput.x, c.sigma_s.x), per_sigma(throughput.y, c.sigma_s.y),
+                                per_sigma(throughput.z, c.sigma_s.z)};
+              if (MaxComponent(weight) > 0) in_media.push_back({w.owner, c.position, -w.ray.direction, weight, medium});
+            }
+            return event == CollisionEvent::kNull;
+          });
+      for (size_t j = 0; j < members.size(); ++j)
+        passed[members[j]] = done[j] && walks[active[members[j]]].path.Pass(transmittance[j]);
+    }
+
     if (emitted) {
       std::vector<EmitterQuery> lights;
       std::vector<uint32_t> lit;
-      for (size_t k = 0; k < walks.size(); ++k)
-        if (hits[k].Found())
-          if (const Emitter* e = scene.EmitterOf(hits[k].shape)) {
-            lights.push_back({e, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
-            lit.push_back(uint32_t(k));
-          }
-      const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
-      for (size_t q = 0; q < lit.size(); ++q)
-        (*emitted)[walks[lit[q]].owner] += walks[lit[q]].throughput * le[q].radiance;
       std::vector<Vec3> directions;
       std::vector<uint32_t> escaped;
-      for (size_t k = 0; k < walks.size(); ++k)
+      for (size_t k = 0; k < active.size(); ++k) {
+        if (!passed[k]) continue;
         if (!hits[k].Found()) {
           directions.push_back(rays[k].direction);
           escaped.push_back(uint32_t(k));
+        } else if (const Emitter* e = scene.EmitterOf(hits[k].shape)) {
+          lights.push_back({e, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
+          lit.push_back(uint32_t(k));
         }
+      }
+      const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
+      for (size_t q = 0; q < lit.size(); ++q) {
+        const CameraWalk& w = walks[active[lit[q]]];
+        (*emitted)[w.owner] += w.Throughput() * le[q].radiance;
+      }
       const std::vector<Vec3> environment = EnvironmentAlong(scene, directions);
-      for (size_t q = 0; q < escaped.size(); ++q)
-        (*emitted)[walks[escaped[q]].owner] += walks[escaped[q]].throughput * environment[q];
+      for (size_t q = 0; q < escaped.size(); ++q) {
+        const CameraWalk& w = walks[active[escaped[q]]];
+        (*emitted)[w.owner] += w.Throughput() * environment[q];
+      }
     }
     std::vector<ScatterQuery> queries;
     std::vector<uint32_t> scattering;
     std::vector<ShadingPoint> shading;
-    for (size_t k = 0; k < walks.size(); ++k) {
-      if (!hits[k].Found()) continue;
+    std::vector<uint32_t> next;
+    for (size_t k = 0; k < active.size(); ++k) {
+      if (!passed[k] || !hits[k].Found()) continue;
+      const uint32_t i = active[k];
+      CameraWalk& w = walks[i];
+      if (IsNullBoundary(scene, hits[k].shape)) {
+        w.medium = scene.MediaOf(hits[k].shape).Beyond(rays[k].direction, hits[k].normal, w.medium);
+        Redirect(w.ray, rays[k].origin + rays[k].direction * hits[k].t, hits[k].normal, rays[k].direction);
+        if (++steps[i] < kMaxBoundarySteps) next.push_back(i);
+        continue;
+      }
       const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
       const uint32_t material = scene.MaterialOf(hits[k].shape);
       if (StoresPhotons(scene.Material(material).Lobes())) {
-        reached.push_back({walks[k].owner, walks[k].throughput, at, rays[k].time, material});
+        reached.push_back({w.owner, w.Throughput(), at, rays[k].time, material, hits[k].shape, w.medium});
         continue;
       }
-      if (bounce >= bounces) continue;
-      const uint32_t base = first + 4 * uint32_t(bounce);
+      if (bounce[i] >= bounces) continue;
+      const uint32_t base = first + 4 * uint32_t(bounce[i]);
       ScatterQuery q{material, at.wi, at.site};
-      q.uniform[0] = points.Get(walks[k].owner, base + 2);
-      q.uniform[1] = points.Get(walks[k].owner, base);
-      q.uniform[2] = points.Get(walks[k].owner, base + 1);
+      q.uniform[0] = points.Get(w.owner, base + 2);
+      q.uniform[1] = points.Get(w.owner, base);
+      q.uniform[2] = points.Get(w.owner, base + 1);
       queries.push_back(q);
       scattering.push_back(uint32_t(k));
       shading.push_back(at);
     }
     const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
-    std::vector<Walk> next;
     for (size_t q = 0; q < queries.size(); ++q) {
       const ShadingPoint& at = shading[q];
       const Vec3 weight =
           sampled[q].weight * ShadingWeight(at.frame, at.ng, at.wi, sampled[q].wo, TransportMode::kRadiance);
       if (!(sampled[q].pdf > 0) || !(MaxComponent(weight) > 0)) continue;
-      Walk w = walks[scattering[q]];
-      w.throughput *= weight;
-      Redirect(w.ray, at.position, at.ng, Normalize(at.frame.ToWorld(sampled[q].wo)));
-      next.push_back(w);
+      const uint32_t i = active[scattering[q]];
+      CameraWalk& w = walks[i];
+      w.path.beta *= weight;
+      const Vec3 direction = Normalize(at.frame.ToWorld(sampled[q].wo));
+      w.medium = scene.MediaOf(hits[scattering[q]].shape).Beyond(direction, at.ng, w.medium);
+      Redirect(w.ray, at.position, at.ng, direction);
+      ++bounce[i];
+      next.push_back(i);
     }
-    walks = std::move(next);
+    active = std::move(next);
   }
   return reached;
 }
 
+// f·L·|cos|/pdf of each connection, its shadow ray not traced.
+inline std::vector<Vec3> UnshadowedDirectLight(const SceneView& scene,
+                                               const std::vector<LightConnection>& connections) {
+  const size_t n = connections.size();
+  std::vector<SurfaceQuery> surfaces(n);
+  std::vector<EmitterQuery> lights(n);
+  for (size_t k = 0; k < n; ++k) {
+    const LightConnection& c = connections[k];
+    surfaces[k] = {c.material, c.wi, c.frame.ToLocal(c.light.direction), c.site};
+    lights[k] = {c.light.emitter, c.light.w, SurfaceSite::Uv(c.light.u, c.light.v)};
+  }
+  const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
+  const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
+  std::vector<Vec3> out(n);
+  for (size_t k = 0; k < n; ++k) {
+    const LightConnection& c = connections[k];
+    if (!c.light.emitter || !(c.light.pdf > 0)) continue;
+    const float shading = ShadingWeight(c.frame, c.ng, c.wi, surfaces[k].wo, TransportMode::kRadiance);
+    out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * shading / c.light.pdf);
+  }
+  return out;
+}
+
 // Next-event estimation at each point: one light sample, chosen from
-// coordinates (position pair at `first`, choice at first + 2).
+// coordinates (position pair at `first`, choice at first + 2). In scenes
+// with media or null boundaries the shadow ray is ratio-tracked through
+// them (a hero channel of its own, its estimate divided by the mean of
+// its light-sampling ratios: the light tracer's estimator, no MIS).
 inline std::vector<Vec3> DirectLightAt(const SceneView& scene, const PrimarySamples& points,
                                        const std::vector<SurfacePoint>& at, uint32_t first) {
   if (!scene.HasLights()) return std::vector<Vec3>(at.size());
@@ -355,7 +598,23 @@ inline std::vector<Vec3> DirectLightAt(const SceneView& scene, const PrimarySamp
     const SurfacePoint& s = at[k];
     connections.push_back({s.material, s.at.position, s.at.ng, s.at.frame, s.at.wi, s.at.site, s.time, lights[k]});
   }
-  std::vector<Vec3> direct = DirectLight(scene, connections);
+  const bool through = scene.MediumCount() > 0 || HasNullBoundaries(scene);
+  std::vector<Vec3> direct = through ? UnshadowedDirectLight(scene, connections) : DirectLight(scene, connections);
+  if (through) {
+    std::vector<ShadowWalk> shadows(at.size());
+    for (uint32_t k = 0; k < at.size(); ++k) {
+      const SurfacePoint& s = at[k];
+      const Ray ray = ShadowRayToLight(s.at.position, s.at.ng, lights[k], s.time);
+      const uint64_t seed = Hash(WalkSeed(points, s.owner, 2), k);
+      WalkRandom random{seed};
+      shadows[k] = {ray, s.MediumToward(scene, ray.direction), std::min(2u, uint32_t(3 * random.Next())), seed};
+    }
+    const std::vector<ShadowTransmittance> transmittance = Transmittances(scene, shadows, true);
+    for (size_t k = 0; k < at.size(); ++k) {
+      const float mean = ChannelMean(transmittance[k].r_l);
+      direct[k] = mean > 0 ? direct[k] * transmittance[k].value / mean : Vec3();
+    }
+  }
   for (size_t k = 0; k < at.size(); ++k) direct[k] = direct[k] * at[k].throughput;
   return direct;
 }
@@ -443,6 +702,64 @@ inline std::vector<Vec3> DiscEstimate(const SceneView& scene, const PhotonTree& 
     });
   }
   return ReflectedRadiance(scene, tree, at, found);
+}
+
+// Density estimation of in-scattered radiance (Jensen & Christensen
+// 1998): photons stored at real scatterings within a ball of radius r
+// around x. The expected power of the photons scattered per unit volume
+// toward each direction is σ_s·L, so Σ p(wi, photon's from)·Φ / (4/3·πr³)
+// estimates σ_s(x)·∫p·L, and the point's weight carries the 1/σ_s(x).
+// One EvaluatePhase per medium.
+inline std::vector<Vec3> InScatteredRadiance(const SceneView& scene, const PhotonTree& tree,
+                                             const std::vector<VolumePoint>& at,
+                                             const std::vector<KernelPhoton>& found) {
+  std::vector<Vec3> radiance(at.size());
+  std::vector<uint32_t> keys(found.size());
+  for (size_t j = 0; j < found.size(); ++j) keys[j] = at[found[j].point].medium;
+  for (const auto& [medium, members] : GroupBy(keys)) {
+    const size_t m = members.size();
+    std::vector<float> wi(3 * m), wo(3 * m), position(3 * m), value(m), pdf(m);
+    for (size_t j = 0; j < m; ++j) {
+      const KernelPhoton& kp = found[members[j]];
+      at[kp.point].wi.Store(&wi[3 * j]);
+      tree[kp.photon].from.Store(&wo[3 * j]);
+      at[kp.point].position.Store(&position[3 * j]);
+    }
+    scene.MediumAt(medium).EvaluatePhase(wi, wo, position, value, pdf);
+    for (size_t j = 0; j < m; ++j) {
+      const KernelPhoton& kp = found[members[j]];
+      radiance[kp.point] += tree[kp.photon].power * (value[j] * kp.weight);
+    }
+  }
+  for (size_t k = 0; k < at.size(); ++k) radiance[k] = radiance[k] * at[k].weight;
+  return radiance;
+}
+
+// The volume estimate over the k nearest photons, r the k-th distance.
+inline std::vector<Vec3> VolumeNearestEstimate(const SceneView& scene, const PhotonTree& tree,
+                                               const std::vector<VolumePoint>& at, size_t k) {
+  std::vector<KernelPhoton> found;
+  std::vector<uint32_t> indices(k);
+  std::vector<float> distance2(k);
+  for (uint32_t q = 0; q < at.size(); ++q) {
+    const size_t count = tree.Nearest(at[q].position, k, indices.data(), distance2.data());
+    if (count == 0) continue;
+    const float r = std::sqrt(distance2[count - 1]);
+    if (!(r > 0)) continue;
+    const float weight = 1.0f / (4.0f / 3.0f * kPi * r * r * r);
+    for (size_t j = 0; j < count; ++j) found.push_back({q, indices[j], weight});
+  }
+  return InScatteredRadiance(scene, tree, at, found);
+}
+
+// The volume estimate over the photons within a fixed radius.
+inline std::vector<Vec3> VolumeBallEstimate(const SceneView& scene, const PhotonTree& tree,
+                                            const std::vector<VolumePoint>& at, float radius) {
+  std::vector<KernelPhoton> found;
+  const float weight = 1.0f / (4.0f / 3.0f * kPi * radius * radius * radius);
+  for (uint32_t q = 0; q < at.size(); ++q)
+    tree.Within(at[q].position, radius, [&](uint32_t photon, float) { found.push_back({q, photon, weight}); });
+  return InScatteredRadiance(scene, tree, at, found);
 }
 
 }  // namespace yarf

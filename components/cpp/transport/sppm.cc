@@ -14,6 +14,13 @@
 // density estimate of every photon after at least one bounce within r_i
 // of x, uniform kernel 1/(πr_i²), the BSDF evaluated toward each photon.
 //
+// In participating media photons are delta-tracked and also stored
+// wherever they really scatter; a camera ray that scatters in a medium
+// ends there with the volume estimate of the pass's volume photons within
+// r_i, Σ p(wi, wo)·Φ / (σ_s·(4/3)πr_i³) (Jensen & Christensen's, with
+// Knaus & Zwicker's shrinking radius). Null boundaries are stepped
+// through; media that emit light are refused.
+//
 // Photon maps are built on demand, once per pass (threads that need the
 // same pass wait for one build), and the maps of passes before the last
 // few are dropped.
@@ -53,7 +60,15 @@ constexpr int kUnboundedSpecularBounces = 16;
 constexpr uint64_t kKeptPasses = 2;
 constexpr float kRadiusOfDiagonal = 0.015f;
 
-using PhotonMapOfPass = std::shared_future<std::shared_ptr<const PhotonTree>>;
+// A pass's photons: on surfaces (after at least one bounce) and at real
+// scatterings in media (all of them).
+struct PassMaps {
+  PassMaps(std::vector<Photon> surface_photons, std::vector<Photon> volume_photons)
+      : surface(std::move(surface_photons)), volume(std::move(volume_photons)) {}
+  PhotonTree surface, volume;
+};
+
+using PhotonMapOfPass = std::shared_future<std::shared_ptr<const PassMaps>>;
 
 class StochasticProgressivePhotonMapper final : public Transport {
  public:
@@ -71,10 +86,10 @@ class StochasticProgressivePhotonMapper final : public Transport {
   uint32_t Dimensions() const override { return LightSampling() + 4; }
 
   void Prepare(const SceneView& scene) override {
-    RefuseMedia(scene, "sppm");
-    std::shared_ptr<const PhotonTree> first = Shoot(scene, 0);
+    RefuseEmissiveMedia(scene, "sppm");
+    std::shared_ptr<const PassMaps> first = Shoot(scene, 0);
     if (initial_radius_ == 0) initial_radius_ = DefaultRadius(*first);
-    std::promise<std::shared_ptr<const PhotonTree>> ready;
+    std::promise<std::shared_ptr<const PassMaps>> ready;
     ready.set_value(std::move(first));
     std::lock_guard lock(mutex_);
     maps_.clear();
@@ -83,11 +98,14 @@ class StochasticProgressivePhotonMapper final : public Transport {
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     const size_t n = points.Count();
-    std::vector<Walk> walks(n);
-    for (uint32_t i = 0; i < n; ++i) walks[i] = {i, CameraRayOf(scene, points, i)};
+    std::vector<CameraWalk> walks;
+    walks.reserve(n);
+    for (uint32_t i = 0; i < n; ++i)
+      walks.emplace_back(i, CameraRayOf(scene, points, i), Vec3(1, 1, 1), scene.CameraMedium(), WalkSeed(points, i, 0));
     std::vector<Vec3> radiance(n);
+    std::vector<VolumePoint> in_media;
     const std::vector<SurfacePoint> visible =
-        WalkToDiffuse(scene, points, std::move(walks), kTransportDimension, Bounces(), &radiance);
+        WalkToDiffuse(scene, points, std::move(walks), kTransportDimension, Bounces(), &radiance, in_media);
     const std::vector<Vec3> direct = DirectLightAt(scene, points, visible, LightSampling());
     for (size_t k = 0; k < visible.size(); ++k) radiance[visible[k].owner] += direct[k];
 
@@ -98,9 +116,19 @@ class StochasticProgressivePhotonMapper final : public Transport {
       std::vector<SurfacePoint> at;
       at.reserve(members.size());
       for (uint32_t k : members) at.push_back(visible[k]);
-      const std::shared_ptr<const PhotonTree> map = MapOfPass(scene, index);
-      const std::vector<Vec3> indirect = DiscEstimate(scene, *map, at, Radius(index));
+      const std::shared_ptr<const PassMaps> maps = MapOfPass(scene, index);
+      const std::vector<Vec3> indirect = DiscEstimate(scene, maps->surface, at, Radius(index));
       for (size_t j = 0; j < at.size(); ++j) radiance[at[j].owner] += indirect[j];
+    }
+    std::vector<uint64_t> volume_pass(in_media.size());
+    for (size_t k = 0; k < in_media.size(); ++k) volume_pass[k] = points.SampleIndex(in_media[k].owner);
+    for (const auto& [index, members] : GroupBy(volume_pass)) {
+      std::vector<VolumePoint> at;
+      at.reserve(members.size());
+      for (uint32_t k : members) at.push_back(in_media[k]);
+      const std::shared_ptr<const PassMaps> maps = MapOfPass(scene, index);
+      const std::vector<Vec3> in_scattered = VolumeBallEstimate(scene, maps->volume, at, Radius(index));
+      for (size_t j = 0; j < at.size(); ++j) radiance[at[j].owner] += in_scattered[j];
     }
     for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, radiance[i], out);
   }
@@ -113,31 +141,37 @@ class StochasticProgressivePhotonMapper final : public Transport {
     return initial_radius_ * std::pow(float(pass + 1), (alpha_ - 1.0f) / 2.0f);
   }
 
-  // The photons of a pass that met a surface before: light at x that
-  // next-event estimation does not count.
-  std::shared_ptr<const PhotonTree> Shoot(const SceneView& scene, uint64_t pass) const {
+  // The photons of a pass: on surfaces those that met a surface (or a
+  // medium) before, light at x that next-event estimation does not count;
+  // in media all.
+  std::shared_ptr<const PassMaps> Shoot(const SceneView& scene, uint64_t pass) const {
     const PhotonShooting shooting{uint64_t(photons_per_pass_), uint64_t(seed_), pass, length_.max_depth,
                                   length_.rr_depth};
-    return std::make_shared<const PhotonTree>(
-        ShootPhotons(scene, shooting, [](PhotonHistory h) { return h != PhotonHistory::kDirect; }));
+    std::vector<Photon> volume;
+    std::vector<Photon> surface =
+        ShootPhotons(scene, shooting, [](PhotonHistory h) { return h != PhotonHistory::kDirect; }, &volume);
+    return std::make_shared<const PassMaps>(std::move(surface), std::move(volume));
   }
 
-  static float DefaultRadius(const PhotonTree& photons) {
-    if (photons.size() == 0) return 1;
-    Vec3 lower = photons[0].position, upper = lower;
-    for (size_t i = 1; i < photons.size(); ++i) {
-      const Vec3 p = photons[i].position;
-      lower = {std::min(lower.x, p.x), std::min(lower.y, p.y), std::min(lower.z, p.z)};
-      upper = {std::max(upper.x, p.x), std::max(upper.y, p.y), std::max(upper.z, p.z)};
-    }
-    const float diagonal = Length(upper - lower);
+  static float DefaultRadius(const PassMaps& maps) {
+    bool any = false;
+    Vec3 lower, upper;
+    for (const PhotonTree* photons : {&maps.surface, &maps.volume})
+      for (size_t i = 0; i < photons->size(); ++i) {
+        const Vec3 p = (*photons)[i].position;
+        if (!any) lower = upper = p;
+        any = true;
+        lower = {std::min(lower.x, p.x), std::min(lower.y, p.y), std::min(lower.z, p.z)};
+        upper = {std::max(upper.x, p.x), std::max(upper.y, p.y), std::max(upper.z, p.z)};
+      }
+    const float diagonal = any ? Length(upper - lower) : 0;
     return diagonal > 0 ? kRadiusOfDiagonal * diagonal : 1;
   }
 
   // The map of `pass`, built by the first thread to ask for it; maps of
   // passes far behind are dropped (and rebuilt, identical, if asked again).
-  std::shared_ptr<const PhotonTree> MapOfPass(const SceneView& scene, uint64_t pass) {
-    std::promise<std::shared_ptr<const PhotonTree>> build;
+  std::shared_ptr<const PassMaps> MapOfPass(const SceneView& scene, uint64_t pass) {
+    std::promise<std::shared_ptr<const PassMaps>> build;
     PhotonMapOfPass map;
     {
       std::lock_guard lock(mutex_);
