@@ -25,6 +25,7 @@ from conftest import small_scene
 
 from yarf import Client, LocalServer, component, properties, rgb, transform, vec3
 from yarf.integrate import serve_function
+from yarf.scene import float_array
 from yarf.server import find_yarfd
 from yarf.v1 import asset_pb2, math_pb2, math_pb2_grpc, render_pb2, scene_pb2
 
@@ -143,6 +144,35 @@ def test_nested_instances_whose_product_is_singular_fail_their_job_and_not_the_s
     status = client.wait(job, timeout=60)
     assert status.state == render_pb2.FAILED, status
     assert "composed" in status.error and "degenerate to_world" in status.error, status.error
+    assert_still_renders()
+
+
+def test_a_medium_whose_majorant_is_absurdly_loose_fails_its_job(
+    client: Client, assert_still_renders: Callable[[], None]
+) -> None:
+    """A grid whose one dense voxel makes its majorant 1e9 where the density
+    is zero: a ray would meet ~1e8 null collisions; the job fails, clearly."""
+    scene = small_scene()
+    scene.materials.add(name="boundary", class_name="null")
+    scene.camera_medium = "fog"
+    placement = np.diag([40.0, 40.0, 8.0, 1.0])
+    placement[:3, 3] = (-20, -20, -2)
+    density = [1e9] + [0.0] * 7
+    scene.media.add(
+        name="fog",
+        medium=component(
+            "grid",
+            density=float_array(density),
+            nx=1,
+            ny=1,
+            nz=len(density),
+            to_world=transform(placement),
+        ),
+    )
+    job = client.submit(scene, spp=1, transport=component("volpath"), name="loose majorant")
+    status = client.wait(job, timeout=120)
+    assert status.state == render_pb2.FAILED, status
+    assert "collisions in one medium" in status.error, status.error
     assert_still_renders()
 
 

@@ -10,8 +10,10 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
+#include "yarf/error.h"
 #include "yarf/geometry.h"
 #include "yarf/hash.h"
 #include "yarf/medium.h"
@@ -47,6 +49,11 @@ struct Collision {
   Vec3 transmittance_maj;
 };
 
+// More tentative collisions than this along one walk means a majorant
+// absurdly far above the medium (or a medium absurdly thick for the
+// scene's size): the job fails rather than walk for ever.
+inline constexpr uint32_t kMaxCollisionsPerWalk = 1u << 20;
+
 // One walk: a ray through the medium over [0, tmax), the channel whose
 // majorant draws the collisions, and its random numbers.
 struct Walk {
@@ -78,7 +85,7 @@ std::vector<Vec3> TrackMajorants(const Medium& medium, std::span<const Walk> wal
   medium.Majorants(origin, direction, tmax, majorants);
 
   // Where each walk is: its segment and its t within it.
-  std::vector<uint32_t> segment(n);
+  std::vector<uint32_t> segment(n), collisions(n);
   std::vector<float> t(n);
   std::vector<uint32_t> active;
   for (uint32_t i = 0; i < n; ++i) {
@@ -106,6 +113,10 @@ std::vector<Vec3> TrackMajorants(const Medium& medium, std::span<const Walk> wal
             transmittance[i] *= MajorantTransmittance(s.sigma_maj, step);
             t[i] += step;
             collides = true;
+            if (++collisions[i] > kMaxCollisionsPerWalk)
+              throw Error("a ray met more than " + std::to_string(kMaxCollisionsPerWalk) +
+                          " collisions in one medium: its majorant (" + std::to_string(sigma) +
+                          " per unit length) is far too large for the scene");
             break;
           }
         }
