@@ -32,6 +32,7 @@ from google.protobuf.message import Message
 
 from yarf import LocalServer, component, load_scene, properties, rgb, transform, vec3
 from yarf.farm.validation import AddressNotAllowed, InvalidRequest, SubmitChecker
+from yarf.scene import float_array
 from yarf.v1 import render_pb2, scene_pb2
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -101,9 +102,25 @@ def seeds() -> list[render_pb2.SubmitRequest]:
         name="spot", emitter=component("spot", intensity=rgb(5.0), cutoff_angle=30.0)
     )
     spot.to_world.CopyFrom(transform(np.eye(4)))
+    # Media: a homogeneous fog around the camera, a grid inside a null box.
+    rich.materials.add(name="boundary", class_name="null")
+    rich.camera_medium = "fog"
+    rich.media.add(
+        name="fog", medium=component("homogeneous", sigma_a=rgb(0.1), sigma_s=rgb(0.3), g=0.4)
+    )
+    voxels = [0.5, 1.0, 0.0, 2.0, 1.5, 0.2, 0.7, 1.1]
+    rich.media.add(
+        name="smoke",
+        medium=component(
+            "grid", density=float_array(voxels), nx=2, ny=2, nz=2, to_world=transform(np.eye(4))
+        ),
+    )
+    box = rich.shapes.add(name="box", material="boundary", interior="smoke", exterior="fog").mesh
+    box.positions.extend([0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1])
+    box.indices.extend([0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3])
     requests = []
     for scene in (cornell, rich):
-        for transport in ("path", "bdpt", "photon_map"):
+        for transport in ("path", "bdpt", "photon_map", "volpath", "light"):
             request = render_pb2.SubmitRequest(scene=scene, name="fuzz")
             request.options.spp = 1
             request.options.transport.class_name = transport
