@@ -35,40 +35,13 @@
 #include "../textures/linear_image.h"
 #include "piecewise_constant.h"
 #include "yarf/plugin.h"
+#include "yarf/warps.h"
 
 namespace {
 
 using yarf::Error;
 using yarf::Vec3;
 using yarf::kPi;
-
-// Clarberg's equal-area map of the unit sphere onto [0, 1]² (pbrt-v4's
-// EqualAreaSphereToSquare and its inverse).
-std::array<float, 2> SphereToSquare(Vec3 d) {
-  const float x = std::abs(d.x), y = std::abs(d.y), z = std::abs(d.z);
-  const float r = std::sqrt(std::max(0.0f, 1 - z));
-  const float a = std::max(x, y), b = a > 0 ? std::min(x, y) / a : 0.0f;
-  float phi = std::atan(b) * (2 / kPi);
-  if (x < y) phi = 1 - phi;
-  float v = phi * r, u = r - v;
-  if (d.z < 0) {
-    std::swap(u, v);
-    u = 1 - u, v = 1 - v;
-  }
-  u = std::copysign(u, d.x), v = std::copysign(v, d.y);
-  return {0.5f * (u + 1), 0.5f * (v + 1)};
-}
-
-Vec3 SquareToSphere(float px, float py) {
-  const float u = 2 * px - 1, v = 2 * py - 1;
-  const float up = std::abs(u), vp = std::abs(v);
-  const float signed_distance = 1 - (up + vp);
-  const float r = 1 - std::abs(signed_distance);
-  const float phi = (r == 0 ? 1 : (vp - up) / r + 1) * kPi / 4;
-  const float z = std::copysign(1 - r * r, signed_distance);
-  const float s = r * std::sqrt(std::max(0.0f, 2 - r * r));
-  return {std::copysign(std::cos(phi), u) * s, std::copysign(std::sin(phi), v) * s, z};
-}
 
 class EnvironmentMap final : public yarf::Emitter {
  public:
@@ -116,7 +89,7 @@ class EnvironmentMap final : public yarf::Emitter {
  private:
   // Image coordinates in [0, 1]² of a unit direction toward the light.
   std::array<float, 2> ImageUv(Vec3 d) const {
-    if (equal_area_) return SphereToSquare(d);
+    if (equal_area_) return yarf::EqualAreaSphereToSquare(d);
     float u = std::atan2(d.x, -d.z) / (2 * kPi);
     u -= std::floor(u);
     return {u, std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi};
@@ -135,7 +108,7 @@ class EnvironmentMap final : public yarf::Emitter {
   }
 
   Vec3 Direction(float u, float v) const {
-    if (equal_area_) return SquareToSphere(u, v);
+    if (equal_area_) return yarf::EqualAreaSquareToSphere(u, v);
     const float phi = 2 * kPi * u, theta = kPi * v;
     const float sin_theta = std::sin(theta);
     return {sin_theta * std::sin(phi), std::cos(theta), -sin_theta * std::cos(phi)};

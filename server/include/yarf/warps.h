@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
 #include "yarf/vecmath.h"
 
@@ -176,6 +177,37 @@ inline std::array<float, 3> SampleUniformTriangle(float u0, float u1) {
     b0 = u0 - b1;
   }
   return {b0, b1, 1.0f - b0 - b1};
+}
+
+// Clarberg's equal-area map of the square [0, 1]² onto the unit sphere
+// (pbrt-v4's EqualAreaSquareToSphere): each cell of a square image stands
+// for the same solid angle, 4π over the cell count; +z at the centre, −z
+// at the corners.
+inline Vec3 EqualAreaSquareToSphere(float px, float py) {
+  const float u = 2 * px - 1, v = 2 * py - 1;
+  const float up = std::abs(u), vp = std::abs(v);
+  const float signed_distance = 1 - (up + vp);
+  const float r = 1 - std::abs(signed_distance);
+  const float phi = (r == 0 ? 1 : (vp - up) / r + 1) * kPi / 4;
+  const float z = std::copysign(1 - r * r, signed_distance);
+  const float s = r * std::sqrt(std::max(0.0f, 2 - r * r));
+  return {std::copysign(std::cos(phi), u) * s, std::copysign(std::sin(phi), v) * s, z};
+}
+
+// Inverse of EqualAreaSquareToSphere, for unit directions.
+inline std::array<float, 2> EqualAreaSphereToSquare(Vec3 d) {
+  const float x = std::abs(d.x), y = std::abs(d.y), z = std::abs(d.z);
+  const float r = std::sqrt(std::max(0.0f, 1 - z));
+  const float a = std::max(x, y), b = a > 0 ? std::min(x, y) / a : 0.0f;
+  float phi = std::atan(b) * (2 / kPi);
+  if (x < y) phi = 1 - phi;
+  float v = phi * r, u = r - v;
+  if (d.z < 0) {
+    std::swap(u, v);
+    u = 1 - u, v = 1 - v;
+  }
+  u = std::copysign(u, d.x), v = std::copysign(v, d.y);
+  return {0.5f * (u + 1), 0.5f * (v + 1)};
 }
 
 // Area density on a triangle of the given area.

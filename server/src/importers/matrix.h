@@ -24,6 +24,7 @@ inline Vec3d Cross(const Vec3d& a, const Vec3d& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 inline double Length(const Vec3d& v) { return std::sqrt(Dot(v, v)); }
+inline double TriangleArea(const Vec3d& a, const Vec3d& b, const Vec3d& c) { return Length(Cross(b - a, c - a)) / 2; }
 // The unit vector along v; nullopt when v is (nearly) zero or not finite.
 std::optional<Vec3d> Normalized(const Vec3d& v);
 

@@ -33,9 +33,10 @@ class PbrtImporter {
 
  private:
   struct AreaLight {
-    Rgb radiance;
+    Rgb radiance;  // L × scale, before `power`
     bool two_sided = false;
-    SourceLocation where;
+    double power = -1;  // pbrt-v4's `power` in W; ≤ 0 when not given
+    SourceLocation where, power_where;
   };
   // What AttributeBegin saves and AttributeEnd restores.
   struct State {
@@ -102,6 +103,10 @@ class PbrtImporter {
   void AreaLightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void DistantLight(PbrtParams& params, const SourceLocation& where);
   void InfiniteLight(PbrtParams& params, const SourceLocation& where);
+  // The radiance of the area light in force on a shape made of pbrt-v4
+  // shapes of these areas (one per triangle of a mesh), `power` applied;
+  // no areas where they are not known.
+  Rgb AreaLightRadiance(const std::vector<double>& areas, const std::string& shape);
 
   const SceneFolder& folder_;
   Diagnostics& diagnostics_;

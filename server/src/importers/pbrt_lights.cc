@@ -1,11 +1,13 @@
 // pbrt lights: point and spot lights, area lights on shapes, distant
-// lights and uniform infinite lights; an image infinite light becomes the
-// uniform one of its mean radiance.
+// lights, uniform infinite lights and image infinite lights.
+#include <algorithm>
 #include <cmath>
 
 #include "importers/colour_checks.h"
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
+#include "importers/texture_mean.h"
+#include "yarf/warps.h"
 
 namespace yarf::importers {
 namespace {
@@ -31,10 +33,8 @@ void PbrtImporter::AreaLightSource(const std::string& type, PbrtParams& params, 
   }
   const Rgb radiance = Colour(params, "L", {1, 1, 1}, kLight, where) * params.Float("scale", 1);
   const bool two_sided = params.Bool("twosided", false);
-  if (params.Has("power")) {
-    params.Find("power");
-    Warn(params.WhereIs("power", where), "light-power", "light power is not supported: L and scale used");
-  }
+  const double power = params.Float("power", -1);
+  if (!std::isfinite(power) || power > 1e30) Fail(params.WhereIs("power", where), "area light power out of range");
   if (params.Has("filename")) {
     params.Find("filename");
     Warn(params.WhereIs("filename", where), "arealight-image", "image area lights are not supported: L used");
@@ -43,7 +43,36 @@ void PbrtImporter::AreaLightSource(const std::string& type, PbrtParams& params, 
   state_.area_light = AreaLight{ClampColour(radiance, 0, 1e30, [&] {
                                   Warn(where, "negative-radiance", "negative radiance clamped to 0");
                                 }),
-                                two_sided, where};
+                                two_sided, power, where, params.WhereIs("power", where)};
+}
+
+// pbrt-v4's DiffuseAreaLight::Create: with `power` Φ the radiance is
+// multiplied by Φ / (π · (two-sided ? 2 : 1) · A), A the area of the pbrt
+// shape the light is made for. pbrt-v4 makes one light per shape, and a
+// triangle mesh is a shape per triangle: each triangle emits Φ, its
+// radiance set by its own area. L has been made unit luminance already
+// (RGB values stay as given), as pbrt-v4 divides by its luminance first.
+Rgb PbrtImporter::AreaLightRadiance(const std::vector<double>& areas, const std::string& shape) {
+  const AreaLight& light = *state_.area_light;
+  if (!(light.power > 0)) return light.radiance;
+  if (areas.empty()) {
+    Warn(light.power_where, "light-power", "area light power on " + shape + " is not supported: L and scale used");
+    return light.radiance;
+  }
+  const auto [least, most] = std::minmax_element(areas.begin(), areas.end());
+  double area = 0;
+  for (double a : areas) area += a;
+  area /= double(areas.size());
+  if (*most - *least > 1e-4 * *most)
+    Warn(light.power_where, "light-power-mesh",
+         "area light power: pbrt-v4 gives each triangle of " + shape +
+             " the power, a radiance for its own area; yarf gives one radiance to the shape: that of the mean "
+             "triangle area");
+  if (!(area > 0)) {
+    Warn(light.power_where, "light-power-area", "area light power on " + shape + " of zero area: no emission");
+    return {0, 0, 0};
+  }
+  return light.radiance * (light.power / (M_PI * (light.two_sided ? 2 : 1) * area));
 }
 
 void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where) {
@@ -128,15 +157,34 @@ void PbrtImporter::InfiniteLight(PbrtParams& params, const SourceLocation& where
     // pbrt-v4's maps are square, in its equal-area octahedral mapping.
     const std::string filename = params.String("filename", "");
     const auto file = folder_.Resolve(filename, origin_.file, params.WhereIs("filename", where));
-    if (illuminance > 0)
-      Warn(params.WhereIs("illuminance", where), "infinite-illuminance",
-           "infinite light: illuminance of an image is not supported: scale used");
+    double map_scale = scale;
+    if (illuminance > 0) {
+      // The illuminance the map gives a point facing +z (the map's up):
+      // each of its N texels stands for 4π / N sr, so E = 4π / N · Σ over
+      // the texels above the horizon of luminance × cos θ. pbrt-v4's
+      // ImageInfiniteLight::Create sums the same but with 2π / N, which
+      // makes the illuminance it renders twice that asked for; this is
+      // the illuminance asked for, as pbrt-v4's uniform infinite light
+      // (E / π for a constant map) and distant light give it.
+      const auto up_cosine = [](uint64_t x, uint64_t y, uint64_t width, uint64_t height) {
+        const Vec3 w = EqualAreaSquareToSphere(float((double(x) + 0.5) / double(width)),
+                                               float((double(y) + 0.5) / double(height)));
+        return std::max(0.0, double(w.z));
+      };
+      const Rgb sum = ImageWeightedSumPerPixel(file, ImageEncoding::kAuto, 1, params.WhereIs("filename", where),
+                                               up_cosine);
+      const double map_illuminance = 4 * M_PI * (0.2126 * sum.r + 0.7152 * sum.g + 0.0722 * sum.b);
+      if (!(map_illuminance > 0))
+        Fail(params.WhereIs("illuminance", where), "infinite light: the map is black above the horizon: it cannot "
+                                                   "give an illuminance");
+      map_scale = scale * illuminance / map_illuminance;
+    }
     params.Accept({"portal"});
     if (params.Has("portal"))
       Warn(params.WhereIs("portal", where), "infinite-portal", "infinite light: portals are not supported: ignored");
     v1::Properties props;
     SetString(props, "filename", folder_.Relative(file));
-    SetFloat(props, "scale", scale);
+    SetFloat(props, "scale", map_scale);
     SetString(props, "mapping", "equal_area");
     params.WarnUnused(diagnostics_, "light 'infinite'");
     added = assembly_.AddEnvironmentMap("", std::move(props), state_.ctm, where);

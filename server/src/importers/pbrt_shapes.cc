@@ -38,6 +38,10 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
   NormalRule rule = NormalRule::kTransformed;
   bool flip = state_.reverse_orientation;
   const std::string what = "shape '" + type + "'";
+  // The areas of the pbrt-v4 shapes this one is made of, for an area
+  // light's power: a triangle mesh's triangles after the CTM, the
+  // quadrics' as pbrt-v4 gives them (in object space, partial as given).
+  std::vector<double> light_areas;
   if (type == "trianglemesh") {
     const std::vector<double> p = params.Numbers("P", {"point3"});
     std::vector<double> raw = params.Numbers("indices", {"integer"});
@@ -63,6 +67,11 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     if (!uv.empty() && uv.size() != 2 * vertices)
       Fail(params.WhereIs(params.Has("uv") ? "uv" : "st", where), what + ": uv needs one (u, v) per vertex");
     std::vector<float> positions(p.begin(), p.end());
+    if (state_.area_light) {
+      auto point = [&](uint32_t i) { return to_world.Point({p[3 * i], p[3 * i + 1], p[3 * i + 2]}); };
+      for (size_t t = 0; t + 2 < indices.size(); t += 3)
+        light_areas.push_back(TriangleArea(point(indices[t]), point(indices[t + 1]), point(indices[t + 2])));
+    }
     v1::Mesh& mesh = *shape.mutable_mesh() = InlineMesh(positions, indices);
     mesh.mutable_normals()->Add(n.begin(), n.end());
     mesh.mutable_uvs()->Add(uv.begin(), uv.end());
@@ -95,14 +104,20 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     // yarf's sphere has v = θ/π from its z axis (Mitsuba's); pbrt's has
     // v = 1 − θ/π. Mirrored in z, the same sphere has pbrt's.
     to_world = to_world * Matrix4::Scale({1, 1, -1});
-    if (params.Float("zmin", -radius) > -radius || params.Float("zmax", radius) < radius ||
-        params.Float("phimax", 360) < 360)
+    const double zmin = std::clamp(params.Float("zmin", -radius), -radius, radius);
+    const double zmax = std::clamp(params.Float("zmax", radius), -radius, radius);
+    const double phimax = std::clamp(params.Float("phimax", 360), 0.0, 360.0);
+    if (zmin > -radius || zmax < radius || phimax < 360)
       Warn(where, "partial-sphere", "partial spheres (zmin, zmax, phimax) are rendered whole");
+    light_areas.push_back(phimax * M_PI / 180 * radius * std::abs(zmax - zmin));
   } else if (type == "disk") {
     const double radius = params.Float("radius", 1), height = params.Float("height", 0);
     if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "disk radius must be positive");
-    if (params.Float("innerradius", 0) > 0 || params.Float("phimax", 360) < 360)
+    const double inner = std::clamp(params.Float("innerradius", 0), 0.0, radius);
+    const double phimax = std::clamp(params.Float("phimax", 360), 0.0, 360.0);
+    if (inner > 0 || phimax < 360)
       Warn(where, "partial-disk", "partial disks (innerradius, phimax) are rendered whole");
+    light_areas.push_back(phimax * M_PI / 180 / 2 * (radius * radius - inner * inner));
     *shape.mutable_mesh() = DiskMesh(DiskUv::kPbrt);
     to_world = to_world * Matrix4::Translate({0, 0, height}) * Matrix4::Scale({radius, radius, 1});
     Warn(where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
@@ -113,6 +128,7 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     if (!(zmax > zmin && zmax - zmin < 1e30)) Fail(params.WhereIs("zmax", where), "cylinder zmax must exceed zmin");
     if (!(phimax > 0 && phimax <= 360)) Fail(params.WhereIs("phimax", where), "cylinder phimax must lie in (0, 360]");
     *shape.mutable_mesh() = CylinderMesh(phimax);
+    light_areas.push_back((zmax - zmin) * radius * phimax * M_PI / 180);
     to_world = to_world * Matrix4::Translate({0, 0, zmin}) * Matrix4::Scale({radius, radius, zmax - zmin});
     Warn(where, "cylinder",
          "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads per turn");
@@ -148,7 +164,7 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
            "area lights in object instances are not supported (as in pbrt): emission ignored");
     } else {
       v1::Properties props;
-      SetRgb(props, "radiance", state_.area_light->radiance);
+      SetRgb(props, "radiance", AreaLightRadiance(light_areas, what));
       if (state_.area_light->two_sided) SetBool(props, "two_sided", true);
       *shape.mutable_emitter() = Spec("diffuse_area", std::move(props));
     }

@@ -13,10 +13,15 @@ double SrgbToLinear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 
 // Images beyond this many values are refused (a tiled one is read whole).
 constexpr uint64_t kMaxValues = uint64_t(1) << 28, kMaxSide = uint64_t(1) << 20;
 
-}  // namespace
+struct WeightedSum {
+  Rgb sum;
+  double weights = 0;
+  uint64_t pixels = 0;
+};
 
-Rgb ImageMeanColour(const std::filesystem::path& file, ImageEncoding encoding, double gamma,
-                    const SourceLocation& where, PixelWeight weight) {
+// Σ weight × linear colour and Σ weight over the pixels.
+WeightedSum SumPixels(const std::filesystem::path& file, ImageEncoding encoding, double gamma,
+                      const SourceLocation& where, const PixelWeightFunction& pixel_weight) {
   auto in = OIIO::ImageInput::open(file.string());
   if (!in) Fail(where, "cannot read image '" + file.string() + "': " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
@@ -42,21 +47,12 @@ Rgb ImageMeanColour(const std::filesystem::path& file, ImageEncoding encoding, d
                                                  spec.format == OIIO::TypeDesc::UINT16));
   }
   const int colour_channels = channels >= 3 ? 3 : 1;
-  // The weight of the pixels of row y: for a latitude-longitude map, the
-  // integral of sin θ times the row's hat of linear interpolation (width
-  // d on either side; half a hat at the poles).
-  const double d = height > 1 ? M_PI / double(height - 1) : 0;
-  const auto row_weight = [&](uint64_t y) {
-    if (weight == PixelWeight::kEqual || height < 2) return 1.0;
-    if (y == 0 || y == height - 1) return 1 - std::sin(d) / d;
-    return 4 * std::sin(double(y) * d) * std::pow(std::sin(d / 2), 2) / d;  // 1 - cos d = 2 sin²(d/2)
-  };
   double sum[3] = {0, 0, 0}, total = 0;
   for (uint64_t pass = 0; pass < (rows ? height : 1); ++pass) {
     if (!read(spec.y + int(pass))) Fail(where, "cannot read image '" + file.string() + "': " + in->geterror());
     const uint64_t n = rows ? width : count;
     for (uint64_t p = 0; p < n; ++p) {
-      const double w = row_weight(rows ? pass : p / width % height);
+      const double w = pixel_weight(p % width, rows ? pass : p / width % height, width, height);
       total += w;
       for (int c = 0; c < colour_channels; ++c) {
         double v = pixels[p * channels + c];
@@ -68,7 +64,30 @@ Rgb ImageMeanColour(const std::filesystem::path& file, ImageEncoding encoding, d
     }
   }
   if (colour_channels == 1) sum[1] = sum[2] = sum[0];
-  return {sum[0] / total, sum[1] / total, sum[2] / total};
+  return {{sum[0], sum[1], sum[2]}, total, rows ? width * height : count};
+}
+
+}  // namespace
+
+Rgb ImageMeanColour(const std::filesystem::path& file, ImageEncoding encoding, double gamma,
+                    const SourceLocation& where, PixelWeight weight) {
+  // The weight of the pixels of row y: for a latitude-longitude map, the
+  // integral of sin θ times the row's hat of linear interpolation (width
+  // d on either side; half a hat at the poles).
+  const auto row_weight = [weight](uint64_t, uint64_t y, uint64_t, uint64_t height) {
+    if (weight == PixelWeight::kEqual || height < 2) return 1.0;
+    const double d = M_PI / double(height - 1);
+    if (y == 0 || y == height - 1) return 1 - std::sin(d) / d;
+    return 4 * std::sin(double(y) * d) * std::pow(std::sin(d / 2), 2) / d;  // 1 - cos d = 2 sin²(d/2)
+  };
+  const WeightedSum s = SumPixels(file, encoding, gamma, where, row_weight);
+  return s.sum * (1 / s.weights);
+}
+
+Rgb ImageWeightedSumPerPixel(const std::filesystem::path& file, ImageEncoding encoding, double gamma,
+                             const SourceLocation& where, const PixelWeightFunction& weight) {
+  const WeightedSum s = SumPixels(file, encoding, gamma, where, weight);
+  return s.sum * (1 / double(s.pixels));
 }
 
 }  // namespace yarf::importers

@@ -3,7 +3,9 @@
 // file's mean.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 
 #include "importers/import_error.h"
 #include "importers/spectrum.h"
@@ -29,5 +31,14 @@ enum class PixelWeight {
 // alpha channel is ignored). Unreadable images fail at `where`.
 Rgb ImageMeanColour(const std::filesystem::path& file, ImageEncoding encoding, double gamma,
                     const SourceLocation& where, PixelWeight weight = PixelWeight::kEqual);
+
+// weight(x, y, width, height) of each pixel (row y = 0 at the top).
+using PixelWeightFunction = std::function<double(uint64_t, uint64_t, uint64_t, uint64_t)>;
+
+// The sum over the pixels of weight × linear colour, over the pixel count
+// (not over the weights): with equal-area pixels of solid angle Ω / count,
+// Ω times this is an integral over directions.
+Rgb ImageWeightedSumPerPixel(const std::filesystem::path& file, ImageEncoding encoding, double gamma,
+                             const SourceLocation& where, const PixelWeightFunction& weight);
 
 }  // namespace yarf::importers
