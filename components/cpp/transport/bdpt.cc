@@ -16,18 +16,34 @@
 // bounce per subpath direction and once per connection round, never per
 // sample. The light subpath's vertex 0 serves the s = 1 strategies.
 //
+// In media (pbrt-v4's BDPTIntegrator), both subpaths are walked by delta
+// tracking with one hero channel per sample, and a collision that scatters
+// is a vertex whose phase function plays the BSDF: no cosine at it, in
+// contributions or in the conversion of densities to area. Null
+// boundaries (the `null` material) are stepped through and are no
+// vertices. Each connection crosses media by ratio tracking and null
+// boundaries (medium_transport.h). Every subpath vertex keeps its
+// channels' densities relative to the hero's (r_u), and a contribution is
+// divided by the channels' mean of the whole path's: the balance
+// heuristic over hero channels, as volpath. As in pbrt-v4, the strategy
+// weights leave transmittance out of the densities. Light a medium emits
+// is found by camera subpaths alone (no light subpath starts in a medium),
+// so it takes full weight.
+//
 // Primary sample space: 0–1 film, 2–3 lens, 4 time; (6, 7) light
 // position, (8, 9) emission direction, 10 light choice; from 12, four per
-// camera bounce (direction pair, lobe, unused), then four per light bounce.
+// camera vertex (direction pair, lobe, unused), then four per light
+// vertex; the walks through media draw from a hash of the coordinates.
 //
 // Properties:
 //   int max_depth  longest path in segments (Mitsuba's convention), ≥ 1,
 //                  default 8; bidirectional weights need it finite.
 
 #include <algorithm>
+#include <bit>
 #include <vector>
 
-#include "wavefront.h"
+#include "medium_transport.h"
 #include "yarf/plugin.h"
 
 namespace yarf {
@@ -38,7 +54,7 @@ constexpr uint32_t kLightPosition = kTransportDimension, kEmission = kTransportD
                    kPerBounce = 4;
 
 struct Vertex {
-  enum class Kind : uint8_t { kCamera, kLight, kSurface };
+  enum class Kind : uint8_t { kCamera, kLight, kSurface, kMedium };
   Kind kind = Kind::kSurface;
   // Scattered through a delta lobe (surfaces).
   bool delta = false;
@@ -58,10 +74,15 @@ struct Vertex {
   // Toward the previous vertex of its subpath, world space.
   Vec3 wi;
   Vec3 beta;
+  // The subpath's channel densities relative to its hero's, up to here.
+  Vec3 r_u{1, 1, 1};
   // Area densities of generating this vertex from its predecessor, and
   // from its successor by the other subpath's sampler.
   float pdf_fwd = 0, pdf_rev = 0;
   uint32_t material = 0, shape = kNoShape;
+  // The medium the vertex lies in; on a surface, the one on the side its
+  // subpath arrived from.
+  uint32_t medium = kNoMedium;
   SurfaceSite site;
   const Emitter* emitter = nullptr;
 
@@ -72,7 +93,8 @@ struct Vertex {
   // `next` into an area density at next. A vertex at infinity is reached
   // by a direction, whose density stays per solid angle; from one, light
   // paths are parallel rays through a disk, whose area density the caller
-  // passes, and next sees it through its cosine alone.
+  // passes, and next sees it through its cosine alone. A point in a
+  // medium has no cosine.
   float ToArea(float pdf, const Vertex& next) const {
     if (next.infinite) return pdf;
     if (infinite) return next.OnSurface() ? pdf * std::abs(Dot(next.n, n)) : pdf;
@@ -81,6 +103,11 @@ struct Vertex {
     if (!(dist2 > 0)) return 0;
     if (next.OnSurface()) pdf *= std::abs(Dot(next.n, d)) / std::sqrt(dist2);
     return pdf / dist2;
+  }
+  // The medium a ray leaving the vertex toward `direction` starts in.
+  uint32_t MediumToward(const SceneView& scene, Vec3 direction) const {
+    if (shape == kNoShape || !OnSurface()) return medium;
+    return scene.MediaOf(shape).Beyond(direction, n, medium);
   }
 };
 
@@ -94,15 +121,47 @@ struct Subpaths {
   const Vertex& at(size_t path, uint32_t k) const { return vertices[path * capacity + k]; }
 };
 
-// A walk in progress: the ray leaving the last vertex and the solid-angle
-// density its direction was sampled with.
-struct Walker {
+// A walk in progress: its weight, channel ratios, hero and walk numbers;
+// the ray leaving the last vertex, the solid-angle density its direction
+// was sampled with, and the medium it travels through.
+struct Walker : SpectralPath {
   Ray ray;
-  Vec3 beta;
   float pdf_dir = 0;
+  uint32_t medium = kNoMedium;
 };
 
+// A phase function query at a vertex in a medium, world space: wi toward
+// where the subpath came from, wo toward the other subpath.
+struct PhaseQuery {
+  uint32_t medium;
+  Vec3 wi, wo, position;
+};
+
+// The phase function's value and density for every query, as a surface
+// answer (f = p in every channel; the function is symmetric, so the
+// reverse density is the forward one): one call per medium.
+std::vector<SurfaceAnswer> EvaluatePhases(const SceneView& scene, const std::vector<PhaseQuery>& queries) {
+  std::vector<SurfaceAnswer> answers(queries.size());
+  std::vector<uint32_t> keys(queries.size());
+  for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].medium;
+  for (const auto& [medium, members] : GroupBy(keys)) {
+    const size_t m = members.size();
+    std::vector<float> wi(3 * m), wo(3 * m), position(3 * m), value(m), pdf(m);
+    for (size_t j = 0; j < m; ++j) {
+      const PhaseQuery& q = queries[members[j]];
+      q.wi.Store(&wi[3 * j]);
+      q.wo.Store(&wo[3 * j]);
+      q.position.Store(&position[3 * j]);
+    }
+    scene.MediumAt(medium).EvaluatePhase(wi, wo, position, value, pdf);
+    for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3(value[j], value[j], value[j]), pdf[j], pdf[j]};
+  }
+  return answers;
+}
+
 float Remap0(float f) { return f != 0 ? f : 1; }
+
+uint32_t FloatBits(float f) { return std::bit_cast<uint32_t>(f); }
 
 // The area density of the points of the disk light paths from infinity
 // cross (SceneView::InfiniteLightOrigin).
@@ -123,7 +182,7 @@ class Bdpt final : public Transport {
 
   void Prepare(const SceneView& scene) override {
     RefuseOrthographicCamera(scene, "bdpt");
-    RefuseMedia(scene, "bdpt");
+    null_boundaries_ = HasNullBoundaries(scene);
   }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
@@ -133,6 +192,8 @@ class Bdpt final : public Transport {
     Subpaths camera(n, uint32_t(max_depth_) + 1), light(n, uint32_t(max_depth_));
     std::vector<float> time(n), raster(2 * n);
     std::vector<Walker> walkers(n);
+    std::vector<uint32_t> hero(n);
+    std::vector<uint64_t> seed(n);
     std::vector<uint32_t> active;
     for (uint32_t i = 0; i < n; ++i) {
       time[i] = scene.ShutterTime(points.Get(i, kTimeDimension));
@@ -145,15 +206,29 @@ class Bdpt final : public Transport {
       c.p = ray.origin;
       c.n = ray.direction;  // only its role as "not a surface" matters
       c.beta = Vec3(1, 1, 1);
+      c.medium = scene.CameraMedium();
       camera.count[i] = 1;
-      walkers[i] = {ray, Vec3(1, 1, 1), scene.CameraDirectionPdf(ray.direction)};
-      if (walkers[i].pdf_dir > 0) active.push_back(i);
+      Walker& walker = walkers[i];
+      walker.ray = ray;
+      walker.pdf_dir = scene.CameraDirectionPdf(ray.direction);
+      walker.medium = c.medium;
+      seed[i] = Hash(FloatBits(fx), FloatBits(fy), FloatBits(points.Get(i, kLensDimension)),
+                     FloatBits(points.Get(i, kLensDimension + 1)), FloatBits(points.Get(i, kLightPosition)),
+                     FloatBits(points.Get(i, kEmission)));
+      walker.random.seed = seed[i];
+      walker.ChooseHero();
+      hero[i] = walker.hero;
+      if (walker.pdf_dir > 0) active.push_back(i);
     }
-    Walk(scene, points, TransportMode::kRadiance, kFirstBounce, camera, walkers, active);
+    std::vector<Vec3> emitted(n);
+    Extend(scene, points, TransportMode::kRadiance, kFirstBounce, camera, walkers, active, &emitted);
+    for (uint32_t i = 0; i < n; ++i)
+      if (MaxComponent(emitted[i]) > 0) out.Add(i, raster[2 * i], raster[2 * i + 1], emitted[i]);
 
     active.clear();
     if (scene.HasLights()) {
       const std::vector<LightStart> starts = StartLightPaths(scene, points, kLightChoice, kLightPosition, kEmission);
+      const std::vector<uint32_t> media = StartMedia(scene, starts, time);
       for (uint32_t i = 0; i < n; ++i) {
         const LightStart& s = starts[i];
         if (!s.light.emitter || !(s.light.pdf > 0)) continue;
@@ -166,11 +241,19 @@ class Bdpt final : public Transport {
         l.beta = Vec3(1, 1, 1) * (1.0f / s.light.pdf);
         l.pdf_fwd = s.light.pdf;
         l.shape = s.light.shape;
+        l.medium = media[i];
         l.site = SurfaceSite::Uv(s.light.u, s.light.v);
         l.emitter = s.light.emitter;
         light.count[i] = 1;
         if (!s.Valid()) continue;
-        walkers[i] = {s.FirstRay(time[i]), s.Throughput(), s.pdf_direction};
+        Walker& walker = walkers[i];
+        walker = Walker{};
+        walker.ray = s.FirstRay(time[i]);
+        walker.beta = s.Throughput();
+        walker.pdf_dir = s.pdf_direction;
+        walker.medium = l.MediumToward(scene, s.direction);
+        walker.random.seed = Hash(seed[i], 1u);
+        walker.hero = hero[i];
         if (l.infinite) {
           // At infinity the vertex is its direction, chosen with density
           // p_choice·p_direction per solid angle (s = 1 joins along it);
@@ -179,46 +262,102 @@ class Bdpt final : public Transport {
           l.pdf_fwd = s.light.pdf / disk * s.pdf_direction;
           l.beta = Vec3(1, 1, 1) * (1.0f / l.pdf_fwd);
           l.frame = s.light.frame;
-          walkers[i].pdf_dir = disk;
+          walker.pdf_dir = disk;
         }
-        if (MaxComponent(walkers[i].beta) > 0) active.push_back(i);
+        if (MaxComponent(walker.beta) > 0) active.push_back(i);
       }
-      Walk(scene, points, TransportMode::kImportance, kFirstBounce + kPerBounce * uint32_t(max_depth_), light,
-           walkers, active);
+      Extend(scene, points, TransportMode::kImportance, kFirstBounce + kPerBounce * uint32_t(max_depth_), light,
+             walkers, active, nullptr);
     }
-    Connect(scene, points, camera, light, raster, time, out);
+    Connect(scene, points, camera, light, raster, time, hero, seed, out);
   }
 
  private:
-  // Extends the subpaths of `active` until they leave the scene, fail to
-  // scatter or fill their capacity. Sets each new vertex's forward density
-  // and its predecessor's reverse one.
-  void Walk(const SceneView& scene, const PrimarySamples& points, TransportMode mode, uint32_t first_dimension,
-            Subpaths& paths, std::vector<Walker>& walkers, std::vector<uint32_t> active) const {
-    for (uint32_t bounce = 0; !active.empty(); ++bounce) {
-      std::vector<Ray> rays(active.size());
-      std::vector<Hit> hits(active.size());
-      for (size_t k = 0; k < active.size(); ++k) rays[k] = walkers[active[k]].ray;
+  // The medium each light path starts in: the one its point lies in, seen
+  // from the camera (an emitting boundary's side is the vertex's to choose).
+  static std::vector<uint32_t> StartMedia(const SceneView& scene, const std::vector<LightStart>& starts,
+                                          const std::vector<float>& time) {
+    std::vector<Vec3> at(starts.size());
+    for (size_t i = 0; i < starts.size(); ++i) at[i] = starts[i].light.position;
+    return MediaAt(scene, at, time.empty() ? 0.0f : time[0]);
+  }
+
+  // Extends the subpaths of `active` until they leave the scene, are
+  // absorbed, fail to scatter or fill their capacity: through media by
+  // delta tracking (a real collision is a vertex), through null boundaries
+  // without a vertex. Sets each new vertex's forward density and its
+  // predecessor's reverse one. Camera subpaths add the light media emit
+  // along them to `emitted`.
+  void Extend(const SceneView& scene, const PrimarySamples& points, TransportMode mode, uint32_t first_dimension,
+              Subpaths& paths, std::vector<Walker>& walkers, std::vector<uint32_t> active,
+              std::vector<Vec3>* emitted) const {
+    // The dimensions of the vertex a subpath has just reached.
+    const auto base = [&](uint32_t i) { return first_dimension + kPerBounce * (paths.count[i] - 2); };
+    while (!active.empty()) {
+      const size_t count = active.size();
+      std::vector<Ray> rays(count);
+      std::vector<Hit> hits(count);
+      for (size_t k = 0; k < count; ++k) rays[k] = walkers[active[k]].ray;
       scene.Intersect(rays, hits);
+
+      // Through the media: each walk scatters, is absorbed or reaches its hit.
+      std::vector<uint8_t> at_surface(count, 1);
+      std::vector<std::pair<uint32_t, Vec3>> scattered;  // path, point
+      std::vector<uint32_t> keys(count);
+      for (size_t k = 0; k < count; ++k) keys[k] = walkers[active[k]].medium;
+      for (const auto& [medium, members] : GroupBy(keys)) {
+        if (medium == kNoMedium) continue;
+        std::vector<Walk> walks(members.size());
+        for (size_t q = 0; q < members.size(); ++q) {
+          Walker& walker = walkers[active[members[q]]];
+          walks[q] = {walker.ray, hits[members[q]].t, walker.hero, &walker.random};
+        }
+        std::vector<uint8_t> reached;
+        const std::vector<Vec3> transmittance =
+            TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t q, const Collision& c) {
+              const uint32_t i = active[members[q]];
+              Walker& walker = walkers[i];
+              if (emitted && MaxComponent(c.emission) > 0) (*emitted)[i] += Emission(walker, c);
+              const CollisionEvent event = DeltaTrack(walker, c);
+              if (event == CollisionEvent::kScatter) scattered.emplace_back(i, c.position);
+              return event == CollisionEvent::kNull;
+            });
+        for (size_t q = 0; q < members.size(); ++q)
+          at_surface[members[q]] = reached[q] && walkers[active[members[q]]].Pass(transmittance[q]);
+      }
+
+      std::vector<uint32_t> next;
+      ScatterInMedia(scene, points, paths, walkers, scattered, base, next);
+
       std::vector<ScatterQuery> queries;
       std::vector<uint32_t> scattering;
-      const uint32_t base = first_dimension + kPerBounce * bounce;
-      for (size_t k = 0; k < active.size(); ++k) {
+      for (size_t k = 0; k < count; ++k) {
         const uint32_t i = active[k];
-        if (paths.count[i] == paths.capacity) continue;
+        Walker& walker = walkers[i];
+        if (!at_surface[k] || paths.count[i] == paths.capacity) continue;
         if (!hits[k].Found()) {
           // A camera path that leaves the scene ends at the environment.
           if (mode == TransportMode::kRadiance && scene.HasEnvironment()) {
+            const Vec3 from = paths.at(i, paths.count[i] - 1).p;
             Vertex& v = paths.at(i, paths.count[i]++);
             v = Vertex{};
             v.kind = Vertex::Kind::kLight;
             v.infinite = true;
             v.n = -rays[k].direction;
-            v.p = rays[k].origin + rays[k].direction;
+            v.p = from + rays[k].direction;
             v.wi = v.n;
-            v.beta = walkers[i].beta;
-            v.pdf_fwd = walkers[i].pdf_dir;
+            v.beta = walker.beta;
+            v.r_u = walker.r_u;
+            v.pdf_fwd = walker.pdf_dir;
+            v.medium = walker.medium;
           }
+          continue;
+        }
+        if (IsNullBoundary(scene, hits[k].shape)) {
+          // A boundary only: on through it, no vertex.
+          walker.medium = scene.MediaOf(hits[k].shape).Beyond(rays[k].direction, hits[k].normal, walker.medium);
+          Redirect(walker.ray, rays[k].origin + rays[k].direction * hits[k].t, hits[k].normal, rays[k].direction);
+          next.push_back(i);
           continue;
         }
         Vertex& prev = paths.at(i, paths.count[i] - 1);
@@ -230,21 +369,22 @@ class Bdpt final : public Transport {
         v.frame = at.frame;
         v.site = at.site;
         v.wi = -rays[k].direction;
-        v.beta = walkers[i].beta;
-        v.pdf_fwd = prev.ToArea(walkers[i].pdf_dir, v);
+        v.beta = walker.beta;
+        v.r_u = walker.r_u;
+        v.pdf_fwd = prev.ToArea(walker.pdf_dir, v);
         v.material = scene.MaterialOf(hits[k].shape);
         v.shape = hits[k].shape;
+        v.medium = walker.medium;
         v.emitter = scene.EmitterOf(hits[k].shape);
         if (paths.count[i] == paths.capacity) continue;
         ScatterQuery q{v.material, v.frame.ToLocal(v.wi), v.site};
-        q.uniform[0] = points.Get(i, base + 2);
-        q.uniform[1] = points.Get(i, base);
-        q.uniform[2] = points.Get(i, base + 1);
+        q.uniform[0] = points.Get(i, base(i) + 2);
+        q.uniform[1] = points.Get(i, base(i));
+        q.uniform[2] = points.Get(i, base(i) + 1);
         queries.push_back(q);
         scattering.push_back(i);
       }
       const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, mode, 0, queries);
-      std::vector<uint32_t> next;
       for (size_t q = 0; q < queries.size(); ++q) {
         const uint32_t i = scattering[q];
         const ScatterAnswer& a = sampled[q];
@@ -262,6 +402,7 @@ class Bdpt final : public Transport {
           walker.pdf_dir = pdf_rev = 0;
         }
         prev.pdf_rev = v.ToArea(pdf_rev, prev);
+        walker.medium = v.MediumToward(scene, dir);
         Redirect(walker.ray, v.p, v.n, dir);
         next.push_back(i);
       }
@@ -269,12 +410,77 @@ class Bdpt final : public Transport {
     }
   }
 
+  // The light a medium emits at a tentative collision, as volpath weighs
+  // it over hero channels; only camera subpaths find it.
+  static Vec3 Emission(const Walker& walker, const Collision& c) {
+    const int h = int(walker.hero);
+    const float pdf = c.sigma_maj[h] * c.transmittance_maj[h];
+    const Vec3 r_e = walker.r_u * c.sigma_maj * c.transmittance_maj / pdf;
+    if (!(pdf > 0) || !(MaxComponent(r_e) > 0)) return Vec3();
+    return walker.beta * c.transmittance_maj * c.sigma_a * c.emission / (pdf * ChannelMean(r_e));
+  }
+
+  // Real collisions in media become vertices; those with room for more
+  // scatter on by their phase function (one call per medium).
+  template <typename Base>
+  void ScatterInMedia(const SceneView& scene, const PrimarySamples& points, Subpaths& paths,
+                      std::vector<Walker>& walkers, const std::vector<std::pair<uint32_t, Vec3>>& scattered,
+                      const Base& base, std::vector<uint32_t>& next) const {
+    std::vector<uint32_t> keys, owners;
+    for (const auto& [i, position] : scattered) {
+      Walker& walker = walkers[i];
+      Vertex& prev = paths.at(i, paths.count[i] - 1);
+      Vertex& v = paths.at(i, paths.count[i]++);
+      v = Vertex{};
+      v.kind = Vertex::Kind::kMedium;
+      v.p = position;
+      v.wi = -walker.ray.direction;
+      v.beta = walker.beta;
+      v.r_u = walker.r_u;
+      v.pdf_fwd = prev.ToArea(walker.pdf_dir, v);
+      v.medium = walker.medium;
+      if (paths.count[i] == paths.capacity) continue;
+      keys.push_back(walker.medium);
+      owners.push_back(i);
+    }
+    for (const auto& [medium_index, members] : GroupBy(keys)) {
+      const size_t m = members.size();
+      std::vector<float> wi(3 * m), position(3 * m), u(2 * m), wo(3 * m), weight(m), pdf(m);
+      for (size_t j = 0; j < m; ++j) {
+        const uint32_t i = owners[members[j]];
+        const Vertex& v = paths.at(i, paths.count[i] - 1);
+        v.wi.Store(&wi[3 * j]);
+        v.p.Store(&position[3 * j]);
+        u[2 * j] = points.Get(i, base(i));
+        u[2 * j + 1] = points.Get(i, base(i) + 1);
+      }
+      scene.MediumAt(medium_index).SamplePhase(wi, position, u, wo, weight, pdf);
+      for (size_t j = 0; j < m; ++j) {
+        const uint32_t i = owners[members[j]];
+        if (!(pdf[j] > 0) || !(weight[j] > 0)) continue;
+        Vertex& v = paths.at(i, paths.count[i] - 1);
+        Vertex& prev = paths.at(i, paths.count[i] - 2);
+        Walker& walker = walkers[i];
+        walker.beta *= weight[j];
+        walker.pdf_dir = pdf[j];
+        prev.pdf_rev = v.ToArea(pdf[j], prev);
+        walker.ray.origin = v.p;
+        walker.ray.direction = Normalize(Vec3::Load(&wo[3 * j]));
+        walker.ray.tnear = 0;
+        walker.ray.tfar = kInfinity;
+        next.push_back(i);
+      }
+    }
+  }
+
   // One way of joining the subpaths of a point.
   struct Join {
     uint32_t path = 0;
     uint32_t s = 0, t = 0;
-    // Indices into the query lists (or none).
-    uint32_t light_surface = kNone, camera_surface = kNone, emitter = kNone;
+    // Indices into the query lists (or none): surface or phase queries at
+    // either end.
+    uint32_t light_surface = kNone, camera_surface = kNone, light_phase = kNone, camera_phase = kNone;
+    uint32_t emitter = kNone;
     // s = 0 at a vertex at infinity: into the environment queries.
     uint32_t environment = kNone;
     CameraConnection camera;  // t = 1
@@ -282,9 +488,11 @@ class Bdpt final : public Transport {
   };
 
   void Connect(const SceneView& scene, const PrimarySamples& points, const Subpaths& camera, const Subpaths& light,
-               const std::vector<float>& raster, const std::vector<float>& time, FilmSamples& out) const {
+               const std::vector<float>& raster, const std::vector<float>& time, const std::vector<uint32_t>& hero,
+               const std::vector<uint64_t>& seed, FilmSamples& out) const {
     std::vector<Join> joins;
     std::vector<SurfaceQuery> light_queries, camera_queries;
+    std::vector<PhaseQuery> light_phases, camera_phases;
     std::vector<EmitterQuery> emitter_queries;
     std::vector<Vec3> environment_queries;
     // Surface models see a surface vertex's shading frame; emitters the
@@ -336,11 +544,17 @@ class Bdpt final : public Transport {
             j.emitter = uint32_t(emitter_queries.size());
             emitter_queries.push_back(
                 {qs.emitter, qs.infinite ? qs.frame.ToLocal(to_pt) : emitter_local(qs, to_pt), qs.site});
+          } else if (qs.kind == Vertex::Kind::kMedium) {
+            j.light_phase = uint32_t(light_phases.size());
+            light_phases.push_back({qs.medium, qs.wi, to_pt, qs.p});
           } else {
             j.light_surface = uint32_t(light_queries.size());
             light_queries.push_back({qs.material, local(qs, qs.wi), local(qs, to_pt), qs.site});
           }
-          if (t > 1) {
+          if (t > 1 && pt.kind == Vertex::Kind::kMedium) {
+            j.camera_phase = uint32_t(camera_phases.size());
+            camera_phases.push_back({pt.medium, pt.wi, -to_pt, pt.p});
+          } else if (t > 1) {
             j.camera_surface = uint32_t(camera_queries.size());
             camera_queries.push_back({pt.material, local(pt, pt.wi), local(pt, -to_pt), pt.site});
           }
@@ -348,14 +562,16 @@ class Bdpt final : public Transport {
         }
     const std::vector<SurfaceAnswer> at_light = EvaluateSurfaces(scene, TransportMode::kImportance, light_queries);
     const std::vector<SurfaceAnswer> at_camera = EvaluateSurfaces(scene, TransportMode::kRadiance, camera_queries);
+    const std::vector<SurfaceAnswer> phase_at_light = EvaluatePhases(scene, light_phases);
+    const std::vector<SurfaceAnswer> phase_at_camera = EvaluatePhases(scene, camera_phases);
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, emitter_queries);
     std::vector<Vec3> environment(environment_queries.size());
     std::vector<float> environment_pdf(environment_queries.size());
     if (!environment_queries.empty()) scene.Escaped(environment_queries, environment, environment_pdf);
     const float disk = DiskPdf(scene);
 
-    std::vector<Ray> shadow;
-    std::vector<Vec3> values;
+    std::vector<ShadowWalk> shadows;
+    std::vector<Vec3> values, ratios;
     std::vector<uint32_t> owners;
     std::vector<float> xy;
     for (const Join& j : joins) {
@@ -364,15 +580,16 @@ class Bdpt final : public Transport {
       if (j.environment != Join::kNone) {
         const Vec3 value = pt.beta * environment[j.environment];
         if (!(MaxComponent(value) > 0)) continue;
-        out.Add(j.path, x, y, value * Weight(scene, camera, light, j, nullptr, nullptr, disk,
-                                             environment_pdf[j.environment]));
+        out.Add(j.path, x, y,
+                value * (Weight(scene, camera, light, j, nullptr, nullptr, disk, environment_pdf[j.environment]) /
+                         ChannelMean(pt.r_u)));
         continue;
       }
       if (j.s == 0) {
         const Vec3 value = pt.beta * emitted[j.emitter].radiance;
         if (!(MaxComponent(value) > 0)) continue;
         const float weight = Weight(scene, camera, light, j, nullptr, nullptr, emitted[j.emitter].pdf_direction, 0);
-        out.Add(j.path, x, y, value * weight);
+        out.Add(j.path, x, y, value * (weight / ChannelMean(pt.r_u)));
         continue;
       }
       const Vertex& qs = light.at(j.path, j.s - 1);
@@ -381,52 +598,75 @@ class Bdpt final : public Transport {
       // From infinity: parallel light, no fall-off with distance.
       const float dist2 = qs.infinite ? 1.0f : Dot(d, d);
       const Vec3 to_pt = qs.infinite ? qs.n : d / std::sqrt(dist2);
-      // Light end: the emitter's radiance with its cosine, or beta·f of a
-      // surface with the shading cosine and its importance correction.
+      // Light end: the emitter's radiance with its cosine, beta·f of a
+      // surface with the shading cosine and its importance correction, or
+      // beta·p of a point in a medium.
       Vec3 value = qs.beta;
+      const SurfaceAnswer* light_answer = nullptr;
       if (j.s == 1) {
         value *= emitted[j.emitter].radiance * (qs.OnSurface() ? std::abs(Dot(qs.n, to_pt)) : 1.0f);
+      } else if (j.light_phase != Join::kNone) {
+        light_answer = &phase_at_light[j.light_phase];
+        value *= light_answer->f;
       } else {
         const SurfaceQuery& q = light_queries[j.light_surface];
-        value *= at_light[j.light_surface].f *
+        light_answer = &at_light[j.light_surface];
+        value *= light_answer->f *
                  (std::abs(q.wo.z) * ShadingWeight(qs.frame, qs.n, q.wi, q.wo, TransportMode::kImportance));
       }
+      const SurfaceAnswer* camera_answer = nullptr;
       if (j.t == 1) {
         value *= j.camera.importance / dist2;
         x = j.camera.raster_x;
         y = j.camera.raster_y;
+      } else if (j.camera_phase != Join::kNone) {
+        camera_answer = &phase_at_camera[j.camera_phase];
+        value *= pt.beta * camera_answer->f / dist2;
       } else {
         const SurfaceQuery& q = camera_queries[j.camera_surface];
-        value *= pt.beta * at_camera[j.camera_surface].f *
+        camera_answer = &at_camera[j.camera_surface];
+        value *= pt.beta * camera_answer->f *
                  (std::abs(q.wo.z) * ShadingWeight(pt.frame, pt.n, q.wi, q.wo, TransportMode::kRadiance) / dist2);
       }
       if (!(MaxComponent(value) > 0)) continue;
-      const SurfaceAnswer* light_answer = j.s > 1 ? &at_light[j.light_surface] : nullptr;
-      const SurfaceAnswer* camera_answer = j.t > 1 ? &at_camera[j.camera_surface] : nullptr;
       const float weight =
           Weight(scene, camera, light, j, light_answer, camera_answer,
                  j.s == 1 ? (qs.infinite ? disk : emitted[j.emitter].pdf_direction) : 0, 0);
-      Ray ray;
+      ShadowWalk shadow;
+      Ray& ray = shadow.ray;
       if (qs.infinite) {
-        ray.origin = OffsetRayOrigin(pt.p, pt.n, -to_pt);
+        // Toward the light, from pt.
+        ray.origin = pt.OnSurface() ? OffsetRayOrigin(pt.p, pt.n, -to_pt) : pt.p;
         ray.direction = -to_pt;
-      } else if (j.t == 1) {
-        ray = RayToLens(qs.p, qs.OnSurface() ? qs.n : Vec3(), target, time[j.path]);
+        shadow.medium = pt.MediumToward(scene, -to_pt);
       } else {
-        ray = qs.OnSurface() ? ShadowRay(qs.p, qs.n, pt.p) : ShadowRay(pt.p, pt.n, qs.p);
-        if (!qs.OnSurface()) ray.tfar = std::max(0.0f, Length(qs.p - ray.origin));
+        if (j.t == 1) {
+          ray = RayToLens(qs.p, qs.OnSurface() ? qs.n : Vec3(), target, time[j.path]);
+        } else {
+          ray.origin = qs.OnSurface() ? OffsetRayOrigin(qs.p, qs.n, to_pt) : qs.p;
+          const Vec3 along = pt.p - ray.origin;
+          const float length = Length(along);
+          ray.direction = length > 0 ? along / length : to_pt;
+          ray.tfar = std::max(0.0f, length - (pt.OnSurface() ? SurfaceOffset(pt.p) : 0.0f));
+        }
+        shadow.medium = qs.MediumToward(scene, to_pt);
       }
       ray.time = time[j.path];
-      shadow.push_back(ray);
+      shadow.hero = hero[j.path];
+      shadow.seed = Hash(seed[j.path], j.s, j.t, 2u);
+      shadows.push_back(shadow);
       values.push_back(value * weight);
+      ratios.push_back(qs.r_u * (j.t == 1 ? Vec3(1, 1, 1) : pt.r_u));
       owners.push_back(j.path);
       xy.push_back(x);
       xy.push_back(y);
     }
-    std::vector<uint8_t> occluded(shadow.size());
-    scene.Occluded(shadow, occluded);
-    for (size_t k = 0; k < shadow.size(); ++k)
-      if (!occluded[k]) out.Add(owners[k], xy[2 * k], xy[2 * k + 1], values[k]);
+    const std::vector<ShadowTransmittance> through = Transmittances(scene, shadows, null_boundaries_);
+    for (size_t k = 0; k < shadows.size(); ++k) {
+      const float mean = ChannelMean(ratios[k] * through[k].r_l);
+      if (!(MaxComponent(through[k].value) > 0) || !(mean > 0)) continue;
+      out.Add(owners[k], xy[2 * k], xy[2 * k + 1], values[k] * through[k].value / mean);
+    }
   }
 
   // The power-heuristic weight of strategy (s, t) against every other way
@@ -493,6 +733,7 @@ class Bdpt final : public Transport {
   }
 
   int max_depth_;
+  bool null_boundaries_ = false;
 };
 
 }  // namespace
