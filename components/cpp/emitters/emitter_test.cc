@@ -63,6 +63,14 @@ class EmitterTest : public testing::Test {
     props.Set("scale", scale);
     return props;
   }
+  // A goniometric light of the Sky image (side × side), intensity (1, 2, 3).
+  Properties Goniometric(int side, double scale = 1) const {
+    Properties props;
+    props.Set("filename", WriteSky("goniometric_" + std::to_string(side) + ".exr", side, side));
+    props.Set("intensity", Rgb{Vec3(1, 2, 3)});
+    props.Set("scale", scale);
+    return props;
+  }
   // A to_world that rotates 30° about x, stretches x by 1.5 and shrinks z
   // to 0.8, and moves the light: not rigid.
   static Transform Stretched() {
@@ -110,6 +118,13 @@ class EmitterTest : public testing::Test {
     stretched.Set("to_world", Stretched());
     stretched.Set("wrap_mode", std::string("clamp"));
     all.emplace_back("projector (stretched, clamped)", Make("projector", stretched));
+    Properties intensity_image = Projector(8, 6, 100);
+    intensity_image.Set("image", std::string("intensity"));
+    all.emplace_back("projector (intensity image)", Make("projector", intensity_image));
+    all.emplace_back("goniometric", Make("goniometric", Goniometric(8)));
+    Properties stretched_goniometric = Goniometric(8);
+    stretched_goniometric.Set("to_world", Stretched());
+    all.emplace_back("goniometric (stretched)", Make("goniometric", stretched_goniometric));
     return all;
   }
 
@@ -469,6 +484,71 @@ TEST_F(EmitterTest, AProjectorRefusesBadParameters) {
   Properties missing;
   missing.Set("fov", 30.0);
   EXPECT_NE(CreationError("projector", missing).find("'filename'"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace yarf
+
+namespace yarf {
+namespace {
+
+// pbrt-v4's GoniometricLight: I(l) = scale · I · (mean of the texel's
+// channels), the texel where the equal-area map puts l; +z at the centre.
+TEST_F(EmitterTest, AGoniometricLightShinesItsTexelsWhereTheEqualAreaMapPutsThem) {
+  constexpr int kSide = 8;
+  const auto light = Make("goniometric", Goniometric(kSide, 2));
+  const auto grey = [](Vec3 c) { return (c.x + c.y + c.z) / 3; };
+  for (const auto& [x, y] : {std::pair{5, 2}, {0, 0}, {3, 4}, {7, 6}, {kSide / 2, kSide / 2}}) {
+    const Vec3 w = EqualAreaSquareToSphere((float(x) + 0.5f) / kSide, (float(y) + 0.5f) / kSide);
+    const Vec3 expected = Vec3(1, 2, 3) * (2 * grey(Sky(x, y)));
+    const Vec3 l = RadianceToward(*light, w);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(l[c], expected[c], 1e-4f * (1 + expected[c])) << x << ", " << y;
+  }
+  // Straight up is the map's centre, whatever the texel there.
+  const Vec3 up = RadianceToward(*light, Vec3(0, 0, 1));
+  EXPECT_NEAR(up.x, 2 * grey(Sky(kSide / 2, kSide / 2)), 1e-4f);
+}
+
+TEST_F(EmitterTest, AGoniometricLightTurnsWithItsToWorldIncludingAMirror) {
+  // pbrt-v4 swaps y and z: the map's centre then shines along +y. The
+  // kernel hands directions in the frame of to_world's z axis alone.
+  Properties props = Goniometric(8);
+  Transform swap_yz;
+  swap_yz.m = {1, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 1};
+  props.Set("to_world", swap_yz);
+  const auto light = Make("goniometric", props);
+  const Frame kernel(Vec3(0, 1, 0));
+  const auto toward_world = [&](Vec3 d) { return RadianceToward(*light, kernel.ToLocal(Normalize(d))); };
+  const auto plain = Make("goniometric", Goniometric(8));
+  for (const Vec3 d : {Vec3(0, 0, 1), Vec3(0.3f, -0.5f, 0.8f), Vec3(-0.7f, 0.1f, -0.2f)}) {
+    const Vec3 expected = RadianceToward(*plain, Normalize(d));
+    const Vec3 got = toward_world(Vec3(d.x, d.z, d.y));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], expected[c], 1e-5f * (1 + expected[c]));
+  }
+}
+
+TEST_F(EmitterTest, AnIntensityImageProjectorShinesItsTexelsWithoutTheCosineFactor) {
+  // pbrt-v4's ProjectionLight: I = scale · E(u, v), looked up nearest.
+  constexpr int kWidth = 8, kHeight = 6;
+  Properties props = Projector(kWidth, kHeight, 60, 2);
+  props.Set("image", std::string("intensity"));
+  props.Set("filter_type", std::string("nearest"));
+  const auto projector = Make("projector", props);
+  const float tan_x = std::tan(kPi / 6), tan_y = tan_x * kHeight / kWidth;
+  for (const auto& [x, y] : {std::pair{0, 0}, {kWidth - 1, kHeight - 1}, {5, 2}}) {
+    const Vec3 q = TowardImage((float(x) + 0.5f) / kWidth, (float(y) + 0.5f) / kHeight, tan_x, tan_y);
+    const Vec3 l = RadianceToward(*projector, Normalize(q)), expected = Sky(x, y) * 2;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(l[c], expected[c], 1e-4f * (1 + expected[c]));
+  }
+}
+
+TEST_F(EmitterTest, AGoniometricLightRefusesWhatItCannotUse) {
+  Properties props = Goniometric(8);
+  props.Set("filename", WriteSky("oblong.exr", 8, 4));
+  EXPECT_NE(CreationError("goniometric", props).find("square"), std::string::npos);
+  Properties negative = Goniometric(8, -1);
+  EXPECT_NE(CreationError("goniometric", negative).find("scale"), std::string::npos);
+  EXPECT_NE(CreationError("goniometric", Properties()).find("filename"), std::string::npos);
 }
 
 }  // namespace

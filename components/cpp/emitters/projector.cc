@@ -49,6 +49,11 @@
 //                                                      "smaller" or "larger"
 //   to_world      transform        default identity    the light's placement
 //                                                      (the same as its Light's)
+//   image         string           default "irradiance"
+//       "irradiance": the image as above (Mitsuba); "intensity": the image
+//       is the intensity itself, I = scale · E(u, v) in W·sr⁻¹ with no π
+//       and no 1/cos³θ (pbrt-v4's ProjectionLight; for a non-rigid
+//       to_world, the intensity in the light's own space)
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -59,6 +64,7 @@
 
 #include "../textures/linear_image.h"
 #include "intensity.h"
+#include "light_frame.h"
 #include "piecewise_constant.h"
 #include "yarf/plugin.h"
 
@@ -68,27 +74,7 @@ using yarf::Error;
 using yarf::Vec3;
 using yarf::kPi;
 
-// A 3 × 3 matrix in double, row-major, acting on column vectors.
-struct Matrix3 {
-  std::array<double, 9> m{1, 0, 0, 0, 1, 0, 0, 0, 1};
-
-  Vec3 operator*(Vec3 v) const {
-    return {float(m[0] * v.x + m[1] * v.y + m[2] * v.z), float(m[3] * v.x + m[4] * v.y + m[5] * v.z),
-            float(m[6] * v.x + m[7] * v.y + m[8] * v.z)};
-  }
-  double Determinant() const {
-    return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
-           m[2] * (m[3] * m[7] - m[4] * m[6]);
-  }
-  Matrix3 Inverse() const {
-    const double d = Determinant();
-    Matrix3 r;
-    r.m = {(m[4] * m[8] - m[5] * m[7]) / d, (m[2] * m[7] - m[1] * m[8]) / d, (m[1] * m[5] - m[2] * m[4]) / d,
-           (m[5] * m[6] - m[3] * m[8]) / d, (m[0] * m[8] - m[2] * m[6]) / d, (m[2] * m[3] - m[0] * m[5]) / d,
-           (m[3] * m[7] - m[4] * m[6]) / d, (m[1] * m[6] - m[0] * m[7]) / d, (m[0] * m[4] - m[1] * m[3]) / d};
-    return r;
-  }
-};
+using yarf::Matrix3;
 
 double Radians(double degrees) { return degrees * 3.14159265358979323846 / 180.0; }
 
@@ -140,6 +126,10 @@ class Projector final : public yarf::Emitter {
       image_.texels = {constant.x, constant.y, constant.z};
     }
 
+    const std::string image_is = props.String("image", "irradiance");
+    if (image_is != "irradiance" && image_is != "intensity")
+      throw Error("property 'image' must be \"irradiance\" or \"intensity\", not \"" + image_is + "\"");
+    intensity_image_ = image_is == "intensity";
     if (!props.Has("fov")) throw Error("property 'fov' (degrees) is missing");
     const double fov = props.Float("fov");
     if (!(fov > 0 && fov < 180)) throw Error("property 'fov' must lie in (0, 180) degrees");
@@ -173,7 +163,8 @@ class Projector final : public yarf::Emitter {
       float u = 0, v = 0;
       Vec3 value;
       const float cos_forward = yarf::Dot(forward_, d);
-      if (ImageUv(c, u, v) && cos_forward > 0) value = Lookup(u, v) * (kPi * scale_ / (c.z * c.z * cos_forward));
+      if (ImageUv(c, u, v) && cos_forward > 0)
+        value = intensity_image_ ? Lookup(u, v) * scale_ : Lookup(u, v) * (kPi * scale_ / (c.z * c.z * cos_forward));
       value.Store(&radiance[3 * k]);
     }
   }
@@ -279,6 +270,7 @@ class Projector final : public yarf::Emitter {
   }
 
   float scale_ = 1;
+  bool intensity_image_ = false;
   bool bilinear_ = true;
   Wrap wrap_ = Wrap::kRepeat;
   yarf::textures::LinearImage image_;
