@@ -84,7 +84,7 @@ class LightTracer final : public Transport {
     const std::vector<LightStart> starts = StartLightPaths(scene, points, kLightChoice, kLightPosition, kEmission);
     std::vector<float> time(n);
     for (uint32_t i = 0; i < n; ++i) time[i] = scene.ShutterTime(points.Get(i, kTimeDimension));
-    const std::vector<uint32_t> media = StartMedia(scene, starts, time);
+    const std::vector<uint32_t> media = LightStartMedia(scene, starts, time.empty() ? 0.0f : time[0]);
     ConnectLightsToCamera(scene, points, starts, media, time, out);
     if (scene.HasEnvironment()) SeeEnvironment(scene, points, time, out);
 
@@ -107,21 +107,6 @@ class LightTracer final : public Transport {
 
  private:
   // Paths of one segment: a surface light seen directly by the camera.
-  // The medium each light path starts in.
-  static std::vector<uint32_t> StartMedia(const SceneView& scene, const std::vector<LightStart>& starts,
-                                          const std::vector<float>& time) {
-    std::vector<uint32_t> media(starts.size(), kNoMedium);
-    if (scene.MediumCount() == 0) return media;
-    std::vector<Vec3> points(starts.size());
-    for (size_t i = 0; i < starts.size(); ++i) points[i] = starts[i].light.position;
-    media = MediaAt(scene, points, time.empty() ? 0.0f : time[0]);
-    for (size_t i = 0; i < starts.size(); ++i) {
-      const LightSample& l = starts[i].light;
-      if (l.shape != kNoShape) media[i] = scene.MediaOf(l.shape).Beyond(starts[i].direction, l.normal, media[i]);
-    }
-    return media;
-  }
-
   void ConnectLightsToCamera(const SceneView& scene, const PrimarySamples& points,
                              const std::vector<LightStart>& starts, const std::vector<uint32_t>& media,
                              const std::vector<float>& time, FilmSamples& out) const {

@@ -253,4 +253,21 @@ inline std::vector<uint32_t> MediaAt(const SceneView& scene, std::span<const Vec
   return medium;
 }
 
+// The medium each light path starts in: the one its light's point lies
+// in, seen along the line from the camera, and on an emitting boundary
+// the one it emits into.
+inline std::vector<uint32_t> LightStartMedia(const SceneView& scene, const std::vector<LightStart>& starts,
+                                             float time) {
+  std::vector<uint32_t> media(starts.size(), kNoMedium);
+  if (scene.MediumCount() == 0) return media;
+  std::vector<Vec3> points(starts.size());
+  for (size_t i = 0; i < starts.size(); ++i) points[i] = starts[i].light.position;
+  media = MediaAt(scene, points, time);
+  for (size_t i = 0; i < starts.size(); ++i) {
+    const LightSample& l = starts[i].light;
+    if (l.shape != kNoShape) media[i] = scene.MediaOf(l.shape).Beyond(starts[i].direction, l.normal, media[i]);
+  }
+  return media;
+}
+
 }  // namespace yarf
