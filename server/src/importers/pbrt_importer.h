@@ -102,6 +102,7 @@ class PbrtImporter {
   void LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void AreaLightSource(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void DistantLight(PbrtParams& params, const SourceLocation& where);
+  void ImageLight(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void InfiniteLight(PbrtParams& params, const SourceLocation& where);
   // The radiance of the area light in force on a shape made of pbrt-v4
   // shapes of these areas (one per triangle of a mesh), `power` applied;

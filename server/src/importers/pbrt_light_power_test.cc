@@ -114,5 +114,46 @@ TEST(PbrtLightPower, AnImageInfiniteLightGivesTheIlluminanceAskedFor) {
   EXPECT_FALSE(Warns(result, "illuminance"));
 }
 
+TEST(PbrtImageLights, AGoniometricLightScalesToItsPowerAndTurnsItsMapUp) {
+  const std::filesystem::path scene = ConstantMap("grey.pfm", 0.25f, 16);
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\nLightSource \"goniometric\" \"string filename\" \"grey.pfm\" \"float power\" 10 "
+      "\"rgb I\" [1 2 3]\n",
+      scene);
+  ASSERT_EQ(result.scene.lights_size(), 1);
+  const v1::Light& light = result.scene.lights(0);
+  EXPECT_EQ(light.emitter().class_name(), "goniometric");
+  const Vec3d intensity = RgbProperty(light.emitter().properties(), "intensity");
+  EXPECT_NEAR(intensity.x, 1, 1e-9);
+  EXPECT_NEAR(intensity.z, 3, 1e-9);
+  // Φ = 4π · scale · 0.25.
+  EXPECT_NEAR(FloatProperty(light.emitter().properties(), "scale"), 10 / (4 * M_PI * 0.25), 1e-6);
+  // The map's +z along +y (pbrt-v4's swap of y and z).
+  const Vec3d up = ToMatrix(light.to_world()).Vector({0, 0, 1});
+  EXPECT_NEAR(up.x, 0, 1e-12);
+  EXPECT_NEAR(up.y, 1, 1e-12);
+  EXPECT_NEAR(up.z, 0, 1e-12);
+  EXPECT_FALSE(Warns(result, "light"));
+}
+
+TEST(PbrtImageLights, AProjectionLightProjectsItsImageAsIntensity) {
+  const std::filesystem::path scene = ConstantMap("white.pfm", 1, 64);
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\nLightSource \"projection\" \"string filename\" \"white.pfm\" \"float power\" 5 "
+      "\"float scale\" 2\n",
+      scene);
+  ASSERT_EQ(result.scene.lights_size(), 1);
+  const v1::Light& light = result.scene.lights(0);
+  EXPECT_EQ(light.emitter().class_name(), "projector");
+  const v1::Properties& props = light.emitter().properties();
+  EXPECT_EQ(StringProperty(props, "image"), "intensity");
+  EXPECT_EQ(StringProperty(props, "fov_axis"), "smaller");
+  EXPECT_DOUBLE_EQ(FloatProperty(props, "fov"), 90);  // pbrt-v4's default
+  // A white image through a 90° square frustum, of solid angle 2π/3:
+  // Φ = scale · 2π/3 (to the error of a sum over texel centres).
+  EXPECT_NEAR(FloatProperty(props, "scale"), 2 * 5 / (2 * M_PI / 3), 2e-3 * 2 * 5 / (2 * M_PI / 3));
+  EXPECT_FALSE(Warns(result, "light"));
+}
+
 }  // namespace
 }  // namespace yarf::importers

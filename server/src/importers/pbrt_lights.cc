@@ -76,11 +76,8 @@ Rgb PbrtImporter::AreaLightRadiance(const std::vector<double>& areas, const std:
 }
 
 void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, const SourceLocation& where) {
-  if (type == "goniometric" || type == "projection") {
-    Warn(where, "light:" + type, "unsupported light: LightSource \"" + type + "\" ignored");
-    return;
-  }
-  if (type != "point" && type != "spot" && type != "distant" && type != "infinite") {
+  if (type != "point" && type != "spot" && type != "distant" && type != "infinite" && type != "goniometric" &&
+      type != "projection") {
     Warn(where, "light:" + type, "LightSource \"" + type + "\" is not supported: ignored");
     return;
   }
@@ -90,6 +87,7 @@ void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, cons
   }
   if (type == "distant") return DistantLight(params, where);
   if (type == "infinite") return InfiniteLight(params, where);
+  if (type == "goniometric" || type == "projection") return ImageLight(type, params, where);
   Rgb intensity = ClampColour(Colour(params, "I", {1, 1, 1}, kLight, where) * params.Float("scale", 1), 0, 1e30,
                               [&] { Warn(where, "negative-intensity", "negative intensity clamped to 0"); });
   // pbrt-v4's `power` Φ scales I by Φ over the light's solid-angle
@@ -129,6 +127,77 @@ void PbrtImporter::LightSource(const std::string& type, PbrtParams& params, cons
   v1::Light light;
   *light.mutable_emitter() = Spec(type, std::move(props));
   assembly_.AddLight(std::move(light), to_world, where);
+}
+
+// pbrt-v4's GoniometricLight and ProjectionLight, as the goniometric and
+// projector emitters (which take the light's frame as to_world too).
+void PbrtImporter::ImageLight(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  const double scale = params.Float("scale", 1), power = params.Float("power", -1);
+  if (!(scale >= 0) || !std::isfinite(scale)) Fail(params.WhereIs("scale", where), type + " light: scale must be >= 0");
+  if (!params.Has("filename")) {
+    // pbrt-v4 refuses a projection light without an image and lights a
+    // goniometric one nowhere.
+    if (type == "projection") Fail(where, "projection light: \"filename\" is required");
+    Warn(where, "goniometric-no-image", "goniometric light without \"filename\": it emits nothing: ignored");
+    params.WarnUnused(diagnostics_, "light '" + type + "'");
+    return;
+  }
+  const std::string filename = params.String("filename", "");
+  const SourceLocation file_where = params.WhereIs("filename", where);
+  const auto file = folder_.Resolve(filename, origin_.file, file_where);
+  v1::Properties props;
+  SetString(props, "filename", folder_.Relative(file));
+  Matrix4 frame = state_.ctm;
+  double power_scale = 1;
+  if (type == "goniometric") {
+    const Rgb intensity = ClampColour(Colour(params, "I", {1, 1, 1}, kLight, where), 0, 1e30, [&] {
+      Warn(where, "negative-intensity", "negative intensity clamped to 0");
+    });
+    SetRgb(props, "intensity", intensity);
+    // pbrt-v4 turns the map's +z toward the light's +y.
+    frame = state_.ctm * Matrix4({1, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 1});
+    if (power > 0) {
+      // Φ = 4π · scale · mean of the texels' channel means.
+      const Rgb mean = ImageMeanColour(file, ImageEncoding::kAuto, 1, file_where);
+      const double k_e = 4 * M_PI * (mean.r + mean.g + mean.b) / 3;
+      if (!(k_e > 0)) Fail(params.WhereIs("power", where), "goniometric light: a black image cannot emit a power");
+      power_scale = power / k_e;
+    }
+  } else {
+    const double fov = params.Float("fov", 90);
+    if (!(fov > 0 && fov < 180)) Fail(params.WhereIs("fov", where), "projection light: fov must lie in (0, 180)");
+    // pbrt-v4: fov spans the image's shorter side; u grows along the
+    // light's +x and v along its −y, where the projector's u grows along
+    // −x: mirrored in x.
+    SetFloat(props, "fov", fov);
+    SetString(props, "fov_axis", "smaller");
+    SetString(props, "image", "intensity");
+    SetString(props, "filter_type", "nearest");
+    SetString(props, "wrap_mode", "clamp");
+    frame = state_.ctm * Matrix4::Scale({-1, 1, 1});
+    if (power > 0) {
+      // Φ = scale · A · mean over the texels of luminance × cos³θ, A the
+      // image plane's area at unit distance (pbrt-v4's ProjectionLight::Create).
+      const double t = std::tan(fov * M_PI / 360);
+      const auto cos_cubed = [t](uint64_t x, uint64_t y, uint64_t width, uint64_t height) {
+        const double aspect = double(width) / double(height);
+        const double sx = (aspect > 1 ? aspect : 1) * (2 * (double(x) + 0.5) / double(width) - 1);
+        const double sy = (aspect > 1 ? 1 : 1 / aspect) * (2 * (double(y) + 0.5) / double(height) - 1);
+        // The plane's area, 4 t² · max(aspect, 1 / aspect), times cos³θ.
+        return 4 * t * t * std::max(aspect, 1 / aspect) * std::pow(1 + t * t * (sx * sx + sy * sy), -1.5);
+      };
+      const Rgb sum = ImageWeightedSumPerPixel(file, ImageEncoding::kAuto, 1, file_where, cos_cubed);
+      const double k_e = 0.2126 * sum.r + 0.7152 * sum.g + 0.0722 * sum.b;
+      if (!(k_e > 0)) Fail(params.WhereIs("power", where), "projection light: a black image cannot emit a power");
+      power_scale = power / k_e;
+    }
+  }
+  SetFloat(props, "scale", scale * power_scale);
+  SetTransform(props, "to_world", frame);
+  params.WarnUnused(diagnostics_, "light '" + type + "'");
+  v1::Light light;
+  *light.mutable_emitter() = Spec(type == "goniometric" ? "goniometric" : "projector", std::move(props));
+  assembly_.AddLight(std::move(light), frame, where);
 }
 
 void PbrtImporter::DistantLight(PbrtParams& params, const SourceLocation& where) {
