@@ -407,6 +407,24 @@ def test_bdpt_and_volpath_agree_in_fog_whose_extinction_differs_per_channel(
     agree_with_volpath(client, scene)
 
 
+def test_bdpt_and_volpath_agree_in_fog_that_emits(
+    client: Client, cornell_box: scene_pb2.Scene
+) -> None:
+    """Light the fog emits is found by camera subpaths alone (light subpaths
+    start at the lights), with full weight beside the other strategies."""
+    scene = foggy_cornell_box(cornell_box)
+    del scene.media[:]
+    medium(
+        scene,
+        "fog",
+        sigma_a=rgb(0.0004, 0.0006, 0.0008),
+        sigma_s=rgb(0.0015, 0.001, 0.0006),
+        g=0.3,
+        emission=rgb(0.6, 0.3, 0.2),
+    )
+    agree_with_volpath(client, scene)
+
+
 # Photon mapping in fog: the volume estimate against volpath (dropping the
 # phase function from it makes the image about five times too bright). The
 # estimates are density estimates, so block means are compared with a tolerance for

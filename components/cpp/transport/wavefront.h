@@ -350,7 +350,7 @@ inline void RefuseOrthographicCamera(const SceneView& scene, const std::string& 
 // as Mitsuba's and pbrt-v4's path tracers do).
 inline void RefuseMedia(const SceneView& scene, const std::string& transport) {
   if (scene.MediumCount() > 0)
-    throw Error(transport + " does not render participating media: render this scene with volpath or light");
+    throw Error(transport + " does not render participating media: render this scene with volpath, light or bdpt");
 }
 
 // Where light paths start: a point on a light and a direction leaving it.
