@@ -97,7 +97,6 @@ def lepage(integrand: Integrand, seed: int) -> float:
 
 
 def yarf(integrand: Integrand, method: str, seed: int, address: str) -> float:
-    sampler = "sobol" if method == "rqmc" else "independent"
     zero, one = [0.0] * integrand.dimensions, [1.0] * integrand.dimensions
     result = integrate(
         integrand.f,
@@ -106,7 +105,6 @@ def yarf(integrand: Integrand, method: str, seed: int, address: str) -> float:
         method=method,
         evaluations=EVALUATIONS,
         seed=seed,
-        sampler=sampler,
         server=address,
     )
     return float(result.estimate[0])

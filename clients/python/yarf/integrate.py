@@ -25,6 +25,11 @@ from yarf.v1 import math_pb2, math_pb2_grpc
 VectorFunction = Callable[[np.ndarray], np.ndarray]
 # Method names as people write them, for classes whose names cannot hold them.
 METHOD_CLASSES = {"vegas+": "vegas_plus"}
+# The sampler a method takes when none is named: rqmc's error bars come from
+# independent scramblings of one net, so it takes the Owen-scrambled Sobol
+# sequence; the others make their own points adaptive or stratified, and
+# take independent numbers.
+DEFAULT_SAMPLERS = {"rqmc": "sobol_nd"}
 
 
 @dataclass(frozen=True)
@@ -113,20 +118,24 @@ def integrate(
     method: str = "vegas",
     evaluations: int = 100_000,
     seed: int = 0,
-    sampler: str = "independent",
+    sampler: str | None = None,
     server: str | Client | None = None,
     **options: PropertyValue,
 ) -> Integral:
     """∫ f over the box [lower, upper] by the server's Integrator ``method``.
 
     ``options`` configure the integrator (e.g. ``iterations=10``);
-    ``server`` is an address or a Client, else a local yarfd is started.
+    ``sampler`` names the point set (None: "sobol_nd" for rqmc, else
+    "independent"); ``server`` is an address or a Client, else a local
+    yarfd is started.
     """
     if len(lower) != len(upper) or not lower:
         raise ValueError("lower and upper need one bound per dimension")
     with _connect(server) as client, serve_function(f, len(lower)) as address:
         integrator = client.create(METHOD_CLASSES.get(method, method), properties(**options)).handle
-        sampler_handle = client.create(sampler).handle
+        sampler_handle = client.create(
+            sampler or DEFAULT_SAMPLERS.get(method, "independent")
+        ).handle
         try:
             reply = math_pb2_grpc.IntegratorStub(client.channel).Integrate(
                 math_pb2.IntegrateRequest(

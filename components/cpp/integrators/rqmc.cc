@@ -5,14 +5,17 @@
 // points (`evaluations` in the result is R · n). Replicate r takes points
 // 0 … n−1 of the sampler's sequence for the seed Hash(seed, r), mapped to
 // the box, and gives its own mean-sample estimate Q_r = V · (1/n) Σ f(x_i).
-// With a randomized low-discrepancy sampler ("sobol": Owen-scrambled) the
-// Q_r are independent and unbiased, each far more accurate than plain
-// Monte Carlo on smooth integrands, so
+// With a randomized low-discrepancy sampler ("sobol_nd": the Sobol
+// sequence in all d dimensions, Owen-scrambled) the Q_r are independent
+// and unbiased, each far more accurate than plain Monte Carlo on smooth
+// integrands, so
 //   estimate = (1/R) Σ_r Q_r,   σ = s_Q / √R,
 // with s_Q the sample standard deviation of the Q_r: an honest error bar
-// for a quasi-Monte Carlo rule, which has none of its own. With sobol,
-// make n a power of two (the point set is then a scrambled net). Any
-// sampler works; with "independent" this is plain Monte Carlo in batches.
+// for a quasi-Monte Carlo rule, which has none of its own. With sobol_nd,
+// make n a power of two (the point set is then a scrambled net); yarf's
+// Python integrate() takes it for rqmc unless told otherwise. Any sampler
+// works; with "independent" this is plain Monte Carlo in batches, and the
+// padded "sobol" (random pairings of 2-D nets) is a net only pair by pair.
 //
 // Properties: int "replicates" (default 16, at least 2).
 
