@@ -21,6 +21,9 @@
 // Bounds: indices below 2^32 (direction numbers of 32 bits) and
 // dimensions below 1024 (the tabulated ones, see sobol_directions.h);
 // anything beyond is refused with an Error rather than repeating points.
+// Renders keep `sobol` by default: it has no dimension bound (paths with
+// Russian roulette have no length bound), and on the Cornell box at 64 spp
+// its RMSE was 4% below this one's.
 //
 // Deterministic and stateless: the same (index, dimension, seed) always
 // gives the same number in [0, 1).
