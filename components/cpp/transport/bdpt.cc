@@ -301,30 +301,13 @@ class Bdpt final : public Transport {
       scene.Intersect(rays, hits);
 
       // Through the media: each walk scatters, is absorbed or reaches its hit.
-      std::vector<uint8_t> at_surface(count, 1);
       std::vector<std::pair<uint32_t, Vec3>> scattered;  // path, point
-      std::vector<uint32_t> keys(count);
-      for (size_t k = 0; k < count; ++k) keys[k] = walkers[active[k]].medium;
-      for (const auto& [medium, members] : GroupBy(keys)) {
-        if (medium == kNoMedium) continue;
-        std::vector<Walk> walks(members.size());
-        for (size_t q = 0; q < members.size(); ++q) {
-          Walker& walker = walkers[active[members[q]]];
-          walks[q] = {walker.ray, hits[members[q]].t, walker.hero, &walker.random};
-        }
-        std::vector<uint8_t> reached;
-        const std::vector<Vec3> transmittance =
-            TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t q, const Collision& c) {
-              const uint32_t i = active[members[q]];
-              Walker& walker = walkers[i];
-              if (emitted && MaxComponent(c.emission) > 0) (*emitted)[i] += Emission(walker, c);
-              const CollisionEvent event = DeltaTrack(walker, c);
-              if (event == CollisionEvent::kScatter) scattered.emplace_back(i, c.position);
-              return event == CollisionEvent::kNull;
-            });
-        for (size_t q = 0; q < members.size(); ++q)
-          at_surface[members[q]] = reached[q] && walkers[active[members[q]]].Pass(transmittance[q]);
-      }
+      const std::vector<uint8_t> at_surface = WalkToHits(
+          scene, active, hits, [&](uint32_t i) { return WalkStateOf(walkers[i]); },
+          [&](uint32_t i, const Collision& c) {
+            if (emitted && MaxComponent(c.emission) > 0) (*emitted)[i] += Emission(walkers[i], c);
+          },
+          [&](uint32_t i, const Collision& c) { scattered.emplace_back(i, c.position); });
 
       std::vector<uint32_t> next;
       ScatterInMedia(scene, points, paths, walkers, scattered, base, next);

@@ -182,28 +182,10 @@ class LightTracer final : public Transport {
     scene.Intersect(rays, hits);
 
     // Through the media: each path scatters, is absorbed or reaches its hit.
-    std::vector<uint8_t> at_surface(active.size(), 1);
     std::vector<std::pair<uint32_t, Vec3>> scattered;  // path, point
-    std::vector<uint32_t> keys(active.size());
-    for (size_t k = 0; k < active.size(); ++k) keys[k] = paths[active[k]].medium;
-    for (const auto& [medium, members] : GroupBy(keys)) {
-      if (medium == kNoMedium) continue;
-      std::vector<Walk> walks(members.size());
-      for (size_t j = 0; j < members.size(); ++j) {
-        LightPath& p = paths[active[members[j]]];
-        walks[j] = {p.ray, hits[members[j]].t, p.hero, &p.random};
-      }
-      std::vector<uint8_t> reached;
-      const std::vector<Vec3> transmittance =
-          TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t j, const Collision& c) {
-            const uint32_t i = active[members[j]];
-            const CollisionEvent event = DeltaTrack(paths[i], c);
-            if (event == CollisionEvent::kScatter) scattered.emplace_back(i, c.position);
-            return event == CollisionEvent::kNull;
-          });
-      for (size_t j = 0; j < members.size(); ++j)
-        at_surface[members[j]] = reached[j] && paths[active[members[j]]].Pass(transmittance[j]);
-    }
+    const std::vector<uint8_t> at_surface = WalkToHits(
+        scene, active, hits, [&](uint32_t i) { return WalkStateOf(paths[i]); }, [](uint32_t, const Collision&) {},
+        [&](uint32_t i, const Collision& c) { scattered.emplace_back(i, c.position); });
 
     std::vector<uint32_t> next;
     std::vector<CameraLink> links;

@@ -77,6 +77,58 @@ inline CollisionEvent DeltaTrack(SpectralPath& p, const Collision& c) {
   return p.Alive() ? CollisionEvent::kNull : CollisionEvent::kAbsorb;
 }
 
+// What a walk through a medium moves: its ray, the medium it is in and
+// the path weight delta tracking updates.
+struct WalkState {
+  const Ray& ray;
+  uint32_t medium;
+  SpectralPath& path;
+};
+
+// Walks the paths `active` that are in a medium through it, up to their
+// hits (hits[k] for active[k]; a miss, to the ray's tfar): one batch per
+// medium, delta tracking at every tentative collision. `state(i)` gives
+// path i's WalkState; at_collision(i, collision) sees each collision
+// before it is tracked (a medium's emission), on_scatter(i, collision)
+// each real scattering, which ends the path's walk. Returns, per k,
+// whether active[k] reached its hit (always, in vacuum) with its weight
+// kept.
+template <typename State, typename AtCollision, typename OnScatter>
+std::vector<uint8_t> WalkToHits(const SceneView& scene, const std::vector<uint32_t>& active,
+                                const std::vector<Hit>& hits, State&& state, AtCollision&& at_collision,
+                                OnScatter&& on_scatter) {
+  std::vector<uint8_t> at_hit(active.size(), 1);
+  std::vector<uint32_t> keys(active.size());
+  for (size_t k = 0; k < active.size(); ++k) keys[k] = state(active[k]).medium;
+  for (const auto& [medium, members] : GroupBy(keys)) {
+    if (medium == kNoMedium) continue;
+    std::vector<Walk> walks(members.size());
+    for (size_t j = 0; j < members.size(); ++j) {
+      const WalkState s = state(active[members[j]]);
+      const Hit& hit = hits[members[j]];
+      walks[j] = {s.ray, hit.Found() ? hit.t : s.ray.tfar, s.path.hero, &s.path.random};
+    }
+    std::vector<uint8_t> reached;
+    const std::vector<Vec3> transmittance =
+        TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t j, const Collision& c) {
+          const uint32_t i = active[members[j]];
+          at_collision(i, c);
+          const CollisionEvent event = DeltaTrack(state(i).path, c);
+          if (event == CollisionEvent::kScatter) on_scatter(i, c);
+          return event == CollisionEvent::kNull;
+        });
+    for (size_t j = 0; j < members.size(); ++j)
+      at_hit[members[j]] = reached[j] && state(active[members[j]]).path.Pass(transmittance[j]);
+  }
+  return at_hit;
+}
+
+// A path's walk state, for paths that keep ray and medium beside their weight.
+template <typename Path>
+WalkState WalkStateOf(Path& path) {
+  return {path.ray, path.medium, path};
+}
+
 // Whether any material of the scene is a null boundary.
 inline bool HasNullBoundaries(const SceneView& scene) {
   for (uint32_t m = 0; m < scene.MaterialCount(); ++m)

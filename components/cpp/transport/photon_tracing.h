@@ -160,28 +160,10 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
       scene.Intersect(rays, hits);
 
       // Through the media: each photon scatters, is absorbed or reaches its hit.
-      std::vector<uint8_t> at_surface(active.size(), 1);
       std::vector<std::pair<uint32_t, Vec3>> scattered;  // path, point
-      std::vector<uint32_t> keys(active.size());
-      for (size_t k = 0; k < active.size(); ++k) keys[k] = paths[active[k]].medium;
-      for (const auto& [medium, members] : GroupBy(keys)) {
-        if (medium == kNoMedium) continue;
-        std::vector<yarf::Walk> walks(members.size());
-        for (size_t j = 0; j < members.size(); ++j) {
-          Live& p = paths[active[members[j]]];
-          walks[j] = {p.ray, hits[members[j]].Found() ? hits[members[j]].t : p.ray.tfar, p.hero, &p.random};
-        }
-        std::vector<uint8_t> reached;
-        const std::vector<Vec3> transmittance =
-            TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t j, const Collision& c) {
-              const uint32_t i = active[members[j]];
-              const CollisionEvent event = DeltaTrack(paths[i], c);
-              if (event == CollisionEvent::kScatter) scattered.emplace_back(i, c.position);
-              return event == CollisionEvent::kNull;
-            });
-        for (size_t j = 0; j < members.size(); ++j)
-          at_surface[members[j]] = reached[j] && paths[active[members[j]]].Pass(transmittance[j]);
-      }
+      const std::vector<uint8_t> at_surface = WalkToHits(
+          scene, active, hits, [&](uint32_t i) { return WalkStateOf(paths[i]); }, [](uint32_t, const Collision&) {},
+          [&](uint32_t i, const Collision& c) { scattered.emplace_back(i, c.position); });
 
       std::vector<uint32_t> next;
       // Photons scattered in media: stored, then scattered on by the phase
@@ -433,33 +415,18 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
     for (size_t k = 0; k < active.size(); ++k) rays[k] = walks[active[k]].ray;
     scene.Intersect(rays, hits);
 
-    std::vector<uint8_t> passed(active.size(), 1);
-    std::vector<uint32_t> keys(active.size());
-    for (size_t k = 0; k < active.size(); ++k) keys[k] = walks[active[k]].medium;
-    for (const auto& [medium, members] : GroupBy(keys)) {
-      if (medium == kNoMedium) continue;
-      std::vector<yarf::Walk> tracks(members.size());
-      for (size_t j = 0; j < members.size(); ++j) {
-        CameraWalk& w = walks[active[members[j]]];
-        tracks[j] = {w.ray, hits[members[j]].Found() ? hits[members[j]].t : w.ray.tfar, w.path.hero, &w.path.random};
-      }
-      std::vector<uint8_t> done;
-      const std::vector<Vec3> transmittance =
-          TrackMajorants(scene.MediumAt(medium), tracks, done, [&](size_t j, const Collision& c) {
-            CameraWalk& w = walks[active[members[j]]];
-            const CollisionEvent event = DeltaTrack(w.path, c);
-            if (event == CollisionEvent::kScatter) {
-              const Vec3 throughput = w.Throughput();
-              const auto per_sigma = [](float t, float sigma) { return sigma > 0 ? t / sigma : 0.0f; };
-              const Vec3 weight{per_sigma(throughput.x, c.sigma_s.x), per_sigma(throughput.y, c.sigma_s.y),
-                                per_sigma(throughput.z, c.sigma_s.z)};
-              if (MaxComponent(weight) > 0) in_media.push_back({w.owner, c.position, -w.ray.direction, weight, medium});
-            }
-            return event == CollisionEvent::kNull;
-          });
-      for (size_t j = 0; j < members.size(); ++j)
-        passed[members[j]] = done[j] && walks[active[members[j]]].path.Pass(transmittance[j]);
-    }
+    const std::vector<uint8_t> passed = WalkToHits(
+        scene, active, hits,
+        [&](uint32_t i) { return WalkState{walks[i].ray, walks[i].medium, walks[i].path}; },
+        [](uint32_t, const Collision&) {},
+        [&](uint32_t i, const Collision& c) {
+          CameraWalk& w = walks[i];
+          const Vec3 throughput = w.Throughput();
+          const auto per_sigma = [](float t, float sigma) { return sigma > 0 ? t / sigma : 0.0f; };
+          const Vec3 weight{per_sigma(throughput.x, c.sigma_s.x), per_sigma(throughput.y, c.sigma_s.y),
+                            per_sigma(throughput.z, c.sigma_s.z)};
+          if (MaxComponent(weight) > 0) in_media.push_back({w.owner, c.position, -w.ray.direction, weight, w.medium});
+        });
 
     if (emitted) {
       std::vector<EmitterQuery> lights;

@@ -147,28 +147,11 @@ class VolPathTracer final : public Transport {
     scene.Intersect(rays, hits);
 
     // Through the media: each path scatters, is absorbed or reaches its hit.
-    std::vector<uint8_t> at_surface(count, 1);
     std::vector<MediumVertex> scattered;
-    std::vector<uint32_t> keys(count);
-    for (size_t k = 0; k < count; ++k) keys[k] = paths[active[k]].medium;
-    for (const auto& [medium, members] : GroupBy(keys)) {
-      if (medium == kNoMedium) continue;
-      std::vector<Walk> walks(members.size());
-      for (size_t j = 0; j < members.size(); ++j) {
-        VolPath& p = paths[active[members[j]]];
-        walks[j] = {p.ray, hits[members[j]].t, p.hero, &p.random};
-      }
-      std::vector<uint8_t> reached;
-      const std::vector<Vec3> transmittance =
-          TrackMajorants(scene.MediumAt(medium), walks, reached, [&](size_t j, const Collision& c) {
-            return Collide(paths[active[members[j]]], active[members[j]], c, scattered);
-          });
-      for (size_t j = 0; j < members.size(); ++j) {
-        VolPath& p = paths[active[members[j]]];
-        at_surface[members[j]] = reached[j];
-        if (reached[j] && !p.Pass(transmittance[j])) at_surface[members[j]] = 0;
-      }
-    }
+    const std::vector<uint8_t> at_surface = WalkToHits(
+        scene, active, hits, [&](uint32_t i) { return WalkStateOf(paths[i]); },
+        [&](uint32_t i, const Collision& c) { AddEmission(paths[i], c); },
+        [&](uint32_t i, const Collision& c) { scattered.push_back({i, c.position}); });
 
     std::vector<uint32_t> next;
     std::vector<LightLink> links;
@@ -205,19 +188,15 @@ class VolPathTracer final : public Transport {
     return next;
   }
 
-  // A tentative collision of path p in its medium: the medium's emission
-  // there, then delta tracking. Returns whether the walk goes on.
-  static bool Collide(VolPath& p, uint32_t i, const Collision& c, std::vector<MediumVertex>& scattered) {
+  // The light a medium emits at a tentative collision of path p, before
+  // delta tracking decides what the collision is (pbrt-v4's estimator).
+  static void AddEmission(VolPath& p, const Collision& c) {
+    if (!(MaxComponent(c.emission) > 0)) return;
     const int h = int(p.hero);
-    if (MaxComponent(c.emission) > 0) {
-      const float pdf = c.sigma_maj[h] * c.transmittance_maj[h];
-      const Vec3 r_e = p.r_u * c.sigma_maj * c.transmittance_maj / pdf;
-      if (MaxComponent(r_e) > 0)
-        p.radiance += p.beta * c.transmittance_maj * c.sigma_a * c.emission / (pdf * ChannelMean(r_e));
-    }
-    const CollisionEvent event = DeltaTrack(p, c);
-    if (event == CollisionEvent::kScatter) scattered.push_back({i, c.position});
-    return event == CollisionEvent::kNull;
+    const float pdf = c.sigma_maj[h] * c.transmittance_maj[h];
+    const Vec3 r_e = p.r_u * c.sigma_maj * c.transmittance_maj / pdf;
+    if (MaxComponent(r_e) > 0)
+      p.radiance += p.beta * c.transmittance_maj * c.sigma_a * c.emission / (pdf * ChannelMean(r_e));
   }
 
   // Light samples and phase samples at the points scattered in media.
