@@ -85,10 +85,17 @@ class LightTracer final : public Transport {
     std::vector<float> time(n);
     for (uint32_t i = 0; i < n; ++i) time[i] = scene.ShutterTime(points.Get(i, kTimeDimension));
     const std::vector<uint32_t> media = LightStartMedia(scene, starts, time.empty() ? 0.0f : time[0]);
-    ConnectLightsToCamera(scene, points, starts, media, time, out);
-    if (scene.HasEnvironment()) SeeEnvironment(scene, points, time, out);
-
     std::vector<LightPath> paths(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      LightPath& p = paths[i];
+      p.random.seed = Hash(FloatBits(points.Get(i, kLightPosition)), FloatBits(points.Get(i, kLightPosition + 1)),
+                           FloatBits(points.Get(i, kEmission)), FloatBits(points.Get(i, kEmission + 1)),
+                           FloatBits(points.Get(i, kLightChoice)));
+      p.ChooseHero();
+    }
+    ConnectLightsToCamera(scene, points, starts, media, paths, time, out);
+    if (scene.HasEnvironment()) SeeEnvironment(scene, points, paths, time, out);
+
     std::vector<uint32_t> active;
     for (uint32_t i = 0; i < n; ++i) {
       if (!starts[i].Valid()) continue;
@@ -96,10 +103,6 @@ class LightTracer final : public Transport {
       p.ray = starts[i].FirstRay(time[i]);
       p.beta = starts[i].Throughput();
       p.medium = media[i];
-      p.random.seed = Hash(FloatBits(points.Get(i, kLightPosition)), FloatBits(points.Get(i, kLightPosition + 1)),
-                           FloatBits(points.Get(i, kEmission)), FloatBits(points.Get(i, kEmission + 1)),
-                           FloatBits(points.Get(i, kLightChoice)));
-      p.ChooseHero();
       if (MaxComponent(p.beta) > 0 && length_.max_depth != 1) active.push_back(i);
     }
     while (!active.empty()) active = Bounce(scene, points, paths, active, out);
@@ -109,7 +112,8 @@ class LightTracer final : public Transport {
   // Paths of one segment: a surface light seen directly by the camera.
   void ConnectLightsToCamera(const SceneView& scene, const PrimarySamples& points,
                              const std::vector<LightStart>& starts, const std::vector<uint32_t>& media,
-                             const std::vector<float>& time, FilmSamples& out) const {
+                             const std::vector<LightPath>& paths, const std::vector<float>& time,
+                             FilmSamples& out) const {
     std::vector<EmitterQuery> queries;
     std::vector<CameraConnection> connections;
     std::vector<uint32_t> owners;
@@ -139,33 +143,34 @@ class LightTracer final : public Transport {
       const Ray ray = RayToLens(l.position, l.normal, c.lens_point, time[i]);
       const uint32_t medium =
           l.shape == kNoShape ? media[i] : scene.MediaOf(l.shape).Beyond(ray.direction, l.normal, media[i]);
-      links.push_back({i, {ray, medium, 0, Hash(uint64_t(i), FloatBits(l.u), FloatBits(l.v))}, value, Vec3(1, 1, 1), c});
+      links.push_back({i, {ray, medium, paths[i].hero, Hash(paths[i].random.seed, 0u)}, value, Vec3(1, 1, 1), c});
     }
     Splat(scene, links, out);
   }
 
   // Paths of one segment from an environment: no light path reaches the
   // camera's pinhole from infinity, so a camera ray per point (its film
-  // coordinates) splats the environment where it is seen directly. One
-  // pass of W×H points puts one such ray in each pixel on average.
-  void SeeEnvironment(const SceneView& scene, const PrimarySamples& points, const std::vector<float>& time,
-                      FilmSamples& out) const {
+  // coordinates) splats the environment where it is seen directly,
+  // through media and null boundaries. One pass of W×H points puts one
+  // such ray in each pixel on average.
+  void SeeEnvironment(const SceneView& scene, const PrimarySamples& points, const std::vector<LightPath>& paths,
+                      const std::vector<float>& time, FilmSamples& out) const {
     const size_t n = points.Count();
-    std::vector<Ray> rays(n);
-    std::vector<Hit> hits(n);
-    for (uint32_t i = 0; i < n; ++i)
-      rays[i] = scene.CameraRay(points.Get(i, kFilmDimension), points.Get(i, kFilmDimension + 1),
-                                points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), time[i]);
-    scene.Intersect(rays, hits);
-    std::vector<Vec3> directions;
-    std::vector<uint32_t> escaped;
-    for (uint32_t i = 0; i < n; ++i)
-      if (!hits[i].Found()) {
-        directions.push_back(rays[i].direction);
-        escaped.push_back(i);
-      }
+    std::vector<ShadowWalk> views(n);
+    std::vector<Vec3> directions(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      const Ray ray = CameraRayOf(scene, points, i);
+      views[i] = {ray, scene.CameraMedium(), paths[i].hero, Hash(paths[i].random.seed, 1u)};
+      views[i].ray.time = time[i];
+      directions[i] = ray.direction;
+    }
+    const std::vector<ShadowTransmittance> through = Transmittances(scene, views, null_boundaries_);
     const std::vector<Vec3> environment = EnvironmentAlong(scene, directions);
-    for (size_t k = 0; k < escaped.size(); ++k) AddCameraSample(scene, points, escaped[k], environment[k], out);
+    for (uint32_t i = 0; i < n; ++i) {
+      const float mean = ChannelMean(through[i].r_l);
+      if (MaxComponent(through[i].value) > 0 && mean > 0)
+        AddCameraSample(scene, points, i, environment[i] * through[i].value / mean, out);
+    }
   }
 
   // Whether a vertex after `bounce` segments may scatter on: its next
