@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from yarf_component import Medium, Rgb, henyey_greenstein, sample_henyey_greenstein
+from yarf_component import HenyeyGreensteinMedium, Rgb
 
 
-class ExponentialFog(Medium):
+class ExponentialFog(HenyeyGreensteinMedium):
     class_name = "py_exponential_fog"
     summary = "fog whose density falls off exponentially with height, in Python"
 
@@ -72,15 +72,3 @@ class ExponentialFog(Medium):
     def coefficients(self, position: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         density = self.density(position[:, 2])[:, None]
         return density * self.sigma_a, density * self.sigma_s, np.zeros_like(position)
-
-    def evaluate_phase(
-        self, wi: np.ndarray, wo: np.ndarray, position: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        p = henyey_greenstein(wi, wo, self.g)
-        return p, p
-
-    def sample_phase(
-        self, wi: np.ndarray, position: np.ndarray, uniform: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        wo = sample_henyey_greenstein(wi, uniform, self.g)
-        return wo, np.ones(len(wi), np.float32), henyey_greenstein(wi, wo, self.g)

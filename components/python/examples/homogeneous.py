@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from yarf_component import Medium, Rgb, henyey_greenstein, sample_henyey_greenstein
+from yarf_component import HenyeyGreensteinMedium, Rgb
 
 
-class Homogeneous(Medium):
+class Homogeneous(HenyeyGreensteinMedium):
     class_name = "py_homogeneous"
     summary = "the same absorption, scattering and phase function everywhere, in Python"
 
@@ -65,16 +65,3 @@ class Homogeneous(Medium):
 
     def emits(self) -> bool:
         return bool(self.emission.max() > 0 and self.sigma_a.max() > 0)
-
-    def evaluate_phase(
-        self, wi: np.ndarray, wo: np.ndarray, position: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        p = henyey_greenstein(wi, wo, self.g)
-        return p, p
-
-    def sample_phase(
-        self, wi: np.ndarray, position: np.ndarray, uniform: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        wo = sample_henyey_greenstein(wi, uniform, self.g)
-        # Sampled exactly: the weight p/pdf is 1.
-        return wo, np.ones(len(wi), np.float32), henyey_greenstein(wi, wo, self.g)

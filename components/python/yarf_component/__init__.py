@@ -16,7 +16,12 @@ from yarf_component.frames import Frame, normalize, reflect
 from yarf_component.job_calls import JobSceneError, Pending
 from yarf_component.job_scene import MISS, Hits, JobScene, LightSamples, Rays, SceneLayout
 from yarf_component.job_surface import SurfaceClient
-from yarf_component.medium import Medium, henyey_greenstein, sample_henyey_greenstein
+from yarf_component.medium import (
+    HenyeyGreensteinMedium,
+    Medium,
+    henyey_greenstein,
+    sample_henyey_greenstein,
+)
 from yarf_component.numerical import Function, Integrand, Integrator, PointSource, Sampler, Warp
 from yarf_component.properties import PropertyError, Rgb, Transform, Vec3
 from yarf_component.server import Running, serve
@@ -36,6 +41,7 @@ __all__ = [
     "Emitter",
     "Frame",
     "Function",
+    "HenyeyGreensteinMedium",
     "Hits",
     "Integrand",
     "Integrator",
