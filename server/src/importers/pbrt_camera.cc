@@ -170,6 +170,22 @@ void PbrtImporter::Integrator(const std::string& type, PbrtParams& params, const
   has_integrator_ = true;
   integrator_type_ = type;
   integrator_where_ = where;
+  if (type == "ambientocclusion") {
+    // Its own parameters only: no depth, no light sampler. Unset, the
+    // transport's default maxdistance is pbrt's, infinity (a scene's
+    // numbers must be finite).
+    v1::Properties props;
+    SetBool(props, "cossample", params.Bool("cossample", true));
+    if (params.Has("maxdistance")) {
+      const double distance = params.Float("maxdistance", 0);
+      if (!(distance > 0) || !std::isfinite(distance))
+        Fail(params.WhereIs("maxdistance", where), "maxdistance must be > 0 and finite");
+      SetFloat(props, "maxdistance", distance);
+    }
+    params.WarnUnused(diagnostics_, "integrator 'ambientocclusion'");
+    *assembly_.scene().mutable_transport() = Spec("ambient_occlusion", std::move(props));
+    return;
+  }
   // pbrt's integrators and the yarf transport that estimates the same
   // image; simplepath and randomwalk sample differently, to the same limit,
   // and volpath is path where there are no media (volpath where there are:

@@ -402,9 +402,23 @@ TEST(PbrtImport, IntegratorsMapToTheTransportsThatEstimateTheirImage) {
   EXPECT_DOUBLE_EQ(FloatProperty(sppm.scene.transport().properties(), "initial_radius"), 0.25);
   EXPECT_EQ(IntProperty(sppm.scene.transport().properties(), "photons_per_pass"), 1000);
   EXPECT_EQ(IntProperty(sppm.scene.transport().properties(), "seed"), 3);
-  const ImportResult ao = PbrtWithIntegrator("\"ambientocclusion\"");
-  EXPECT_EQ(ao.scene.transport().class_name(), "path");
-  EXPECT_TRUE(Warns(ao, "integrator 'ambientocclusion' is not available"));
+}
+
+TEST(PbrtImport, AmbientOcclusionMapsToItsTransportWithItsParameters) {
+  const ImportResult ao =
+      PbrtWithIntegrator("\"ambientocclusion\" \"bool cossample\" false \"float maxdistance\" 2.5");
+  const v1::Properties& props = ao.scene.transport().properties();
+  EXPECT_EQ(ao.scene.transport().class_name(), "ambient_occlusion");
+  EXPECT_FALSE(props.values().at("cossample").bool_value());
+  EXPECT_DOUBLE_EQ(FloatProperty(props, "maxdistance"), 2.5);
+  EXPECT_FALSE(props.values().contains("max_depth"));
+  EXPECT_TRUE(ao.warnings.empty());
+  // pbrt's defaults: cosine-weighted, no distance (the transport's infinity).
+  const ImportResult plain = PbrtWithIntegrator("\"ambientocclusion\"");
+  EXPECT_TRUE(plain.scene.transport().properties().values().at("cossample").bool_value());
+  EXPECT_FALSE(plain.scene.transport().properties().values().contains("maxdistance"));
+  EXPECT_TRUE(plain.warnings.empty());
+  EXPECT_THROW(PbrtWithIntegrator("\"ambientocclusion\" \"float maxdistance\" 0"), ImportError);
 }
 
 TEST(PbrtImport, AnOrthographicCameraSpansTwoUnitsOfItsSpaceOverTheShorterAxis) {
