@@ -38,12 +38,17 @@ SUBPIXELS = 8
 
 
 def rectangle(
-    scene: scene_pb2.Scene, x_axis: tuple, y_axis: tuple, normal: tuple, center: tuple
+    scene: scene_pb2.Scene,
+    x_axis: tuple,
+    y_axis: tuple,
+    normal: tuple,
+    center: tuple,
+    material: str = "grey",
 ) -> None:
     """The unit square [-1, 1]² spanned along x_axis, y_axis about center."""
     m = np.eye(4)
     m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x_axis, y_axis, normal, center
-    shape = scene.shapes.add(material="grey")
+    shape = scene.shapes.add(material=material)
     shape.rectangle.SetInParent()
     shape.to_world.CopyFrom(transform(m))
 
@@ -207,3 +212,22 @@ def test_uniform_directions_estimate_what_cosine_ones_do(client: Client) -> None
     (a, va), (b, vb) = column_means(cosine), column_means(uniform)
     z = (a - b) / np.sqrt(va + vb)
     assert np.abs(z).max() < sidak_z(SIZE), z
+
+
+def test_null_boundaries_are_passed_by_camera_and_occlusion_rays(client: Client) -> None:
+    # Under a ceiling at z = 2, a null sheet at z = 1 over the floor, the
+    # camera between them. Within maxdistance 1.5 the floor reaches
+    # nothing; a ray stopped by the sheet would see the ceiling within it.
+    scene = floor_scene(wall=False)
+    scene.camera.origin.z = 1.5
+    scene.materials.add(name="boundary", class_name="null")
+    rectangle(scene, (50, 0, 0), (0, 50, 0), (0, 0, 1), (0, 0, 1), "boundary")
+    rectangle(scene, (50, 0, 0), (0, -50, 0), (0, 0, -1), (0, 0, 2))
+    open_floor = render(client, scene, cossample=True, maxdistance=1.5).pixels
+    np.testing.assert_allclose(open_floor, 1.0, atol=1e-6)
+    # Within 2.5 the ceiling, seen past the sheet, fills the cone cos θ >
+    # 2/2.5, whose cosine-weighted share is 1 − 0.8²: the floor reads 0.64.
+    covered = render(client, scene, cossample=True, maxdistance=2.5)
+    mean = float(covered.pixels[..., 0].astype(np.float64).mean())
+    sigma = math.sqrt(float(covered.variance[..., 0].astype(np.float64).sum())) / SIZE**2
+    assert abs(mean - 0.64) < sidak_z(1) * sigma, (mean, sigma)
