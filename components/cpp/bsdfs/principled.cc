@@ -79,6 +79,7 @@
 #include <vector>
 
 #include "microfacet.h"
+#include "principled_lobes.h"
 #include "scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
@@ -89,6 +90,7 @@ namespace {
 
 using yarf::Vec3;
 namespace mf = yarf::microfacet;
+namespace pr = yarf::principled;
 
 constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 constexpr uint32_t kGlossyLobe = yarf::kScatterReflect | yarf::kScatterGlossy;
@@ -100,29 +102,10 @@ enum Parameter {
   kRoughness, kAnisotropic, kMetallic, kSpecTrans, kSpecTint, kSheen, kSheenTint, kFlatness,
   kClearcoat, kClearcoatGloss, kParameterCount
 };
-struct ParameterInfo {
-  const char* name;
-  float fallback;
-};
-constexpr ParameterInfo kParameters[kParameterCount] = {
+constexpr pr::ParameterInfo kParameters[kParameterCount] = {
     {"roughness", 0.5f}, {"anisotropic", 0.0f}, {"metallic", 0.0f},  {"spec_trans", 0.0f},
     {"spec_tint", 0.0f}, {"sheen", 0.0f},       {"sheen_tint", 0.0f}, {"flatness", 0.0f},
     {"clearcoat", 0.0f}, {"clearcoat_gloss", 0.0f}};
-
-yarf::TexturedValue ReadUnitParameter(const yarf::Properties& props, const ParameterInfo& info) {
-  if (auto texture = props.TextureOf(info.name)) return yarf::TexturedValue(std::move(texture)).Clamped(0.0f, 1.0f);
-  const double value = props.Float(info.name, info.fallback);
-  if (!(value >= 0.0 && value <= 1.0))
-    throw yarf::Error(std::string("property '") + info.name + "' must be a number in [0, 1]");
-  return yarf::TexturedValue(float(value));
-}
-
-float ReadSamplingRate(const yarf::Properties& props, const std::string& name) {
-  const double rate = props.Float(name, 1.0);
-  if (!(rate >= 0.0 && std::isfinite(rate)))
-    throw yarf::Error("property '" + name + "' must be a finite number ≥ 0");
-  return float(rate);
-}
 
 // η from 'eta' or 'specular' (they exclude each other); `refracts` moves
 // it off 1, where a refraction would not bend.
@@ -139,33 +122,6 @@ float ReadEta(const yarf::Properties& props, bool refracts) {
   if (refracts && specular == 0.0) specular = 1e-3;
   return float(2.0 / (1.0 - std::sqrt(0.08 * specular)) - 1.0);
 }
-
-// Schlick's weight (1 - cos θ)⁵.
-float SchlickWeight(float cos_theta) {
-  const float m = std::clamp(1.0f - cos_theta, 0.0f, 1.0f);
-  return (m * m) * (m * m) * m;
-}
-
-// Schlick's Fresnel factor of normal reflectance r0 at incidence cos_i on
-// a facet of relative index eta; from the dense side, at the refracted
-// angle (so that it follows total internal reflection), as Mitsuba.
-Vec3 Schlick(Vec3 r0, float cos_i, float eta) {
-  const float eta_it = cos_i >= 0 ? eta : 1.0f / eta;
-  float weight = SchlickWeight(std::abs(cos_i));
-  if (!(eta_it > 1.0f)) {
-    const float cos2_t = 1.0f - (1.0f - cos_i * cos_i) / (eta_it * eta_it);
-    weight = SchlickWeight(std::sqrt(std::max(0.0f, cos2_t)));
-  }
-  return r0 + (Vec3(1.0f, 1.0f, 1.0f) - r0) * weight;
-}
-
-// c / lum(c), the hue of a colour (white when it is black).
-Vec3 Tint(Vec3 c) {
-  const float lum = yarf::Luminance(c);
-  return lum > 0 ? c / lum : Vec3(1.0f, 1.0f, 1.0f);
-}
-
-Vec3 Lerp(Vec3 a, Vec3 b, float t) { return a * (1.0f - t) + b * t; }
 
 // Burley's GTR1 ("generalised Trowbridge–Reitz", γ = 1) distribution of
 // the clear coat's normals, its D at cos θm, and a normal drawn by
@@ -195,36 +151,14 @@ struct Material {
   float glass_weight = 0;    // (1 - metallic) spec_trans
 
   Material(Vec3 base_color, const std::array<float, kParameterCount>& values) : base(base_color), p(values) {
-    // Disney's remapping α = ρ², stretched along x by the anisotropy;
-    // Mitsuba's floor of 0.001.
-    const float r2 = p[kRoughness] * p[kRoughness];
-    const float aspect = std::sqrt(1.0f - 0.9f * p[kAnisotropic]);
-    specular = {std::max(0.001f, r2 / aspect), std::max(0.001f, r2 * aspect), mf::Distribution::kGgx};
+    specular = pr::DisneyRoughness(p[kRoughness], p[kAnisotropic]);
     clearcoat_alpha = 0.1f + (0.001f - 0.1f) * p[kClearcoatGloss];
     diffuse_weight = (1.0f - p[kMetallic]) * (1.0f - p[kSpecTrans]);
     glass_weight = (1.0f - p[kMetallic]) * p[kSpecTrans];
   }
 };
 
-// The parameters at a call's points.
-class Points {
- public:
-  Points(const yarf::TexturedValue& base, const std::array<yarf::TexturedValue, kParameterCount>& values,
-         const yarf::SurfacePoints& at)
-      : base_(base.At(at)) {
-    for (const yarf::TexturedValue& value : values) values_.push_back(value.FloatsAt(at));
-  }
-
-  Material operator[](size_t k) const {
-    std::array<float, kParameterCount> values;
-    for (int i = 0; i < kParameterCount; ++i) values[i] = values_[i][k];
-    return Material(base_[k], values);
-  }
-
- private:
-  yarf::PointValues<Vec3> base_;
-  std::vector<yarf::PointValues<float>> values_;
-};
+using Points = pr::PointParameters<Material, kParameterCount>;
 
 // The odds of each lobe Sample draws, summing to 1 (or all 0).
 struct Odds {
@@ -252,9 +186,9 @@ class Principled final : public yarf::SurfaceModel {
       : base_(yarf::TexturedValue::Color(props, "base_color", Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
         values_(ReadParameters(props)),
         eta_(ReadEta(props, !values_[kSpecTrans].IsZero())),
-        diffuse_rate_(ReadSamplingRate(props, "diffuse_reflectance_sampling_rate")),
-        specular_rate_(ReadSamplingRate(props, "main_specular_sampling_rate")),
-        clearcoat_rate_(ReadSamplingRate(props, "clearcoat_sampling_rate")) {}
+        diffuse_rate_(pr::ReadSamplingRate(props, "diffuse_reflectance_sampling_rate")),
+        specular_rate_(pr::ReadSamplingRate(props, "main_specular_sampling_rate")),
+        clearcoat_rate_(pr::ReadSamplingRate(props, "clearcoat_sampling_rate")) {}
 
   void Evaluate(yarf::TransportMode mode, std::span<const float> wi, std::span<const float> wo,
                 const yarf::SurfacePoints& at, std::span<float> value) const override {
@@ -299,7 +233,7 @@ class Principled final : public yarf::SurfaceModel {
  private:
   static std::array<yarf::TexturedValue, kParameterCount> ReadParameters(const yarf::Properties& props) {
     std::array<yarf::TexturedValue, kParameterCount> values;
-    for (int i = 0; i < kParameterCount; ++i) values[i] = ReadUnitParameter(props, kParameters[i]);
+    for (int i = 0; i < kParameterCount; ++i) values[i] = pr::ReadWeight(props, kParameters[i]);
     return values;
   }
 
@@ -401,7 +335,7 @@ class Principled final : public yarf::SurfaceModel {
                                         : Vec3(1.0f, 1.0f, 1.0f) * (m.glass_weight * pair.fresnel);
       out += fresnel * (mf::Ndf(pair.h, m.specular) * mf::SmithG2(wi, wo, m.specular) / (4.0f * cos_i * cos_o));
       if (pair.outside && m.p[kClearcoat] > 0) {
-        const float coat = 0.25f * m.p[kClearcoat] * Schlick(Vec3(0.04f, 0.04f, 0.04f), cos_ih, eta_).x *
+        const float coat = 0.25f * m.p[kClearcoat] * pr::Schlick(Vec3(0.04f, 0.04f, 0.04f), cos_ih, eta_).x *
                            Gtr1(pair.h.z, m.clearcoat_alpha) * mf::SmithG1(wi, kClearcoatMasking) *
                            mf::SmithG1(wo, kClearcoatMasking);
         out += Vec3(coat, coat, coat);
@@ -417,11 +351,10 @@ class Principled final : public yarf::SurfaceModel {
   Vec3 PrincipledFresnel(const Material& m, float dielectric, float cos_ih) const {
     const float metallic = m.p[kMetallic], tint = m.p[kSpecTint];
     Vec3 out = Vec3(1.0f, 1.0f, 1.0f) * ((1.0f - metallic) * (1.0f - tint) * dielectric);
-    if (metallic > 0) out += metallic * Schlick(m.base, cos_ih, eta_);
+    if (metallic > 0) out += metallic * pr::Schlick(m.base, cos_ih, eta_);
     if (tint > 0) {
-      const float eta_it = cos_ih >= 0 ? eta_ : 1.0f / eta_;
-      const float r0 = (eta_it - 1.0f) * (eta_it - 1.0f) / ((eta_it + 1.0f) * (eta_it + 1.0f));
-      out += (1.0f - metallic) * tint * Schlick(Tint(m.base) * r0, cos_ih, eta_);
+      const float r0 = pr::NormalReflectance(cos_ih >= 0 ? eta_ : 1.0f / eta_);
+      out += (1.0f - metallic) * tint * pr::Schlick(pr::Tint(m.base) * r0, cos_ih, eta_);
     }
     return out;
   }
@@ -429,21 +362,10 @@ class Principled final : public yarf::SurfaceModel {
   // The diffuse base (with retro-reflection and fake subsurface) and the
   // sheen; θd is the angle between h and wo.
   static Vec3 Diffuse(const Material& m, float cos_i, float cos_o, float cos_d) {
-    const float fi = SchlickWeight(cos_i), fo = SchlickWeight(cos_o);
-    const float retro_reach = 2.0f * m.p[kRoughness] * cos_d * cos_d;
-    float shape = (1.0f - 0.5f * fi) * (1.0f - 0.5f * fo) + retro_reach * (fo + fi + fo * fi * (retro_reach - 1.0f));
-    if (m.p[kFlatness] > 0) {
-      // Hanrahan–Krueger's subsurface approximation, flattened by roughness.
-      const float f90 = 0.5f * retro_reach;
-      const float fss = (1.0f + (f90 - 1.0f) * fo) * (1.0f + (f90 - 1.0f) * fi);
-      const float subsurface = 1.25f * (fss * (1.0f / (cos_o + cos_i) - 0.5f) + 0.5f);
-      shape += (subsurface - shape) * m.p[kFlatness];
-    }
+    const float shape = pr::DiffuseShape(m.p[kRoughness], m.p[kFlatness], cos_i, cos_o, cos_d);
     Vec3 out = m.base * (m.diffuse_weight * shape * yarf::kInvPi);
-    if (m.p[kSheen] > 0 && m.p[kMetallic] < 1) {
-      const Vec3 sheen = Lerp(Vec3(1.0f, 1.0f, 1.0f), Tint(m.base), m.p[kSheenTint]);
-      out += sheen * (m.p[kSheen] * (1.0f - m.p[kMetallic]) * SchlickWeight(std::abs(cos_d)));
-    }
+    if (m.p[kSheen] > 0 && m.p[kMetallic] < 1)
+      out += pr::Sheen(m.base, m.p[kSheenTint], cos_d) * (m.p[kSheen] * (1.0f - m.p[kMetallic]));
     return out;
   }
 
