@@ -87,6 +87,24 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     if (!(a > 0 && a <= 10)) Fail(p.WhereIs(key), what + ": " + key + " must lie in (0, 10]");
     SetFloat(props, key, a);
   };
+  // A Disney model's weight in [0, high], a number or a texture: Mitsuba
+  // reads them unchecked, yarf's models refuse a constant outside, so
+  // clamp here.
+  auto disney_weight = [&](const std::string& key, int high) {
+    if (!p.Has(key)) return;
+    Textured value = p.TexturedColor(key, {0, 0, 0});
+    if (!value.IsTexture())
+      value.constant = ClampColour(value.constant, 0, high, [&] {
+        Warn(p.WhereIs(key), "clamp:" + key, what + ": " + key + " clamped into [0, " + std::to_string(high) + "]");
+      });
+    SetFloatOrTexture(props, key, value);
+  };
+  auto sampling_rate = [&](const std::string& key) {
+    if (!p.Has(key)) return;
+    const double rate = p.Float(key, 1.0);
+    if (!(rate >= 0)) Fail(p.WhereIs(key), what + ": " + key + " must be ≥ 0");
+    SetFloat(props, key, rate);
+  };
   // A nested BSDF stands for a wrapper (twosided, mask, bumpmap...).
   auto inner = [&]() -> const XmlElement& {
     const auto nested = p.Objects("bsdf");
@@ -220,18 +238,9 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
   } else if (type == "principled") {
     class_name = "principled";
     reflectance("base_color", "base_color", {0.5, 0.5, 0.5});
-    // Weights in [0, 1], each a number or a texture: Mitsuba reads them
-    // unchecked, yarf's model refuses a constant outside, so clamp here.
     for (const char* key : {"roughness", "anisotropic", "metallic", "spec_trans", "specular", "spec_tint", "sheen",
-                            "sheen_tint", "flatness", "clearcoat", "clearcoat_gloss"}) {
-      if (!p.Has(key)) continue;
-      Textured value = p.TexturedColor(key, {0, 0, 0});
-      if (!value.IsTexture())
-        value.constant = ClampColour(value.constant, 0, 1, [&] {
-          Warn(p.WhereIs(key), std::string("clamp:") + key, what + ": " + key + " clamped into [0, 1]");
-        });
-      SetFloatOrTexture(props, key, value);
-    }
+                            "sheen_tint", "flatness", "clearcoat", "clearcoat_gloss"})
+      disney_weight(key, 1);
     if (p.Has("eta") && p.Has("specular"))
       Fail(p.WhereIs("specular"), what + ": give eta or specular (the same index of refraction), not both");
     if (p.Has("eta")) {
@@ -241,17 +250,24 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     }
     for (const char* key : {"diffuse_reflectance_sampling_rate", "main_specular_sampling_rate",
                             "clearcoat_sampling_rate"})
-      if (p.Has(key)) {
-        const double rate = p.Float(key, 1.0);
-        if (!(rate >= 0)) Fail(p.WhereIs(key), what + ": " + key + " must be ≥ 0");
-        SetFloat(props, key, rate);
-      }
+      sampling_rate(key);
   } else if (type == "principledthin") {
-    Warn(e.where, "bsdf:" + type, "bsdf '" + type + "' approximated by a Lambertian of its base_color");
-    class_name = "lambertian";
-    reflectance("base_color", "reflectance", {0.5, 0.5, 0.5});
-    p.WarnUnused();
-    return assembly_.AddMaterial(name, class_name, std::move(props));
+    class_name = "principledthin";
+    reflectance("base_color", "base_color", {0.5, 0.5, 0.5});
+    for (const char* key : {"roughness", "anisotropic", "spec_trans", "spec_tint", "sheen", "sheen_tint", "flatness"})
+      disney_weight(key, 1);
+    // 2 gives all of the diffuse lobe to the other side.
+    disney_weight("diff_trans", 2);
+    // The sheet's index may vary over it (a texture), as in Mitsuba.
+    if (p.Has("eta")) {
+      const Textured eta = p.TexturedColor("eta", {1.5, 1.5, 1.5});
+      if (!eta.IsTexture() && !(eta.constant.r > 0 && eta.constant.r < 100))
+        Fail(p.WhereIs("eta"), what + ": eta must lie in (0, 100)");
+      SetFloatOrTexture(props, "eta", eta);
+    }
+    for (const char* key : {"specular_reflectance_sampling_rate", "specular_transmittance_sampling_rate",
+                            "diffuse_reflectance_sampling_rate", "diffuse_transmittance_sampling_rate"})
+      sampling_rate(key);
   } else {
     static const std::vector<std::string> kKnown = {
         "diffuse", "roughdiffuse", "twosided", "mask", "bumpmap", "normalmap", "blendbsdf", "null",

@@ -387,6 +387,30 @@ TEST(MitsubaImport, PrincipledBecomesThePrincipledModel) {
   }
 }
 
+TEST(MitsubaImport, PrincipledThinBecomesTheThinPrincipledModel) {
+  const ImportResult result = ImportMitsuba(
+      R"(<scene version="3.0.0"><bsdf type="principledthin" id="leaf"><rgb name="base_color" value="0.3, 0.6, 0.2"/>)"
+      R"(<float name="spec_trans" value="0.4"/><float name="diff_trans" value="2.5"/><float name="eta" value="1.33"/>)"
+      R"(<texture type="checkerboard" name="roughness"/><float name="sheen" value="0.2"/>)"
+      R"(<float name="diffuse_transmittance_sampling_rate" value="2"/></bsdf>)"
+      R"(<shape type="sphere" id="ball"><ref id="leaf"/></shape></scene>)",
+      "thin.xml");
+  const v1::Material& material = testing::MaterialOf(result.scene, testing::ShapeNamed(result.scene, "ball"));
+  EXPECT_EQ(material.class_name(), "principledthin");
+  const v1::Properties& props = material.properties();
+  const Vec3d base = testing::RgbProperty(props, "base_color");
+  EXPECT_NEAR(base.y, 0.6, 1e-9);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "spec_trans"), 0.4);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "eta"), 1.33);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "sheen"), 0.2);
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "diffuse_transmittance_sampling_rate"), 2.0);
+  EXPECT_EQ(props.values().at("roughness").value_case(), v1::Property::kReference);
+  // diff_trans reaches 2 (all of the diffuse lobe transmitted), no further.
+  EXPECT_DOUBLE_EQ(testing::FloatProperty(props, "diff_trans"), 2.0);
+  EXPECT_TRUE(testing::Warns(result, "thin.xml:1: bsdf 'principledthin': diff_trans clamped into [0, 2]"));
+  EXPECT_FALSE(testing::Warns(result, "approximated"));
+}
+
 }  // namespace
 }  // namespace yarf::importers
 
