@@ -75,6 +75,9 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   yarf::FactoryServiceImpl factory(registry, remote_classes, instances);
   yarf::IntersectServiceImpl intersect(job_scenes);
   yarf::JobSceneServiceImpl job_scene(job_scenes);
+  yarf::ShapeServiceImpl shape(job_scenes);
+  yarf::SampleSurfaceAreaServiceImpl sample_surface_area(job_scenes);
+  yarf::SampleSurfaceDirectionServiceImpl sample_surface_direction(job_scenes);
   yarf::IntegratorServiceImpl integrator(registry, instances);
   yarf::RootFinderServiceImpl root_finder(instances);
   yarf::SamplerServiceImpl sampler(instances);
@@ -96,7 +99,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   builder.SetMaxSendMessageSize(yarf::kMaxMessageBytes);
   for (grpc::Service* service : std::initializer_list<grpc::Service*>{
            &render, &registry_service, &component, &factory, &integrator, &root_finder, &sampler, &generator, &warp,
-           &surface_model, &emitter, &intersect, &job_scene, &asset_service})
+           &surface_model, &emitter, &intersect, &job_scene, &shape, &sample_surface_area,
+           &sample_surface_direction, &asset_service})
     builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server) {

@@ -47,11 +47,28 @@ std::vector<float> BatchDecoder::Floats(const v1::Array& array, std::initializer
                                         const std::string& what) {
   size_t rows = 0;
   std::vector<float> values = FloatsOf(array, trailing, what, rows);
+  CheckRows(rows, what);
+  return values;
+}
+
+std::vector<uint32_t> BatchDecoder::Uint32s(const v1::Array& array, const std::string& what) {
+  if (array.dtype() != v1::Array::UINT32 || array.shape_size() != 1)
+    throw Error(what + ": expected a UINT32 array of shape [N]");
+  const size_t rows = array.shape(0);
+  if (array.data().size() != rows * sizeof(uint32_t))
+    throw Error(what + ": " + std::to_string(array.data().size()) + " bytes for " + std::to_string(rows) +
+                " uint32 values");
+  CheckRows(rows, what);
+  std::vector<uint32_t> values(rows);
+  std::memcpy(values.data(), array.data().data(), array.data().size());
+  return values;
+}
+
+void BatchDecoder::CheckRows(size_t rows, const std::string& what) {
   if (!first_ && rows != rows_)
     throw Error(what + " has " + std::to_string(rows) + " rows, the batch " + std::to_string(rows_));
   rows_ = rows;
   first_ = false;
-  return values;
 }
 
 v1::Array FloatArray(const std::vector<float>& values, std::initializer_list<uint32_t> shape) {

@@ -22,9 +22,13 @@ class BatchDecoder {
  public:
   std::vector<float> Floats(const v1::Array& array, std::initializer_list<uint32_t> trailing,
                             const std::string& what);
+  // A UINT32 array of shape [N].
+  std::vector<uint32_t> Uint32s(const v1::Array& array, const std::string& what);
   uint32_t rows() const { return uint32_t(rows_); }
 
  private:
+  void CheckRows(size_t rows, const std::string& what);
+
   size_t rows_ = 0;
   bool first_ = true;
 };

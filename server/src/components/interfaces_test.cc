@@ -8,6 +8,7 @@
 #include "yarf/geometry.h"
 #include "yarf/math.h"
 #include "yarf/medium.h"
+#include "yarf/shape.h"
 #include "yarf/surface.h"
 #include "yarf/transport.h"
 #include "yarf/v1/geometry.pb.h"
@@ -48,6 +49,9 @@ TEST(Interfaces, MirrorTheirProtoServices) {
   ExpectMirrorsService<SurfaceModel>();
   ExpectMirrorsService<Emitter>();
   ExpectMirrorsService<Intersector>();
+  ExpectMirrorsService<Shape>();
+  ExpectMirrorsService<SurfaceAreaSampler>();
+  ExpectMirrorsService<SurfaceDirectionSampler>();
   ExpectMirrorsService<Transport>();
   ExpectMirrorsService<Medium>();
 }

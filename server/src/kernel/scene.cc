@@ -168,7 +168,6 @@ void KernelScene::Build(RTCScene scene) const {
 
 void KernelScene::AddLight(const Emitter* emitter, const Transform& to_world) {
   Light light;
-  light.first = light.end = uint32_t(emitting_.size());
   light.emitter = emitter;
   light.kind = LightKind::kPoint;
   light.position = to_world.Point(Vec3(0, 0, 0));
@@ -239,34 +238,36 @@ void KernelScene::AddSurfaceLights() {
     if (!s.look.emitter) continue;
     if (s.moving) throw Error("shape '" + s.look.name + "' moves and emits: moving lights are not supported");
     Light light;
-    light.first = uint32_t(emitting_.size());
+    light.shape = id;
     light.emitter = s.look.emitter;
-    const uint32_t count = s.kind == Kind::kSphere ? 1 : uint32_t(meshes_[s.mesh].TriangleCount());
-    for (uint32_t p = 0; p < count; ++p) {
-      EmittingPrimitive e{id, p, s.kind == Kind::kSphere, {}, {}, {}, 0, {}, 0};
-      if (e.sphere) {
-        e.p0 = s.placed ? s.to_world.Point(s.center) : s.center;
-        e.radius = s.radius * (s.placed ? float(std::cbrt(std::abs(s.to_world.Determinant3()))) : 1.0f);
-      } else {
-        Vec3 v[3];
-        Triangle(s, p, v);
-        e.p0 = v[0], e.p1 = v[1], e.p2 = v[2];
-        e.normal = Normal(s, p, v[0], 0);
-      }
-      const float area = PrimitiveArea(s, p);
-      light.area += area;
-      light.position += (e.sphere ? e.p0 : (e.p0 + e.p1 + e.p2) / 3.0f) * area;
-      light.axis += e.normal * area;
-      e.cdf = light.area;
-      emitting_.push_back(e);
-    }
-    light.end = uint32_t(emitting_.size());
-    if (!(light.area > 0)) continue;
-    light.position = light.position / light.area;
-    light.axis = Length(light.axis) > 0 ? Normalize(light.axis) : emitting_[light.first].normal;
+    light.surface = MakeSurface(id);
+    if (!(light.surface->Area() > 0)) continue;
     shape_light_[id] = uint32_t(lights_.size());
-    lights_.push_back(light);
+    lights_.push_back(std::move(light));
   }
+}
+
+std::unique_ptr<ShapeSurface> KernelScene::MakeSurface(uint32_t shape) const {
+  const ShapeRecord& s = shapes_.at(shape);
+  if (s.kind == Kind::kSphere) {
+    SphereGeometry sphere;
+    sphere.center = s.placed ? s.to_world.Point(s.center) : s.center;
+    // Spheres are placed by similarity transforms: scale by the cube root
+    // of the determinant.
+    sphere.radius = s.radius * (s.placed ? float(std::cbrt(std::abs(s.to_world.Determinant3()))) : 1.0f);
+    sphere.axes = s.axes;
+    sphere.flip_normals = s.look.flip_normals;
+    return std::make_unique<SphereSurface>(sphere, !spheres_by_area_);
+  }
+  const uint32_t count = uint32_t(meshes_[s.mesh].TriangleCount());
+  std::vector<std::array<Vec3, 3>> corners(count);
+  std::vector<Vec3> normals(count);
+  for (uint32_t p = 0; p < count; ++p) {
+    Triangle(s, p, corners[p].data());
+    normals[p] = Normal(s, p, corners[p][0], 0);
+  }
+  return std::make_unique<MeshSurface>(std::move(corners), std::move(normals), meshes_[s.mesh],
+                                       triangles_by_solid_angle_);
 }
 
 float KernelScene::EstimatePower(const Light& light) const {
@@ -302,7 +303,7 @@ float KernelScene::EstimatePower(const Light& light) const {
     if (std::isfinite(value) && value > 0) sum += value;
   }
   double power = sum / n;
-  if (light.kind == LightKind::kSurface) power *= light.area;
+  if (light.kind == LightKind::kSurface) power *= light.surface->Area();
   if (light.kind == LightKind::kDirectional || light.kind == LightKind::kEnvironment)
     power *= kPi * double(bounds_radius_) * bounds_radius_;
   return std::isfinite(power) ? float(power) : 0.0f;
@@ -328,9 +329,7 @@ void KernelScene::ChooseLightsByPower() {
     lights_[l].cdf = l + 1 == lights_.size() ? 1.0f : float(running / total);
   }
   for (const Light& light : lights_)
-    if (light.kind == LightKind::kSurface)
-      for (uint32_t e = light.first; e < light.end; ++e)
-        shape_light_pdf_[emitting_[e].shape] = light.probability / light.area;
+    if (light.kind == LightKind::kSurface) shape_light_pdf_[light.shape] = light.probability / light.surface->Area();
 }
 
 void KernelScene::Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const {
@@ -428,29 +427,13 @@ Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 posi
   return shape.look.flip_normals ? -n : n;
 }
 
-void KernelScene::SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hit& hit) {
-  // Mitsuba's parameterisation in the sphere's own frame: u = φ/2π from
-  // its x axis, v = θ/π from its z axis.
-  const Vec3 local(Dot(d, shape.axes[0]), Dot(d, shape.axes[1]), Dot(d, shape.axes[2]));
-  float phi = std::atan2(local.y, local.x);
-  if (phi < 0) phi += 2 * kPi;
-  const float cos_theta = std::clamp(local.z, -1.0f, 1.0f), sin_theta = std::sqrt(1 - cos_theta * cos_theta);
-  hit.u = phi * (0.5f * kInvPi);
-  hit.v = std::acos(cos_theta) * kInvPi;
-  const Vec3 along_phi = shape.axes[0] * (-local.y) + shape.axes[1] * local.x;
-  const Vec3 along_theta = shape.axes[0] * (cos_theta * std::cos(phi)) + shape.axes[1] * (cos_theta * std::sin(phi)) -
-                           shape.axes[2] * sin_theta;
-  hit.dpdu = along_phi * (2 * kPi * r);
-  hit.dpdv = along_theta * (kPi * r);
-}
-
 void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const {
   hit.shading_normal = hit.normal;
   hit.parameterised = shape.kind == Kind::kSphere;
   if (shape.kind == Kind::kSphere) {
     const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
     const float r = Length(position - center);
-    SphereParameters(shape, r > 0 ? (position - center) / r : shape.axes[2], r, hit);
+    SphereParameters(shape.axes, r > 0 ? (position - center) / r : shape.axes[2], r, hit);
     return;
   }
   const TriangleMesh& mesh = meshes_[shape.mesh];
@@ -649,29 +632,12 @@ void KernelScene::BuildLightBvh() {
         // Its emitter may be a spot: every direction, conservatively.
         b.lower = b.upper = light.position;
         break;
-      case LightKind::kSurface: {
-        const EmittingPrimitive& first = emitting_[light.first];
-        if (first.sphere) {
-          b.lower = first.p0 - Vec3(first.radius, first.radius, first.radius);
-          b.upper = first.p0 + Vec3(first.radius, first.radius, first.radius);
-          break;  // normals in every direction
-        }
-        b.lower = b.upper = first.p0;
-        for (uint32_t e = light.first; e < light.end; ++e)
-          for (const Vec3 v : {emitting_[e].p0, emitting_[e].p1, emitting_[e].p2}) {
-            b.lower = Vec3(std::min(b.lower.x, v.x), std::min(b.lower.y, v.y), std::min(b.lower.z, v.z));
-            b.upper = Vec3(std::max(b.upper.x, v.x), std::max(b.upper.y, v.y), std::max(b.upper.z, v.z));
-          }
-        // The cone of the triangles' normals around the mean one; an
-        // emitter may shine from both sides (two_sided), so the bound is.
-        b.w = light.axis;
-        b.cos_theta_o = 1;
-        for (uint32_t e = light.first; e < light.end; ++e)
-          b.cos_theta_o = std::min(b.cos_theta_o, Dot(b.w, emitting_[e].normal));
-        if (!(Length(b.w) > 0.5f) || !(b.cos_theta_o > -1)) b.w = Vec3(0, 0, 1), b.cos_theta_o = -1;
-        b.cos_theta_o = std::max(-1.0f, b.cos_theta_o - 1e-4f);  // rounding of the normals
+      case LightKind::kSurface:
+        light.surface->Bounds(b.lower, b.upper);
+        // The cone of the surface's normals; an emitter may shine from
+        // both sides (two_sided), so the bound is.
+        if (!light.surface->NormalCone(b.w, b.cos_theta_o)) b.w = Vec3(0, 0, 1), b.cos_theta_o = -1;
         break;
-      }
     }
   }
   light_bvh_ = LightBvh(bounds);
@@ -709,51 +675,17 @@ float KernelScene::ProbabilityFrom(uint32_t light, Vec3 p) const {
   return (1 - infinite_probability_) * light_bvh_.Pmf(p, light);
 }
 
-uint32_t KernelScene::PickPrimitive(const Light& light, float u_primitive) const {
-  const auto begin = emitting_.begin() + light.first, end = emitting_.begin() + light.end;
-  const auto it = std::upper_bound(begin, end, u_primitive * light.area,
-                                   [](float target, const EmittingPrimitive& e) { return target < e.cdf; });
-  return uint32_t((it == end ? end - 1 : it) - emitting_.begin());
-}
-
-float KernelScene::PrimitiveShare(const Light& light, uint32_t primitive) const {
-  const float below = primitive > light.first ? emitting_[primitive - 1].cdf : 0.0f;
-  return (emitting_[primitive].cdf - below) / light.area;
-}
-
-bool KernelScene::TriangleBySolidAngle(const EmittingPrimitive& e, Vec3 p, float& solid_angle) const {
-  // pbrt-v4's bounds: below, area sampling is as good and cheaper; above,
-  // the spherical triangle is too close to a hemisphere to sample well.
-  constexpr float kMinSolidAngle = 3e-4f, kMaxSolidAngle = 6.22f;
-  if (e.sphere || !triangles_by_solid_angle_) return false;
-  const Vec3 a = e.p0 - p, b = e.p1 - p, c = e.p2 - p;
-  if (!(Length(a) > 0 && Length(b) > 0 && Length(c) > 0)) return false;
-  solid_angle = SphericalTriangleArea(Normalize(a), Normalize(b), Normalize(c));
-  return solid_angle > kMinSolidAngle && solid_angle < kMaxSolidAngle;
-}
-
 LightSample KernelScene::PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const {
+  const float u[3] = {u_primitive, u0, u1};
+  SurfaceSample at;
+  light.surface->Sample(u, {&at, 1});
   LightSample s;
   s.emitter = light.emitter;
-  const EmittingPrimitive& e = emitting_[PickPrimitive(light, u_primitive)];
-  s.shape = e.shape;
-  s.pdf = shape_light_pdf_[e.shape];
-  if (e.sphere) {
-    const Vec3 d = SampleUniformSphere(u0, u1);
-    s.position = e.p0 + d * e.radius;
-    s.normal = shapes_[e.shape].look.flip_normals ? -d : d;
-    Hit at;
-    SphereParameters(shapes_[e.shape], d, e.radius, at);
-    s.u = at.u, s.v = at.v;
-    return s;
-  }
-  const auto b = SampleUniformTriangle(u0, u1);
-  s.position = e.p0 * b[0] + e.p1 * b[1] + e.p2 * (1 - b[0] - b[1]);
-  float uv[2];
-  const TriangleMesh& mesh = meshes_[shapes_[e.shape].mesh];
-  TriangleUvAt(mesh.indices, mesh.uvs, e.primitive, b[1], 1 - b[0] - b[1], uv);
-  s.u = uv[0], s.v = uv[1];
-  s.normal = e.normal;
+  s.shape = light.shape;
+  s.pdf = shape_light_pdf_[light.shape];
+  s.position = at.position;
+  s.normal = at.normal;
+  s.u = at.u, s.v = at.v;
   return s;
 }
 
@@ -790,31 +722,6 @@ Vec3 KernelScene::InfiniteLightOrigin(Vec3 d, float u0, float u1, float& pdf_are
   return bounds_center_ + (disk.s * x + disk.t * y - d) * bounds_radius_;
 }
 
-namespace {
-
-// Whether p lies outside a sphere (centre c, radius r) by enough that the
-// cone of directions toward it is well defined; spheres seen from inside
-// are sampled by area.
-bool OutsideSphere(Vec3 p, Vec3 c, float r) {
-  const Vec3 d = c - p;
-  return Dot(d, d) > r * r * 1.0001f;
-}
-
-// cos θmax of the cone a sphere subtends from p (outside it).
-float ConeCosine(Vec3 p, Vec3 c, float r) {
-  const Vec3 d = c - p;
-  const float sin2 = r * r / Dot(d, d);
-  return std::sqrt(std::max(0.0f, 1 - sin2));
-}
-
-}  // namespace
-
-bool KernelScene::SphereByCone(const Light& light, Vec3 p) const {
-  if (spheres_by_area_ || light.kind != LightKind::kSurface) return false;
-  const EmittingPrimitive& first = emitting_[light.first];
-  return first.sphere && OutsideSphere(p, first.p0, first.radius);
-}
-
 void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
                                    std::span<LightDirection> out) const {
   std::vector<uint32_t> from_environment;
@@ -825,8 +732,7 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     const Vec3 p = points[k];
     const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
     float u_primitive = 0, probability = 0;
-    // Set where a triangle is sampled by its solid angle (a density per
-    // solid angle already).
+    // A surface light's density per solid angle.
     float solid_angle_pdf = 0;
     const uint32_t index = PickLightFor(p, uniform[3 * k], u_primitive, probability);
     if (index == kNoLight) continue;
@@ -850,52 +756,19 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
         s.delta = true;
         break;
       case LightKind::kSurface: {
-        const EmittingPrimitive& first = emitting_[light.first];
-        if (SphereByCone(light, p)) {
-          // By the solid angle the sphere subtends (uniform in its cone),
-          // the point the direction meets on its near side.
-          const Vec3 to_center = first.p0 - p;
-          const float cos_max = ConeCosine(p, first.p0, first.radius);
-          const Vec3 dir = Frame(Normalize(to_center)).ToWorld(SampleUniformCone(u0, u1, cos_max));
-          const float b = Dot(dir, to_center), r2 = first.radius * first.radius;
-          const float t = b - std::sqrt(std::max(0.0f, r2 - (Dot(to_center, to_center) - b * b)));
-          const Vec3 radial = Normalize(p + dir * t - first.p0);
-          s.position = first.p0 + radial * first.radius;
-          s.normal = shapes_[first.shape].look.flip_normals ? -radial : radial;
-          s.shape = first.shape;
-          Hit at;
-          SphereParameters(shapes_[first.shape], radial, first.radius, at);
-          s.u = at.u, s.v = at.v;
-          s.direction = dir;
-          s.distance = Length(s.position - p);
-          s.pdf = probability * UniformConePdf(1, cos_max);
-          s.w = Frame(s.normal).ToLocal(-dir);
+        // The surface's own sampler, by solid angle where it can.
+        const float u[3] = {u_primitive, u0, u1};
+        SurfaceSample at;
+        light.surface->Sample({&p, 1}, u, {&at, 1});
+        s.position = at.position;
+        s.normal = at.normal;
+        s.shape = light.shape;
+        s.u = at.u, s.v = at.v;
+        solid_angle_pdf = probability * at.pdf;
+        if (!(solid_angle_pdf > 0)) {
+          s.emitter = nullptr;
           continue;
         }
-        if (!first.sphere) {
-          // A triangle that subtends a fair solid angle: uniformly in it.
-          const uint32_t picked = PickPrimitive(light, u_primitive);
-          const EmittingPrimitive& e = emitting_[picked];
-          const Vec3 corners[3] = {e.p0, e.p1, e.p2};
-          float solid_angle = 0;
-          std::array<float, 3> b;
-          if (TriangleBySolidAngle(e, p, solid_angle) && SampleSphericalTriangle(corners, p, u0, u1, b)) {
-            s.position = e.p0 * b[0] + e.p1 * b[1] + e.p2 * b[2];
-            s.normal = e.normal;
-            s.shape = e.shape;
-            float uv[2];
-            const TriangleMesh& mesh = meshes_[shapes_[e.shape].mesh];
-            TriangleUvAt(mesh.indices, mesh.uvs, e.primitive, b[1], b[2], uv);
-            s.u = uv[0], s.v = uv[1];
-            solid_angle_pdf = probability * PrimitiveShare(light, picked) / solid_angle;
-            break;
-          }
-        }
-        const LightSample area = PointOnSurfaceLight(light, u_primitive, u0, u1);
-        s.position = area.position;
-        s.normal = area.normal;
-        s.shape = area.shape;
-        s.u = area.u, s.v = area.v;
         break;
       }
     }
@@ -908,15 +781,7 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     }
     s.direction = d / s.distance;
     s.w = Frame(s.normal).ToLocal(-s.direction);
-    const float d2 = s.distance * s.distance;
-    if (s.delta) {
-      s.pdf = probability * d2;
-    } else if (solid_angle_pdf > 0) {
-      s.pdf = solid_angle_pdf;
-    } else {
-      const float cos_light = std::abs(s.w.z);
-      s.pdf = cos_light > 0 ? probability / light.area * d2 / cos_light : 0.0f;
-    }
+    s.pdf = s.delta ? probability * s.distance * s.distance : solid_angle_pdf;
   }
   if (from_environment.empty()) return;
   const Light& environment = lights_[environment_];
@@ -939,18 +804,13 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
 float KernelScene::LightPdfFrom(const Ray& ray, const Hit& hit) const {
   if (!hit.Found() || hit.shape >= shape_light_.size() || shape_light_[hit.shape] == kNoLight) return 0;
   const Light& light = lights_[shape_light_[hit.shape]];
-  const EmittingPrimitive& first = emitting_[light.first];
-  const float probability = ProbabilityFrom(shape_light_[hit.shape], ray.origin);
-  if (SphereByCone(light, ray.origin))
-    return probability * UniformConePdf(1, ConeCosine(ray.origin, first.p0, first.radius));
-  if (!first.sphere && light.first + hit.primitive < light.end) {
-    const uint32_t primitive = light.first + hit.primitive;
-    float solid_angle = 0;
-    if (TriangleBySolidAngle(emitting_[primitive], ray.origin, solid_angle))
-      return probability * PrimitiveShare(light, primitive) / solid_angle;
-  }
-  const float cos_light = std::abs(Dot(hit.normal, ray.direction));
-  return cos_light > 0 ? probability / light.area * hit.t * hit.t / cos_light : 0.0f;
+  SurfaceSample at;
+  at.position = ray.origin + ray.direction * hit.t;
+  at.normal = hit.normal;
+  at.primitive = hit.primitive;
+  float pdf = 0;
+  light.surface->Pdf({&ray.origin, 1}, {&at, 1}, {&pdf, 1});
+  return ProbabilityFrom(shape_light_[hit.shape], ray.origin) * pdf;
 }
 
 void KernelScene::Escaped(std::span<const Vec3> directions, std::span<Vec3> radiance, std::span<float> pdf) const {
@@ -974,6 +834,7 @@ void KernelScene::Escaped(std::span<const Vec3> directions, std::span<Vec3> radi
 LightDirection KernelScene::LightPoint(uint32_t index, Vec3 seen_from) const {
   const Light& light = lights_[index];
   LightDirection s;
+  float gathered_area = 0;
   switch (light.kind) {
     case LightKind::kEnvironment:
       return s;
@@ -991,17 +852,11 @@ LightDirection KernelScene::LightPoint(uint32_t index, Vec3 seen_from) const {
       s.delta = true;
       break;
     case LightKind::kSurface: {
-      const EmittingPrimitive& first = emitting_[light.first];
-      s.shape = first.shape;
-      if (first.sphere) {
-        const Vec3 to = seen_from - first.p0;
-        const Vec3 d = Length(to) > 0 ? Normalize(to) : Vec3(0, 0, 1);
-        s.position = first.p0 + d * first.radius;
-        s.normal = shapes_[first.shape].look.flip_normals ? -d : d;
-      } else {
-        s.position = light.position;
-        s.normal = light.axis;
-      }
+      const SurfaceSample at = light.surface->Gathered(seen_from, gathered_area);
+      s.shape = light.shape;
+      s.position = at.position;
+      s.normal = at.normal;
+      s.u = at.u, s.v = at.v;
       break;
     }
   }
@@ -1017,10 +872,8 @@ LightDirection KernelScene::LightPoint(uint32_t index, Vec3 seen_from) const {
     return s;
   }
   // As if the light's whole area (a sphere: its cross-section) emitted here.
-  const EmittingPrimitive& first = emitting_[light.first];
-  const float area = first.sphere ? kPi * first.radius * first.radius : light.area;
   const float cos_light = std::abs(s.w.z);
-  s.pdf = cos_light > 0 ? d2 / (area * cos_light) : 0.0f;
+  s.pdf = cos_light > 0 ? d2 / (gathered_area * cos_light) : 0.0f;
   return s;
 }
 

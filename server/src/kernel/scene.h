@@ -16,6 +16,7 @@
 #include "kernel/embree_device.h"
 #include "kernel/light_bvh.h"
 #include "kernel/mesh_io.h"
+#include "kernel/shape_surfaces.h"
 #include "yarf/texture.h"
 #include "yarf/transport.h"
 
@@ -138,6 +139,9 @@ class KernelScene final : public SceneView {
   void SetServiceHandle(uint64_t handle) { service_handle_ = handle; }
 
   uint32_t ShapeCount() const override { return uint32_t(shapes_.size()); }
+  // Shape `shape`'s surface, as placed at shutter open, sampled as this
+  // scene samples its lights.
+  std::unique_ptr<ShapeSurface> MakeSurface(uint32_t shape) const;
   uint32_t PrimitiveCount(uint32_t shape) const override;
   bool Triangle(uint32_t shape, uint32_t primitive, Vec3 corners[3]) const override;
   // The committed Embree scene (for measuring Embree itself).
@@ -180,9 +184,6 @@ class KernelScene final : public SceneView {
   // Fills hit's uv, shading normal and ∂p/∂u, ∂p/∂v (its shape, primitive,
   // barycentrics and geometric normal set) at `position`.
   void Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const;
-  // A sphere's uv and ∂p/∂u, ∂p/∂v at unit direction d from its centre
-  // (world), radius r.
-  static void SphereParameters(const ShapeRecord& shape, Vec3 d, float r, Hit& hit);
   // The lights of the emitting shapes, after the point and infinite ones.
   void AddSurfaceLights();
   // Each light's power estimated from its emitter, and the probabilities
@@ -203,15 +204,6 @@ class KernelScene final : public SceneView {
   // A point uniform in area on surface light `light` (u_primitive chooses
   // its primitive).
   LightSample PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const;
-  struct EmittingPrimitive;
-  // The primitive of `light` u_primitive picks, in proportion to area.
-  uint32_t PickPrimitive(const Light& light, float u_primitive) const;
-  // The probability of that pick: the primitive's share of its light's area.
-  float PrimitiveShare(const Light& light, uint32_t primitive) const;
-  // Whether light samples from p find emitting triangle `e` by the solid
-  // angle it subtends (as pbrt-v4: for one neither tiny nor huge from
-  // p, when triangles are sampled so), and that solid angle.
-  bool TriangleBySolidAngle(const EmittingPrimitive& e, Vec3 p, float& solid_angle) const;
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
   float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
 
@@ -236,28 +228,15 @@ class KernelScene final : public SceneView {
   std::vector<ShapeRecord> shapes_;
   // First shape id of each world-level Embree geometry (by geomID).
   std::vector<uint32_t> geometry_base_;
-  // Emitting primitives in world space, ready for light sampling, with
-  // the running sum of their areas within their light.
-  struct EmittingPrimitive {
-    uint32_t shape;
-    uint32_t primitive;
-    bool sphere;
-    Vec3 p0, p1, p2;  // triangle corners; p0 is a sphere's centre
-    float radius;
-    Vec3 normal;  // a triangle's unit normal
-    float cdf;
-  };
-  std::vector<EmittingPrimitive> emitting_;
-  // A light: an emitting shape's primitives [first, end) in emitting_, a
-  // point light, or a light at infinity.
+  // A light: an emitting shape's surface, a point light, or a light at
+  // infinity.
   enum class LightKind { kSurface, kPoint, kDirectional, kEnvironment };
   struct Light {
     LightKind kind = LightKind::kSurface;
-    uint32_t first = 0, end = 0;
-    float area = 0;
+    uint32_t shape = kNoShape;
+    std::shared_ptr<const ShapeSurface> surface;
     const Emitter* emitter = nullptr;
-    // Point lights: where they are and their axis; surfaces: the
-    // area-weighted centroid and mean normal.
+    // Point lights: where they are and their axis.
     Vec3 position, axis;
     // Lights at infinity: the emitter's local frame in the world.
     Frame frame{Vec3(0, 0, 1)};
@@ -275,8 +254,6 @@ class KernelScene final : public SceneView {
   float infinite_probability_ = 0;
   bool spheres_by_area_ = false;
   bool triangles_by_solid_angle_ = false;
-  // Whether light samples from p find the sphere light `light` by its cone.
-  bool SphereByCone(const Light& light, Vec3 p) const;
   // The sphere around the scene and the camera that lights at infinity
   // send their light paths through.
   Vec3 bounds_center_;

@@ -80,6 +80,49 @@ void FillHits(const std::vector<Hit>& hits, v1::IntersectReply* reply) {
   *reply->mutable_primitive_ids() = Uint32Array(primitives, {n});
 }
 
+// Points in [0,1)³, as a sampler's uniform numbers must be.
+void CheckUniform(const std::vector<float>& u) {
+  for (size_t i = 0; i < u.size(); ++i)
+    if (!(u[i] >= 0 && u[i] < 1)) throw Error("uniform " + std::to_string(i / 3) + " is not in [0, 1)");
+}
+
+std::vector<Vec3> PointsOf(const std::vector<float>& xyz, const std::string& what) {
+  std::vector<Vec3> points(xyz.size() / 3);
+  for (size_t k = 0; k < points.size(); ++k) {
+    points[k] = Vec3::Load(&xyz[3 * k]);
+    if (!std::isfinite(points[k].x + points[k].y + points[k].z))
+      throw Error(what + " " + std::to_string(k) + " is not finite");
+  }
+  return points;
+}
+
+// The surface a sampling request names; a shape without area has no
+// density to sample by.
+const ShapeSurface& SampledSurface(const ServedScene& served, uint32_t shape) {
+  const ShapeSurface& surface = served.Surface(shape);
+  if (!(surface.Area() > 0)) throw Error("shape " + std::to_string(shape) + " has no area to sample");
+  return surface;
+}
+
+void FillSurfaceSamples(const std::vector<SurfaceSample>& samples, v1::SurfaceSampleReply* reply) {
+  const uint32_t n = uint32_t(samples.size());
+  std::vector<float> positions(3 * n), normals(3 * n), pdf(n), uv(2 * n);
+  std::vector<uint32_t> primitives(n);
+  for (uint32_t k = 0; k < n; ++k) {
+    const SurfaceSample& s = samples[k];
+    s.position.Store(&positions[3 * k]);
+    s.normal.Store(&normals[3 * k]);
+    pdf[k] = std::isfinite(s.pdf) ? s.pdf : 0.0f;
+    uv[2 * k] = s.u, uv[2 * k + 1] = s.v;
+    primitives[k] = s.primitive;
+  }
+  *reply->mutable_positions() = FloatArray(positions, {n, 3});
+  *reply->mutable_normals() = FloatArray(normals, {n, 3});
+  *reply->mutable_pdf() = FloatArray(pdf, {n});
+  *reply->mutable_uv() = FloatArray(uv, {n, 2});
+  *reply->mutable_primitive_ids() = Uint32Array(primitives, {n});
+}
+
 // Radiance of emitters toward local directions, one call per emitter.
 void EmitterRadiance(const std::vector<const Emitter*>& emitters, const std::vector<float>& w,
                      const std::vector<float>& uv, std::vector<float>& radiance) {
@@ -160,6 +203,75 @@ grpc::Status IntersectServiceImpl::CrossSection(grpc::ServerContext*, const v1::
     *reply->mutable_offsets() = offsets_array;
     *reply->mutable_t() = FloatArray(t, {uint32_t(t.size())});
     *reply->mutable_shape_ids() = Uint32Array(shapes, {uint32_t(shapes.size())});
+  });
+}
+
+grpc::Status ShapeServiceImpl::Bounds(grpc::ServerContext*, const v1::ShapeRequest* request,
+                                      v1::BoundsReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    Vec3 lower, upper;
+    served.Surface(request->shape()).Bounds(lower, upper);
+    for (auto [to, from] : {std::pair{reply->mutable_lower(), lower}, std::pair{reply->mutable_upper(), upper}}) {
+      to->set_x(from.x);
+      to->set_y(from.y);
+      to->set_z(from.z);
+    }
+  });
+}
+
+grpc::Status ShapeServiceImpl::Area(grpc::ServerContext*, const v1::ShapeRequest* request, v1::AreaReply* reply) {
+  return WithScene(scenes_, request->handle(),
+                   [&](const ServedScene& served) { reply->set_area(served.Surface(request->shape()).Area()); });
+}
+
+grpc::Status SampleSurfaceAreaServiceImpl::Sample(grpc::ServerContext*, const v1::SurfaceSampleRequest* request,
+                                                  v1::SurfaceSampleReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto u = batch.Floats(request->uniform(), {3}, "uniform");
+    CheckRows(batch.rows());
+    CheckUniform(u);
+    std::vector<SurfaceSample> samples(batch.rows());
+    SampledSurface(served, request->shape()).Sample(u, samples);
+    FillSurfaceSamples(samples, reply);
+  });
+}
+
+grpc::Status SampleSurfaceDirectionServiceImpl::Sample(grpc::ServerContext*, const v1::SurfaceSampleRequest* request,
+                                                       v1::SurfaceSampleReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto u = batch.Floats(request->uniform(), {3}, "uniform");
+    const auto from = PointsOf(batch.Floats(request->reference_points(), {3}, "reference_points"), "reference point");
+    CheckRows(batch.rows());
+    CheckUniform(u);
+    std::vector<SurfaceSample> samples(batch.rows());
+    SampledSurface(served, request->shape()).Sample(from, u, samples);
+    FillSurfaceSamples(samples, reply);
+  });
+}
+
+grpc::Status SampleSurfaceDirectionServiceImpl::Pdf(grpc::ServerContext*, const v1::SurfacePdfRequest* request,
+                                                    v1::SurfacePdfReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto from = PointsOf(batch.Floats(request->reference_points(), {3}, "reference_points"), "reference point");
+    const auto positions = PointsOf(batch.Floats(request->positions(), {3}, "positions"), "position");
+    const auto primitives = batch.Uint32s(request->primitive_ids(), "primitive_ids");
+    const uint32_t n = batch.rows();
+    CheckRows(n);
+    const ShapeSurface& surface = SampledSurface(served, request->shape());
+    // The normal is the surface's own: the primitive gives it.
+    std::vector<SurfaceSample> at(n);
+    for (uint32_t k = 0; k < n; ++k) {
+      at[k].position = positions[k];
+      at[k].primitive = primitives[k];
+    }
+    std::vector<float> pdf(n);
+    surface.Pdf(from, at, pdf);
+    for (float& p : pdf)
+      if (!std::isfinite(p)) p = 0;
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
   });
 }
 

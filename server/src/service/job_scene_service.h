@@ -19,6 +19,37 @@ class IntersectServiceImpl final : public v1::Intersect::Service {
   const JobScenes& scenes_;
 };
 
+// Shape, SampleSurfaceArea and SampleSurfaceDirection for the shapes of
+// running jobs: the kernel's own surfaces and densities.
+class ShapeServiceImpl final : public v1::Shape::Service {
+ public:
+  explicit ShapeServiceImpl(const JobScenes& scenes) : scenes_(scenes) {}
+  grpc::Status Bounds(grpc::ServerContext*, const v1::ShapeRequest*, v1::BoundsReply*) override;
+  grpc::Status Area(grpc::ServerContext*, const v1::ShapeRequest*, v1::AreaReply*) override;
+
+ private:
+  const JobScenes& scenes_;
+};
+
+class SampleSurfaceAreaServiceImpl final : public v1::SampleSurfaceArea::Service {
+ public:
+  explicit SampleSurfaceAreaServiceImpl(const JobScenes& scenes) : scenes_(scenes) {}
+  grpc::Status Sample(grpc::ServerContext*, const v1::SurfaceSampleRequest*, v1::SurfaceSampleReply*) override;
+
+ private:
+  const JobScenes& scenes_;
+};
+
+class SampleSurfaceDirectionServiceImpl final : public v1::SampleSurfaceDirection::Service {
+ public:
+  explicit SampleSurfaceDirectionServiceImpl(const JobScenes& scenes) : scenes_(scenes) {}
+  grpc::Status Sample(grpc::ServerContext*, const v1::SurfaceSampleRequest*, v1::SurfaceSampleReply*) override;
+  grpc::Status Pdf(grpc::ServerContext*, const v1::SurfacePdfRequest*, v1::SurfacePdfReply*) override;
+
+ private:
+  const JobScenes& scenes_;
+};
+
 class JobSceneServiceImpl final : public v1::JobScene::Service {
  public:
   explicit JobSceneServiceImpl(const JobScenes& scenes) : scenes_(scenes) {}

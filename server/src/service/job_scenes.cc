@@ -1,5 +1,7 @@
 #include "service/job_scenes.h"
 
+#include "yarf/error.h"
+
 namespace yarf {
 namespace {
 
@@ -40,6 +42,16 @@ bool ServedScene::Splat(const FilmSamples& samples) const {
   if (!target_) return false;
   target_->Accumulate(samples);
   return true;
+}
+
+const ShapeSurface& ServedScene::Surface(uint32_t shape) const {
+  if (shape >= scene_->ShapeCount())
+    throw Error("shape " + std::to_string(shape) + " is not one of the scene's " +
+                std::to_string(scene_->ShapeCount()) + " shapes");
+  std::lock_guard lock(surfaces_mutex_);
+  auto& surface = surfaces_[shape];
+  if (!surface) surface = scene_->MakeSurface(shape);
+  return *surface;
 }
 
 void ServedScene::End() {

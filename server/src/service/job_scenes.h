@@ -25,6 +25,9 @@ class ServedScene {
   const std::vector<uint64_t>& material_handles() const { return material_handles_; }
   // Adds splats to the job's film; false once the job has ended.
   bool Splat(const FilmSamples& samples) const;
+  // Shape `shape`'s surface (Shape and its samplers), made at the first
+  // call; throws Error for a shape the scene does not have.
+  const ShapeSurface& Surface(uint32_t shape) const;
   void End();
 
  private:
@@ -32,6 +35,8 @@ class ServedScene {
   mutable std::mutex mutex_;
   RenderTarget* target_;
   std::vector<uint64_t> material_handles_;
+  mutable std::mutex surfaces_mutex_;
+  mutable std::map<uint32_t, std::unique_ptr<ShapeSurface>> surfaces_;
 };
 
 class JobScenes {

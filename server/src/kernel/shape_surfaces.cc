@@ -1,0 +1,246 @@
+#include "kernel/shape_surfaces.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "yarf/error.h"
+#include "yarf/warps.h"
+
+namespace yarf {
+namespace {
+
+// Area density `pdf_area` at surface point `at` turned into solid angle
+// at p; 0 when the surface is seen edge-on or p lies on it.
+float AreaToSolidAngle(float pdf_area, Vec3 p, const SurfaceSample& at) {
+  const Vec3 d = at.position - p;
+  const float d2 = Dot(d, d);
+  const float cos_at = std::abs(Dot(at.normal, d));
+  return cos_at > 0 && d2 > 0 ? pdf_area * d2 * std::sqrt(d2) / cos_at : 0.0f;
+}
+
+}  // namespace
+
+void SphereParameters(const std::array<Vec3, 3>& axes, Vec3 d, float r, Hit& hit) {
+  const Vec3 local(Dot(d, axes[0]), Dot(d, axes[1]), Dot(d, axes[2]));
+  float phi = std::atan2(local.y, local.x);
+  if (phi < 0) phi += 2 * kPi;
+  const float cos_theta = std::clamp(local.z, -1.0f, 1.0f), sin_theta = std::sqrt(1 - cos_theta * cos_theta);
+  hit.u = phi * (0.5f * kInvPi);
+  hit.v = std::acos(cos_theta) * kInvPi;
+  const Vec3 along_phi = axes[0] * (-local.y) + axes[1] * local.x;
+  const Vec3 along_theta =
+      axes[0] * (cos_theta * std::cos(phi)) + axes[1] * (cos_theta * std::sin(phi)) - axes[2] * sin_theta;
+  hit.dpdu = along_phi * (2 * kPi * r);
+  hit.dpdv = along_theta * (kPi * r);
+}
+
+// Sphere
+
+void SphereSurface::Bounds(Vec3& lower, Vec3& upper) const {
+  const Vec3 r(sphere_.radius, sphere_.radius, sphere_.radius);
+  lower = sphere_.center - r;
+  upper = sphere_.center + r;
+}
+
+float SphereSurface::Area() const { return 4 * kPi * sphere_.radius * sphere_.radius; }
+
+SurfaceSample SphereSurface::At(Vec3 d) const {
+  SurfaceSample s;
+  s.position = sphere_.center + d * sphere_.radius;
+  s.normal = sphere_.flip_normals ? -d : d;
+  Hit parameters;
+  SphereParameters(sphere_.axes, d, sphere_.radius, parameters);
+  s.u = parameters.u, s.v = parameters.v;
+  return s;
+}
+
+bool SphereSurface::SeenByCone(Vec3 p) const {
+  // From just outside, the cone is too ill-conditioned to be worth it.
+  const Vec3 d = sphere_.center - p;
+  return by_cone_ && Dot(d, d) > sphere_.radius * sphere_.radius * 1.0001f;
+}
+
+void SphereSurface::Sample(std::span<const float> uniform, std::span<SurfaceSample> out) const {
+  for (size_t k = 0; k < out.size(); ++k) {
+    out[k] = At(SampleUniformSphere(uniform[3 * k + 1], uniform[3 * k + 2]));
+    out[k].pdf = 1 / Area();
+  }
+}
+
+void SphereSurface::Sample(std::span<const Vec3> from, std::span<const float> uniform,
+                           std::span<SurfaceSample> out) const {
+  const float r2 = sphere_.radius * sphere_.radius;
+  for (size_t k = 0; k < out.size(); ++k) {
+    const Vec3 p = from[k];
+    const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
+    if (!SeenByCone(p)) {
+      out[k] = At(SampleUniformSphere(u0, u1));
+      out[k].pdf = AreaToSolidAngle(1 / Area(), p, out[k]);
+      continue;
+    }
+    // Uniform in the cone, then the point the direction meets on the
+    // near side.
+    const Vec3 to_center = sphere_.center - p;
+    const float distance2 = Dot(to_center, to_center);
+    const float cos_max = std::sqrt(std::max(0.0f, 1 - r2 / distance2));
+    const Vec3 dir = Frame(Normalize(to_center)).ToWorld(SampleUniformCone(u0, u1, cos_max));
+    const float b = Dot(dir, to_center);
+    const float t = b - std::sqrt(std::max(0.0f, r2 - (distance2 - b * b)));
+    out[k] = At(Normalize(p + dir * t - sphere_.center));
+    out[k].pdf = UniformConePdf(1, cos_max);
+  }
+}
+
+void SphereSurface::Pdf(std::span<const Vec3> from, std::span<const SurfaceSample> at, std::span<float> pdf) const {
+  const float r2 = sphere_.radius * sphere_.radius;
+  for (size_t k = 0; k < pdf.size(); ++k) {
+    const Vec3 p = from[k];
+    if (!SeenByCone(p)) {
+      // The normal is the sphere's own at the point.
+      SurfaceSample on = at[k];
+      on.normal = Normalize(on.position - sphere_.center);
+      pdf[k] = AreaToSolidAngle(1 / Area(), p, on);
+      continue;
+    }
+    const Vec3 to_center = sphere_.center - p;
+    pdf[k] = UniformConePdf(1, std::sqrt(std::max(0.0f, 1 - r2 / Dot(to_center, to_center))));
+  }
+}
+
+SurfaceSample SphereSurface::Gathered(Vec3 seen_from, float& area) const {
+  const Vec3 to = seen_from - sphere_.center;
+  area = kPi * sphere_.radius * sphere_.radius;
+  return At(Length(to) > 0 ? Normalize(to) : Vec3(0, 0, 1));
+}
+
+// Triangle mesh
+
+MeshSurface::MeshSurface(std::vector<std::array<Vec3, 3>> corners, std::vector<Vec3> normals,
+                         const TriangleMesh& mesh, bool by_solid_angle)
+    : corners_(std::move(corners)), normals_(std::move(normals)), mesh_(&mesh), by_solid_angle_(by_solid_angle) {
+  if (corners_.empty() || corners_.size() != normals_.size()) throw Error("a mesh surface needs its triangles");
+  cdf_.reserve(corners_.size());
+  double running = 0;
+  for (const auto& v : corners_) {
+    running += 0.5 * Length(Cross(v[1] - v[0], v[2] - v[0]));
+    cdf_.push_back(float(running));
+  }
+  area_ = float(running);
+}
+
+void MeshSurface::Bounds(Vec3& lower, Vec3& upper) const {
+  lower = upper = corners_[0][0];
+  for (const auto& triangle : corners_)
+    for (const Vec3 v : triangle) {
+      lower = Vec3(std::min(lower.x, v.x), std::min(lower.y, v.y), std::min(lower.z, v.z));
+      upper = Vec3(std::max(upper.x, v.x), std::max(upper.y, v.y), std::max(upper.z, v.z));
+    }
+}
+
+float MeshSurface::Share(uint32_t t) const {
+  return area_ > 0 ? (cdf_[t] - (t > 0 ? cdf_[t - 1] : 0.0f)) / area_ : 0.0f;
+}
+
+uint32_t MeshSurface::Pick(float u, float& share) const {
+  const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u * area_);
+  const uint32_t t = uint32_t((it == cdf_.end() ? cdf_.end() - 1 : it) - cdf_.begin());
+  share = Share(t);
+  return t;
+}
+
+bool MeshSurface::BySolidAngle(uint32_t t, Vec3 p, float& solid_angle) const {
+  // pbrt-v4's bounds: below, area sampling is as good and cheaper; above,
+  // the spherical triangle is too close to a hemisphere to sample well.
+  constexpr float kMinSolidAngle = 3e-4f, kMaxSolidAngle = 6.22f;
+  if (!by_solid_angle_) return false;
+  const Vec3 a = corners_[t][0] - p, b = corners_[t][1] - p, c = corners_[t][2] - p;
+  if (!(Length(a) > 0 && Length(b) > 0 && Length(c) > 0)) return false;
+  solid_angle = SphericalTriangleArea(Normalize(a), Normalize(b), Normalize(c));
+  return solid_angle > kMinSolidAngle && solid_angle < kMaxSolidAngle;
+}
+
+SurfaceSample MeshSurface::At(uint32_t t, const std::array<float, 3>& b) const {
+  SurfaceSample s;
+  const auto& v = corners_[t];
+  s.position = v[0] * b[0] + v[1] * b[1] + v[2] * b[2];
+  s.normal = normals_[t];
+  s.primitive = t;
+  float uv[2];
+  TriangleUvAt(mesh_->indices, mesh_->uvs, t, b[1], b[2], uv);
+  s.u = uv[0], s.v = uv[1];
+  return s;
+}
+
+void MeshSurface::Sample(std::span<const float> uniform, std::span<SurfaceSample> out) const {
+  for (size_t k = 0; k < out.size(); ++k) {
+    float share = 0;
+    const uint32_t t = Pick(uniform[3 * k], share);
+    out[k] = At(t, SampleUniformTriangle(uniform[3 * k + 1], uniform[3 * k + 2]));
+    out[k].pdf = 1 / area_;
+  }
+}
+
+void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> uniform,
+                         std::span<SurfaceSample> out) const {
+  for (size_t k = 0; k < out.size(); ++k) {
+    const Vec3 p = from[k];
+    const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
+    float share = 0, solid_angle = 0;
+    const uint32_t t = Pick(uniform[3 * k], share);
+    std::array<float, 3> b;
+    const Vec3 v[3] = {corners_[t][0], corners_[t][1], corners_[t][2]};
+    if (BySolidAngle(t, p, solid_angle) && SampleSphericalTriangle(v, p, u0, u1, b)) {
+      out[k] = At(t, b);
+      out[k].pdf = share / solid_angle;
+      continue;
+    }
+    out[k] = At(t, SampleUniformTriangle(u0, u1));
+    out[k].pdf = AreaToSolidAngle(1 / area_, p, out[k]);
+  }
+}
+
+void MeshSurface::Pdf(std::span<const Vec3> from, std::span<const SurfaceSample> at, std::span<float> pdf) const {
+  for (size_t k = 0; k < pdf.size(); ++k) {
+    const uint32_t t = at[k].primitive;
+    if (t >= corners_.size()) {
+      pdf[k] = 0;
+      continue;
+    }
+    float solid_angle = 0;
+    if (BySolidAngle(t, from[k], solid_angle)) {
+      pdf[k] = Share(t) / solid_angle;
+      continue;
+    }
+    SurfaceSample on = at[k];
+    on.normal = normals_[t];
+    pdf[k] = AreaToSolidAngle(1 / area_, from[k], on);
+  }
+}
+
+SurfaceSample MeshSurface::Gathered(Vec3, float& area) const {
+  SurfaceSample s;
+  Vec3 centroid, normal;
+  for (size_t t = 0; t < corners_.size(); ++t) {
+    const float a = Share(uint32_t(t));
+    centroid += (corners_[t][0] + corners_[t][1] + corners_[t][2]) * (a / 3);
+    normal += normals_[t] * a;
+  }
+  s.position = centroid;
+  s.normal = Length(normal) > 0 ? Normalize(normal) : normals_[0];
+  area = area_;
+  return s;
+}
+
+bool MeshSurface::NormalCone(Vec3& axis, float& cos_theta) const {
+  Vec3 sum;
+  for (size_t t = 0; t < corners_.size(); ++t) sum += normals_[t] * Share(uint32_t(t));
+  if (!(Length(sum) > 0.5f)) return false;
+  axis = Normalize(sum);
+  cos_theta = 1;
+  for (const Vec3 n : normals_) cos_theta = std::min(cos_theta, Dot(axis, n));
+  // Less a little for the rounding of the normals.
+  cos_theta = std::max(-1.0f, cos_theta - 1e-4f);
+  return cos_theta > -1;
+}
+
+}  // namespace yarf
