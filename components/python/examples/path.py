@@ -46,26 +46,14 @@ from yarf_component import (
     SurfaceClient,
     Transport,
     normalize,
+    power_heuristic,
+    samples_lights,
 )
 from yarf_component.rays import offset_origins, shadow_rays
 from yarf_component.transport import FIRST_FREE
 
 PER_BOUNCE = 6
 BSDF_DIRECTION, LIGHT_POSITION, LIGHT_CHOICE, BSDF_LOBE = 0, 2, 4, 5
-
-
-def power_heuristic(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Veach's power heuristic (β = 2) of strategy a against b."""
-    a2, b2 = np.square(a, dtype=np.float64), np.square(b, dtype=np.float64)
-    total = a2 + b2
-    return np.divide(a2, total, out=np.zeros_like(total), where=total > 0).astype(np.float32)
-
-
-def samples_lights(lobes: int) -> bool:
-    """Whether a light sample can find anything: all but purely specular models."""
-    return bool(lobes & (ScatterFlags.DIFFUSE | ScatterFlags.GLOSSY)) or not (
-        lobes & ScatterFlags.DELTA
-    )
 
 
 @dataclass

@@ -14,7 +14,15 @@ from __future__ import annotations
 from yarf_component.component import Component
 from yarf_component.frames import Frame, normalize, reflect
 from yarf_component.job_calls import JobSceneError, Pending
-from yarf_component.job_scene import MISS, Hits, JobScene, LightSamples, Rays, SceneLayout
+from yarf_component.job_scene import (
+    MISS,
+    Hits,
+    JobScene,
+    LightSamples,
+    Rays,
+    SceneLayout,
+    SurfaceSamples,
+)
 from yarf_component.job_surface import SurfaceClient
 from yarf_component.medium import (
     HenyeyGreensteinMedium,
@@ -22,6 +30,7 @@ from yarf_component.medium import (
     henyey_greenstein,
     sample_henyey_greenstein,
 )
+from yarf_component.mis import power_heuristic, samples_lights
 from yarf_component.numerical import Function, Integrand, Integrator, PointSource, Sampler, Warp
 from yarf_component.properties import PropertyError, Rgb, Transform, Vec3
 from yarf_component.server import Running, serve
@@ -61,6 +70,7 @@ __all__ = [
     "SurfaceClient",
     "SurfaceModel",
     "SurfacePoints",
+    "SurfaceSamples",
     "Texture",
     "Transform",
     "Transport",
@@ -70,8 +80,10 @@ __all__ = [
     "henyey_greenstein",
     "lobe_allowed",
     "normalize",
+    "power_heuristic",
     "reflect",
     "sample_henyey_greenstein",
+    "samples_lights",
     "serve",
 ]
 

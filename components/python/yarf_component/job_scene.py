@@ -1,5 +1,6 @@
-"""The scene of a running job, for transports: yarfd's JobScene, Intersect and
-SurfaceModel services as numpy calls.
+"""The scene of a running job, for transports: yarfd's JobScene, Intersect,
+Shape, SampleSurfaceArea, SampleSurfaceDirection and SurfaceModel services as
+numpy calls.
 
 A Transport's ``prepare`` and ``evaluate`` receive a JobScene bound to the
 yarfd that called them and to the job's scene handle. Arrays are float32,
@@ -68,6 +69,28 @@ class LightSamples(NamedTuple):
     delta: np.ndarray
 
 
+class SurfaceSamples(NamedTuple):
+    """Points sampled on a shape: positions [N,3], unit normals [N,3] on the side the
+    shape's normals face, densities [N] (per unit area, or per solid angle at the
+    reference points; 0: nothing sampled), uv [N,2] and primitive_ids [N]."""
+
+    positions: np.ndarray
+    normals: np.ndarray
+    pdf: np.ndarray
+    uv: np.ndarray
+    primitive_ids: np.ndarray
+
+
+def _surface_samples(reply: geometry_pb2.SurfaceSampleReply) -> SurfaceSamples:
+    return SurfaceSamples(
+        positions=array_to_numpy(reply.positions),
+        normals=array_to_numpy(reply.normals),
+        pdf=array_to_numpy(reply.pdf),
+        uv=array_to_numpy(reply.uv),
+        primitive_ids=array_to_numpy(reply.primitive_ids),
+    )
+
+
 @dataclass(frozen=True)
 class SceneLayout:
     """The film size, and per shape its material's SurfaceModel handle and whether it emits."""
@@ -93,6 +116,9 @@ class JobScene:
         rpc_channel = channel(address)
         self._scene = transport_pb2_grpc.JobSceneStub(rpc_channel)
         self._intersect = geometry_pb2_grpc.IntersectStub(rpc_channel)
+        self._shape = geometry_pb2_grpc.ShapeStub(rpc_channel)
+        self._by_area = geometry_pb2_grpc.SampleSurfaceAreaStub(rpc_channel)
+        self._by_direction = geometry_pb2_grpc.SampleSurfaceDirectionStub(rpc_channel)
         self._surfaces: dict[int, SurfaceClient] = {}
         self._lock = threading.Lock()
 
@@ -200,6 +226,61 @@ class JobScene:
             handle=self.handle, contributions=float_array(contributions, len(contributions), 5)
         )
         self._call("JobScene.Splat", self._scene.Splat, request)
+
+    def shape_bounds(self, shape: int) -> tuple[np.ndarray, np.ndarray]:
+        """The lower and upper corners [3] of the box around shape ``shape``."""
+        request = geometry_pb2.ShapeRequest(handle=self.handle, shape=shape)
+        reply = self._call("Shape.Bounds", self._shape.Bounds, request)
+        return (
+            np.array([reply.lower.x, reply.lower.y, reply.lower.z], np.float32),
+            np.array([reply.upper.x, reply.upper.y, reply.upper.z], np.float32),
+        )
+
+    def shape_area(self, shape: int) -> float:
+        """The surface area of shape ``shape``."""
+        request = geometry_pb2.ShapeRequest(handle=self.handle, shape=shape)
+        return self._call("Shape.Area", self._shape.Area, request).area
+
+    def sample_surface_area(self, shape: int, uniform: np.ndarray) -> SurfaceSamples:
+        """Points of shape ``shape`` uniform in area; uniform [N,3]: the primitive's
+        choice, then the point on it."""
+        request = geometry_pb2.SurfaceSampleRequest(
+            handle=self.handle, shape=shape, uniform=float_array(uniform, len(uniform), 3)
+        )
+        reply = self._call("SampleSurfaceArea.Sample", self._by_area.Sample, request)
+        return _surface_samples(reply)
+
+    def sample_surface_direction(
+        self, shape: int, uniform: np.ndarray, points: np.ndarray
+    ) -> SurfaceSamples:
+        """Points of shape ``shape`` as seen from points [N,3], with densities per solid
+        angle there (a sphere by its cone, large triangles by their solid angle when the
+        job samples them so): the kernel's own light sampling."""
+        n = len(points)
+        request = geometry_pb2.SurfaceSampleRequest(
+            handle=self.handle,
+            shape=shape,
+            uniform=float_array(uniform, n, 3),
+            reference_points=float_array(points, n, 3),
+        )
+        reply = self._call("SampleSurfaceDirection.Sample", self._by_direction.Sample, request)
+        return _surface_samples(reply)
+
+    def surface_direction_pdf(
+        self, shape: int, points: np.ndarray, positions: np.ndarray, primitive_ids: np.ndarray
+    ) -> np.ndarray:
+        """[N] the density ``sample_surface_direction`` from points [N,3] has for the
+        surface points (positions [N,3] on primitives [N]) the rays toward them meet."""
+        n = len(points)
+        request = geometry_pb2.SurfacePdfRequest(
+            handle=self.handle,
+            shape=shape,
+            reference_points=float_array(points, n, 3),
+            positions=float_array(positions, n, 3),
+            primitive_ids=numpy_to_array(np.asarray(primitive_ids, dtype=np.uint32)),
+        )
+        reply = self._call("SampleSurfaceDirection.Pdf", self._by_direction.Pdf, request)
+        return array_to_numpy(reply.pdf)
 
     def surface(self, material_handle: int) -> SurfaceClient:
         """The SurfaceModel of a material (``layout.material_handles[shape]``) on yarfd."""
