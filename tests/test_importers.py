@@ -256,3 +256,27 @@ def test_strict_refuses_what_would_be_ignored_and_names_misspellings(
     assert main(["convert", "--strict", str(scene), str(tmp_path / "strict.json")]) != 0
     assert "--strict refuses what would be ignored or approximated" in capsys.readouterr().err
     assert not (tmp_path / "strict.json").exists()
+
+
+def test_a_pbrt_image_area_light_shows_its_image_the_right_way_up(
+    client: Client, tmp_path: Path
+) -> None:
+    """pbrt-v4 looks an area light's image up at (u, 1 − v): on a quad whose v
+    runs up the screen, the image's top row (red) is at the top."""
+    rows = np.array([[[0, 0, 2]] * 2, [[3, 0, 0]] * 2], np.float32)  # PFM: bottom row first
+    (tmp_path / "glow.pfm").write_bytes(b"PF\n2 2\n-1.0\n" + rows.tobytes())
+    (tmp_path / "glow.pbrt").write_text(
+        'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective" "float fov" 20\n'
+        'Film "rgb" "integer xresolution" 16 "integer yresolution" 16\n'
+        'Sampler "independent" "integer pixelsamples" 4\nWorldBegin\n'
+        'AreaLightSource "diffuse" "string filename" "glow.pfm" "float scale" 0.5 '
+        '"bool twosided" true\n'
+        'Shape "trianglemesh" "point3 P" [-1 -1 0 1 -1 0 1 1 0 -1 1 0] '
+        '"point2 uv" [0 0 1 0 1 1 0 1] "integer indices" [0 1 2 0 2 3]\n'
+    )
+    imported = import_scene(tmp_path / "glow.pbrt")
+    assert imported.warnings == []
+    upload_scene_assets(client, imported.scene, tmp_path)
+    pixels = client.render(imported.scene, spp=4, seed=1, timeout=60).pixels
+    np.testing.assert_allclose(pixels[:2].reshape(-1, 3), [[1.5, 0, 0]] * 32, rtol=1e-4, atol=1e-5)
+    np.testing.assert_allclose(pixels[-2:].reshape(-1, 3), [[0, 0, 1]] * 32, rtol=1e-4, atol=1e-5)

@@ -33,10 +33,11 @@ class PbrtImporter {
 
  private:
   struct AreaLight {
-    Rgb radiance;  // L × scale, before `power`
+    Rgb radiance;  // L × scale, before `power`; with an image, the image's factor
     bool two_sided = false;
     double power = -1;  // pbrt-v4's `power` in W; ≤ 0 when not given
     SourceLocation where, power_where;
+    std::filesystem::path image;  // pbrt's `filename`: radiance from an image
   };
   // What AttributeBegin saves and AttributeEnd restores.
   struct State {

@@ -157,3 +157,51 @@ TEST(PbrtImageLights, AProjectionLightProjectsItsImageAsIntensity) {
 
 }  // namespace
 }  // namespace yarf::importers
+
+namespace yarf::importers {
+namespace {
+
+using namespace testing;
+
+// The bitmap texture a shape's emitter reads its radiance from.
+const v1::SceneTexture& RadianceTexture(const ImportResult& result) {
+  const std::string name = result.scene.shapes(0).emitter().properties().values().at("radiance").reference();
+  for (const v1::SceneTexture& t : result.scene.textures())
+    if (t.name() == name) return t;
+  ADD_FAILURE() << "no texture " << name;
+  return result.scene.textures(0);
+}
+
+TEST(PbrtImageLights, AnImageAreaLightReadsItsImageFlippedAndScaledToItsPower) {
+  const std::filesystem::path scene = ConstantMap("glow.pfm", 0.5f, 4);
+  const std::string triangle =
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 0 2 0 0 0 3 0] \"integer indices\" [0 1 2]\n";
+  const ImportResult plain =
+      ImportPbrt("WorldBegin\nAreaLightSource \"diffuse\" \"string filename\" \"glow.pfm\" \"float scale\" 3\n" +
+                     triangle,
+                 scene);
+  const v1::SceneTexture& image = RadianceTexture(plain);
+  EXPECT_EQ(image.texture().class_name(), "bitmap");
+  EXPECT_EQ(StringProperty(image.texture().properties(), "filename"), "glow.pfm");
+  EXPECT_NEAR(FloatProperty(image.texture().properties(), "scale"), 3, 1e-9);
+  // pbrt looks its image up at (u, 1 − v).
+  const Matrix4 to_uv = ToMatrix(image.texture().properties().values().at("to_uv").transform_value());
+  const Vec3d corner = to_uv.Point({0, 0, 0});
+  EXPECT_NEAR(corner.y, 1, 1e-12);
+  EXPECT_FALSE(Warns(plain, "image"));
+  // With `power`: Φ = scale · mean luminance (0.5) · π · area (3).
+  const ImportResult powered = ImportPbrt(
+      "WorldBegin\nAreaLightSource \"diffuse\" \"string filename\" \"glow.pfm\" \"float power\" 6\n" + triangle,
+      scene);
+  EXPECT_NEAR(FloatProperty(RadianceTexture(powered).texture().properties(), "scale"), 6 / (0.5 * M_PI * 3),
+              1e-6);
+  // L and an image together are refused, as pbrt refuses them.
+  EXPECT_THROW(ImportPbrt("WorldBegin\nAreaLightSource \"diffuse\" \"string filename\" \"glow.pfm\" "
+                          "\"rgb L\" [1 1 1]\n" +
+                              triangle,
+                          scene),
+               std::exception);
+}
+
+}  // namespace
+}  // namespace yarf::importers

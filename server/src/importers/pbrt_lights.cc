@@ -31,19 +31,29 @@ void PbrtImporter::AreaLightSource(const std::string& type, PbrtParams& params, 
     Warn(where, "arealight:" + type, "area light '" + type + "' is not supported: ignored");
     return;
   }
-  const Rgb radiance = Colour(params, "L", {1, 1, 1}, kLight, where) * params.Float("scale", 1);
+  const double scale = params.Float("scale", 1);
   const bool two_sided = params.Bool("twosided", false);
   const double power = params.Float("power", -1);
   if (!std::isfinite(power) || power > 1e30) Fail(params.WhereIs("power", where), "area light power out of range");
+  AreaLight light{{}, two_sided, power, where, params.WhereIs("power", where), {}};
   if (params.Has("filename")) {
-    params.Find("filename");
-    Warn(params.WhereIs("filename", where), "arealight-image", "image area lights are not supported: L used");
+    // pbrt-v4's image area light: L = scale · image(u, 1 − v), bilinear,
+    // the image's RGB as it is; with `power`, normalised by the image's
+    // mean luminance in place of L's.
+    if (params.Has("L")) Fail(params.WhereIs("L", where), "both \"L\" and \"filename\" given for an area light");
+    const SourceLocation file_where = params.WhereIs("filename", where);
+    light.image = folder_.Resolve(params.String("filename", ""), origin_.file, file_where);
+    const double mean = Luminance(ImageMeanColour(light.image, ImageEncoding::kAuto, 1, file_where));
+    if (power > 0 && !(mean > 0)) Fail(light.power_where, "area light: a black image cannot emit a power");
+    const double s = power > 0 ? scale / mean : scale;
+    light.radiance = {s, s, s};
+  } else {
+    light.radiance = ClampColour(Colour(params, "L", {1, 1, 1}, kLight, where) * scale, 0, 1e30, [&] {
+      Warn(where, "negative-radiance", "negative radiance clamped to 0");
+    });
   }
   params.WarnUnused(diagnostics_, "area light 'diffuse'");
-  state_.area_light = AreaLight{ClampColour(radiance, 0, 1e30, [&] {
-                                  Warn(where, "negative-radiance", "negative radiance clamped to 0");
-                                }),
-                                two_sided, power, where, params.WhereIs("power", where)};
+  state_.area_light = std::move(light);
 }
 
 // pbrt-v4's DiffuseAreaLight::Create: with `power` Φ the radiance is
@@ -187,7 +197,7 @@ void PbrtImporter::ImageLight(const std::string& type, PbrtParams& params, const
         return 4 * t * t * std::max(aspect, 1 / aspect) * std::pow(1 + t * t * (sx * sx + sy * sy), -1.5);
       };
       const Rgb sum = ImageWeightedSumPerPixel(file, ImageEncoding::kAuto, 1, file_where, cos_cubed);
-      const double k_e = 0.2126 * sum.r + 0.7152 * sum.g + 0.0722 * sum.b;
+      const double k_e = Luminance(sum);
       if (!(k_e > 0)) Fail(params.WhereIs("power", where), "projection light: a black image cannot emit a power");
       power_scale = power / k_e;
     }
@@ -242,7 +252,7 @@ void PbrtImporter::InfiniteLight(PbrtParams& params, const SourceLocation& where
       };
       const Rgb sum = ImageWeightedSumPerPixel(file, ImageEncoding::kAuto, 1, params.WhereIs("filename", where),
                                                up_cosine);
-      const double map_illuminance = 4 * M_PI * (0.2126 * sum.r + 0.7152 * sum.g + 0.0722 * sum.b);
+      const double map_illuminance = 4 * M_PI * Luminance(sum);
       if (!(map_illuminance > 0))
         Fail(params.WhereIs("illuminance", where), "infinite light: the map is black above the horizon: it cannot "
                                                    "give an illuminance");

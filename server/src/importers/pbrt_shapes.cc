@@ -164,7 +164,18 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
            "area lights in object instances are not supported (as in pbrt): emission ignored");
     } else {
       v1::Properties props;
-      SetRgb(props, "radiance", AreaLightRadiance(light_areas, what));
+      const Rgb radiance = AreaLightRadiance(light_areas, what);
+      if (state_.area_light->image.empty()) {
+        SetRgb(props, "radiance", radiance);
+      } else {
+        v1::Properties image;
+        SetString(image, "filename", folder_.Relative(state_.area_light->image));
+        SetFloat(image, "scale", radiance.r);
+        SetString(image, "filter", "bilinear");
+        SetString(image, "wrap", "clamp");
+        SetTransform(image, "to_uv", Matrix4({1, 0, 0, 0, 0, -1, 0, 1, 0, 0, 1, 0, 0, 0, 0, 1}));
+        SetReference(props, "radiance", assembly_.AddTexture("arealight", Spec("bitmap", std::move(image))));
+      }
       if (state_.area_light->two_sided) SetBool(props, "two_sided", true);
       *shape.mutable_emitter() = Spec("diffuse_area", std::move(props));
     }

@@ -11,6 +11,10 @@ struct Rgb {
   Rgb operator*(double s) const { return {r * s, g * s, b * s}; }
 };
 
+// Luminance of a linear sRGB colour (Rec. 709 weights), as pbrt-v4 takes
+// it to normalise lights by their power.
+inline double Luminance(const Rgb& c) { return 0.212671 * c.r + 0.715160 * c.g + 0.072169 * c.b; }
+
 // What a spectrum describes decides how it is normalised.
 enum class SpectrumUse {
   // A reflectance: weighted by D65 and normalised so a constant 1 is white

@@ -15,7 +15,6 @@ void ExpectRgb(const Rgb& c, double r, double g, double b, double tolerance) {
   EXPECT_NEAR(c.b, b, tolerance);
 }
 
-double Luminance(const Rgb& c) { return 0.212671 * c.r + 0.715160 * c.g + 0.072169 * c.b; }
 
 const std::vector<double> kWavelengths = {400, 500, 600, 700};
 const std::vector<double> kRed = {0.04, 0.06, 0.3, 0.64};
