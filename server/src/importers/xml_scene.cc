@@ -66,6 +66,10 @@ ImportResult MitsubaImporter::Run(const XmlElement& scene) {
            "integrator '" + integrator_type_ +
                "' does not render participating media: they are ignored (Mitsuba's \"volpath\" renders them)");
   }
+  // Mitsuba 3 chooses lights uniformly. On its own MIS scene that is what
+  // keeps the small lamps' light samples: by power, the far fill light
+  // takes nearly all of them.
+  assembly_.scene().set_light_sampler(v1::Scene::LIGHT_SAMPLER_UNIFORM);
   ImportResult result;
   result.scene = assembly_.Finish();
   result.sample_count = sample_count_;

@@ -28,6 +28,8 @@ TEST(MitsubaImport, DefaultsSubstituteAndParametersOverrideThem) {
   EXPECT_EQ(result.sample_count, 8u);
   EXPECT_EQ(result.scene.sampler().class_name(), "stratified");
   EXPECT_EQ(IntProperty(result.scene.sampler().properties(), "sample_count"), 8);
+  // Lights are chosen as Mitsuba chooses them: uniformly.
+  EXPECT_EQ(result.scene.light_sampler(), v1::Scene::LIGHT_SAMPLER_UNIFORM);
 
   const ImportResult small = Import("mitsuba_defaults.xml", {{{"res", "16"}, {"spp", "2"}}});
   EXPECT_EQ(small.scene.film().width(), 16u);
