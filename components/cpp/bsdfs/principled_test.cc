@@ -111,6 +111,13 @@ class TwoCells final : public Texture {
   Vec3 left_, right_;
 };
 
+// 'name', as error messages quote a property.
+std::string Quoted(const char* name) {
+  std::string out(1, '\'');
+  out.append(name).push_back('\'');
+  return out;
+}
+
 class PrincipledTest : public SurfacePluginTest {
  protected:
   // Each parameter in `names` of `model_name`, given as a texture of two
@@ -175,7 +182,7 @@ TEST_F(PrincipledTest, BadPropertiesAreRejectedByName) {
   };
   for (const char* name : {"roughness", "anisotropic", "metallic", "spec_trans", "spec_tint", "sheen",
                            "sheen_tint", "flatness", "clearcoat", "clearcoat_gloss", "specular"}) {
-    const std::string quoted = "'" + std::string(name) + "'";
+    const std::string quoted = Quoted(name);
     expect_error(Props({{name, -0.1}}), {quoted.c_str()});
     expect_error(Props({{name, 1.5}}), {quoted.c_str()});
   }
@@ -205,7 +212,7 @@ TEST_F(PrincipledTest, BadThinPropertiesAreRejectedByName) {
   };
   for (const char* name :
        {"roughness", "anisotropic", "spec_trans", "spec_tint", "sheen", "sheen_tint", "flatness", "diff_trans"}) {
-    const std::string quoted = "'" + std::string(name) + "'";
+    const std::string quoted = Quoted(name);
     expect_error(Props({{name, -0.1}}), quoted);
     expect_error(Props({{name, 2.5}}), quoted);
   }

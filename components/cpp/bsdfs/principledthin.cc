@@ -26,10 +26,13 @@
 // Differences from Mitsuba: G2 is Smith's height-correlated joint masking
 // (microfacet.h) where Mitsuba multiplies two G1s, as in principled.cc.
 // Mitsuba also drops the transmission where wo itself (not its mirror
-// image wo', whose masking the lobe models) faces the microfacet; that
-// rule is not symmetric in wi and wo, and removes a little transmission
-// at grazing angles only, so yarf keeps the lobe reciprocal instead.
-// The luminance is Rec. 709's (vecmath.h).
+// image wo', whose masking the lobe models) faces the microfacet, mostly
+// where wo lies low; that rule is not symmetric in wi and wo (Mitsuba's
+// sheet is not reciprocal there), so yarf keeps the whole lobe. Together
+// they make yarf's sheet transmit a little more: at roughness 0.5, 1.4%
+// at normal incidence to 6% at cos θi = 0.1. The diffuse, sheen and
+// translucent lobes, and every density, are Mitsuba's. The luminance is
+// Rec. 709's (vecmath.h).
 //
 // Parameters (each float or rgb may be a texture; its values are clamped
 // to the range given)
