@@ -29,19 +29,25 @@ class TilePoints : public PrimarySamples {
 
   virtual void Reset(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, uint64_t seed) {
     pixels_.clear();
+    indices_.clear();
     seeds_.clear();
+    pairs_.clear();
     for (uint32_t y = y0; y < y1; ++y)
       for (uint32_t x = x0; x < x1; ++x) {
         pixels_.push_back({x, y});
-        seeds_.push_back(Hash(seed, uint64_t(y) * width_ + x));
+        const uint64_t pixel_seed = Hash(seed, uint64_t(y) * width_ + x);
+        for (uint32_t s = 0; s < samples_; ++s) {
+          indices_.push_back(first_index_ + s);
+          seeds_.push_back(pixel_seed);
+        }
       }
   }
 
-  size_t Count() const override { return pixels_.size() * samples_; }
-  uint64_t SampleIndex(size_t i) const override { return first_index_ + i % samples_; }
+  size_t Count() const override { return indices_.size(); }
+  uint64_t SampleIndex(size_t i) const override { return indices_[i]; }
   float Get(size_t i, uint32_t dimension) const override {
     const size_t pixel = i / samples_;
-    const float u = sampler_.Sample(first_index_ + i % samples_, dimension, seeds_[pixel]);
+    const float u = Uniform(i, dimension);
     if (dimension == 0) return (pixels_[pixel].x + u) * inv_width_;
     if (dimension == 1) return (pixels_[pixel].y + u) * inv_height_;
     return Warp(i, dimension, u);
@@ -51,6 +57,22 @@ class TilePoints : public PrimarySamples {
   virtual float Warp(size_t i, uint32_t dimension, float u) const { return u; }
 
  private:
+  // The sampler's coordinate `dimension` of point i, made with its pair
+  // (2k, 2k + 1) at the first use of either and kept: the two share the
+  // sampler's work on the index, and a coordinate asked for twice (the
+  // film position) is made once. Points whose paths ended never pay.
+  float Uniform(size_t i, uint32_t dimension) const {
+    const uint32_t pair = dimension / 2;
+    if (pair >= pairs_.size()) pairs_.resize(pair + 1);
+    std::vector<float>& values = pairs_[pair];
+    if (values.empty()) values.assign(2 * indices_.size(), kUnmade);
+    float* made = &values[2 * i];
+    if (made[0] == kUnmade) sampler_.SamplePairs({&indices_[i], 1}, {&seeds_[i], 1}, pair, {made, 2});
+    return made[dimension % 2];
+  }
+  // Marks a pair not made yet: samplers give values in [0, 1).
+  static constexpr float kUnmade = -1;
+
   struct Pixel {
     uint32_t x, y;
   };
@@ -60,7 +82,11 @@ class TilePoints : public PrimarySamples {
   uint32_t width_;
   float inv_width_, inv_height_;
   std::vector<Pixel> pixels_;
-  std::vector<uint64_t> seeds_;
+  // Per point: its index in its pixel's sequence and the pixel's seed.
+  std::vector<uint64_t> indices_, seeds_;
+  // Per pair of dimensions asked for: [Count(), 2] coordinates, kUnmade
+  // until made.
+  mutable std::vector<std::vector<float>> pairs_;
 };
 
 // Runs passes from target.FirstSample() until target.SamplesPerPixel()

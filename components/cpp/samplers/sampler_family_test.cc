@@ -5,6 +5,7 @@
 // theory gives.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -365,6 +366,29 @@ TEST_F(SamplerFamilyTest, StratumFloatStaysInItsStratum) {
         ASSERT_EQ(Stratum(x, count), stratum) << "count " << count << " bits " << bits;
       }
     }
+}
+
+// SamplePairs is Sample for many points at once, bit for bit, for every
+// sampler (those that override it and those that inherit the loop).
+TEST_F(SamplerFamilyTest, SamplePairsGivesSamplesValuesExactly) {
+  std::vector<uint64_t> indices, seeds;
+  for (uint64_t k = 0; k < 300; ++k) {
+    indices.push_back(k % 7 == 0 ? (k << 22) + k : k * 37 % 256);
+    seeds.push_back(Hash(uint64_t(42), k / 4));
+  }
+  for (const char* name : {"sobol", "sobol_nd", "independent", "stratified", "latin_hypercube", "hammersley",
+                           "halton"}) {
+    const bool counted = std::find(std::begin(kCounted), std::end(kCounted), std::string(name)) != std::end(kCounted);
+    const std::unique_ptr<Sampler> sampler = Make(name, counted ? 256 : 0);
+    for (uint32_t pair : {0u, 1u, 3u, 130u, 500u}) {
+      std::vector<float> out(2 * indices.size());
+      sampler->SamplePairs(indices, seeds, pair, out);
+      for (size_t k = 0; k < indices.size(); ++k)
+        for (uint32_t c = 0; c < 2; ++c)
+          ASSERT_EQ(out[2 * k + c], sampler->Sample(indices[k], 2 * pair + c, seeds[k]))
+              << name << " pair " << pair << " point " << k;
+    }
+  }
 }
 
 }  // namespace

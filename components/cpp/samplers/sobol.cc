@@ -15,6 +15,7 @@
 // Parameters: none.
 #include <array>
 #include <cstdint>
+#include <span>
 
 #include "yarf/hash.h"
 #include "yarf/owen.h"
@@ -64,28 +65,47 @@ constexpr std::array<uint64_t, kCachedSeeds> Salts(uint64_t salt) {
 constexpr std::array<uint64_t, kCachedSeeds> kScrambleSeeds = Salts(kScrambleSalt);
 constexpr std::array<uint64_t, kCachedSeeds> kShuffleSeeds = Salts(kShuffleSalt);
 
+// Point `index` of block `block` (dimensions 2·block, 2·block + 1) for
+// `seed`, its index bits reversed and shuffled. Owen-scrambling the index
+// permutes it within every aligned run of 2^m indices, and an aligned run
+// of Sobol points is a (0, m, 2)-net, so any power-of-two prefix stays
+// stratified. Indices past 2^32 pick another shuffle rather than wrapping
+// onto the same points.
+inline uint32_t ShuffledReversedIndex(uint64_t index, uint32_t block, uint64_t seed) {
+  const uint32_t shuffle_seed =
+      uint32_t(yarf::MixBits(seed ^ kShuffleSeeds[block % kCachedSeeds] ^ ((index >> 32) * kGolden))) +
+      block / kCachedSeeds;
+  return yarf::LaineKarrasPermutation(yarf::ReverseBits(uint32_t(index)), shuffle_seed);
+}
+
+// Coordinate `dimension` from its block's shuffled index: Sobol's first
+// dimension is the van der Corput sequence, the bit reversal of the index,
+// so the reversals around the scrambles cancel; then the coordinate's own
+// scramble.
+inline float Coordinate(uint32_t reversed_shuffled, uint32_t dimension, uint64_t seed) {
+  const uint32_t bits =
+      dimension % 2 == 0 ? reversed_shuffled : SobolSecond(yarf::ReverseBits(reversed_shuffled));
+  const uint32_t scramble_seed =
+      uint32_t(yarf::MixBits(seed ^ kScrambleSeeds[dimension % kCachedSeeds]) + (dimension / kCachedSeeds));
+  return yarf::ToUnitFloat(yarf::NestedUniformScramble(bits, scramble_seed));
+}
+
 class Sobol final : public yarf::Sampler {
  public:
   explicit Sobol(const yarf::Properties&) {}
 
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {
-    const uint32_t block = dimension / 2;
-    // Owen-scrambling the index permutes it within every aligned run of
-    // 2^m indices, and an aligned run of Sobol points is a (0, m, 2)-net,
-    // so any power-of-two prefix stays stratified. Indices past 2^32 pick
-    // another shuffle rather than wrapping onto the same points.
-    const uint32_t shuffle_seed =
-        uint32_t(yarf::MixBits(seed ^ kShuffleSeeds[block % kCachedSeeds] ^ ((index >> 32) * kGolden))) +
-        block / kCachedSeeds;
-    // Sobol's first dimension is the van der Corput sequence, the bit
-    // reversal of the index, so the reversals around the scrambles cancel.
-    const uint32_t reversed_shuffled =
-        yarf::LaineKarrasPermutation(yarf::ReverseBits(uint32_t(index)), shuffle_seed);
-    const uint32_t bits =
-        dimension % 2 == 0 ? reversed_shuffled : SobolSecond(yarf::ReverseBits(reversed_shuffled));
-    const uint32_t scramble_seed = uint32_t(yarf::MixBits(seed ^ kScrambleSeeds[dimension % kCachedSeeds]) +
-                                            (dimension / kCachedSeeds));
-    return yarf::ToUnitFloat(yarf::NestedUniformScramble(bits, scramble_seed));
+    return Coordinate(ShuffledReversedIndex(index, dimension / 2, seed), dimension, seed);
+  }
+
+  // Both coordinates of a block share the index's shuffle.
+  void SamplePairs(std::span<const uint64_t> indices, std::span<const uint64_t> seeds, uint32_t pair,
+                   std::span<float> out) const override {
+    for (size_t k = 0; k < indices.size(); ++k) {
+      const uint32_t shuffled = ShuffledReversedIndex(indices[k], pair, seeds[k]);
+      out[2 * k] = Coordinate(shuffled, 2 * pair, seeds[k]);
+      out[2 * k + 1] = Coordinate(shuffled, 2 * pair + 1, seeds[k]);
+    }
   }
 };
 

@@ -62,6 +62,17 @@ class Sampler : public virtual Component {
 
   // Coordinate `dimension` of point `index` of the sequence for `seed`.
   virtual float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const = 0;
+  // Coordinates 2·pair and 2·pair + 1 of point indices[k] of the sequence
+  // for seeds[k], as out[2k] and out[2k + 1]: Sample's values, for many
+  // points in one call (a wavefront asks for one dimension of every live
+  // path at once). A sampler that makes a pair faster together overrides it.
+  virtual void SamplePairs(std::span<const uint64_t> indices, std::span<const uint64_t> seeds, uint32_t pair,
+                           std::span<float> out) const {
+    for (size_t k = 0; k < indices.size(); ++k) {
+      out[2 * k] = Sample(indices[k], 2 * pair, seeds[k]);
+      out[2 * k + 1] = Sample(indices[k], 2 * pair + 1, seeds[k]);
+    }
+  }
   // Points first .. first+count-1 as [count, dimensions].
   virtual void Generate(uint64_t first, uint32_t count, uint32_t dimensions, uint64_t seed,
                         std::span<float> out) const {
