@@ -107,6 +107,13 @@ void SphereSurface::Pdf(std::span<const Vec3> from, std::span<const SurfaceSampl
   }
 }
 
+SurfaceSample SphereSurface::SamplePoint(float u0, float u1) const {
+  // One primitive: both numbers place the point.
+  SurfaceSample s = At(SampleUniformSphere(u0, u1));
+  s.pdf = 1 / Area();
+  return s;
+}
+
 SurfaceSample SphereSurface::Gathered(Vec3 seen_from, float& area) const {
   const Vec3 to = seen_from - sphere_.center;
   area = kPi * sphere_.radius * sphere_.radius;
@@ -215,6 +222,18 @@ void MeshSurface::Pdf(std::span<const Vec3> from, std::span<const SurfaceSample>
     on.normal = normals_[t];
     pdf[k] = AreaToSolidAngle(1 / area_, from[k], on);
   }
+}
+
+SurfaceSample MeshSurface::SamplePoint(float u0, float u1) const {
+  float share = 0;
+  const uint32_t t = Pick(u0, share);
+  // u0's place within triangle t's stretch of the running sum, rescaled
+  // to [0,1); a float keeps fewer bits of it the more triangles there are.
+  const float below = t > 0 ? cdf_[t - 1] : 0.0f, width = cdf_[t] - below;
+  const float rest = width > 0 ? std::clamp((u0 * area_ - below) / width, 0.0f, std::nextafter(1.0f, 0.0f)) : 0.5f;
+  SurfaceSample s = At(t, SampleUniformTriangle(rest, u1));
+  s.pdf = 1 / area_;
+  return s;
 }
 
 SurfaceSample MeshSurface::Gathered(Vec3, float& area) const {

@@ -31,6 +31,12 @@ class ShapeSurface : public Shape, public SurfaceAreaSampler, public SurfaceDire
   // The cone around `axis` holding every normal of the surface, as the
   // cosine of its half-angle; false when the normals face every way.
   virtual bool NormalCone(Vec3& axis, float& cos_theta) const = 0;
+  // A point uniform in area (pdf 1/Area) from two uniform numbers, for
+  // callers that have only two (a camera ray's film position): u0 picks the
+  // primitive in proportion to area, and its remainder within that
+  // primitive's share, uniform on [0,1) and independent of the choice, is
+  // the point's first coordinate there, u1 its second.
+  virtual SurfaceSample SamplePoint(float u0, float u1) const = 0;
 };
 
 struct SphereGeometry {
@@ -54,6 +60,7 @@ class SphereSurface final : public ShapeSurface {
   void Pdf(std::span<const Vec3> from, std::span<const SurfaceSample> at, std::span<float> pdf) const override;
   SurfaceSample Gathered(Vec3 seen_from, float& area) const override;
   bool NormalCone(Vec3& axis, float& cos_theta) const override { return false; }
+  SurfaceSample SamplePoint(float u0, float u1) const override;
 
  private:
   // The point of the sphere at unit direction d from its centre.
@@ -82,6 +89,7 @@ class MeshSurface final : public ShapeSurface {
   void Pdf(std::span<const Vec3> from, std::span<const SurfaceSample> at, std::span<float> pdf) const override;
   SurfaceSample Gathered(Vec3 seen_from, float& area) const override;
   bool NormalCone(Vec3& axis, float& cos_theta) const override;
+  SurfaceSample SamplePoint(float u0, float u1) const override;
 
  private:
   // The triangle u picks in proportion to area, and its share of the area.

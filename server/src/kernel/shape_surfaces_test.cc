@@ -172,5 +172,55 @@ TEST(ShapeSurfaces, GatheredIntoOnePoint) {
   EXPECT_FALSE(sphere.NormalCone(axis, cos_theta));
 }
 
+TEST(ShapeSurfaces, PointsFromTwoNumbersAreUniformInArea) {
+  // Three triangles of areas 8, 0.5 and 0.3, facing +z.
+  TriangleMesh mesh;
+  mesh.positions = {Vec3(0, 0, 0), Vec3(4, 0, 0), Vec3(0, 4, 0), Vec3(5, 0, 0), Vec3(6, 0, 0),
+                    Vec3(5, 1, 0), Vec3(0, 5, 0), Vec3(3, 5, 0), Vec3(0, 5.2f, 0)};
+  mesh.indices = {0, 1, 2, 3, 4, 5, 6, 7, 8};
+  const MeshSurface surface = QuadSurface(mesh, false);
+  const float areas[3] = {8, 0.5f, 0.3f};
+  Vec3 centroid, centroids[3];
+  for (int t = 0; t < 3; ++t) {
+    centroids[t] = (mesh.positions[3 * t] + mesh.positions[3 * t + 1] + mesh.positions[3 * t + 2]) / 3;
+    centroid += centroids[t] * (areas[t] / 8.8f);
+  }
+  constexpr size_t kN = 400000;
+  const std::vector<float> u = Uniform(kN, 11);
+  double sum[2] = {0, 0}, sum_first[2] = {0, 0};
+  size_t count[3] = {0, 0, 0};
+  for (size_t k = 0; k < kN; ++k) {
+    const SurfaceSample s = surface.SamplePoint(u[3 * k], u[3 * k + 1]);
+    ASSERT_LT(s.primitive, 3u);
+    EXPECT_FLOAT_EQ(s.pdf, 1 / 8.8f);
+    sum[0] += s.position.x, sum[1] += s.position.y;
+    if (s.primitive == 0) sum_first[0] += s.position.x, sum_first[1] += s.position.y;
+    ++count[s.primitive];
+  }
+  // Positions spread over about ±2 units: the mean's σ is about 0.003.
+  EXPECT_NEAR(sum[0] / kN, centroid.x, 0.015);
+  EXPECT_NEAR(sum[1] / kN, centroid.y, 0.015);
+  // Within the large triangle too: the reused remainder fills it evenly.
+  EXPECT_NEAR(sum_first[0] / double(count[0]), centroids[0].x, 0.015);
+  EXPECT_NEAR(sum_first[1] / double(count[0]), centroids[0].y, 0.015);
+  for (int t = 0; t < 3; ++t) EXPECT_NEAR(double(count[t]) / kN, areas[t] / 8.8, 0.004) << "triangle " << t;
+
+  // A sphere: centred, with E[z²] = r²/3.
+  SphereGeometry geometry;
+  geometry.center = Vec3(1, 2, 3);
+  geometry.radius = 2;
+  const SphereSurface sphere(geometry, true);
+  Vec3 mean;
+  double z2 = 0;
+  for (size_t k = 0; k < kN; ++k) {
+    const SurfaceSample s = sphere.SamplePoint(u[3 * k], u[3 * k + 1]);
+    EXPECT_NEAR(Length(s.position - geometry.center), 2, 1e-5);
+    mean += s.position / float(kN);
+    z2 += (s.position.z - 3) * (s.position.z - 3) / kN;
+  }
+  EXPECT_NEAR(Length(mean - geometry.center), 0, 0.02);
+  EXPECT_NEAR(z2, 4.0 / 3, 0.02);
+}
+
 }  // namespace
 }  // namespace yarf
