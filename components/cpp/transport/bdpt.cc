@@ -181,7 +181,7 @@ class Bdpt final : public Transport {
   uint32_t Dimensions() const override { return kFirstBounce + 2 * kPerBounce * uint32_t(max_depth_); }
 
   void Prepare(const SceneView& scene) override {
-    RefuseOrthographicCamera(scene, "bdpt");
+    RefuseUnreachableCamera(scene, "bdpt");
     null_boundaries_ = HasNullBoundaries(scene);
   }
 

@@ -72,7 +72,7 @@ class LightTracer final : public Transport {
   }
 
   void Prepare(const SceneView& scene) override {
-    RefuseOrthographicCamera(scene, "light");
+    RefuseUnreachableCamera(scene, "light");
     RefuseEmittingMedia(scene, "light");
     null_boundaries_ = HasNullBoundaries(scene);
   }

@@ -338,11 +338,11 @@ inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const
 }
 
 // Methods that connect light paths to the camera (light tracing, bdpt)
-// cannot reach an orthographic camera, whose rays are parallel.
-inline void RefuseOrthographicCamera(const SceneView& scene, const std::string& transport) {
-  if (scene.CameraIsOrthographic())
-    throw Error(transport + ": an orthographic camera cannot be reached by light paths (its rays are parallel): "
-                "render it with path, whitted, distribution, photon_map or sppm");
+// cannot render a camera light paths cannot reach (orthographic, meters).
+inline void RefuseUnreachableCamera(const SceneView& scene, const std::string& transport) {
+  if (const std::string_view reason = scene.CameraUnreachableReason(); !reason.empty())
+    throw Error(transport + ": " + std::string(reason) +
+                ": render it with path, whitted, distribution, photon_map or sppm");
 }
 
 // Methods that know nothing of participating media refuse scenes that

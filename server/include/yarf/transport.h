@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "yarf/component.h"
@@ -201,9 +202,11 @@ class SceneView : public Intersector, public SurfaceAttributes {
   virtual void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const { dpdx = dpdy = Vec3(); }
   // Whether the lens has area (thin lens) or is a point (pinhole).
   virtual bool CameraHasLens() const = 0;
-  // An orthographic camera's rays are parallel: ConnectToCamera never
-  // succeeds, and methods that connect light paths to it cannot render.
-  virtual bool CameraIsOrthographic() const = 0;
+  // Why light paths cannot reach the camera (an orthographic camera's
+  // rays are parallel; a radiance or irradiance meter has no lens and film
+  // to land on), empty when they can: ConnectToCamera never succeeds then,
+  // and methods that connect light paths to the camera cannot render.
+  virtual std::string_view CameraUnreachableReason() const = 0;
   // Density per solid angle of camera ray directions over the whole
   // film, 1/(A cos³θ) (CameraConnection::importance), 0 off the film.
   virtual float CameraDirectionPdf(Vec3 direction) const = 0;

@@ -11,6 +11,46 @@ Vec3 ToVec3(const v1::Vec3& v) { return {float(v.x()), float(v.y()), float(v.z()
 }  // namespace
 
 Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
+  switch (camera.model()) {
+    case v1::Camera::PINHOLE:
+    case v1::Camera::THIN_LENS:
+      kind_ = Kind::kPerspective;
+      break;
+    case v1::Camera::ORTHOGRAPHIC:
+      kind_ = Kind::kOrthographic;
+      break;
+    case v1::Camera::RADIANCE_METER:
+      kind_ = Kind::kRadianceMeter;
+      break;
+    case v1::Camera::IRRADIANCE_METER:
+      kind_ = Kind::kIrradianceMeter;
+      break;
+    default:
+      throw Error("camera: unknown model " + std::to_string(int(camera.model())));
+  }
+  if (!(camera.shutter() >= 0 && camera.shutter() <= 1))
+    throw Error("camera: shutter must lie in [0, 1], got " + std::to_string(camera.shutter()));
+  shutter_ = float(camera.shutter());
+  if (IsMeter()) {
+    // As Mitsuba's meters: one value, so one pixel, which every sample
+    // reaches alike.
+    const char* name = kind_ == Kind::kRadianceMeter ? "a radiance meter" : "an irradiance meter";
+    if (width != 1 || height != 1)
+      throw Error(std::string("camera: ") + name + " measures one value: its film must be 1x1, not " +
+                  std::to_string(width) + "x" + std::to_string(height));
+    if (kind_ == Kind::kIrradianceMeter) {
+      if (camera.meter_shape().empty()) throw Error("camera: an irradiance meter needs meter_shape, the shape it measures");
+      return;
+    }
+    origin_ = ToVec3(camera.origin());
+    const Vec3 direction = ToVec3(camera.target()) - origin_;
+    if (!(Length(direction) > 0) || !std::isfinite(Length(direction)))
+      throw Error("camera: a radiance meter's target must differ from its origin");
+    forward_ = Normalize(direction);
+    const Frame frame(forward_);
+    right_ = frame.s, up_ = frame.t;
+    return;
+  }
   origin_ = ToVec3(camera.origin());
   const Vec3 to_target = ToVec3(camera.target()) - origin_;
   if (Length(to_target) <= 0) throw Error("camera: target equals origin");
@@ -20,13 +60,13 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
   right_ = Normalize(right);
   up_ = Cross(right_, forward_);
 
-  orthographic_ = camera.model() == v1::Camera::ORTHOGRAPHIC;
-  if (orthographic_ && !(camera.view_size() > 0 && camera.view_size() < 1e30))
+  const bool orthographic = kind_ == Kind::kOrthographic;
+  if (orthographic && !(camera.view_size() > 0 && camera.view_size() < 1e30))
     throw Error("camera: an orthographic view_size must be positive and finite, got " +
                 std::to_string(camera.view_size()));
-  if (!orthographic_ && !(camera.fov() > 0 && camera.fov() < 180))
+  if (!orthographic && !(camera.fov() > 0 && camera.fov() < 180))
     throw Error("camera: fov must lie in (0, 180) degrees, got " + std::to_string(camera.fov()));
-  const float tan_half = orthographic_ ? float(camera.view_size()) / 2 : std::tan(float(camera.fov()) * kPi / 360.0f);
+  const float tan_half = orthographic ? float(camera.view_size()) / 2 : std::tan(float(camera.fov()) * kPi / 360.0f);
   const float aspect = float(width) / float(height);
   bool along_x = camera.fov_axis() == v1::Camera::X;
   if (camera.fov_axis() == v1::Camera::SMALLER) along_x = width <= height;
@@ -45,12 +85,49 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
     throw Error("camera: need 0 <= near_clip < far_clip (far_clip 0 = unbounded)");
   near_clip_ = float(camera.near_clip());
   far_clip_ = float(camera.far_clip());
-  if (!(camera.shutter() >= 0 && camera.shutter() <= 1))
-    throw Error("camera: shutter must lie in [0, 1], got " + std::to_string(camera.shutter()));
-  shutter_ = float(camera.shutter());
   inv_film_area_ = 1.0f / (4 * tan_half_x_ * tan_half_y_);
   pixel_x_ = 2 * tan_half_x_ / float(width);
   pixel_y_ = 2 * tan_half_y_ / float(height);
+}
+
+void Camera::MeasureOn(std::shared_ptr<const ShapeSurface> surface) {
+  if (kind_ != Kind::kIrradianceMeter) throw Error("camera: only an irradiance meter measures on a shape");
+  if (!surface || !(surface->Area() > 0)) throw Error("camera: an irradiance meter's shape has no area");
+  Vec3 lower, upper;
+  surface->Bounds(lower, upper);
+  origin_ = (lower + upper) * 0.5f;
+  surface_ = std::move(surface);
+}
+
+std::string_view Camera::UnreachableReason() const {
+  switch (kind_) {
+    case Kind::kOrthographic:
+      return "an orthographic camera cannot be reached by light paths (its rays are parallel)";
+    case Kind::kRadianceMeter:
+      return "a radiance meter cannot be reached by light paths (it measures along a single ray)";
+    case Kind::kIrradianceMeter:
+      return "an irradiance meter cannot be reached by light paths (they land on a lens and film, and it has neither)";
+    default:
+      return {};
+  }
+}
+
+Ray Camera::MeterRay(float film_x, float film_y, float lens_u, float lens_v, float time) const {
+  Ray ray;
+  ray.time = time;
+  ray.tnear = 0;
+  ray.tfar = kInfinity;
+  if (kind_ == Kind::kRadianceMeter) {
+    ray.origin = origin_;
+    ray.direction = forward_;
+    return ray;
+  }
+  if (!surface_) throw Error("camera: the irradiance meter has no shape to measure on");
+  const SurfaceSample at = surface_->SamplePoint(film_x, film_y);
+  ray.direction = Frame(at.normal).ToWorld(SampleCosineHemisphere(lens_u, lens_v));
+  // Off the surface, to the side the normal faces, so as not to hit it.
+  ray.origin = OffsetRayOrigin(at.position, at.normal, ray.direction);
+  return ray;
 }
 
 Vec3 Camera::LensPoint(float lens_u, float lens_v) const {
@@ -61,7 +138,7 @@ Vec3 Camera::LensPoint(float lens_u, float lens_v) const {
 
 bool Camera::Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float* film_x,
                      float* film_y, float* importance) const {
-  if (orthographic_) return false;
+  if (!UnreachableReason().empty()) return false;
   const Vec3 lens = LensPoint(lens_u, lens_v);
   const Vec3 rel = p - origin_;
   const Vec3 local{Dot(rel, right_), Dot(rel, up_), Dot(rel, forward_)};
@@ -83,7 +160,9 @@ bool Camera::Connect(Vec3 p, float lens_u, float lens_v, Vec3* lens_point, float
 
 void Camera::PixelSpacing(Vec3 p, Vec3 n, Vec3* dpdx, Vec3* dpdy) const {
   *dpdx = *dpdy = Vec3();
-  if (orthographic_) {
+  // Meters' rays carry no differentials (as Mitsuba's): the finest texture level.
+  if (IsMeter()) return;
+  if (kind_ == Kind::kOrthographic) {
     // Parallel rays: a pixel's step on the film, carried along the view
     // axis onto the plane.
     const float facing = Dot(n, forward_);
@@ -114,7 +193,7 @@ void Camera::PixelSpacing(Vec3 p, Vec3 n, Vec3* dpdx, Vec3* dpdy) const {
 }
 
 float Camera::DirectionPdf(Vec3 direction) const {
-  if (orthographic_) return 0;
+  if (!UnreachableReason().empty()) return 0;
   const Vec3 d = Normalize(direction);
   const float cos_theta = Dot(d, forward_);
   if (!(cos_theta > 0)) return 0;
@@ -124,7 +203,8 @@ float Camera::DirectionPdf(Vec3 direction) const {
 }
 
 Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v, float time) const {
-  if (orthographic_) {
+  if (IsMeter()) return MeterRay(film_x, film_y, lens_u, lens_v, time);
+  if (kind_ == Kind::kOrthographic) {
     Ray ray;
     ray.origin = origin_ + right_ * ((2 * film_x - 1) * tan_half_x_) + up_ * ((1 - 2 * film_y) * tan_half_y_);
     ray.direction = forward_;

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <utility>
 
+#include "testing/chi_square.h"
 #include "yarf/error.h"
+#include "yarf/warps.h"
 
 namespace yarf {
 namespace {
@@ -125,6 +128,99 @@ TEST(Camera, RejectsDegeneratePlacement) {
   spec.mutable_up()->set_z(1);
   EXPECT_ANY_THROW(Camera(spec, 8, 8));
   EXPECT_ANY_THROW(Camera(LookAlongZ(180), 8, 8));
+}
+
+TEST(Camera, RadianceMeterIsOneRayAlongItsDirection) {
+  v1::Camera spec;
+  spec.set_model(v1::Camera::RADIANCE_METER);
+  spec.mutable_origin()->set_x(1);
+  spec.mutable_target()->set_x(1);
+  spec.mutable_target()->set_y(3);  // along +y; up (absent) does not matter
+  const Camera camera(spec, 1, 1);
+  for (const auto [x, y] : {std::pair{0.5f, 0.5f}, {0.0f, 0.9f}, {0.7f, 0.1f}}) {
+    const Ray r = camera.Generate(x, y, y, x, 0);
+    EXPECT_EQ(r.origin.x, 1.0f);
+    EXPECT_EQ(r.origin.y, 0.0f);
+    EXPECT_NEAR(r.direction.y, 1.0f, 1e-7f);
+    EXPECT_EQ(r.tnear, 0.0f);
+  }
+  EXPECT_EQ(camera.RayWeight(), 1.0f);
+  EXPECT_FALSE(camera.UnreachableReason().empty());
+  Vec3 lens;
+  float fx = 0, fy = 0, importance = 0;
+  EXPECT_FALSE(camera.Connect(Vec3(1, 2, 0), 0.5f, 0.5f, &lens, &fx, &fy, &importance));
+  EXPECT_EQ(camera.DirectionPdf(Vec3(0, 1, 0)), 0.0f);
+  // One value: one pixel.
+  EXPECT_THROW(Camera(spec, 2, 2), Error);
+  EXPECT_THROW(Camera(spec, 1, 4), Error);
+  spec.mutable_target()->set_y(0);
+  EXPECT_THROW(Camera(spec, 1, 1), Error);
+}
+
+// The irradiance meter's rays on a tilted quad, normal (0, -1, 1)/√2:
+// origins on it, directions cosine-distributed about its normal (cos²θ and
+// φ both uniform), each weighing π.
+TEST(Camera, IrradianceMeterRaysLeaveItsShapeCosineDistributed) {
+  TriangleMesh mesh;
+  mesh.positions = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 1, 1), Vec3(0, 1, 1)};
+  mesh.indices = {0, 1, 2, 0, 2, 3};
+  mesh.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
+  const Vec3 normal = Normalize(Vec3(0, -1, 1));
+  std::vector<std::array<Vec3, 3>> corners = {{mesh.positions[0], mesh.positions[1], mesh.positions[2]},
+                                               {mesh.positions[0], mesh.positions[2], mesh.positions[3]}};
+  auto quad = std::make_shared<MeshSurface>(corners, std::vector<Vec3>(2, normal), mesh, false);
+
+  v1::Camera spec;
+  spec.set_model(v1::Camera::IRRADIANCE_METER);
+  EXPECT_THROW(Camera(spec, 1, 1), Error);  // no meter_shape
+  spec.set_meter_shape("quad");
+  EXPECT_THROW(Camera(spec, 3, 1), Error);
+  Camera camera(spec, 1, 1);
+  camera.MeasureOn(quad);
+  EXPECT_NEAR(camera.RayWeight(), kPi, 1e-6f);
+  EXPECT_FALSE(camera.UnreachableReason().empty());
+
+  constexpr int kCosBins = 10, kPhiBins = 16;
+  constexpr size_t kN = 160000;
+  std::vector<double> observed(kCosBins * kPhiBins, 0), expected(kCosBins * kPhiBins, double(kN) / observed.size());
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0, 0x1.fffffep-1f);
+  const Frame frame(normal);
+  double mean_x = 0;
+  for (size_t k = 0; k < kN; ++k) {
+    const Ray r = camera.Generate(u(rng), u(rng), u(rng), u(rng), 0);
+    // On the quad, moved off it to its normal's side by the surface
+    // offset (2e-4 here), inside it.
+    EXPECT_GT(Dot(r.origin, normal), 0);
+    EXPECT_LT(Dot(r.origin, normal), 2.1e-4f);
+    EXPECT_GE(r.origin.x, -3e-4f);
+    EXPECT_LE(r.origin.x, 2 + 3e-4f);
+    EXPECT_GE(r.origin.y, -3e-4f);
+    EXPECT_LE(r.origin.y, 1 + 3e-4f);
+    mean_x += r.origin.x / kN;
+    const Vec3 local = frame.ToLocal(r.direction);
+    ASSERT_GT(local.z, 0) << "a ray leaves the back of its shape";
+    float phi = std::atan2(local.y, local.x);
+    if (phi < 0) phi += 2 * kPi;
+    const int c = std::min(kCosBins - 1, int(local.z * local.z * kCosBins));
+    const int p = std::min(kPhiBins - 1, int(phi / (2 * kPi) * kPhiBins));
+    observed[c * kPhiBins + p] += 1;
+  }
+  EXPECT_NEAR(mean_x, 1, 0.01);
+  EXPECT_TRUE(testing_support::PearsonChiSquareTest(observed, expected, 1e-3));
+
+  // A sphere: rays leave outward from points on it.
+  SphereGeometry ball;
+  ball.center = Vec3(0, 0, 5);
+  ball.radius = 0.5f;
+  Camera on_ball(spec, 1, 1);
+  on_ball.MeasureOn(std::make_shared<SphereSurface>(ball, true));
+  EXPECT_NEAR(on_ball.origin().z, 5, 1e-6f);
+  for (int k = 0; k < 1000; ++k) {
+    const Ray r = on_ball.Generate(u(rng), u(rng), u(rng), u(rng), 0);
+    EXPECT_NEAR(Length(r.origin - ball.center), 0.5f, 1e-3f);
+    EXPECT_GT(Dot(r.direction, r.origin - ball.center), 0);
+  }
 }
 
 }  // namespace

@@ -8,7 +8,7 @@ void FilmTarget::Accumulate(const FilmSamples& samples) {
     if (samples.splats)
       film_.Splat(samples.xy[2 * i], samples.xy[2 * i + 1], samples.rgb[i]);
     else
-      film_.Add(samples.xy[2 * i], samples.xy[2 * i + 1], samples.rgb[i]);
+      film_.Add(samples.xy[2 * i], samples.xy[2 * i + 1], samples.rgb[i] * camera_weight_);
   }
 }
 

@@ -28,6 +28,10 @@ class FilmTarget final : public RenderTarget {
       : film_(film), mutex_(mutex), spp_(spp), seed_(seed), share_(share), cancel_(cancel),
         on_pass_(std::move(on_pass)), samples_done_(share.first_sample) {}
 
+  // What each camera sample's radiance counts for (π for an irradiance
+  // meter: KernelScene::CameraRayWeight); 1 unless set.
+  void WeighCameraSamples(float weight) { camera_weight_ = weight; }
+
   uint32_t SamplesPerPixel() const override { return spp_; }
   uint32_t FirstSample() const override { return share_.first_sample; }
   std::optional<PixelWindow> Crop() const override { return share_.crop; }
@@ -45,6 +49,7 @@ class FilmTarget final : public RenderTarget {
   const std::atomic<bool>& cancel_;
   PassCallback on_pass_;
   uint32_t samples_done_;
+  float camera_weight_ = 1;
 };
 
 }  // namespace yarf

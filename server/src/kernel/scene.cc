@@ -66,7 +66,7 @@ uint32_t KernelScene::NewGroup() {
   return uint32_t(groups_.size() - 1);
 }
 
-void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look) {
+uint32_t KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look) {
   DropFaceNormals(mesh);
   RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
@@ -108,10 +108,11 @@ void KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& lo
   face_normals_.push_back(std::move(normals));
   meshes_.push_back(std::move(mesh));
   groups_[group].shapes.push_back(record);
+  return uint32_t(groups_[group].shapes.size() - 1);
 }
 
-void KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look,
-                            const std::array<Vec3, 3>& axes) {
+uint32_t KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look,
+                                const std::array<Vec3, 3>& axes) {
   RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_SPHERE_POINT);
   auto* point = static_cast<float*>(rtcSetNewGeometryBuffer(
       geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
@@ -130,6 +131,7 @@ void KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const Sha
   record.axes = axes;
   record.look = look;
   groups_[group].shapes.push_back(record);
+  return uint32_t(groups_[group].shapes.size() - 1);
 }
 
 void KernelScene::AddPlacement(uint32_t group, const Transform& to_world,
@@ -181,6 +183,11 @@ void KernelScene::Commit() {
   for (const ShapeRecord& s : groups_[kWorld].shapes) {
     geometry_base_.push_back(uint32_t(shapes_.size()));
     shapes_.push_back(s);
+  }
+  if (camera_.IsIrradianceMeter()) {
+    if (!meter_shape_ || *meter_shape_ >= shapes_.size())
+      throw Error("camera: the irradiance meter's shape is not a shape of the world");
+    camera_.MeasureOn(MakeSurface(*meter_shape_));
   }
   for (size_t g = 1; g < groups_.size(); ++g) {
     rtcSetSceneBuildQuality(groups_[g].scene, RTC_BUILD_QUALITY_HIGH);

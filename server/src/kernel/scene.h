@@ -52,11 +52,15 @@ class KernelScene final : public SceneView {
   uint32_t AddMedium(std::unique_ptr<Medium> medium);
   void SetCameraMedium(uint32_t medium) { camera_medium_ = medium; }
   uint32_t NewGroup();
-  // Geometry in the group's own space.
-  void AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look);
+  // Geometry in the group's own space; returns the shape's number in its
+  // group, which for kWorld is its shape id once committed.
+  uint32_t AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look);
   // `axes`: the sphere's own x, y, z axes (unit), which its uv follows.
-  void AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look,
-                 const std::array<Vec3, 3>& axes = {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)});
+  uint32_t AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look,
+                     const std::array<Vec3, 3>& axes = {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)});
+  // The shape an irradiance meter camera measures: a number AddMesh or
+  // AddSphere returned for group kWorld. Required for that camera.
+  void SetMeterShape(uint32_t world_shape) { meter_shape_ = world_shape; }
   // Places a group (not kWorld) in the world; nested placements arrive
   // here already flattened, with composed transforms. With `to_world_end`
   // the placement moves from to_world to it over the shutter interval.
@@ -127,7 +131,10 @@ class KernelScene final : public SceneView {
   void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const override;
   void Attribute(std::string_view name, std::span<const SurfaceLocation> at, std::span<float> rgb) const override;
   bool CameraHasLens() const override { return camera_.HasLens(); }
-  bool CameraIsOrthographic() const override { return camera_.Orthographic(); }
+  std::string_view CameraUnreachableReason() const override { return camera_.UnreachableReason(); }
+  // What each camera sample's radiance counts for on the film (π for an
+  // irradiance meter); the film target applies it.
+  float CameraRayWeight() const { return camera_.RayWeight(); }
   float CameraDirectionPdf(Vec3 direction) const override { return camera_.DirectionPdf(direction); }
   uint32_t FilmWidth() const override { return width_; }
   uint32_t FilmHeight() const override { return height_; }
@@ -217,6 +224,7 @@ class KernelScene final : public SceneView {
   std::vector<std::unique_ptr<Emitter>> emitters_;
   std::vector<std::unique_ptr<Medium>> media_;
   uint32_t camera_medium_ = kNoMedium;
+  std::optional<uint32_t> meter_shape_;
   std::vector<TriangleMesh> meshes_;
   // The cut-outs of meshes with an alpha texture, Embree's filter data.
   std::vector<std::unique_ptr<AlphaCut>> alpha_cuts_;

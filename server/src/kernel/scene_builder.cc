@@ -328,22 +328,26 @@ class Builder {
         AddShape(own, s, look, Transform{}, what);
         continue;
       }
-      AddShape(group, s, look, to_world, what);
+      const uint32_t id = AddShape(group, s, look, to_world, what);
+      // ValidateMeter made sure this is the one world shape of that name.
+      if (group == KernelScene::kWorld && scene_.camera().model() == v1::Camera::IRRADIANCE_METER &&
+          s.name() == scene_.camera().meter_shape())
+        kernel_->SetMeterShape(id);
     }
   }
 
-  // The shape's geometry, moved to where `to_world` puts it.
-  void AddShape(uint32_t group, const v1::SceneShape& s, const ShapeLook& look, const Transform& to_world,
-                const std::string& what) {
+  // The shape's geometry, moved to where `to_world` puts it; its number
+  // in the group.
+  uint32_t AddShape(uint32_t group, const v1::SceneShape& s, const ShapeLook& look, const Transform& to_world,
+                    const std::string& what) {
     if (s.has_sphere()) {
       const auto& c = s.sphere().center();
       const float scale = float(std::cbrt(std::abs(to_world.Determinant3())));
       // Its uv follows its own axes, rotated (and perhaps mirrored) by to_world.
       std::array<Vec3, 3> axes{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
       for (Vec3& axis : axes) axis = Normalize(to_world.Vector(axis));
-      kernel_->AddSphere(group, to_world.Point(Vec3(float(c.x()), float(c.y()), float(c.z()))),
-                         float(s.sphere().radius()) * scale, look, axes);
-      return;
+      return kernel_->AddSphere(group, to_world.Point(Vec3(float(c.x()), float(c.y()), float(c.z()))),
+                                float(s.sphere().radius()) * scale, look, axes);
     }
     TriangleMesh mesh = s.has_mesh() ? LoadMesh(s.mesh(), what) : Rectangle();
     for (Vec3& p : mesh.positions) p = to_world.Point(p);
@@ -352,7 +356,7 @@ class Builder {
       const float length = Length(moved);
       n = length > 0 ? moved / length : Vec3();
     }
-    kernel_->AddMesh(group, std::move(mesh), look);
+    return kernel_->AddMesh(group, std::move(mesh), look);
   }
 
   TriangleMesh LoadMesh(const v1::Mesh& mesh, const std::string& what) {
@@ -468,6 +472,27 @@ uint64_t CountPlacements(const v1::Scene& scene) {
   return total;
 }
 
+// A meter's film is one pixel that every sample reaches with the same
+// weight (a box of at least half a pixel); an irradiance meter measures on
+// one shape of the world that stays put.
+void ValidateMeter(const v1::Scene& scene) {
+  const v1::Camera& camera = scene.camera();
+  if (camera.model() != v1::Camera::RADIANCE_METER && camera.model() != v1::Camera::IRRADIANCE_METER) return;
+  const v1::ReconstructionFilter& filter = scene.film().filter();
+  if (filter.kind() != v1::ReconstructionFilter::BOX || (filter.radius() != 0 && filter.radius() < 0.5))
+    throw Error("film: a meter needs the box filter of radius 0.5 or more, so that every sample weighs the same");
+  if (camera.model() != v1::Camera::IRRADIANCE_METER) return;
+  int found = 0;
+  for (const v1::SceneShape& shape : scene.shapes())
+    if (shape.name() == camera.meter_shape()) {
+      if (++found > 1) throw Error("camera: meter_shape '" + camera.meter_shape() + "' names two shapes");
+      if (shape.has_to_world_end())
+        throw Error("camera: the irradiance meter's shape '" + camera.meter_shape() + "' moves: it must stay put");
+    }
+  if (found == 0)
+    throw Error("camera: meter_shape '" + camera.meter_shape() + "' is not a shape of Scene.shapes");
+}
+
 }  // namespace
 
 std::vector<std::string> SceneAssets(const v1::Scene& scene) {
@@ -502,6 +527,7 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
   ReconstructionFilter{film.filter()};
   if (!scene.has_camera()) throw Error("scene has no camera");
   Camera(scene.camera(), film.width(), film.height());
+  ValidateMeter(scene);
   SceneNames names;
   for (const v1::Material& m : scene.materials()) {
     if (m.name().empty()) throw Error("a material has no name");

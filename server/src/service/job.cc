@@ -308,6 +308,7 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
       const auto end = std::chrono::steady_clock::now();
       next_checkpoint = end + std::max(every, std::chrono::duration<double>(10 * (end - start)));
     });
+    target.WeighCameraSamples(kernel->CameraRayWeight());
     // Served while it renders, for transports in other processes.
     const auto served = resources.scenes.Serve(kernel, target);
     parts.transport->Prepare(*kernel);
