@@ -212,6 +212,23 @@ void SceneAssembly::SetCamera(v1::Camera camera, const Matrix4& camera_to_world,
   }
 }
 
+void SceneAssembly::SetMeter(v1::Camera camera) {
+  *scene_.mutable_camera() = std::move(camera);
+  mirrored_ = false;
+  mirror_ = Matrix4();
+}
+
+std::string SceneAssembly::UnusedShapeName(const std::string& wanted) const {
+  const auto taken = [&](const std::string& name) {
+    for (const v1::SceneShape& shape : scene_.shapes())
+      if (shape.name() == name) return true;
+    return false;
+  };
+  std::string name = wanted;
+  for (int k = 2; taken(name); ++k) name = wanted + " " + std::to_string(k);
+  return name;
+}
+
 v1::Scene SceneAssembly::Finish() {
   for (int i = 0; i < scene_.shapes_size(); ++i) {
     v1::SceneShape& shape = *scene_.mutable_shapes(i);

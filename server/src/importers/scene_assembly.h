@@ -89,6 +89,11 @@ class SceneAssembly {
   void SetCamera(v1::Camera camera, const Matrix4& camera_to_world, const Vec3d& source_right,
                  const SourceLocation& where);
   bool HasCamera() const { return scene_.has_camera(); }
+  // A meter (radiance or irradiance) as the camera: placed by its own
+  // fields, with no image whose sides could be mirrored.
+  void SetMeter(v1::Camera camera);
+  // `wanted`, or a variant of it, that no world shape is named yet.
+  std::string UnusedShapeName(const std::string& wanted) const;
 
   // The scene, with the mirror applied to world shapes, lights and instances.
   v1::Scene Finish();

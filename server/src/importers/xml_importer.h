@@ -46,6 +46,14 @@ class MitsubaImporter {
   // xml_sensor.cc
   void Integrator(const XmlElement& element);
   void Sensor(const XmlElement& element);
+  void RadianceMeter(XmlPlugin& plugin);
+  // An irradiancemeter nested in the <shape> whose world shape is named
+  // `shape`.
+  void IrradianceMeter(const XmlElement& element, const std::string& shape);
+  // A meter's film (1x1, box filter), sampler and medium, then the camera.
+  void Meter(XmlPlugin& plugin, v1::Camera camera);
+  // The sampler and medium nested in a sensor.
+  void SensorSamplerAndMedium(XmlPlugin& plugin);
   void SetFieldOfView(XmlPlugin& plugin, v1::Camera& camera, int64_t width, int64_t height,
                       const SourceLocation& where);
   void Film(const XmlElement& element);

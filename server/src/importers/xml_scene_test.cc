@@ -346,6 +346,92 @@ TEST(MitsubaImport, AnOrthographicSensorSpansTwoUnitsOfItsScaledSpace) {
   EXPECT_TRUE(result.warnings.empty());
 }
 
+// The import error of a Mitsuba scene given as text, "" when it imports.
+std::string ErrorOf(const std::string& xml) {
+  try {
+    ImportMitsuba(xml, "meter.xml");
+  } catch (const ImportError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+constexpr const char* kOnePixel = R"(<film type="hdrfilm"><integer name="width" value="1"/>)"
+                                  R"(<integer name="height" value="1"/><rfilter type="box"/></film>)";
+
+TEST(MitsubaImport, ARadianceMeterIsOneRayFromItsOriginOrItsToWorld) {
+  const ImportResult along = ImportMitsuba(
+      std::string(R"(<scene version="3.0.0"><sensor type="radiancemeter"><point name="origin" value="1, 2, 3"/>)"
+                  R"(<vector name="direction" value="0, -2, 0"/>)") +
+          kOnePixel + "</sensor></scene>",
+      "meter.xml");
+  const v1::Camera& camera = along.scene.camera();
+  EXPECT_EQ(camera.model(), v1::Camera::RADIANCE_METER);
+  ExpectNear(ToVec(camera.origin()), {1, 2, 3});
+  ExpectNear(ToVec(camera.target()), {1, 0, 3});
+  EXPECT_EQ(along.scene.film().filter().kind(), v1::ReconstructionFilter::BOX);
+  EXPECT_TRUE(along.warnings.empty()) << along.warnings.front();
+
+  // to_world wins over origin and direction; the ray runs along its +z.
+  const ImportResult placed = ImportMitsuba(
+      std::string(R"(<scene version="3.0.0"><sensor type="radiancemeter"><point name="origin" value="9, 9, 9"/>)"
+                  R"(<vector name="direction" value="1, 0, 0"/><transform name="to_world">)"
+                  R"(<lookat origin="0, 1, 0" target="0, 1, -4" up="0, 1, 0"/></transform>)") +
+          kOnePixel + "</sensor></scene>",
+      "meter.xml");
+  ExpectNear(ToVec(placed.scene.camera().origin()), {0, 1, 0});
+  ExpectNear(ToVec(placed.scene.camera().target()), {0, 1, -1});
+  EXPECT_TRUE(placed.warnings.empty());
+
+  // One value: a film of one pixel, given (Mitsuba's default film is larger).
+  EXPECT_NE(ErrorOf(R"(<scene version="3.0.0"><sensor type="radiancemeter"><film type="hdrfilm">)"
+                    R"(<integer name="width" value="4"/><integer name="height" value="4"/></film></sensor></scene>)")
+                .find("meter.xml:1: sensor 'radiancemeter' measures one value: its film must be 1x1, not 4x4"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(R"(<scene version="3.0.0"><sensor type="radiancemeter"/></scene>)").find("needs a 1x1 <film>"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(R"(<scene version="3.0.0"><sensor type="radiancemeter">)"
+                                R"(<point name="origin" value="1, 2, 3"/>)") +
+                    kOnePixel + "</sensor></scene>")
+                .find("give origin and direction together"),
+            std::string::npos);
+}
+
+TEST(MitsubaImport, AnIrradianceMeterMeasuresOnTheShapeItSitsIn) {
+  const ImportResult result = ImportMitsuba(
+      std::string(R"(<scene version="3.0.0"><shape type="rectangle" id="floor"/>)"
+                  R"(<shape type="rectangle"><sensor type="irradiancemeter"><film type="hdrfilm">)"
+                  R"(<integer name="width" value="1"/><integer name="height" value="1"/></film>)"
+                  R"(<sampler type="independent"><integer name="sample_count" value="64"/></sampler>)"
+                  R"(</sensor></shape></scene>)"),
+      "meter.xml");
+  const v1::Camera& camera = result.scene.camera();
+  EXPECT_EQ(camera.model(), v1::Camera::IRRADIANCE_METER);
+  ASSERT_EQ(result.scene.shapes_size(), 2);
+  EXPECT_EQ(camera.meter_shape(), result.scene.shapes(1).name());
+  EXPECT_NE(result.scene.shapes(0).name(), result.scene.shapes(1).name());
+  EXPECT_EQ(result.sample_count, 64u);
+  // Mitsuba's default gaussian would weigh the shape's points unevenly.
+  EXPECT_EQ(result.scene.film().filter().kind(), v1::ReconstructionFilter::BOX);
+  EXPECT_DOUBLE_EQ(result.scene.film().filter().radius(), 0.5);
+  EXPECT_TRUE(Warns(result, "the box filter of radius 0.5 used"));
+  EXPECT_FALSE(Warns(result, "no sensor"));
+
+  EXPECT_NE(ErrorOf(std::string(R"(<scene version="3.0.0"><shape type="sphere"><sensor type="irradiancemeter">)"
+                                R"(<transform name="to_world"><translate x="1"/></transform>)") +
+                    kOnePixel + "</sensor></shape></scene>")
+                .find("meter.xml:1: sensor 'irradiancemeter' takes no to_world"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(R"(<scene version="3.0.0"><sensor type="irradiancemeter">)") + kOnePixel +
+                    "</sensor></scene>")
+                .find("must be declared inside the <shape> it measures"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(R"(<scene version="3.0.0"><shape type="sphere"><sensor type="perspective">)") +
+                    kOnePixel + "</sensor></shape></scene>")
+                .find("only an irradiancemeter can be declared there"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace yarf::importers
 

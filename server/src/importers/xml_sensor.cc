@@ -77,6 +77,12 @@ void MitsubaImporter::Integrator(const XmlElement& e) {
 void MitsubaImporter::Sensor(const XmlElement& e) {
   XmlPlugin p(e, *this);
   const std::string& type = p.type();
+  if (type == "radiancemeter") {
+    RadianceMeter(p);
+    return;
+  }
+  if (type == "irradiancemeter")
+    Fail(e.where, "sensor 'irradiancemeter' must be declared inside the <shape> it measures");
   v1::Camera camera;
   if (type == "thinlens") {
     camera.set_model(v1::Camera::THIN_LENS);
@@ -100,14 +106,6 @@ void MitsubaImporter::Sensor(const XmlElement& e) {
     Film(*films.front());
     width = assembly_.scene().film().width(), height = assembly_.scene().film().height();
   }
-  const auto samplers = p.Objects("sampler");
-  if (samplers.empty()) {
-    sample_count_ = 4;  // Mitsuba's independent sampler's default
-    *assembly_.scene().mutable_sampler() = Spec("independent");
-  } else {
-    Sampler(*samplers.front());
-  }
-
   const Matrix4 to_world = p.Transform("to_world");
   if (type == "orthographic") {
     // Mitsuba's orthographic sensor sees x in [-1, 1] of its own space
@@ -135,12 +133,83 @@ void MitsubaImporter::Sensor(const XmlElement& e) {
   for (const char* offset : {"principal_point_offset_x", "principal_point_offset_y"})
     if (p.Float(offset, 0) != 0)
       Warn(p.WhereIs(offset), "principal-point", "principal point offsets are not supported: ignored");
+  SensorSamplerAndMedium(p);
+  assembly_.SetCamera(std::move(camera), to_world, {-1, 0, 0}, e.where);
+  if (type == "perspective" || type == "thinlens" || type == "orthographic") p.WarnUnused();
+}
+
+void MitsubaImporter::SensorSamplerAndMedium(XmlPlugin& p) {
+  const auto samplers = p.Objects("sampler");
+  if (samplers.empty()) {
+    sample_count_ = 4;  // Mitsuba's independent sampler's default
+    *assembly_.scene().mutable_sampler() = Spec("independent");
+  } else {
+    Sampler(*samplers.front());
+  }
   p.Accept({"shutter_open", "shutter_close"});
   const auto media = p.Objects("medium");
   if (media.size() > 1) Fail(media[1]->where, "a sensor sits in one medium");
   if (!media.empty()) assembly_.SetCameraMedium(Medium(*media.front()));
-  assembly_.SetCamera(std::move(camera), to_world, {-1, 0, 0}, e.where);
-  if (type == "perspective" || type == "thinlens" || type == "orthographic") p.WarnUnused();
+}
+
+// Mitsuba's radiancemeter: the ray from to_world's origin along its +z,
+// or from `origin` along `direction`; to_world wins when both are given.
+void MitsubaImporter::RadianceMeter(XmlPlugin& p) {
+  Vec3d origin{0, 0, 0}, direction{0, 0, 1};
+  if (p.Has("to_world")) {
+    p.Accept({"origin", "direction"});
+    const Matrix4 to_world = p.Transform("to_world");
+    origin = to_world.Point({0, 0, 0});
+    direction = to_world.Vector({0, 0, 1});
+  } else if (p.Has("origin") || p.Has("direction")) {
+    if (!p.Has("origin") || !p.Has("direction"))
+      Fail(p.where(), "sensor 'radiancemeter': give origin and direction together (or to_world)");
+    origin = p.Point("origin", origin);
+    direction = p.Point("direction", direction);
+  }
+  if (!(Length(direction) > 0 && Length(direction) < 1e30))
+    Fail(p.WhereIs(p.Has("to_world") ? "to_world" : "direction"), "sensor 'radiancemeter': its direction is zero");
+  v1::Camera camera;
+  camera.set_model(v1::Camera::RADIANCE_METER);
+  const Vec3d target = origin + direction;
+  camera.mutable_origin()->set_x(origin.x), camera.mutable_origin()->set_y(origin.y),
+      camera.mutable_origin()->set_z(origin.z);
+  camera.mutable_target()->set_x(target.x), camera.mutable_target()->set_y(target.y),
+      camera.mutable_target()->set_z(target.z);
+  Meter(p, std::move(camera));
+}
+
+void MitsubaImporter::IrradianceMeter(const XmlElement& e, const std::string& shape) {
+  XmlPlugin p(e, *this);
+  if (p.Has("to_world"))
+    Fail(p.WhereIs("to_world"), "sensor 'irradiancemeter' takes no to_world: it sits on its shape");
+  v1::Camera camera;
+  camera.set_model(v1::Camera::IRRADIANCE_METER);
+  camera.set_meter_shape(shape);
+  Meter(p, std::move(camera));
+}
+
+void MitsubaImporter::Meter(XmlPlugin& p, v1::Camera camera) {
+  const std::string what = "sensor '" + p.type() + "'";
+  const auto films = p.Objects("film");
+  // Mitsuba's default film is 768x576, which a meter refuses.
+  if (films.empty()) Fail(p.where(), what + " needs a 1x1 <film>");
+  Film(*films.front());
+  v1::Film& film = *assembly_.scene().mutable_film();
+  if (film.width() != 1 || film.height() != 1)
+    Fail(films.front()->where, what + " measures one value: its film must be 1x1, not " +
+                                   std::to_string(film.width()) + "x" + std::to_string(film.height()));
+  // Every sample of the one pixel must weigh the same.
+  if (film.filter().kind() != v1::ReconstructionFilter::BOX || film.filter().radius() < 0.5)
+    Warn(films.front()->where, "meter-filter",
+         what + ": the box filter of radius 0.5 used, so that every sample weighs the same");
+  film.mutable_filter()->set_kind(v1::ReconstructionFilter::BOX);
+  film.mutable_filter()->set_radius(0.5);
+  if (p.Has("srf")) Warn(p.WhereIs("srf"), "meter-srf", what + ": srf is not supported: RGB is measured");
+  p.Accept({"srf"});
+  SensorSamplerAndMedium(p);
+  assembly_.SetMeter(std::move(camera));
+  p.WarnUnused();
 }
 
 // Field of view: fov along fov_axis, or a 35 mm focal length (which

@@ -84,6 +84,8 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
   } else {
     static const std::vector<std::string> kKnown = {"obj",  "ply",  "serialized", "sphere",   "rectangle",
                                                     "cube", "disk", "cylinder",   "instance", "shapegroup"};
+    if (!p.Objects("sensor").empty())
+      Fail(e.where, "shape type '" + type + "' is not supported, and a sensor sits on it" + DidYouMean(type, kKnown));
     Warn(e.where, "shape:" + type, "shape type '" + type + "' is not supported: ignored" + DidYouMean(type, kKnown));
     return;
   }
@@ -99,6 +101,21 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     const std::string name = Medium(*medium);
     std::string(side) == "interior" ? shape.set_interior(name) : shape.set_exterior(name);
   }
+  // An irradiance meter measures on its shape, which the camera then names.
+  const auto sensors = p.Objects("sensor");
+  const XmlElement* meter = nullptr;
+  if (!sensors.empty()) {
+    if (sensors.size() > 1) Fail(sensors[1]->where, "a shape holds one sensor");
+    if (sensors.front()->Get("type") != "irradiancemeter")
+      Fail(sensors.front()->where, "sensor '" + sensors.front()->Get("type") +
+                                       "' inside a shape: only an irradiancemeter can be declared there");
+    if (!group.empty())
+      Fail(sensors.front()->where, "an irradiancemeter on a shape of a shapegroup is not supported: place it in the world");
+    if (assembly_.HasCamera())
+      Warn(sensors.front()->where, "second-sensor", "a second <sensor> ignored: yarf renders the first");
+    else
+      meter = sensors.front();
+  }
   const auto emitters = p.Objects("emitter");
   const auto bsdfs = p.Objects("bsdf");
   if (bsdfs.size() > 1) Fail(bsdfs[1]->where, "a shape takes one BSDF");
@@ -108,7 +125,7 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     // a surface that is neither is invisible, and left out.
     const bool emits = std::any_of(emitters.begin(), emitters.end(),
                                    [](const XmlElement* emitter) { return emitter->Get("type") == "area"; });
-    if (shape.interior().empty() && shape.exterior().empty() && !emits) {
+    if (shape.interior().empty() && shape.exterior().empty() && !emits && !meter) {
       p.WarnUnused();
       return;
     }
@@ -130,6 +147,10 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     if (shape.has_emitter()) Fail(emitter->where, "a shape takes one area emitter");
     attached_emitters_.insert(emitter);
     *shape.mutable_emitter() = AreaEmitter(*emitter);
+  }
+  if (meter) {
+    shape.set_name(assembly_.UnusedShapeName(shape.name().empty() ? "irradiancemeter's shape" : shape.name()));
+    IrradianceMeter(*meter, shape.name());
   }
   p.WarnUnused();
   assembly_.AddShape(std::move(shape), to_world, flip, rule, e.where, group);
