@@ -110,7 +110,8 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
       Fail(sensors.front()->where, "sensor '" + sensors.front()->Get("type") +
                                        "' inside a shape: only an irradiancemeter can be declared there");
     if (!group.empty())
-      Fail(sensors.front()->where, "an irradiancemeter on a shape of a shapegroup is not supported: place it in the world");
+      Fail(sensors.front()->where,
+           "an irradiancemeter on a shape of a shapegroup is not supported: place it in the world");
     if (assembly_.HasCamera())
       Warn(sensors.front()->where, "second-sensor", "a second <sensor> ignored: yarf renders the first");
     else

@@ -39,7 +39,8 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
       throw Error(std::string("camera: ") + name + " measures one value: its film must be 1x1, not " +
                   std::to_string(width) + "x" + std::to_string(height));
     if (kind_ == Kind::kIrradianceMeter) {
-      if (camera.meter_shape().empty()) throw Error("camera: an irradiance meter needs meter_shape, the shape it measures");
+      if (camera.meter_shape().empty())
+        throw Error("camera: an irradiance meter needs meter_shape, the shape it measures");
       return;
     }
     origin_ = ToVec3(camera.origin());
