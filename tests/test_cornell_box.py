@@ -12,8 +12,9 @@ from statistics import NormalDist
 import numpy as np
 import pytest
 from conftest import CORNELL_BOX
+from imagestats import block_z_test
 
-from yarf import Client, LocalServer, RenderResult
+from yarf import Client, LocalServer, RenderResult, component
 from yarf.v1 import render_pb2, scene_pb2
 
 SIZE = 256
@@ -169,3 +170,19 @@ def test_cli_render_writes_an_exr_file(server: LocalServer, tmp_path: Path) -> N
     assert run.returncode == 0, f"yarf render failed ({run.returncode}):\n{run.stderr}"
     assert output.read_bytes()[:4] == EXR_MAGIC
     assert str(output) in run.stdout
+
+
+def test_zsobol_renders_the_image_padded_sobol_renders(
+    client: Client, cornell_box: scene_pb2.Scene
+) -> None:
+    """pbrt-v4's ZSobol (one sequence over the film in Morton order) is a
+    choice of points, not of image: both samplers estimate the same pixels."""
+    scene = scene_pb2.Scene()
+    scene.CopyFrom(cornell_box)
+    scene.film.width = scene.film.height = 64
+    zsobol = client.render(scene, spp=32, seed=3, sampler=component("zsobol"))
+    padded = client.render(scene, spp=32, seed=4, sampler=component("sobol"))
+    test = block_z_test(
+        zsobol.pixels, zsobol.variance, padded.pixels, padded.variance, block=4, family_alpha=1e-3
+    )
+    assert not test.failing.size, f"zsobol vs sobol:\n{test.report()}"

@@ -16,15 +16,17 @@
 namespace yarf {
 
 // The points of one tile's pixels for `samples` consecutive sample
-// indices from `first_index`, produced lazily: the sampler's points of
-// each pixel's own sequence, with coordinates 0 and 1 placed inside the
-// pixel. Point i is sample first_index + i % samples of pixel i / samples.
+// indices from `first_index`, of `samples_per_pixel` in the job, produced
+// lazily: the sampler's points where it places each pixel's samples
+// (Sampler::AtPixel), with coordinates 0 and 1 placed inside the pixel.
+// Point i is sample first_index + i % samples of pixel i / samples.
 // Warp() lets an integrator remap the other coordinates.
 class TilePoints : public PrimarySamples {
  public:
-  TilePoints(const Sampler& sampler, uint64_t first_index, uint32_t width, uint32_t height, uint32_t samples = 1)
-      : sampler_(sampler), first_index_(first_index), samples_(samples), width_(width), inv_width_(1.0f / width),
-        inv_height_(1.0f / height) {}
+  TilePoints(const Sampler& sampler, uint64_t first_index, uint32_t width, uint32_t height,
+             uint32_t samples_per_pixel, uint32_t samples = 1)
+      : sampler_(sampler), first_index_(first_index), samples_(samples), samples_per_pixel_(samples_per_pixel),
+        width_(width), height_(height), inv_width_(1.0f / width), inv_height_(1.0f / height) {}
   virtual ~TilePoints() = default;
 
   virtual void Reset(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, uint64_t seed) {
@@ -35,16 +37,17 @@ class TilePoints : public PrimarySamples {
     for (uint32_t y = y0; y < y1; ++y)
       for (uint32_t x = x0; x < x1; ++x) {
         pixels_.push_back({x, y});
-        const uint64_t pixel_seed = Hash(seed, uint64_t(y) * width_ + x);
         for (uint32_t s = 0; s < samples_; ++s) {
-          indices_.push_back(first_index_ + s);
-          seeds_.push_back(pixel_seed);
+          const Sampler::FilmPoint point =
+              sampler_.AtPixel(x, y, width_, height_, first_index_ + s, samples_per_pixel_, seed);
+          indices_.push_back(point.index);
+          seeds_.push_back(point.seed);
         }
       }
   }
 
   size_t Count() const override { return indices_.size(); }
-  uint64_t SampleIndex(size_t i) const override { return indices_[i]; }
+  uint64_t SampleIndex(size_t i) const override { return first_index_ + i % samples_; }
   float Get(size_t i, uint32_t dimension) const override {
     const size_t pixel = i / samples_;
     const float u = Uniform(i, dimension);
@@ -78,8 +81,8 @@ class TilePoints : public PrimarySamples {
   };
   const Sampler& sampler_;
   uint64_t first_index_;
-  uint32_t samples_;
-  uint32_t width_;
+  uint32_t samples_, samples_per_pixel_;
+  uint32_t width_, height_;
   float inv_width_, inv_height_;
   std::vector<Pixel> pixels_;
   // Per point: its index in its pixel's sequence and the pixel's seed.

@@ -77,7 +77,8 @@ class MeanSampleIntegrator final : public Integrator {
         scene, target, tile_size_, samples_per_pass_,
         [&](uint32_t first, uint32_t samples, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1,
             FilmSamples& out) {
-          TilePoints points(sampler, first, scene.FilmWidth(), scene.FilmHeight(), samples);
+          TilePoints points(sampler, first, scene.FilmWidth(), scene.FilmHeight(), target.SamplesPerPixel(),
+                            samples);
           points.Reset(x0, y0, x1, y1, target.Seed());
           transport.Evaluate(scene, points, out);
           target.Accumulate(out);

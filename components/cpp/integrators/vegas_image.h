@@ -29,8 +29,8 @@ constexpr uint32_t kFirstMappedDimension = 2;
 class MappedTilePoints final : public TilePoints {
  public:
   MappedTilePoints(const Sampler& sampler, const AdaptiveMap& map, uint64_t index, uint32_t width,
-                   uint32_t height)
-      : TilePoints(sampler, index, width, height), map_(map) {}
+                   uint32_t height, uint32_t samples_per_pixel)
+      : TilePoints(sampler, index, width, height, samples_per_pixel), map_(map) {}
 
   void Reset(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, uint64_t seed) override {
     TilePoints::Reset(x0, y0, x1, y1, seed);
@@ -88,7 +88,7 @@ inline void RenderWithVegasMap(Transport& transport, const SceneView& scene, con
   RenderPasses(
       scene, target, kTileSize, 1,
       [&](uint32_t pass, uint32_t, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, FilmSamples& out) {
-        MappedTilePoints points(sampler, map, pass, scene.FilmWidth(), scene.FilmHeight());
+        MappedTilePoints points(sampler, map, pass, scene.FilmWidth(), scene.FilmHeight(), target.SamplesPerPixel());
         points.Reset(x0, y0, x1, y1, target.Seed());
         transport.Evaluate(scene, points, out);
         std::vector<double> luminance(points.Count(), 0.0);

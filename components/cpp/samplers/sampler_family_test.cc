@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -376,8 +377,8 @@ TEST_F(SamplerFamilyTest, SamplePairsGivesSamplesValuesExactly) {
     indices.push_back(k % 7 == 0 ? (k << 22) + k : k * 37 % 256);
     seeds.push_back(Hash(uint64_t(42), k / 4));
   }
-  for (const char* name : {"sobol", "sobol_nd", "independent", "stratified", "latin_hypercube", "hammersley",
-                           "halton"}) {
+  for (const char* name : {"sobol", "zsobol", "sobol_nd", "independent", "stratified", "latin_hypercube",
+                           "hammersley", "halton"}) {
     const bool counted = std::find(std::begin(kCounted), std::end(kCounted), std::string(name)) != std::end(kCounted);
     const std::unique_ptr<Sampler> sampler = Make(name, counted ? 256 : 0);
     for (uint32_t pair : {0u, 1u, 3u, 130u, 500u}) {
@@ -389,6 +390,78 @@ TEST_F(SamplerFamilyTest, SamplePairsGivesSamplesValuesExactly) {
               << name << " pair " << pair << " point " << k;
     }
   }
+}
+
+
+// Whether the points (pairs of coordinates in [0,1)) put exactly one point
+// in each elementary interval of area 1/n, n = points.size() a power of 2:
+// a (0, m, 2)-net.
+bool IsZeroNet(const std::vector<std::array<float, 2>>& points) {
+  const uint32_t n = uint32_t(points.size());
+  const int m = std::countr_zero(n);
+  for (int k = 0; k <= m; ++k) {
+    const uint32_t columns = 1u << k, rows = n >> k;
+    std::vector<int> count(n, 0);
+    for (const auto& p : points) ++count[Stratum(p[1], rows) * columns + Stratum(p[0], columns)];
+    for (int c : count)
+      if (c != 1) return false;
+  }
+  return true;
+}
+
+// zsobol's points of pixel (x, y), samples 0..spp-1, in dimensions 2·pair, 2·pair + 1.
+std::vector<std::array<float, 2>> PixelPoints(const Sampler& sampler, uint32_t x, uint32_t y, uint32_t width,
+                                              uint32_t height, uint32_t spp, uint32_t pair, uint64_t seed) {
+  std::vector<std::array<float, 2>> points;
+  for (uint32_t s = 0; s < spp; ++s) {
+    const Sampler::FilmPoint at = sampler.AtPixel(x, y, width, height, s, spp, seed);
+    points.push_back({sampler.Sample(at.index, 2 * pair, at.seed), sampler.Sample(at.index, 2 * pair + 1, at.seed)});
+  }
+  return points;
+}
+
+// Each pixel's samples are a (0, m, 2)-net in every pair of dimensions,
+// for even and odd powers of two, and in the padded dimensions too.
+TEST_F(SamplerFamilyTest, ZSobolPixelsAreNets) {
+  const auto sampler = Make("zsobol");
+  for (uint32_t spp : {1u, 2u, 8u, 16u, 64u})
+    for (uint32_t pair : {0u, 1u, 5u, 40u})
+      for (uint64_t seed : {uint64_t(1), uint64_t(77)})
+        for (auto [x, y] : {std::pair{0u, 0u}, std::pair{13u, 7u}, std::pair{63u, 31u}})
+          ASSERT_TRUE(IsZeroNet(PixelPoints(*sampler, x, y, 64, 48, spp, pair, seed)))
+              << "spp " << spp << " pair " << pair << " pixel " << x << "," << y;
+}
+
+// The blue-noise property: the samples of an aligned 2^k × 2^k block of
+// pixels together are a (0, m, 2)-net too, so neighbours' errors differ.
+// Padded per-pixel sequences do not have it.
+TEST_F(SamplerFamilyTest, ZSobolNeighbouringPixelsAreStratifiedTogether) {
+  const auto zsobol = Make("zsobol");
+  const auto padded = Make("sobol");
+  int padded_nets = 0;
+  for (uint32_t spp : {1u, 2u, 4u})
+    for (uint32_t block : {2u, 4u})
+      for (uint32_t pair : {1u, 3u})
+        for (uint32_t corner : {0u, 8u}) {
+          std::vector<std::array<float, 2>> together, independent;
+          for (uint32_t y = corner; y < corner + block; ++y)
+            for (uint32_t x = corner; x < corner + block; ++x) {
+              const auto points = PixelPoints(*zsobol, x, y, 32, 32, spp, pair, 5);
+              together.insert(together.end(), points.begin(), points.end());
+              const auto own = PixelPoints(*padded, x, y, 32, 32, spp, pair, 5);
+              independent.insert(independent.end(), own.begin(), own.end());
+            }
+          EXPECT_TRUE(IsZeroNet(together)) << "spp " << spp << " block " << block << " pair " << pair;
+          padded_nets += IsZeroNet(independent);
+        }
+  EXPECT_LT(padded_nets, 4);
+}
+
+TEST_F(SamplerFamilyTest, ZSobolRefusesMoreThanTwoToThe32Points) {
+  const auto sampler = Make("zsobol");
+  EXPECT_NO_THROW(sampler->AtPixel(0, 0, 4096, 4096, 0, 256, 1));
+  EXPECT_THROW(sampler->AtPixel(0, 0, 4096, 4096, 0, 512, 1), Error);
+  EXPECT_THROW(sampler->AtPixel(0, 0, 70000, 2, 0, 1, 1), Error);
 }
 
 }  // namespace

@@ -13,10 +13,29 @@
 // gives the same number in [0, 1).
 //
 // Parameters: none.
+//
+// zsobol — pbrt-v4's ZSobol (Ahmed & Wonka 2020)
+//
+// One Sobol sequence for the whole film instead of one per pixel: pixel
+// (x, y)'s samples are the consecutive points from its Morton index times
+// the samples per pixel (rounded up to a power of two), and for every pair
+// of dimensions the index's base-4 digits are permuted, each by a random
+// permutation of four chosen by the digits above it. An aligned run of
+// indices stays an aligned run, so each pixel's samples are still a
+// (0, m, 2)-net in every pair of dimensions, and so are those of every
+// aligned 2^k × 2^k block of pixels: neighbouring pixels' errors are
+// spread apart (blue noise) rather than alike. The seed scrambles every
+// coordinate as in sobol. Films up to 2^16 pixels a side; a film and
+// sample count of more than 2^32 points in all are refused.
+//
+// Parameters: none.
 #include <array>
+#include <bit>
 #include <cstdint>
+#include <string>
 #include <span>
 
+#include "yarf/error.h"
 #include "yarf/hash.h"
 #include "yarf/owen.h"
 #include "yarf/plugin.h"
@@ -109,9 +128,116 @@ class Sobol final : public yarf::Sampler {
   }
 };
 
+
+// A 32-bit integer hash (Wellons' "lowbias32"): the choice of each digit's
+// permutation, one per digit, so it must be cheap.
+constexpr uint32_t Mix32(uint32_t v) {
+  v ^= v >> 16;
+  v *= 0x7feb352du;
+  v ^= v >> 15;
+  v *= 0x846ca68bu;
+  v ^= v >> 16;
+  return v;
+}
+
+// Interleaves the bits of x and y (x in the even bits).
+constexpr uint64_t Morton(uint32_t x, uint32_t y) {
+  const auto spread = [](uint64_t v) {
+    v &= 0xffffffffull;
+    v = (v | (v << 16)) & 0x0000ffff0000ffffull;
+    v = (v | (v << 8)) & 0x00ff00ff00ff00ffull;
+    v = (v | (v << 4)) & 0x0f0f0f0f0f0f0f0full;
+    v = (v | (v << 2)) & 0x3333333333333333ull;
+    return (v | (v << 1)) & 0x5555555555555555ull;
+  };
+  return spread(x) | (spread(y) << 1);
+}
+
+// The 24 permutations of four digits.
+constexpr std::array<std::array<uint8_t, 4>, 24> kPermutationsOfFour = [] {
+  std::array<std::array<uint8_t, 4>, 24> all{};
+  std::array<uint8_t, 4> p{0, 1, 2, 3};
+  for (auto& entry : all) {
+    entry = p;
+    // Next permutation in lexicographic order.
+    int i = 2;
+    while (i >= 0 && p[i] >= p[i + 1]) --i;
+    if (i < 0) break;
+    int j = 3;
+    while (p[j] <= p[i]) --j;
+    std::swap(p[i], p[j]);
+    for (int a = i + 1, b = 3; a < b; ++a, --b) std::swap(p[a], p[b]);
+  }
+  return all;
+}();
+
+// How AtPixel's seed carries the sequence's shape to Sample: bit 0 is set
+// when the samples per pixel are an odd power of two, bits 1-5 hold the
+// number of base-4 digits of the indices, the rest are the job's seed.
+constexpr uint64_t kOddBit = 1, kDigitsShift = 1, kDigitsMask = 0x1f, kSeedShift = 6;
+
+class ZSobol final : public yarf::Sampler {
+ public:
+  explicit ZSobol(const yarf::Properties&) {}
+
+  FilmPoint AtPixel(uint32_t x, uint32_t y, uint32_t width, uint32_t height, uint64_t sample,
+                    uint32_t samples_per_pixel, uint64_t seed) const override {
+    const uint32_t log2_samples = std::bit_width(std::max(samples_per_pixel, 1u) - 1);
+    const bool odd = log2_samples % 2 == 1;
+    const uint32_t sample_bits = log2_samples + (odd ? 1 : 0);
+    const uint32_t side_bits = std::bit_width(std::max(width, height) - 1);
+    const uint32_t bits = 2 * side_bits + sample_bits;
+    if (bits > 32)
+      throw yarf::Error("zsobol: a " + std::to_string(width) + "×" + std::to_string(height) + " film at " +
+                        std::to_string(samples_per_pixel) +
+                        " samples per pixel needs more than 2^32 points; use sobol");
+    // The odd case leaves the lowest bit free for Sample to fill (pbrt-v4's).
+    const uint64_t index = (Morton(x, y) << sample_bits) | (sample << (odd ? 1 : 0));
+    const uint64_t shape = (odd ? kOddBit : 0) | (uint64_t((bits + 1) / 2) << kDigitsShift);
+    return {index, (yarf::MixBits(seed) << kSeedShift) | shape};
+  }
+
+  float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {
+    return Coordinate(yarf::ReverseBits(PermutedIndex(index, dimension / 2, seed)), dimension, seed >> kSeedShift);
+  }
+
+  void SamplePairs(std::span<const uint64_t> indices, std::span<const uint64_t> seeds, uint32_t pair,
+                   std::span<float> out) const override {
+    for (size_t k = 0; k < indices.size(); ++k) {
+      const uint32_t reversed = yarf::ReverseBits(PermutedIndex(indices[k], pair, seeds[k]));
+      out[2 * k] = Coordinate(reversed, 2 * pair, seeds[k] >> kSeedShift);
+      out[2 * k + 1] = Coordinate(reversed, 2 * pair + 1, seeds[k] >> kSeedShift);
+    }
+  }
+
+ private:
+  // The Sobol index of film index `index` for a pair of dimensions: each
+  // base-4 digit permuted as a function of the digits above it.
+  static uint32_t PermutedIndex(uint64_t index, uint32_t pair, uint64_t seed) {
+    const uint32_t salt = uint32_t(yarf::MixBits((seed >> kSeedShift) ^ (uint64_t(pair) * kGolden)));
+    const bool odd = seed & kOddBit;
+    const int digits = int((seed >> kDigitsShift) & kDigitsMask);
+    uint64_t permuted = 0;
+    for (int i = digits - 1; i >= (odd ? 1 : 0); --i) {
+      const int shift = 2 * i;
+      const uint32_t digit = uint32_t(index >> shift) & 3;
+      const uint32_t choice = Mix32(uint32_t(index >> (shift + 2)) ^ salt) % 24;
+      permuted |= uint64_t(kPermutationsOfFour[choice][digit]) << shift;
+    }
+    if (odd) {
+      // The last digit's free bit dropped, and the sample's bit flipped by
+      // a hash of the digits above.
+      permuted = ((permuted | (index & 3)) >> 1) ^ (Mix32(uint32_t(index >> 2) ^ salt) & 1);
+    }
+    return uint32_t(permuted);
+  }
+};
+
 }  // namespace
 
 YARF_PLUGIN(registrar) {
   yarf::Register<Sobol>(registrar, "sobol", "1.0.0",
                         "Padded 2-D Sobol points with hash-based Owen scrambling");
+  yarf::Register<ZSobol>(registrar, "zsobol", "1.0.0",
+                         "One Owen-scrambled Sobol sequence over the film in Morton order (pbrt-v4's ZSobol)");
 }

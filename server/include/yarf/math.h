@@ -8,6 +8,7 @@
 
 #include "yarf/component.h"
 #include "yarf/error.h"
+#include "yarf/hash.h"
 
 namespace yarf {
 
@@ -62,6 +63,19 @@ class Sampler : public virtual Component {
 
   // Coordinate `dimension` of point `index` of the sequence for `seed`.
   virtual float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const = 0;
+  // Where sample `sample` of pixel (x, y) of a width × height film, of
+  // samples_per_pixel in all, lies among the sampler's points: the index
+  // and seed Sample takes. By default every pixel has a sequence of its
+  // own (the sample's number, and a seed hashed from the job's and the
+  // pixel); a sampler of one sequence over the whole film (zsobol) places
+  // the pixel's samples in it.
+  struct FilmPoint {
+    uint64_t index, seed;
+  };
+  virtual FilmPoint AtPixel(uint32_t x, uint32_t y, uint32_t width, uint32_t height, uint64_t sample,
+                            uint32_t samples_per_pixel, uint64_t seed) const {
+    return {sample, Hash(seed, uint64_t(y) * width + x)};
+  }
   // Coordinates 2·pair and 2·pair + 1 of point indices[k] of the sequence
   // for seeds[k], as out[2k] and out[2k + 1]: Sample's values, for many
   // points in one call (a wavefront asks for one dimension of every live

@@ -127,8 +127,10 @@ void PbrtImporter::Sampler(const std::string& type, PbrtParams& params, const So
     sampler = Spec("stratified", std::move(props));
   } else if (type == "halton") {
     sampler = Spec("halton");
+  } else if (type == "zsobol") {
+    sampler = Spec("zsobol");
   } else {
-    if (type != "sobol" && type != "zsobol" && type != "paddedsobol")
+    if (type != "sobol" && type != "paddedsobol")
       Warn(where, "sampler:" + type, "sampler '" + type + "' replaced by yarf's Sobol sampler");
     sampler = Spec("sobol");
   }

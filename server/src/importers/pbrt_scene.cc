@@ -1,6 +1,7 @@
 // pbrt-v4 scenes: the entry point, the directive loop, transforms and the
 // graphics state.
 #include <algorithm>
+#include <bit>
 
 #include "importers/numbers.h"
 #include "importers/pbrt_importer.h"
@@ -297,6 +298,17 @@ ImportResult PbrtImporter::Finish() {
   }
   ResolveMedia();
   ChooseVolumetricTransport();
+  // yarf's zsobol indexes the film's points with 32 bits: Morton-ordered
+  // pixels of a square of side 2^k, times the samples per pixel rounded up
+  // to an even power of two. Past that the padded sequences serve.
+  const v1::Film& film = assembly_.scene().film();
+  const uint32_t side_bits = std::bit_width(std::max({film.width(), film.height(), 1u}) - 1);
+  const uint32_t sample_bits = std::bit_width(std::max(sample_count_, 1u) - 1);
+  if (assembly_.scene().sampler().class_name() == "zsobol" && 2 * side_bits + sample_bits + sample_bits % 2 > 32) {
+    Warn(origin_, "sampler:zsobol-size",
+         "zsobol: this film and sample count need more than 2^32 points: padded Sobol used");
+    *assembly_.scene().mutable_sampler() = Spec("sobol");
+  }
   ImportResult result;
   result.scene = assembly_.Finish();
   result.sample_count = sample_count_;

@@ -432,5 +432,19 @@ TEST(PbrtImport, AnOrthographicCameraSpansTwoUnitsOfItsSpaceOverTheShorterAxis) 
   EXPECT_TRUE(result.warnings.empty());
 }
 
+TEST(PbrtImport, ZSobolIsTheDefaultSamplerUnlessTheFilmOutgrowsIt) {
+  EXPECT_EQ(PbrtWithIntegrator("\"path\"").scene.sampler().class_name(), "zsobol");
+  const ImportResult paddedsobol =
+      ImportPbrt("Sampler \"paddedsobol\"\nWorldBegin\nShape \"sphere\"\n", "sampler.pbrt");
+  EXPECT_EQ(paddedsobol.scene.sampler().class_name(), "sobol");
+  // 4096² pixels at 512 samples each: 2^33 points.
+  const ImportResult huge = ImportPbrt(
+      "Film \"rgb\" \"integer xresolution\" 4096 \"integer yresolution\" 4096\n"
+      "Sampler \"zsobol\" \"integer pixelsamples\" 512\nWorldBegin\nShape \"sphere\"\n",
+      "sampler.pbrt");
+  EXPECT_EQ(huge.scene.sampler().class_name(), "sobol");
+  EXPECT_TRUE(Warns(huge, "need more than 2^32 points"));
+}
+
 }  // namespace
 }  // namespace yarf::importers
