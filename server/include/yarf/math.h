@@ -28,6 +28,14 @@ struct IntegrationResult {
   std::vector<double> estimate;
   std::vector<double> standard_error;
   uint64_t evaluations = 0;
+  // For integrators that average iterations (vegas, vegas_plus), per
+  // output: χ²/dof of the iterations kept about their weighted average
+  // (dof = iterations kept − 1), and Q, the probability that a χ² of that
+  // many degrees of freedom is at least as large. Q < 0.05 says the
+  // iterations disagree beyond their errors, so the error is not to be
+  // trusted. NaN with a single iteration kept; empty for one-shot methods.
+  std::vector<double> chi2_per_dof;
+  std::vector<double> q;
 };
 
 class Sampler;

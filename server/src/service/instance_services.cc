@@ -129,6 +129,8 @@ grpc::Status IntegratorServiceImpl::Integrate(grpc::ServerContext* context, cons
         integrator.Integrate(*function, lower, upper, request->evaluations(), request->seed(), *sampler);
     for (double e : result.estimate) reply->add_estimate(e);
     for (double e : result.standard_error) reply->add_standard_error(e);
+    for (double c : result.chi2_per_dof) reply->add_chi2_per_dof(c);
+    for (double q : result.q) reply->add_q(q);
     reply->set_evaluations(result.evaluations);
   });
 }
