@@ -7,7 +7,8 @@ import grpc
 import numpy as np
 import pytest
 
-from yarf import Client, integrate
+from yarf import Client, IntegrationWarning, integrate
+from yarf.integrate import DEFAULT_SAMPLERS, LEPAGE_OPTIONS
 
 
 def test_mean_sample_integrates_a_polynomial_within_its_error_bar(client: Client) -> None:
@@ -97,3 +98,79 @@ def test_vegas_plus_finds_a_narrow_peak_that_mean_sample_misses(client: Client) 
     assert abs(vegas.estimate[0] - exact) < 4 * vegas.standard_error[0]
     assert abs(vegas.estimate[0] - exact) < 0.02 * exact
     assert vegas.standard_error[0] < plain.standard_error[0] / 10
+
+
+def test_vegas_reports_chi_square_and_q_and_one_shot_methods_do_not(client: Client) -> None:
+    def f(x: np.ndarray) -> np.ndarray:
+        peak = np.exp(-np.sum((x - 0.4) ** 2, axis=1) * 20)
+        return np.stack([peak, peak * x[:, 0]], axis=1)
+
+    vegas = integrate(f, [0, 0], [1, 1], method="vegas", evaluations=20_000, seed=1, server=client)
+    assert vegas.chi2_per_dof.shape == vegas.q.shape == (2,)
+    assert np.all(vegas.chi2_per_dof >= 0) and np.all((vegas.q >= 0) & (vegas.q <= 1))
+    text = str(vegas)
+    assert "χ²/dof" in text and "Q = " in text
+    assert "q=" in repr(vegas) and "chi2_per_dof=" in repr(vegas)
+    plain = integrate(f, [0, 0], [1, 1], method="mean_sample", evaluations=20_000, server=client)
+    assert np.all(np.isnan(plain.chi2_per_dof)) and np.all(np.isnan(plain.q))
+    assert plain.trustworthy and "Q = " not in str(plain)
+
+
+def test_iterations_that_disagree_give_a_small_q_and_a_warning(client: Client) -> None:
+    calls = [0]
+
+    def drifting(x: np.ndarray) -> np.ndarray:
+        # Each call (one per iteration here) is shifted: the iterations
+        # disagree far beyond their errors.
+        calls[0] += 1
+        return x[:, 0] + 0.05 * calls[0]
+
+    with pytest.warns(IntegrationWarning, match="Q = "):
+        result = integrate(
+            drifting, [0], [1], method="vegas", evaluations=10_000, seed=2, server=client
+        )
+    assert result.q[0] < 0.05 and not result.trustworthy
+    assert "not to be trusted" in str(result)
+
+
+def test_lepage_option_names_map_onto_yarfs(client: Client) -> None:
+    assert LEPAGE_OPTIONS["nitn"] == "iterations"
+    sizes: list[int] = []
+
+    def f(x: np.ndarray) -> np.ndarray:
+        sizes.append(len(x))
+        return np.exp(-np.sum((x - 0.5) ** 2, axis=1))
+
+    result = integrate(
+        f, [0, 0], [1, 1], method="vegas+", nitn=5, neval=3000, alpha=0.7, beta=0.5, server=client
+    )
+    # neval is per iteration: 5 iterations of 3000 points, one call each
+    # after the probe of the function's shape.
+    assert result.evaluations == 15_000
+    assert sizes[1:] == [3000] * 5
+    with pytest.raises(ValueError, match="neval"):
+        integrate(f, [0], [1], neval=1000, evaluations=5000, server=client)
+    with pytest.raises(ValueError, match="twice"):
+        integrate(f, [0], [1], nitn=5, iterations=6, server=client)
+
+
+@pytest.mark.parametrize(
+    "method", ["mean_sample", "stratified_mc", "rqmc", "miser", "simpson", "vegas", "vegas+"]
+)
+def test_evaluations_never_exceed_the_budget(client: Client, method: str) -> None:
+    seen = [0]
+
+    def f(x: np.ndarray) -> np.ndarray:
+        seen[0] += len(x)
+        return np.cos(x[:, 0] + 2 * x[:, 1])
+
+    for budget in (1_000, 12_345, 40_001):
+        seen[0] = 0
+        result = integrate(f, [0, 0], [1, 1], method=method, evaluations=budget, server=client)
+        spent = seen[0] - 1  # the probe of the function's shape
+        assert spent <= budget, (method, budget, spent)
+        assert result.evaluations == spent, (method, budget)
+
+
+def test_rqmc_takes_scrambled_sobol_points_by_default() -> None:
+    assert DEFAULT_SAMPLERS["rqmc"] == "sobol_nd"

@@ -18,7 +18,7 @@ except ImportError as error:  # pragma: no cover - depends on the build
     ) from error
 
 from yarf.client import Client, RenderError, RenderResult, array_to_numpy
-from yarf.integrate import Integral, integrate
+from yarf.integrate import Integral, IntegrationWarning, integrate
 from yarf.scene import (
     SceneError,
     component,
@@ -34,6 +34,7 @@ from yarf.server import LocalServer, ServerError, find_yarfd
 __all__ = [
     "Client",
     "Integral",
+    "IntegrationWarning",
     "LocalServer",
     "RenderError",
     "RenderResult",

@@ -16,6 +16,10 @@ from yarf_component.component import Component
 Integrand = Callable[[np.ndarray], np.ndarray]
 # (first_index, count, dimensions) -> points [count, dimensions] in [0,1).
 PointSource = Callable[[int, int, int], np.ndarray]
+Values = Sequence[float] | np.ndarray
+# What Integrator.integrate returns: (estimate, standard error, evaluations),
+# optionally followed by (χ²/dof, Q), each [k].
+IntegratorAnswer = tuple[Values, Values, int] | tuple[Values, Values, int, Values, Values]
 
 
 class Function(Component):
@@ -84,12 +88,14 @@ class Integrator(Component):
         evaluations: int,
         seed: int,
         sampler: PointSource | None,
-    ) -> tuple[Sequence[float] | np.ndarray, Sequence[float] | np.ndarray, int]:
-        """∫ f over [lower, upper] (float64 [d] each) with about ``evaluations`` points.
+    ) -> IntegratorAnswer:
+        """∫ f over [lower, upper] (float64 [d] each) with at most ``evaluations`` points.
 
         ``f`` maps points [N, d] to float64 values [N, k], each call one batch
         to the function's host; ``sampler`` gives the points of the
         caller's Sampler for ``seed`` (None: draw independent points from
         ``seed``). Returns the estimate [k], its standard error [k] and the
-        evaluations spent.
+        evaluations spent; an integrator that averages iterations may add
+        χ²/dof [k] and Q [k] of its iterations (Lepage's definitions, see
+        IntegrateReply in math.proto).
         """

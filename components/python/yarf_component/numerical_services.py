@@ -126,6 +126,10 @@ class WarpService(math_pb2_grpc.WarpServicer):
             return math_pb2.WarpReply(pdf=float32(warp.pdf(points)))
 
 
+def _doubles(values: object) -> list[float]:
+    return np.atleast_1d(np.asarray(values, dtype=np.float64)).tolist()
+
+
 class IntegratorService(math_pb2_grpc.IntegratorServicer):
     def __init__(self, host: Host) -> None:
         self._host = host
@@ -145,11 +149,20 @@ class IntegratorService(math_pb2_grpc.IntegratorServicer):
         lower = np.array(request.lower, dtype=np.float64)
         upper = np.array(request.upper, dtype=np.float64)
         with user_code(integrator, "integrate"):
-            estimate, error, evaluations = integrator.integrate(
+            answer = integrator.integrate(
                 f, lower, upper, request.evaluations, request.seed, sampler
             )
+            if len(answer) not in (3, 5):
+                raise ValueError(
+                    "integrate returned a tuple of "
+                    f"{len(answer)}, not (estimate, error, evaluations[, chi2_per_dof, q])"
+                )
+            estimate, error, evaluations = answer[:3]
+            chi2, q = answer[3:] if len(answer) == 5 else ([], [])
             return math_pb2.IntegrateReply(
-                estimate=np.atleast_1d(np.asarray(estimate, dtype=np.float64)).tolist(),
-                standard_error=np.atleast_1d(np.asarray(error, dtype=np.float64)).tolist(),
+                estimate=_doubles(estimate),
+                standard_error=_doubles(error),
                 evaluations=int(evaluations),
+                chi2_per_dof=_doubles(chi2),
+                q=_doubles(q),
             )
