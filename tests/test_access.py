@@ -273,7 +273,13 @@ def test_a_submitter_may_not_read_or_write_running_jobs_scenes(
         grpc.access_token_call_credentials(ALICE),
     )
     with grpc.secure_channel(secured.address, credentials) as channel:
-        for service, method in (("JobScene", "Layout"), ("Intersect", "Intersect")):
+        for service, method in (
+            ("JobScene", "Layout"),
+            ("Intersect", "Intersect"),
+            ("Shape", "Area"),
+            ("SampleSurfaceArea", "Sample"),
+            ("SampleSurfaceDirection", "Pdf"),
+        ):
             call = channel.unary_unary(f"/yarf.v1.{service}/{method}")
             with pytest.raises(grpc.RpcError) as error:
                 call(b"", timeout=10)
