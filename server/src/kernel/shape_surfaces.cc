@@ -133,6 +133,13 @@ MeshSurface::MeshSurface(std::vector<std::array<Vec3, 3>> corners, std::vector<V
     cdf_.push_back(float(running));
   }
   area_ = float(running);
+  // The area-weighted centroid and normal sum, once: LightPoint gathers the
+  // surface into them for every point it lights.
+  for (size_t t = 0; t < corners_.size(); ++t) {
+    const float a = Share(uint32_t(t));
+    centroid_ += (corners_[t][0] + corners_[t][1] + corners_[t][2]) * (a / 3);
+    normal_sum_ += normals_[t] * a;
+  }
 }
 
 void MeshSurface::Bounds(Vec3& lower, Vec3& upper) const {
@@ -238,23 +245,15 @@ SurfaceSample MeshSurface::SamplePoint(float u0, float u1) const {
 
 SurfaceSample MeshSurface::Gathered(Vec3, float& area) const {
   SurfaceSample s;
-  Vec3 centroid, normal;
-  for (size_t t = 0; t < corners_.size(); ++t) {
-    const float a = Share(uint32_t(t));
-    centroid += (corners_[t][0] + corners_[t][1] + corners_[t][2]) * (a / 3);
-    normal += normals_[t] * a;
-  }
-  s.position = centroid;
-  s.normal = Length(normal) > 0 ? Normalize(normal) : normals_[0];
+  s.position = centroid_;
+  s.normal = Length(normal_sum_) > 0 ? Normalize(normal_sum_) : normals_[0];
   area = area_;
   return s;
 }
 
 bool MeshSurface::NormalCone(Vec3& axis, float& cos_theta) const {
-  Vec3 sum;
-  for (size_t t = 0; t < corners_.size(); ++t) sum += normals_[t] * Share(uint32_t(t));
-  if (!(Length(sum) > 0.5f)) return false;
-  axis = Normalize(sum);
+  if (!(Length(normal_sum_) > 0.5f)) return false;
+  axis = Normalize(normal_sum_);
   cos_theta = 1;
   for (const Vec3 n : normals_) cos_theta = std::min(cos_theta, Dot(axis, n));
   // Less a little for the rounding of the normals.

@@ -105,6 +105,8 @@ class MeshSurface final : public ShapeSurface {
   // Running sum of the triangles' areas.
   std::vector<float> cdf_;
   float area_ = 0;
+  // Area-weighted: the centroid, and the normals' mean (not unit).
+  Vec3 centroid_, normal_sum_;
   const TriangleMesh* mesh_;
   bool by_solid_angle_;
 };
