@@ -12,18 +12,39 @@ default of ``--spp``. ``yarf convert`` writes the converted scene.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
+from typing import NoReturn
 
 import grpc
 from tqdm import tqdm
 
 from yarf.assets import SceneAssets, scene_assets
-from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, IMAGE_FORMATS, Client
+from yarf.client import (
+    DEFAULT_ADDRESS,
+    FINAL_STATES,
+    IMAGE_FORMATS,
+    Client,
+    RenderError,
+    check_ended,
+)
 from yarf.credentials import resolve as resolve_credentials
+from yarf.images import check_writable, write_image
+from yarf.render_options import (
+    ImageSettings,
+    OptionError,
+    PreparedJob,
+    RenderSettings,
+    add_image_arguments,
+    add_render_arguments,
+    image_settings,
+    render_settings,
+)
 from yarf.scene import (
     IMPORTED_SUFFIXES,
     JSON_SUFFIXES,
@@ -59,9 +80,20 @@ def _say(message: str) -> None:
     print(f"yarf: {message}", file=sys.stderr)
 
 
+def start_hint(address: str) -> str:
+    """How to start a yarfd at ``address``, for a command that found none."""
+    return (
+        f"start one with `yarfd --listen {address}` (build/bin/yarfd in a source tree), "
+        "or name another with --server HOST:PORT"
+    )
+
+
 @contextmanager
-def connect(address: str | None, *, say: Callable[[str], None] = _say) -> Iterator[Client]:
-    """A client of ``address``; without one, of 127.0.0.1:50051 or a local yarfd."""
+def connect(
+    address: str | None, *, say: Callable[[str], None] = _say, threads: int | None = None
+) -> Iterator[Client]:
+    """A client of ``address``; without one, of 127.0.0.1:50051 or a local yarfd
+    (always a local one, of ``threads`` threads, when ``threads`` is given)."""
     token, tls_ca = _CREDENTIALS.get()
     ca_file = resolve_credentials(token, tls_ca)[1]
     if ca_file and not Path(ca_file).is_file():
@@ -71,24 +103,32 @@ def connect(address: str | None, *, say: Callable[[str], None] = _say) -> Iterat
             try:
                 grpc.channel_ready_future(client.channel).result(timeout=CONNECT_TIMEOUT)
             except grpc.FutureTimeoutError:
-                raise CommandError(f"no yarfd answers at {address}") from None
+                raise CommandError(
+                    f"no yarfd answers at {address}: {start_hint(address)}"
+                ) from None
             yield client
         return
-    with Client(DEFAULT_ADDRESS, token=token, tls_ca=tls_ca) as client:
-        if client.is_serving(timeout=0.5):
-            say(f"using the yarfd at {DEFAULT_ADDRESS}")
-            yield client
-            return
-    say("no yarfd at 127.0.0.1:50051: starting one for this command")
-    with LocalServer() as server, server.client() as client:
+    if threads is None:
+        with Client(DEFAULT_ADDRESS, token=token, tls_ca=tls_ca) as client:
+            if client.is_serving(timeout=0.5):
+                say(f"using the yarfd at {DEFAULT_ADDRESS}")
+                yield client
+                return
+        say("no yarfd at 127.0.0.1:50051: starting one for this command")
+    else:
+        say(f"starting a yarfd of {threads} thread{'s' if threads > 1 else ''} for this command")
+    with LocalServer(threads=threads) as server, server.client() as client:
         yield client
 
 
-def _follow(client: Client, job_id: str, *, total: int | None, quiet: bool) -> render_pb2.JobStatus:
-    """Shows the job's progress until it ends; returns its final status."""
+def _follow(
+    client: Client, job_id: str, *, total: int | None, quiet: bool, time_limit: float | None
+) -> render_pb2.JobStatus:
+    """Shows the job's progress until it ends (cancelled at ``time_limit`` seconds);
+    returns its final status."""
     last: render_pb2.JobStatus | None = None
     with tqdm(total=total, unit="spp", disable=quiet, dynamic_ncols=True, leave=True) as bar:
-        for status in client.watch(job_id):
+        for status in client.watch_within(job_id, time_limit):
             last = status
             if status.samples_total and bar.total != status.samples_total:
                 bar.total = status.samples_total
@@ -125,52 +165,86 @@ def _import(
     return imported
 
 
-def _class_at(text: str) -> tuple[str, str]:
-    """CLASS or CLASS@ADDRESS: a class, and the component process serving it (or "")."""
-    class_name, _, address = text.partition("@")
-    if not class_name:
-        raise CommandError(f"expected CLASS or CLASS@ADDRESS, got {text!r}", exit_code=2)
-    return class_name, address
+def load_scene_file(args: argparse.Namespace) -> tuple[scene_pb2.Scene, int]:
+    """The scene file of ``args.scene`` (mesh files still files), and the spp it asks
+    for (0: none)."""
+    path = Path(args.scene)
+    if path.suffix.lower() in IMPORTED_SUFFIXES:
+        imported = _import(path, args.define, inline_files=False, strict=args.strict)
+        return imported.scene, imported.sample_count
+    if args.define:
+        raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
+    return load_scene(path, inline_files=False), 0
 
 
-def _replace_materials(scene: scene_pb2.Scene, replacements: Sequence[str]) -> None:
-    """--material NAME=CLASS[@ADDRESS]: the material NAME, or every material
-    of class NAME, becomes CLASS (served at ADDRESS), keeping its properties."""
-    for replacement in replacements:
-        old, equals, new = replacement.partition("=")
-        if not equals or not old:
-            raise CommandError(
-                f"--material needs NAME=CLASS[@ADDRESS], got {replacement!r}", exit_code=2
-            )
-        class_name, address = _class_at(new)
-        matched = [m for m in scene.materials if old in (m.name, m.class_name)]
-        if not matched:
-            names = ", ".join(sorted({m.name for m in scene.materials}))
-            raise CommandError(
-                f"--material {old}: no material or material class of that name (materials: "
-                f"{names})",
-                exit_code=2,
-            )
-        for material in matched:
-            material.class_name = class_name
-            material.address = address
+def checked_settings(args: argparse.Namespace) -> RenderSettings:
+    """The command's render options, each checked."""
+    try:
+        return render_settings(args)
+    except OptionError as error:
+        raise CommandError(error.for_command_line(), exit_code=2) from None
 
 
-def _transport(args: argparse.Namespace, scene: scene_pb2.Scene) -> scene_pb2.ComponentSpec | None:
-    """The job's transport: --transport and --max-depth over the scene's choice."""
-    if not args.transport and args.max_depth is None:
-        return None
-    spec = scene_pb2.ComponentSpec()
-    class_name, address = _class_at(args.transport) if args.transport else ("", "")
-    if class_name and class_name != scene.transport.class_name:
-        spec.class_name = class_name
-        spec.address = address
-    else:
-        spec.CopyFrom(scene.transport)
-        spec.class_name = spec.class_name or "path"
-    if args.max_depth is not None:
-        spec.properties.values["max_depth"].int_value = args.max_depth
-    return spec
+def prepare_job(
+    args: argparse.Namespace, settings: RenderSettings
+) -> tuple[PreparedJob, SceneAssets]:
+    """The scene file with the options applied, and its mesh and texture files: every
+    failure here comes before any server is asked for."""
+    scene, file_spp = load_scene_file(args)
+    try:
+        job = settings.prepare(scene, default_spp=file_spp)
+    except OptionError as error:
+        raise CommandError(error.for_command_line(), exit_code=2) from None
+    return job, scene_assets(job.scene, Path(args.scene).parent)
+
+
+def output_settings(args: argparse.Namespace, output: Path) -> ImageSettings:
+    """The image options for ``output``, checked, and ``output`` checked writable."""
+    suffix = output.suffix.lower()
+    if suffix not in OUTPUT_FORMATS:
+        raise CommandError(
+            f"cannot write {output}: the output's extension must be one of "
+            f"{', '.join(OUTPUT_FORMATS)}",
+            exit_code=2,
+        )
+    try:
+        settings = image_settings(args, suffix)
+    except OptionError as error:
+        raise CommandError(error.for_command_line(), exit_code=2) from None
+    try:
+        check_writable(output)
+    except OSError as error:
+        raise CommandError(f"cannot write {output}: {error.strerror or error}", 2) from None
+    return settings
+
+
+def submit_job(
+    client: Client,
+    job: PreparedJob,
+    settings: RenderSettings,
+    *,
+    name: str,
+    component_retries: int = 0,
+    priority: int | None = None,
+    max_retries: int | None = None,
+) -> str:
+    """Submits the prepared job; a request the server refuses is a usage error."""
+    try:
+        return client.submit(
+            job.scene,
+            job.spp,
+            settings.seed,
+            name=name,
+            transport=job.transport,
+            crop=job.crop,
+            component_retries=component_retries,
+            priority=priority,
+            max_retries=max_retries,
+        )
+    except grpc.RpcError as error:
+        if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.INVALID_ARGUMENT:
+            raise CommandError(f"the server refused the job: {error.details()}", 2) from None
+        raise
 
 
 def _send_assets(
@@ -193,52 +267,50 @@ def _send_assets(
 
 def render_command(args: argparse.Namespace) -> int:
     output = Path(args.output)
-    output_format = OUTPUT_FORMATS.get(output.suffix.lower())
-    if output_format is None:
-        raise CommandError(
-            f"cannot write {output}: the output's extension must be one of "
-            f"{', '.join(OUTPUT_FORMATS)}",
-            exit_code=2,
-        )
+    settings = checked_settings(args)
+    if args.threads is not None:
+        if args.threads < 1:
+            raise CommandError(f"--threads: must be at least 1, not {args.threads}", 2)
+        if args.server:
+            raise CommandError(
+                f"--threads: sets the threads of a yarfd this command starts; the one at "
+                f"{args.server} keeps its own (yarfd --threads N)",
+                exit_code=2,
+            )
+    image_options = output_settings(args, output)
+    job, assets = prepare_job(args, settings)
     scene_path = Path(args.scene)
-    spp = args.spp
-    if scene_path.suffix.lower() in IMPORTED_SUFFIXES:
-        imported = _import(scene_path, args.define, inline_files=False, strict=args.strict)
-        scene = imported.scene
-        spp = spp or imported.sample_count
-    else:
-        if args.define:
-            raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
-        scene = load_scene(scene_path, inline_files=False)
-    _replace_materials(scene, args.material)
-    # Before any server is asked for: a missing or misplaced file fails here.
-    assets = scene_assets(scene, scene_path.parent)
-    with connect(args.server) as client:
-        _send_assets(client, assets, scene, scene_path.parent, quiet=args.quiet)
-        job_id = client.submit(
-            scene,
-            spp,
-            args.seed,
+    with connect(args.server, threads=args.threads) as client:
+        _send_assets(client, assets, job.scene, scene_path.parent, quiet=args.quiet)
+        job_id = submit_job(
+            client,
+            job,
+            settings,
             name=scene_path.name,
-            transport=_transport(args, scene),
             component_retries=args.component_retries,
         )
+        started = time.monotonic()
         try:
-            status = _follow(client, job_id, total=spp or None, quiet=args.quiet)
+            status = _follow(
+                client,
+                job_id,
+                total=job.spp or None,
+                quiet=args.quiet,
+                time_limit=settings.time_limit,
+            )
         except KeyboardInterrupt:
             client.cancel(job_id)
             raise
-        if status.state != render_pb2.SUCCEEDED:
-            state = render_pb2.JobState.Name(status.state)
-            raise CommandError(f"job {job_id} {state}: {status.error or 'no message'}")
-        image = client.encoded(job_id, output_format)
-    if not image:
-        raise CommandError(f"the server sent an empty {output.suffix} image for job {job_id}")
-    output.parent.mkdir(parents=True, exist_ok=True)
-    output.write_bytes(image)
+        try:
+            check_ended(status, settings.time_limit, time.monotonic() - started)
+        except RenderError as error:
+            raise CommandError(str(error)) from None
+        pixels = client.image(job_id)
+    write_image(output, pixels, image_options, window=job.crop)
+    stopped = ", stopped at the time limit" if status.state != render_pb2.SUCCEEDED else ""
     print(
         f"wrote {output.resolve()} ({status.samples_done} spp, "
-        f"{status.elapsed_seconds:.2f} s, job {job_id})"
+        f"{status.elapsed_seconds:.2f} s{stopped}, job {job_id})"
     )
     return 0
 
@@ -279,10 +351,15 @@ def classes_command(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line: what is wrong, and where help is."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (`{self.prog} --help` lists the options)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="yarf", description="Render scene files on a yarf render server (yarfd)."
-    )
+    parser = _Parser(prog="yarf", description="Render scene files on a yarf render server (yarfd).")
     parser.add_argument(
         "--token",
         metavar="TOKEN",
@@ -327,27 +404,16 @@ def build_parser() -> argparse.ArgumentParser:
         "pbrt-v4 (.pbrt)",
     )
     render.add_argument("-o", "--output", required=True, help="image to write (.exr or .png)")
-    render.add_argument(
-        "--spp",
-        type=int,
-        default=0,
-        help="samples per pixel (default: the Mitsuba or pbrt file's, else the server's, 16)",
+    add_render_arguments(
+        render, spp_default="default: the Mitsuba or pbrt file's, else the server's, 16"
     )
+    add_image_arguments(render)
     add_import_options(render)
-    render.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     render.add_argument(
-        "--transport",
-        metavar="CLASS[@ADDRESS]",
-        help="light transport: path, light, bdpt, whitted, distribution, or a class of the "
-        "component process at ADDRESS (default: the scene's)",
-    )
-    render.add_argument(
-        "--material",
-        action="append",
-        default=[],
-        metavar="NAME=CLASS[@ADDRESS]",
-        help="make the material NAME (or every material of class NAME) a CLASS, served by the "
-        "component process at ADDRESS (host:port or unix:/path) when given; its properties stay",
+        "--threads",
+        type=int,
+        metavar="N",
+        help="render on a yarfd of N threads started for this command (not with --server)",
     )
     render.add_argument(
         "--component-retries",
@@ -355,12 +421,6 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         metavar="N",
         help="retry a call N times on a restarted component process before failing (default 0)",
-    )
-    render.add_argument(
-        "--max-depth",
-        type=int,
-        metavar="N",
-        help="longest path in segments (1: emitters only, -1: unbounded)",
     )
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_server_option(render)
@@ -385,28 +445,62 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _stdout_gone() -> None:
+    """After a reader of stdout went away (``yarf list | head -1``): later writes,
+    and the flush at exit, go nowhere instead of failing again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass  # stdout is not a file descriptor (captured): nothing is flushed to it
+    finally:
+        os.close(devnull)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Runs one ``yarf`` command; every failure is one line on stderr and an exit code
+    (2: a bad command line or value, 1: a failure, 130: interrupted, 141: stdout closed)."""
     args = build_parser().parse_args(argv)
     credentials = _CREDENTIALS.set((args.token, args.ca))
     try:
-        return int(args.handler(args))
+        code = int(args.handler(args))
+        sys.stdout.flush()
+        return code
     except CommandError as error:
         _say(f"error: {error}")
         return error.exit_code
-    except SceneError as error:
+    except (SceneError, OptionError) as error:
         _say(f"error: {error}")
         return 2
     except ServerError as error:
         _say(f"error: {error}")
         return 1
     except grpc.RpcError as error:
-        code = error.code().name if isinstance(error, grpc.Call) else "RPC"
+        code_name = error.code().name if isinstance(error, grpc.Call) else "RPC"
         details = error.details() if isinstance(error, grpc.Call) else str(error)
-        _say(f"error: {code}: {details}")
+        message = f"error: {code_name}: {details}"
+        if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.UNAVAILABLE:
+            address = getattr(args, "server", None) or DEFAULT_ADDRESS
+            message += f" (is a yarfd running at {address}? {start_hint(address)})"
+        _say(message)
         return 1
+    except BrokenPipeError:
+        _stdout_gone()
+        return 141
     except KeyboardInterrupt:
         _say("interrupted")
         return 130
+    except OSError as error:
+        _say(f"error: {error}")
+        return 1
+    except Exception as error:  # no traceback reaches a user
+        if os.environ.get("YARF_TRACEBACK"):
+            raise
+        _say(
+            f"error: unexpected {type(error).__name__}: {error} "
+            "(YARF_TRACEBACK=1 shows where; please report it)"
+        )
+        return 1
     finally:
         _CREDENTIALS.reset(credentials)
 

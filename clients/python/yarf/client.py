@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+import time
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -14,6 +15,8 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 
 from yarf.assets import AssetData, asset_chunks, sha256_of
 from yarf.credentials import open_channel
+from yarf.images import write_image
+from yarf.render_options import CropWindow, ImageSettings, RenderSettings, Tonemap
 from yarf.v1 import (
     asset_pb2,
     asset_pb2_grpc,
@@ -47,13 +50,27 @@ _NUMPY_DTYPES: dict[int, np.dtype[Any]] = {
 class RenderError(RuntimeError):
     """A job that ended FAILED or CANCELLED; ``status`` holds its last JobStatus."""
 
-    def __init__(self, status: render_pb2.JobStatus) -> None:
+    def __init__(self, status: render_pb2.JobStatus, reason: str = "") -> None:
         state = render_pb2.JobState.Name(status.state)
         message = f"job {status.job_id} {state}"
-        if status.error:
-            message += f": {status.error}"
+        if reason or status.error:
+            message += f": {reason or status.error}"
         super().__init__(message)
         self.status = status
+
+
+def check_ended(status: render_pb2.JobStatus, time_limit: float | None, elapsed: float) -> None:
+    """Raises RenderError unless the job SUCCEEDED, or its ``time_limit`` (seconds)
+    stopped it after at least one sample pass."""
+    if status.state == render_pb2.SUCCEEDED:
+        return
+    if status.state == render_pb2.CANCELLED and time_limit is not None and elapsed >= time_limit:
+        if status.samples_done > 0:
+            return
+        raise RenderError(
+            status, f"the time limit of {time_limit:g} s ended before the first sample pass"
+        )
+    raise RenderError(status)
 
 
 @dataclass(frozen=True)
@@ -215,13 +232,15 @@ class Client:
         component_timeout: float = 0.0,
         priority: int | None = None,
         max_retries: int | None = None,
+        crop: render_pb2.PixelWindow | None = None,
     ) -> str:
         """Queues a render of ``scene``; returns the job id.
 
         ``component_retries`` and ``component_timeout`` (seconds, 0: the
         server's 60) govern calls to components in other processes.
         ``priority`` (1..100, None: the server's 50) orders the queue;
-        ``max_retries`` (None: 0) requeues a job that failed.
+        ``max_retries`` (None: 0) requeues a job that failed. ``crop``: only
+        these pixels get samples.
         """
         options = render_pb2.RenderOptions(
             spp=spp,
@@ -235,6 +254,8 @@ class Client:
             options.integrator.CopyFrom(integrator)
         if sampler is not None:
             options.sampler.CopyFrom(sampler)
+        if crop is not None:
+            options.crop.CopyFrom(crop)
         request = render_pb2.SubmitRequest(
             scene=scene,
             options=options,
@@ -301,25 +322,54 @@ class Client:
         """The job's image as an EXR or PNG file."""
         return bytes(self.result(job_id, format).image)
 
-    def fetch(self, job_id: str, path: str | Path) -> render_pb2.JobStatus:
+    def fetch(
+        self,
+        job_id: str,
+        path: str | Path,
+        *,
+        half: bool = False,
+        exposure: float = 0.0,
+        tonemap: Tonemap = "linear",
+    ) -> render_pb2.JobStatus:
         """Writes the job's image (final or progressive) to ``path``, an .exr or .png file.
 
-        Returns the job's status when the image was taken; raises ValueError
-        for another extension and RuntimeError when the job has no image yet.
+        An EXR holds 32-bit floats (``half``: 16-bit); a PNG the radiance
+        scaled by 2^``exposure`` and mapped by ``tonemap`` ("linear" or
+        "aces"), sRGB-encoded. Returns the job's status when the image was
+        taken; raises ValueError for another extension or a bad setting, and
+        RuntimeError when the job has no image yet.
         """
         path = Path(path)
-        format = IMAGE_FORMATS.get(path.suffix.lower())
-        if format is None:
+        if path.suffix.lower() not in IMAGE_FORMATS:
             raise ValueError(
                 f"cannot write {path}: the extension must be one of {', '.join(IMAGE_FORMATS)}"
             )
-        reply = self.result(job_id, format)
-        if not reply.image:
-            state = render_pb2.JobState.Name(reply.status.state)
-            raise RuntimeError(f"job {job_id} ({state}) has no image yet")
+        settings = ImageSettings(half=half, exposure=exposure, tonemap=tonemap)
+        settings.check(path.suffix.lower())
+        try:
+            reply = self.result(job_id)
+        except grpc.RpcError as error:
+            if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.FAILED_PRECONDITION:
+                raise RuntimeError(f"job {job_id} has no image yet ({error.details()})") from None
+            raise
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(reply.image)
+        write_image(path, array_to_numpy(reply.pixels), settings)
         return reply.status
+
+    def watch_within(self, job_id: str, time_limit: float | None) -> Iterator[render_pb2.JobStatus]:
+        """The job's statuses as ``watch`` gives them; at ``time_limit`` seconds (None:
+        never) the job is cancelled, and its statuses follow until it ends, with the
+        samples done so far."""
+        try:
+            yield from self.watch(job_id, timeout=time_limit)
+        except grpc.RpcError as error:
+            expired = isinstance(error, grpc.Call) and (
+                error.code() == grpc.StatusCode.DEADLINE_EXCEEDED
+            )
+            if time_limit is None or not expired:
+                raise
+            self.cancel(job_id)
+            yield from self.watch(job_id, timeout=self.timeout)
 
     def render(
         self,
@@ -328,28 +378,68 @@ class Client:
         seed: int = 0,
         *,
         name: str = "",
-        transport: scene_pb2.ComponentSpec | None = None,
+        transport: str | scene_pb2.ComponentSpec | None = None,
         integrator: scene_pb2.ComponentSpec | None = None,
         sampler: scene_pb2.ComponentSpec | None = None,
         timeout: float | None = None,
+        res: str | tuple[int, int] | None = None,
+        crop: str | tuple[float, float, float, float] | CropWindow | None = None,
+        time_limit: float | None = None,
+        max_depth: int | None = None,
+        materials: Mapping[str, str] | None = None,
     ) -> RenderResult:
         """Submits, waits (at most ``timeout`` s) and fetches the image.
 
-        Raises RenderError unless the job SUCCEEDED.
+        The options are those of ``yarf render`` (``RenderSettings``):
+        ``res`` (width, height) or "WxH" sets the film size; ``crop`` (x0,
+        x1, y0, y1) in pixels, or in fractions of the film when floats,
+        renders only that window and returns its pixels alone;
+        ``time_limit`` seconds after the submission the job is cancelled and
+        the image holds the samples done by then; ``transport``
+        ("CLASS[@ADDRESS]" or a ComponentSpec) and ``max_depth`` choose the
+        light transport; ``materials`` maps a material's name (or class) to
+        the class it becomes. A bad value raises OptionError (a ValueError)
+        before anything is submitted.
+
+        Raises RenderError unless the job SUCCEEDED, or was stopped by its
+        time limit after at least one sample pass.
         """
+        settings = RenderSettings.of(
+            spp=spp,
+            seed=seed,
+            res=res,
+            crop=crop,
+            time_limit=time_limit,
+            transport=transport,
+            materials=materials,
+            max_depth=max_depth,
+        )
+        job = settings.prepare(scene, integrator=integrator)
         job_id = self.submit(
-            scene,
-            spp,
+            job.scene,
+            job.spp,
             seed,
             name=name,
-            transport=transport,
+            transport=job.transport,
             integrator=integrator,
             sampler=sampler,
+            crop=job.crop,
         )
-        status = self.wait(job_id, timeout=timeout)
-        if status.state != render_pb2.SUCCEEDED:
-            raise RenderError(status)
-        return self.raw(job_id)
+        started = time.monotonic()
+        last: render_pb2.JobStatus | None = None
+        if timeout is not None and (time_limit is None or timeout < time_limit):
+            statuses = self.watch(job_id, timeout=timeout)
+        else:
+            statuses = self.watch_within(job_id, time_limit)
+        for last in statuses:  # noqa: B007 - the last status is the one kept
+            pass
+        status = last if last is not None and last.state in FINAL_STATES else self.status(job_id)
+        check_ended(status, time_limit, time.monotonic() - started)
+        result = self.raw(job_id)
+        if job.crop is None:
+            return result
+        window = (slice(job.crop.y0, job.crop.y1), slice(job.crop.x0, job.crop.x1))
+        return RenderResult(result.status, result.pixels[window], result.variance[window])
 
     def cancel(self, job_id: str) -> render_pb2.JobStatus:
         """Asks the job to stop; it ends CANCELLED within a second."""

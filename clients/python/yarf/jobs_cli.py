@@ -21,11 +21,18 @@ from google.protobuf import json_format
 from tqdm import tqdm
 
 from yarf import dashboard
-from yarf.assets import scene_assets
-from yarf.cli import CommandError, _import, _send_assets, connect
-from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, IMAGE_FORMATS, Client
-from yarf.scene import IMPORTED_SUFFIXES, load_scene
-from yarf.v1 import render_pb2, scene_pb2
+from yarf.cli import (
+    CommandError,
+    _send_assets,
+    checked_settings,
+    connect,
+    output_settings,
+    prepare_job,
+    submit_job,
+)
+from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, Client, RenderError, check_ended
+from yarf.render_options import add_image_arguments, add_render_arguments
+from yarf.v1 import render_pb2
 
 # Exit code of `yarf watch` and `yarf submit --watch` for a job that did not succeed.
 JOB_DID_NOT_SUCCEED = 1
@@ -76,22 +83,13 @@ def _about_job(job_id: str) -> Iterator[None]:
         raise
 
 
-def _load(args: argparse.Namespace) -> tuple[scene_pb2.Scene, int]:
-    """The scene file as `yarf render` reads it (mesh files still files), and the spp to
-    ask for (0: the default)."""
-    path = Path(args.scene)
-    if path.suffix.lower() in IMPORTED_SUFFIXES:
-        imported = _import(path, args.define, inline_files=False, strict=args.strict)
-        return imported.scene, args.spp or imported.sample_count
-    if args.define:
-        raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
-    return load_scene(path, inline_files=False), args.spp
-
-
-def follow(client: Client, job_id: str, *, quiet: bool = False) -> render_pb2.JobStatus:
-    """Shows a progress bar (samples, the server's ETA) until the job ends; returns the end."""
+def follow(
+    client: Client, job_id: str, *, quiet: bool = False, time_limit: float | None = None
+) -> render_pb2.JobStatus:
+    """Shows a progress bar (samples, the server's ETA) until the job ends (cancelled at
+    ``time_limit`` seconds); returns the end."""
     bar_format = "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} spp [{elapsed}{postfix}]"
-    with closing(client.watch(job_id)) as statuses:
+    with closing(client.watch_within(job_id, time_limit)) as statuses:
         # The first status comes at once and gives the bar its total.
         last = next(statuses, None)
         if last is not None:
@@ -123,20 +121,25 @@ def _show(bar: tqdm[None], status: render_pb2.JobStatus) -> None:
     bar.set_postfix_str(note, refresh=True)
 
 
-def _watch_to_end(client: Client, job_id: str, *, quiet: bool) -> int:
-    """Follows the job; 0 when it SUCCEEDED, else a CommandError naming its state and error."""
+def _watch_to_end(
+    client: Client, job_id: str, *, quiet: bool, time_limit: float | None = None
+) -> int:
+    """Follows the job; 0 when it SUCCEEDED (or its time limit stopped it with samples
+    done), else a CommandError naming its state and error."""
+    started = time.monotonic()
     try:
-        status = follow(client, job_id, quiet=quiet)
+        status = follow(client, job_id, quiet=quiet, time_limit=time_limit)
     except KeyboardInterrupt:
         raise CommandError(
             f"stopped watching; job {job_id} goes on (`yarf cancel {job_id}` stops it)", 130
         ) from None
-    if status.state != render_pb2.SUCCEEDED:
-        raise CommandError(
-            f"job {job_id} {_state(status)}: {status.error or 'no message'}", JOB_DID_NOT_SUCCEED
-        )
+    try:
+        check_ended(status, time_limit, time.monotonic() - started)
+    except RenderError as error:
+        raise CommandError(str(error), JOB_DID_NOT_SUCCEED) from None
+    ended = "SUCCEEDED" if status.state == render_pb2.SUCCEEDED else "stopped at its time limit"
     print(
-        f"job {job_id} SUCCEEDED: {status.samples_done} spp in "
+        f"job {job_id} {ended}: {status.samples_done} spp in "
         f"{format_duration(status.elapsed_seconds)}"
     )
     return 0
@@ -145,16 +148,21 @@ def _watch_to_end(client: Client, job_id: str, *, quiet: bool) -> int:
 def submit_command(args: argparse.Namespace) -> int:
     if args.priority is not None and not 1 <= args.priority <= 100:
         raise CommandError(f"--priority must be 1 to 100, not {args.priority}", exit_code=2)
-    scene, spp = _load(args)
+    settings = checked_settings(args)
+    if settings.time_limit is not None and not args.watch:
+        # The server has no time limit of its own: the command that watches enforces it.
+        raise CommandError(
+            "--time-limit needs --watch: the job is stopped by the command that follows it",
+            exit_code=2,
+        )
+    job, assets = prepare_job(args, settings)
     base_dir = Path(args.scene).parent
-    # Before any server is asked for: a missing or misplaced mesh file fails here.
-    assets = scene_assets(scene, base_dir)
     with _job_server(args) as client:
-        _send_assets(client, assets, scene, base_dir, quiet=args.quiet)
-        job_id = client.submit(
-            scene,
-            spp,
-            args.seed,
+        _send_assets(client, assets, job.scene, base_dir, quiet=args.quiet)
+        job_id = submit_job(
+            client,
+            job,
+            settings,
             name=args.name or Path(args.scene).name,
             priority=args.priority,
             max_retries=args.max_retries,
@@ -163,7 +171,9 @@ def submit_command(args: argparse.Namespace) -> int:
         print(job_id, flush=True)
         if args.watch:
             with _about_job(job_id):
-                return _watch_to_end(client, job_id, quiet=args.quiet)
+                return _watch_to_end(
+                    client, job_id, quiet=args.quiet, time_limit=settings.time_limit
+                )
     return 0
 
 
@@ -252,14 +262,12 @@ def list_command(args: argparse.Namespace) -> int:
 
 def fetch_command(args: argparse.Namespace) -> int:
     output = Path(args.output)
-    if output.suffix.lower() not in IMAGE_FORMATS:
-        raise CommandError(
-            f"cannot write {output}: the extension must be one of {', '.join(IMAGE_FORMATS)}",
-            exit_code=2,
-        )
+    image = output_settings(args, output)
     with _job_server(args) as client, _about_job(args.job):
         try:
-            status = client.fetch(args.job, output)
+            status = client.fetch(
+                args.job, output, half=image.half, exposure=image.exposure, tonemap=image.tonemap
+            )
         except RuntimeError as error:
             raise CommandError(str(error)) from None
     kind = "image" if status.state == render_pb2.SUCCEEDED else f"{_state(status)} job's image"
@@ -332,10 +340,7 @@ def add_job_commands(
         help="scene file: protobuf JSON (.json) or text (.textproto), Mitsuba 3 (.xml) or "
         "pbrt-v4 (.pbrt)",
     )
-    submit.add_argument(
-        "--spp", type=int, default=0, help="samples per pixel (default: the file's, else 16)"
-    )
-    submit.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    add_render_arguments(submit, spp_default="default: the file's, else 16")
     submit.add_argument("--name", help="the job's name in listings (default: the file name)")
     submit.add_argument(
         "--priority", type=int, metavar="P", help="1 (lowest) to 100 (highest); default 50"
@@ -376,6 +381,7 @@ def add_job_commands(
 
     fetch = job_command("fetch", "write a job's image, final or progressive so far")
     fetch.add_argument("-o", "--output", required=True, help="image to write (.exr or .png)")
+    add_image_arguments(fetch)
     fetch.set_defaults(handler=fetch_command)
 
     priority = job_command("priority", "move a queued job in the queue")
