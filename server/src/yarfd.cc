@@ -17,6 +17,7 @@
 #include "service/job_memory.h"
 #include "service/instance_services.h"
 #include "service/job_scene_service.h"
+#include "service/listen_port.h"
 #include "service/render_service.h"
 #include "service/request_checks.h"
 #include "service/server_credentials.h"
@@ -33,6 +34,8 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   }
   // First: a refused address or a bad tokens file stops yarfd before any work.
   const auto credentials = yarf::ListenCredentials(options);
+  // So is a port another process holds: yarfd never shares one.
+  yarf::CheckPortFree(options.listen);
   std::optional<tbb::global_control> threads;
   if (options.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, options.threads);
 
