@@ -12,6 +12,7 @@
 #include <iostream>
 #include <optional>
 
+#include "grpc/health/v1/health.pb.h"
 #include "service/asset_service.h"
 #include "service/component_service.h"
 #include "service/job_memory.h"
@@ -90,6 +91,10 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   yarf::EmitterServiceImpl emitter(instances);
 
   grpc::EnableDefaultHealthCheckService(true);
+  // gRPC serves the health service without putting its descriptor in the
+  // pool reflection reads; naming a message of it links the health proto
+  // in, so that grpcurl and other reflection clients can call it.
+  grpc::health::v1::HealthCheckRequest::descriptor();
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
