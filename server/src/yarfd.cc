@@ -15,8 +15,9 @@
 #include "grpc/health/v1/health.pb.h"
 #include "service/asset_service.h"
 #include "service/component_service.h"
-#include "service/job_memory.h"
 #include "service/instance_services.h"
+#include "service/job_events.h"
+#include "service/job_memory.h"
 #include "service/job_scene_service.h"
 #include "service/listen_port.h"
 #include "service/render_service.h"
@@ -55,6 +56,9 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
     }
   }
 
+  // Every job event is a line on stderr.
+  yarf::JobLog job_log(std::cerr, options.log_json);
+
   yarf::InstanceTable instances(uint64_t(options.max_instances_per_user),
                                 std::chrono::seconds(options.instance_idle_seconds));
   yarf::JobScenes job_scenes(instances);
@@ -70,7 +74,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
                          .max_queued_jobs_per_user = uint64_t(options.max_queued_jobs_per_user),
                          .max_job_bytes = options.max_job_memory ? options.max_job_memory : yarf::DefaultMaxJobBytes(),
                          .asset_grace_hours = options.asset_grace_hours},
-                        state_folder);
+                        state_folder, &job_log);
   yarf::AssetServiceImpl asset_service(assets);
   yarf::RenderServiceImpl render(jobs, uint32_t(options.max_watches_per_user));
   yarf::RegistryServiceImpl registry_service(registry, remote_classes,

@@ -5,6 +5,7 @@
 #include <optional>
 #include <thread>
 #include <tuple>
+#include <utility>
 
 #include "kernel/film_target.h"
 #include "service/job_files.h"
@@ -33,12 +34,13 @@ constexpr std::chrono::milliseconds kFirstCommitPause(100);
 bool Ended(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
 
 Job::Job(std::string id, JobRecord record, std::shared_ptr<const v1::SubmitRequest> request, Files files,
-         Persist persist)
+         Persist persist, JobObserver* observer)
     : id_(std::move(id)),
       number_(record.number),
       owner_(record.owner),
       files_(std::move(files)),
       persist_(std::move(persist)),
+      observer_(observer),
       request_(std::move(request)),
       row_(std::move(record)),
       samples_done_(row_.samples_done),
@@ -73,6 +75,49 @@ v1::JobStatus Job::Status() const {
   s.set_attempts(row_.attempts);
   s.set_submitted_at(row_.submitted_at);
   return s;
+}
+
+JobEvent Job::Describe(JobEventKind kind) const {
+  std::lock_guard lock(mutex_);
+  return DescribeLocked(kind);
+}
+
+JobEvent Job::DescribeLocked(JobEventKind kind) const {
+  JobEvent event;
+  event.kind = kind;
+  event.job = id_;
+  event.owner = owner_;
+  event.attempt = row_.attempts;
+  event.spp_done = samples_done_;
+  event.spp_total = row_.samples_total;
+  if (Ended(row_.state))
+    event.seconds = row_.elapsed_seconds;
+  else if (row_.state == v1::RUNNING || kind == JobEventKind::kRequeued)
+    event.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  event.rays = closest_hit_rays_ + shadow_rays_;
+  event.error = row_.error;
+  return event;
+}
+
+std::optional<JobEvent> Job::EventOfChange(const JobRecord& before) const {
+  if (before.state == row_.state) {
+    // A stored checkpoint moves the samples a restart goes on from.
+    if (row_.state == v1::RUNNING && row_.samples_done != before.samples_done)
+      return DescribeLocked(JobEventKind::kCheckpoint);
+    return std::nullopt;
+  }
+  switch (row_.state) {
+    case v1::RUNNING: {
+      JobEvent event = DescribeLocked(JobEventKind::kStarted);
+      event.queue_seconds = std::chrono::duration<double>(started_ - queued_since_).count();
+      return event;
+    }
+    case v1::QUEUED: return DescribeLocked(JobEventKind::kRequeued);
+    case v1::SUCCEEDED: return DescribeLocked(JobEventKind::kFinished);
+    case v1::FAILED: return DescribeLocked(JobEventKind::kFailed);
+    case v1::CANCELLED: return DescribeLocked(JobEventKind::kCancelled);
+    default: return std::nullopt;
+  }
 }
 
 uint64_t Job::Version() const {
@@ -110,14 +155,19 @@ std::vector<std::string> Job::Assets() const {
 }
 
 bool Job::Commit(const std::function<bool(JobRecord&)>& change) {
+  std::optional<JobEvent> event;
   {
     std::lock_guard lock(mutex_);
     JobRecord next = row_;
     if (!change(next)) return false;
     persist_(next);
-    row_ = std::move(next);
+    const JobRecord before = std::exchange(row_, std::move(next));
     ++version_;
+    event = EventOfChange(before);
+    if (row_.state == v1::QUEUED && before.state != v1::QUEUED) queued_since_ = std::chrono::steady_clock::now();
   }
+  // Told once stored, as watchers are, and outside the lock.
+  if (event && observer_) observer_->OnJobEvent(*event);
   return true;
 }
 
@@ -154,16 +204,23 @@ void Job::EndUnstored(const StorageError& error) {
     ++version_;
     request_.reset();
   }
+  if (observer_) observer_->OnJobEvent(Describe(JobEventKind::kFailed));
 }
 
 void Job::Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays) {
+  uint64_t new_pixel_samples = 0, new_rays = 0;
   {
     std::lock_guard lock(mutex_);
+    // Only what was added: a run that starts counts its rays from 0 again.
+    if (samples_done > samples_done_) new_pixel_samples = uint64_t(samples_done - samples_done_) * run_pixels_;
+    if (closest_hit_rays + shadow_rays > closest_hit_rays_ + shadow_rays_)
+      new_rays = closest_hit_rays + shadow_rays - closest_hit_rays_ - shadow_rays_;
     samples_done_ = samples_done;
     closest_hit_rays_ = closest_hit_rays;
     shadow_rays_ = shadow_rays;
     ++version_;
   }
+  if (observer_ && (new_pixel_samples || new_rays)) observer_->OnProgress(new_pixel_samples, new_rays);
 }
 
 void Job::SetPriority(uint32_t priority) {
@@ -293,6 +350,13 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
       run_first_sample_ = share.first_sample;
     }
     Progress(share.first_sample, 0, 0);
+    {
+      // After the first Progress: samples of a checkpoint or of another
+      // share were not rendered by this run.
+      std::lock_guard lock(mutex_);
+      run_pixels_ = share.crop ? uint64_t(share.crop->x1 - share.crop->x0) * (share.crop->y1 - share.crop->y0)
+                               : uint64_t(scene.film().width()) * scene.film().height();
+    }
 
     const KernelScene* counters = kernel.get();
     // Checkpoints of a large film take a while to write: at least ten

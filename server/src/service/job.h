@@ -16,6 +16,7 @@
 #include "components/remote_instance.h"
 #include "kernel/film.h"
 #include "service/job_components.h"
+#include "service/job_events.h"
 #include "service/job_files.h"
 #include "service/job_store.h"
 #include "yarf/v1/render.pb.h"
@@ -41,14 +42,17 @@ class Job {
     std::string error;
   };
 
-  // `request` is null for a job that has ended.
+  // `request` is null for a job that has ended. `observer`, if any,
+  // outlives the job and hears of each change of its state once stored.
   Job(std::string id, JobRecord record, std::shared_ptr<const v1::SubmitRequest> request, Files files,
-      Persist persist);
+      Persist persist, JobObserver* observer = nullptr);
 
   const std::string& id() const { return id_; }
   uint64_t number() const { return number_; }
   const std::string& owner() const { return owner_; }
   v1::JobStatus Status() const;
+  // The job as an event of `kind` would tell it now.
+  JobEvent Describe(JobEventKind kind) const;
   // Bumped on every change, for watchers.
   uint64_t Version() const;
   bool Finished() const;
@@ -88,8 +92,9 @@ class Job {
   bool EndRun(const RunResult& result);
 
  private:
-  // Applies `change` to a copy of the row, stores it and publishes it;
-  // nothing changes when `change` returns false or the store fails.
+  // Applies `change` to a copy of the row, stores it and publishes it, then
+  // tells the observer what changed; nothing changes when `change` returns
+  // false or the store fails.
   bool Commit(const std::function<bool(JobRecord&)>& change);
   // Commit, tried again a few times, with growing pauses, while the store
   // fails; then throws the last StorageError.
@@ -109,12 +114,18 @@ class Job {
   void WriteCheckpoint(uint32_t samples_done);
   // Who the job's files belong to: this job, as of its current attempt.
   JobFileOwner FileOwner() const;
+  // Describe, with mutex_ held.
+  JobEvent DescribeLocked(JobEventKind kind) const;
+  // The event a change of the row from `before` to row_ makes, if any;
+  // with mutex_ held.
+  std::optional<JobEvent> EventOfChange(const JobRecord& before) const;
 
   const std::string id_;
   const uint64_t number_;
   const std::string owner_;
   const Files files_;
   const Persist persist_;
+  JobObserver* const observer_;
   // Read by the worker thread; dropped, under mutex_, once the job ends.
   // Other threads copy the pointer under mutex_ before they read (Assets).
   std::shared_ptr<const v1::SubmitRequest> request_;
@@ -128,6 +139,11 @@ class Job {
   uint32_t samples_done_ = 0, run_first_sample_ = 0;
   uint64_t closest_hit_rays_ = 0, shadow_rays_ = 0;
   std::chrono::steady_clock::time_point started_;
+  // Since when the job waits in the queue: made, or last put back.
+  std::chrono::steady_clock::time_point queued_since_ = std::chrono::steady_clock::now();
+  // Pixels the current run renders (its crop, else the film), for the
+  // pixel samples told to the observer.
+  uint64_t run_pixels_ = 0;
   uint64_t version_ = 0;
 
   // The film while rendering; once the job ends its image is on disk.

@@ -48,10 +48,12 @@ void RemoveFile(const std::filesystem::path& path) {
 
 }  // namespace
 
-JobManager::JobManager(JobResources resources, JobQueueOptions options, const StateFolder& folder)
+JobManager::JobManager(JobResources resources, JobQueueOptions options, const StateFolder& folder,
+                       JobObserver* observer)
     : resources_(std::move(resources)),
       options_(std::move(options)),
       folder_(folder),
+      observer_(observer),
       // Told what files of jobs there are, so that it refuses to replace a
       // lost database with an empty one (the sweep below would delete them).
       store_(folder_.Database(), folder_.DescribeJobFiles()),
@@ -75,7 +77,7 @@ std::shared_ptr<Job> JobManager::MakeJob(JobRecord record, std::shared_ptr<const
   const std::string id = IdOf(record.number);
   Job::Files files{folder_.Checkpoint(id), folder_.Result(id)};
   return std::make_shared<Job>(id, std::move(record), std::move(request), std::move(files),
-                               [this](const JobRecord& row) { store_.Update(row); });
+                               [this](const JobRecord& row) { store_.Update(row); }, observer_);
 }
 
 void JobManager::EndCancelled(JobRecord& row) const {
@@ -203,6 +205,8 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
     std::lock_guard lock(mutex_);
     jobs_[job->number()] = job;
   }
+  // Before it is queued, so that the log tells submitted before started.
+  if (observer_) observer_->OnJobEvent(job->Describe(JobEventKind::kSubmitted));
   scheduler_.Enqueue(job);
   return job->id();
 }

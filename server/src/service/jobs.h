@@ -46,8 +46,10 @@ class JobManager {
   // this) and takes back the jobs a previous server left: queued ones wait
   // again, those it was running resume (or fail, if the server died under
   // them too often; or end CANCELLED, if a cancel was asked). Throws Error
-  // or StorageError when the folder or the store is unusable.
-  JobManager(JobResources resources, JobQueueOptions options, const StateFolder& folder);
+  // or StorageError when the folder or the store is unusable. `observer`,
+  // if any, outlives this and hears of every job's events (job_events.h).
+  JobManager(JobResources resources, JobQueueOptions options, const StateFolder& folder,
+             JobObserver* observer = nullptr);
   // StopAll().
   ~JobManager();
   JobManager(const JobManager&) = delete;
@@ -87,6 +89,7 @@ class JobManager {
   const JobResources resources_;
   const JobQueueOptions options_;
   const StateFolder& folder_;
+  JobObserver* const observer_;
   JobStore store_;
   mutable std::mutex mutex_;
   // Asset collection: one sweep at a time, and when the last one was.

@@ -43,7 +43,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--max-instances-per-user N] [--instance-idle-seconds S] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
       "             [--max-asset-bytes-per-user BYTES[K|M|G]] [--asset-grace-hours H]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
-      "             [--allow-root]\n"
+      "             [--allow-root] [--log-json]\n"
       "       yarfd --check-requests   (SubmitRequests on stdin, SubmitChecks on stdout)";
   ServerOptions options;
   for (int i = 1; i < argc; ++i) {
@@ -55,6 +55,10 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     }
     if (flag == "--allow-root") {
       options.allow_root = true;
+      continue;
+    }
+    if (flag == "--log-json") {
+      options.log_json = true;
       continue;
     }
     if (flag == "--check-requests") {

@@ -54,6 +54,9 @@ struct ServerOptions {
   bool allow_load_plugin = false;
   // yarfd refuses to run as root unless --allow-root (or YARF_ALLOW_ROOT=1).
   bool allow_root = false;
+  // One line per job event on stderr (job_events.h): key=value text, or
+  // with --log-json one JSON object per line.
+  bool log_json = false;
   // --check-requests: serve no port, only answer SubmitRequests on stdin
   // with the checks Submit makes (ServeRequestChecks).
   bool check_requests = false;
