@@ -10,7 +10,9 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
+#include <vector>
 
 #include "grpc/health/v1/health.pb.h"
 #include "service/asset_service.h"
@@ -20,12 +22,24 @@
 #include "service/job_memory.h"
 #include "service/job_scene_service.h"
 #include "service/listen_port.h"
+#include "service/metrics_endpoint.h"
 #include "service/render_service.h"
 #include "service/request_checks.h"
 #include "service/server_credentials.h"
 #include "service/server_options.h"
+#include "service/server_metrics.h"
 
 namespace {
+
+// The number of jobs in each state, every state named even when none is in it.
+std::map<std::string, uint64_t> CountJobsByState(const yarf::JobManager& jobs) {
+  std::map<std::string, uint64_t> counts;
+  const auto* states = yarf::v1::JobState_descriptor();
+  for (int i = 0; i < states->value_count(); ++i)
+    if (states->value(i)->number() != yarf::v1::JOB_STATE_UNSPECIFIED) counts[states->value(i)->name()] = 0;
+  for (const auto& job : jobs.List()) ++counts[yarf::v1::JobState_Name(job->Status().state())];
+  return counts;
+}
 
 int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   // Every job, plugin and component call would run with every right.
@@ -38,6 +52,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   const auto credentials = yarf::ListenCredentials(options);
   // So is a port another process holds: yarfd never shares one.
   yarf::CheckPortFree(options.listen);
+  if (!options.metrics.empty()) yarf::CheckPortFree(options.metrics);
   std::optional<tbb::global_control> threads;
   if (options.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, options.threads);
 
@@ -56,8 +71,13 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
     }
   }
 
-  // Every job event is a line on stderr.
+  // Every job event is a line on stderr, and counts in the metrics when
+  // they are asked for.
   yarf::JobLog job_log(std::cerr, options.log_json);
+  std::optional<yarf::ServerMetrics> metrics;
+  std::vector<yarf::JobObserver*> observers = {&job_log};
+  if (!options.metrics.empty()) observers.push_back(&metrics.emplace());
+  yarf::JobObservers job_observers(std::move(observers));
 
   yarf::InstanceTable instances(uint64_t(options.max_instances_per_user),
                                 std::chrono::seconds(options.instance_idle_seconds));
@@ -74,7 +94,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
                          .max_queued_jobs_per_user = uint64_t(options.max_queued_jobs_per_user),
                          .max_job_bytes = options.max_job_memory ? options.max_job_memory : yarf::DefaultMaxJobBytes(),
                          .asset_grace_hours = options.asset_grace_hours},
-                        state_folder, &job_log);
+                        state_folder, &job_observers);
   yarf::AssetServiceImpl asset_service(assets);
   yarf::RenderServiceImpl render(jobs, uint32_t(options.max_watches_per_user));
   yarf::RegistryServiceImpl registry_service(registry, remote_classes,
@@ -109,6 +129,11 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   // Batches and images are large.
   builder.SetMaxReceiveMessageSize(yarf::kMaxMessageBytes);
   builder.SetMaxSendMessageSize(yarf::kMaxMessageBytes);
+  if (metrics) {
+    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> timers;
+    timers.push_back(metrics->CallTimer());
+    builder.experimental().SetInterceptorCreators(std::move(timers));
+  }
   for (grpc::Service* service : std::initializer_list<grpc::Service*>{
            &render, &registry_service, &component, &factory, &integrator, &root_finder, &sampler, &generator, &warp,
            &surface_model, &emitter, &intersect, &job_scene, &shape, &sample_surface_area,
@@ -122,6 +147,13 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   // Jobs start once the server listens: their components may call it back.
   jobs.Start();
   std::cout << "yarfd listening on " << options.listen << " (port " << port << ")" << std::endl;
+  // Stopped before the jobs it counts go (declared after them).
+  std::optional<yarf::MetricsEndpoint> metrics_endpoint;
+  if (metrics) {
+    metrics_endpoint.emplace(options.metrics, [&] { return metrics->Exposition(CountJobsByState(jobs)); });
+    std::cout << "yarfd metrics on " << options.metrics << " (port " << metrics_endpoint->port()
+              << "), at /metrics" << std::endl;
+  }
   if (!options.port_file.empty()) {
     const auto tmp = options.port_file.string() + ".tmp";
     std::ofstream(tmp) << port << "\n";

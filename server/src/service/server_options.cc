@@ -43,7 +43,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--max-instances-per-user N] [--instance-idle-seconds S] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
       "             [--max-asset-bytes-per-user BYTES[K|M|G]] [--asset-grace-hours H]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
-      "             [--allow-root] [--log-json]\n"
+      "             [--allow-root] [--log-json] [--metrics HOST:PORT]\n"
       "       yarfd --check-requests   (SubmitRequests on stdin, SubmitChecks on stdout)";
   ServerOptions options;
   for (int i = 1; i < argc; ++i) {
@@ -88,6 +88,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--tls-cert") options.tls_cert = value;
     else if (flag == "--tls-key") options.tls_key = value;
     else if (flag == "--tokens") options.tokens_file = value;
+    else if (flag == "--metrics") options.metrics = value;
     else throw Error("unknown option " + flag + "\n" + kUsage);
   }
   if (const char* env = std::getenv("YARF_PLUGIN_PATH")) {

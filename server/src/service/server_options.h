@@ -57,6 +57,9 @@ struct ServerOptions {
   // One line per job event on stderr (job_events.h): key=value text, or
   // with --log-json one JSON object per line.
   bool log_json = false;
+  // --metrics HOST:PORT: Prometheus metrics over HTTP at /metrics there;
+  // empty (the default): none.
+  std::string metrics;
   // --check-requests: serve no port, only answer SubmitRequests on stdin
   // with the checks Submit makes (ServeRequestChecks).
   bool check_requests = false;
