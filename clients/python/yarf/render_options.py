@@ -257,12 +257,12 @@ class RenderSettings:
         spec = scene_pb2.ComponentSpec()
         if isinstance(self.transport, scene_pb2.ComponentSpec):
             spec.CopyFrom(self.transport)
+        elif self.transport and class_at("transport", self.transport)[0] != (
+            scene.transport.class_name
+        ):
+            spec.class_name, spec.address = class_at("transport", self.transport)
         else:
-            class_name, address = class_at("transport", self.transport or "")
-            if self.transport and class_name != scene.transport.class_name:
-                spec.class_name, spec.address = class_name, address
-            else:
-                spec.CopyFrom(scene.transport)
+            spec.CopyFrom(scene.transport)
         spec.class_name = spec.class_name or "path"
         if self.max_depth is not None:
             spec.properties.values["max_depth"].int_value = self.max_depth
