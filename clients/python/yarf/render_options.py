@@ -262,8 +262,9 @@ class RenderSettings:
         ):
             spec.class_name, spec.address = class_at("transport", self.transport)
         else:
+            # The scene's transport (path when it names none), with its properties.
             spec.CopyFrom(scene.transport)
-        spec.class_name = spec.class_name or "path"
+            spec.class_name = spec.class_name or "path"
         if self.max_depth is not None:
             spec.properties.values["max_depth"].int_value = self.max_depth
         return spec
