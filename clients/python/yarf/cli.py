@@ -305,7 +305,12 @@ def render_command(args: argparse.Namespace) -> int:
             check_ended(status, settings.time_limit, time.monotonic() - started)
         except RenderError as error:
             raise CommandError(str(error)) from None
-        pixels = client.image(job_id)
+        try:
+            _, pixels, exact = client.image_pixels(job_id)
+        except RuntimeError as error:
+            raise CommandError(str(error)) from None
+    if not exact and output.suffix.lower() == ".exr" and not image_options.half:
+        _say("warning: the film is too large for float pixels in one reply: its values are halves")
     write_image(output, pixels, image_options, window=job.crop)
     stopped = ", stopped at the time limit" if status.state != render_pb2.SUCCEEDED else ""
     print(

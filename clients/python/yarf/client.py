@@ -15,7 +15,7 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 
 from yarf.assets import AssetData, asset_chunks, sha256_of
 from yarf.credentials import open_channel
-from yarf.images import write_image
+from yarf.images import decode_exr, write_image
 from yarf.render_options import CropWindow, ImageSettings, RenderSettings, Tonemap
 from yarf.v1 import (
     asset_pb2,
@@ -318,6 +318,30 @@ class Client:
         """The variance of each pixel's estimate, float32 [H, W, 3]."""
         return array_to_numpy(self.result(job_id).variance)
 
+    def image_pixels(self, job_id: str) -> tuple[render_pb2.JobStatus, np.ndarray, bool]:
+        """The job's status, its pixel estimates float32 [H, W, 3] for an image file,
+        and whether they are exact: a film too large for float pixels in one reply
+        (about 11 million pixels) comes as the server's half-float EXR.
+
+        Raises RuntimeError when the job has no image yet.
+        """
+        try:
+            try:
+                reply = self.result(job_id)
+                return reply.status, array_to_numpy(reply.pixels), True
+            except grpc.RpcError as error:
+                too_large = isinstance(error, grpc.Call) and (
+                    error.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+                )
+                if not too_large:
+                    raise
+            reply = self.result(job_id, render_pb2.GetResultRequest.EXR)
+            return reply.status, decode_exr(reply.image), False
+        except grpc.RpcError as error:
+            if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.FAILED_PRECONDITION:
+                raise RuntimeError(f"job {job_id} has no image yet ({error.details()})") from None
+            raise
+
     def encoded(self, job_id: str, format: int) -> bytes:
         """The job's image as an EXR or PNG file."""
         return bytes(self.result(job_id, format).image)
@@ -346,15 +370,10 @@ class Client:
             )
         settings = ImageSettings(half=half, exposure=exposure, tonemap=tonemap)
         settings.check(path.suffix.lower())
-        try:
-            reply = self.result(job_id)
-        except grpc.RpcError as error:
-            if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.FAILED_PRECONDITION:
-                raise RuntimeError(f"job {job_id} has no image yet ({error.details()})") from None
-            raise
+        status, pixels, _ = self.image_pixels(job_id)
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_image(path, array_to_numpy(reply.pixels), settings)
-        return reply.status
+        write_image(path, pixels, settings)
+        return status
 
     def watch_within(self, job_id: str, time_limit: float | None) -> Iterator[render_pb2.JobStatus]:
         """The job's statuses as ``watch`` gives them; at ``time_limit`` seconds (None:

@@ -58,6 +58,25 @@ def srgb_bytes(display: np.ndarray) -> np.ndarray:
     return np.rint(encoded * 255.0).astype(np.uint8)
 
 
+def decode_exr(data: bytes) -> np.ndarray:
+    """The RGB pixels [height, width, 3] of an EXR file's bytes, as float32."""
+    with tempfile.TemporaryDirectory(prefix="yarf-") as folder:
+        path = Path(folder) / "image.exr"
+        path.write_bytes(data)
+        image = oiio.ImageInput.open(str(path))
+        if image is None:
+            raise OSError(f"cannot read an EXR image: {oiio.geterror()}")
+        try:
+            pixels = image.read_image(0, 0, 0, 3, oiio.FLOAT)
+            if pixels is None:
+                raise OSError(f"cannot read an EXR image: {image.geterror()}")
+            return np.asarray(pixels, dtype=np.float32).reshape(
+                image.spec().height, image.spec().width, 3
+            )
+        finally:
+            image.close()
+
+
 def check_writable(path: Path) -> None:
     """Raises OSError unless a file can be written at ``path`` (its folder made if
     needed), so that a render is not lost to a bad output path at its end."""
