@@ -13,7 +13,6 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-import OpenImageIO as oiio
 
 from yarf.render_options import ImageSettings, Tonemap
 from yarf.v1 import render_pb2
@@ -60,6 +59,8 @@ def srgb_bytes(display: np.ndarray) -> np.ndarray:
 
 def decode_exr(data: bytes) -> np.ndarray:
     """The RGB pixels [height, width, 3] of an EXR file's bytes, as float32."""
+    import OpenImageIO as oiio  # imported when used: `import yarf` stays light
+
     with tempfile.TemporaryDirectory(prefix="yarf-") as folder:
         path = Path(folder) / "image.exr"
         path.write_bytes(data)
@@ -96,6 +97,8 @@ def write_image(
 ) -> None:
     """Writes linear float pixels [height, width, 3] (the whole film) as an .exr or
     .png file; with ``window``, only those pixels."""
+    import OpenImageIO as oiio  # imported when used: `import yarf` stays light
+
     settings = settings or ImageSettings()
     height, width, _ = pixels.shape
     x0, y0 = 0, 0
