@@ -155,7 +155,18 @@ def test_lepage_option_names_map_onto_yarfs(client: Client) -> None:
 
 
 @pytest.mark.parametrize(
-    "method", ["mean_sample", "stratified_mc", "rqmc", "miser", "simpson", "vegas", "vegas+"]
+    "method",
+    [
+        "mean_sample",
+        "stratified_mc",
+        "rqmc",
+        "miser",
+        "simpson",
+        "vegas",
+        "vegas+",
+        "control_variate",
+        "adaptive_hierarchical",
+    ],
 )
 def test_evaluations_never_exceed_the_budget(client: Client, method: str) -> None:
     seen = [0]

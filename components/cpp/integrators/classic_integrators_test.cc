@@ -1,4 +1,5 @@
-// The classic integrators (simpson, stratified_mc, rqmc, miser) on
+// The classic integrators (simpson, stratified_mc, rqmc, miser) and the
+// paper's future ones (control_variate, adaptive_hierarchical) on
 // integrands with closed-form integrals, loaded through the registry as
 // yarfd loads them: accuracy, convergence order, calibration of the
 // reported error, advantage over mean-sample Monte Carlo where theory
@@ -13,6 +14,8 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "components/registry.h"
@@ -60,6 +63,26 @@ class Exponential final : public Function {
   }
 };
 
+// Π_j e^{a_j x_j} over [0,1]^8: smooth, every coordinate interacting.
+class Exponentials final : public Function {
+ public:
+  uint32_t InputDimensions() const override { return 8; }
+  uint32_t OutputDimensions() const override { return 1; }
+  void Evaluate(std::span<const float> points, std::span<float> values) override {
+    for (size_t i = 0; i < values.size(); ++i) {
+      double s = 0;
+      for (size_t j = 0; j < 8; ++j) s += kA[j] * points[i * 8 + j];
+      values[i] = float(std::exp(s));
+    }
+  }
+  static double Exact() {
+    double v = 1;
+    for (double a : kA) v *= std::expm1(a) / a;
+    return v;
+  }
+  static constexpr double kA[8] = {0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2};
+};
+
 // Passes calls through, counting them and the points they carry.
 class Counting final : public Function {
  public:
@@ -91,45 +114,6 @@ class ClassicIntegratorsTest : public testing::Test {
     Properties p;
     p.Set("intervals", n);
     return p;
-  }
-
-  // Over `seeds` runs on [0,1]^d: how many land within 2σ of `exact`, and
-  // the largest |error| / σ seen.
-  struct Calibration {
-    int within_two_sigma = 0;
-    double worst_ratio = 0;
-  };
-  static Calibration Calibrate(Integrator& integrator, Function& f, double exact, uint64_t evaluations,
-                               const Sampler& sampler, int seeds) {
-    const std::vector<double> lower(f.InputDimensions(), 0.0), upper(f.InputDimensions(), 1.0);
-    Calibration out;
-    for (int seed = 0; seed < seeds; ++seed) {
-      const IntegrationResult r = integrator.Integrate(f, lower, upper, evaluations, uint64_t(seed), sampler);
-      EXPECT_GT(r.standard_error[0], 0);
-      const double ratio = std::abs(r.estimate[0] - exact) / r.standard_error[0];
-      if (ratio < 2) ++out.within_two_sigma;
-      out.worst_ratio = std::max(out.worst_ratio, ratio);
-    }
-    return out;
-  }
-
-  // 40 runs of `name` with the sampler `sampler_name` on an oscillatory
-  // integrand with coefficients `a` and on a corner peak: how many land
-  // within 2σ, and the worst |error| / σ, reported under `label`.
-  void ExpectCalibrated(const std::string& name, const std::string& sampler_name, std::vector<double> a,
-                        uint64_t evaluations, const char* label) const {
-    auto integrator = Make(name);
-    auto sampler = MakeSampler(sampler_name);
-    Oscillatory oscillatory(std::move(a), 0.3);
-    CornerPeak peak({3.0, 2.0, 1.0});
-    for (Function* f : std::initializer_list<Function*>{&oscillatory, &peak}) {
-      const double exact = f == &oscillatory ? oscillatory.Exact() : peak.Exact();
-      const Calibration c = Calibrate(*integrator, *f, exact, evaluations, *sampler, 40);
-      std::printf("%s, d = %u: %d / 40 within 2σ, worst |error|/σ = %.2f\n", label, f->InputDimensions(),
-                  c.within_two_sigma, c.worst_ratio);
-      EXPECT_LT(c.worst_ratio, 4.0);
-      EXPECT_GE(c.within_two_sigma, 34);
-    }
   }
 
   // Root-mean-square error over `seeds` runs on [0,1]^d.
@@ -223,16 +207,123 @@ TEST_F(ClassicIntegratorsTest, SimpsonChoosesItsGridFromTheBudget) {
   EXPECT_THROW(simpson->Integrate(f, lower, upper, 8, 0, *sampler), Error);
 }
 
-TEST_F(ClassicIntegratorsTest, StratifiedMcIsWithinItsErrorBarsAndCalibrated) {
-  ExpectCalibrated("stratified_mc", "independent", {1.5, 2.5}, 4096, "stratified_mc");
+TEST_F(ClassicIntegratorsTest, ReportedErrorIsCalibratedOnEveryIntegrandFamily) {
+  // Independent runs fall within 2σ of the exact value about 95% of the
+  // time when σ is right (93.6% for rqmc's Student t with 15 degrees of
+  // freedom); 200 runs put the count within [90%, 99%] unless σ is off.
+  //
+  // Left out: the narrow peak (width 0.02 in 4-D, 6·10⁻⁶ of the volume)
+  // at 10⁵ points for the methods that do not adapt, or adapt by cells
+  // larger than the peak. Plain sampling sees it about once; the estimate
+  // is then skewed (usually low, with a small σ) and no error bar from
+  // such a sample covers 95% of runs: that takes the ~10⁷ points at which
+  // the central limit applies. (Measured, 200 runs: mean_sample 76.5%,
+  // stratified_mc 78%, rqmc 82%, control_variate 72.5%,
+  // adaptive_hierarchical 84%.) miser, and vegas in vegas_test, find the
+  // peak and are held to the interval there too.
+  constexpr int kRuns = 200;
+  struct Method {
+    const char* name;
+    const char* sampler;
+    bool held_on_narrow_peak;
+  };
+  const Method methods[] = {{"mean_sample", "independent", false},     {"stratified_mc", "independent", false},
+                            {"rqmc", "sobol_nd", false},               {"miser", "independent", true},
+                            {"control_variate", "independent", false}, {"adaptive_hierarchical", "independent", false}};
+  auto families = CalibrationFamilies();
+  for (const Method& method : methods) {
+    auto integrator = Make(method.name);
+    auto sampler = MakeSampler(method.sampler);
+    for (CalibrationFamily& family : families) {
+      if (!method.held_on_narrow_peak && std::string(family.name) == "narrow peak d=4") continue;
+      const Calibration c = Calibrate(*integrator, *sampler, family, kRuns);
+      std::printf("[ measured ] %s (%s), %s, %llu points: |error| < 2 sigma in %.1f%% of %d runs\n", method.name,
+                  method.sampler, family.name, static_cast<unsigned long long>(family.evaluations), 100 * c.Within(),
+                  c.runs);
+      EXPECT_GE(c.Within(), 0.90) << method.name << ", " << family.name;
+      EXPECT_LE(c.Within(), 0.99) << method.name << ", " << family.name;
+    }
+  }
 }
 
-TEST_F(ClassicIntegratorsTest, RqmcWithSobolIsWithinItsErrorBarsAndCalibrated) {
-  ExpectCalibrated("rqmc", "sobol", {1.5, 2.5, 0.5, 1.0}, 4096, "rqmc (sobol)");
+TEST_F(ClassicIntegratorsTest, RqmcWithScrambledSobolConvergesNearOneOverN) {
+  // A smooth 8-D product with every coordinate interacting: Owen-scrambled Sobol nets give an RMSE falling about as
+  // N⁻¹ (N^−3/2 up to log factors in theory), Monte Carlo as N^−1/2.
+  Exponentials f;
+  const auto fit_slope = [&](Integrator& integrator, const Sampler& sampler) {
+    // Least-squares slope of log RMSE against log N, N = 2¹⁰ … 2¹⁶.
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    int n = 0;
+    for (int m = 10; m <= 16; m += 2, ++n) {
+      const double x = std::log(double(1 << m));
+      const double y = std::log(Rmse(integrator, f, f.Exact(), uint64_t(1) << m, sampler, 24));
+      sx += x, sy += y, sxx += x * x, sxy += x * y;
+    }
+    return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  };
+  Properties four;
+  four.Set("replicates", int64_t(4));
+  const double rqmc = fit_slope(*Make("rqmc", four), *MakeSampler("sobol_nd"));
+  const double mc = fit_slope(*Make("mean_sample"), *MakeSampler("independent"));
+  std::printf("[ measured ] 8-D product of exponentials, N = 2^10 ... 2^16: RMSE slope rqmc (sobol_nd) %.2f, "
+              "mean_sample %.2f\n",
+              rqmc, mc);
+  EXPECT_LT(rqmc, -0.85);
+  EXPECT_GT(rqmc, -2.0);
+  EXPECT_NEAR(mc, -0.5, 0.15);
 }
 
-TEST_F(ClassicIntegratorsTest, MiserIsWithinItsErrorBarsAndCalibrated) {
-  ExpectCalibrated("miser", "independent", {1.5, 2.5}, 8192, "miser");
+TEST_F(ClassicIntegratorsTest, ControlVariateIntegratesItsFitExactly) {
+  // f is a polynomial of degree 3 in each output (x²y + z + 1, and 1): a
+  // degree-3 fit is f itself, the residual is float rounding, and the
+  // integral is exact whatever the sample.
+  Polynomial f;
+  Properties cubic;
+  cubic.Set("degree", int64_t(3));
+  auto sampler = MakeSampler("independent");
+  const IntegrationResult r = Make("control_variate", cubic)->Integrate(f, Polynomial::kLower, Polynomial::kUpper,
+                                                                       4000, 3, *sampler);
+  EXPECT_NEAR(r.estimate[0], Polynomial::kExact, 1e-5);
+  EXPECT_NEAR(r.estimate[1], Polynomial::kVolume, 1e-5);
+  EXPECT_LT(r.standard_error[0], 1e-5);
+  // Degree 0 is Lafortune's constant ambient term: no better than the mean.
+  Properties constant;
+  constant.Set("degree", int64_t(0));
+  const IntegrationResult flat = Make("control_variate", constant)->Integrate(f, Polynomial::kLower,
+                                                                              Polynomial::kUpper, 4000, 3, *sampler);
+  EXPECT_GT(flat.standard_error[0], 0.01);
+  EXPECT_NEAR(flat.estimate[0], Polynomial::kExact, 4 * flat.standard_error[0]);
+}
+
+TEST_F(ClassicIntegratorsTest, ControlVariateBeatsMeanSampleOnASmoothIntegrand) {
+  Oscillatory f({1.5, 2.5, 0.5, 1.0}, 0.3);
+  auto independent = MakeSampler("independent");
+  const double cv = Rmse(*Make("control_variate"), f, f.Exact(), 10000, *independent, 20);
+  const double mc = Rmse(*Make("mean_sample"), f, f.Exact(), 10000, *independent, 20);
+  std::printf("[ measured ] 4-D oscillatory, 10000 evaluations: RMSE mean_sample %.3g, control_variate %.3g "
+              "(%.0f×)\n",
+              mc, cv, mc / cv);
+  EXPECT_LT(cv, mc / 10);
+}
+
+TEST_F(ClassicIntegratorsTest, AdaptiveHierarchicalBeatsMeanSampleWhereFIsLocalised) {
+  auto independent = MakeSampler("independent");
+  auto adaptive = Make("adaptive_hierarchical");
+  auto mean_sample = Make("mean_sample");
+  CornerPeak corner({20.0, 20.0});
+  Discontinuous jump({1.0, 2.0, 0.5}, 0.6, 0.35);
+  GaussianPeaks narrow = NarrowPeak();
+  const std::tuple<const char*, Function*, double> cases[] = {
+      {"2-D corner peak", &corner, corner.Exact()},
+      {"3-D discontinuous", &jump, jump.Exact()},
+      {"4-D narrow peak", &narrow, narrow.Exact()}};
+  for (const auto& [label, f, exact] : cases) {
+    const double ah = Rmse(*adaptive, *f, exact, 16384, *independent, 20);
+    const double mc = Rmse(*mean_sample, *f, exact, 16384, *independent, 20);
+    std::printf("[ measured ] %s, 16384 evaluations: RMSE mean_sample %.3g, adaptive_hierarchical %.3g (%.1f×)\n",
+                label, mc, ah, mc / ah);
+    EXPECT_LT(ah, mc / 2) << label;
+  }
 }
 
 TEST_F(ClassicIntegratorsTest, RqmcBeatsMeanSampleOnASmoothIntegrand) {
@@ -272,7 +363,7 @@ TEST_F(ClassicIntegratorsTest, CallTheFunctionInLargeBatchesAndCountWhatTheyUse)
   auto independent = MakeSampler("independent");
   Oscillatory f({1.5, 2.5, 0.5}, 0.3);
   const double lower[] = {0, 0, 0}, upper[] = {1, 1, 1};
-  for (const char* name : {"simpson", "stratified_mc", "rqmc", "miser"}) {
+  for (const char* name : {"simpson", "stratified_mc", "rqmc", "miser", "control_variate", "adaptive_hierarchical"}) {
     Counting counted(f);
     const IntegrationResult r = Make(name)->Integrate(counted, lower, upper, 100000, 7, *independent);
     EXPECT_EQ(r.evaluations, counted.evaluated) << name;
@@ -306,13 +397,20 @@ TEST_F(ClassicIntegratorsTest, RejectBadPropertiesNamingThem) {
   expect_rejected("miser", "min_points", int64_t(1));
   expect_rejected("miser", "dither", 0.5);
   expect_rejected("miser", "dither", std::string("large"));
+  expect_rejected("control_variate", "degree", int64_t(-1));
+  expect_rejected("control_variate", "degree", int64_t(9));
+  expect_rejected("control_variate", "pilot_fraction", 1.0);
+  expect_rejected("adaptive_hierarchical", "iterations", int64_t(1));
+  expect_rejected("adaptive_hierarchical", "discard", int64_t(8));
+  expect_rejected("adaptive_hierarchical", "cell_points", int64_t(3));
+  expect_rejected("adaptive_hierarchical", "floor", 1.5);
 }
 
 TEST_F(ClassicIntegratorsTest, RejectABoxOfTheWrongDimension) {
   auto sampler = MakeSampler("independent");
   Oscillatory f({1.0, 2.0, 3.0}, 0.0);
   const double lower[] = {0, 0}, upper[] = {1, 1};
-  for (const char* name : {"simpson", "stratified_mc", "rqmc", "miser"})
+  for (const char* name : {"simpson", "stratified_mc", "rqmc", "miser", "control_variate", "adaptive_hierarchical"})
     EXPECT_THROW(Make(name)->Integrate(f, lower, upper, 1000, 0, *sampler), Error) << name;
 }
 
