@@ -517,6 +517,25 @@ def integrate(
     return math_pb2_grpc.IntegratorStub(channel).Integrate(request, timeout=60)
 
 
+def test_py_vegas_reports_chi_square_and_q_of_its_iterations(
+    sdk: Running, channel: grpc.Channel
+) -> None:
+    from scipy.stats import chi2
+
+    (vegas_class,) = load_target(f"{EXAMPLES / 'vegas.py'}:Vegas")
+    q_of = vars(sys.modules[vegas_class.__module__])["chi_square_q"]
+    for dof in (1, 2, 5, 8, 15):
+        for value in (0.2, 1.0, 4.0, 12.0, 40.0):
+            assert q_of(value, dof) == pytest.approx(chi2.sf(value, dof), rel=1e-10, abs=1e-300)
+    peak = create(channel, "test_gaussian_peak")
+    vegas = create(channel, "py_vegas", iterations=10)
+    reply = integrate(channel, vegas, peak, sdk.address, 100_000, seed=5)
+    # Eight iterations kept (two discarded): 7 degrees of freedom.
+    ((chi2_per_dof,), (q,)) = reply.chi2_per_dof, reply.q
+    assert 0 <= chi2_per_dof < 4 and 0 < q <= 1
+    assert q == pytest.approx(chi2.sf(7 * chi2_per_dof, 7), rel=1e-9)
+
+
 def test_vegas_finds_a_gaussian_peak_far_better_than_plain_monte_carlo(
     sdk: Running, channel: grpc.Channel
 ) -> None:

@@ -12,7 +12,10 @@ smoothed with its neighbours (1:6:1), normalised to r_i and damped to
 an equal share. Bins shrink where |f| is large.
 
 Iterations are combined weighted by their inverse variances (each output
-apart); the first ``discard`` only train the grid. Each iteration spends an
+apart), with Lepage's χ²/dof of the iterations about their weighted mean
+and Q, the chance of a χ² that large if their errors are right (Q < 0.05:
+the errors are not to be trusted); the first ``discard`` only train the
+grid. Each iteration spends an
 equal part of the budget, at least 4096 points (fewer iterations run when
 the budget is small), and f is called with batches of 4096 to 16384
 points. Points come from the caller's sampler, else from numpy's PCG64
@@ -21,13 +24,15 @@ seeded with the request's seed, so a result is a function of the seed.
 Properties:
     iterations   int, default 10    adaptation iterations, ≥ 1
     bins         int, default 50    grid bins per axis, ≥ 2
-    alpha        float, default 1.5 damping of the refinement, ≥ 0; 0 freezes the
-                                    grid (plain Monte Carlo)
+    alpha        float, default 0.5 damping of the refinement, ≥ 0 (Lepage's
+                                    default); 0 freezes the grid (plain Monte Carlo)
     discard      int, default 2     leading iterations left out of the result
                                     (at most iterations - 1)
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -91,8 +96,8 @@ class AdaptiveMap:
 
 def combine(
     estimates: list[np.ndarray], variances: list[np.ndarray]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Inverse-variance weighted mean of iterations and its standard error, per output."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The iterations' inverse-variance weighted mean, its error, χ²/dof and Q, per output."""
     estimate = np.stack(estimates)
     variance = np.stack(variances)
     exact = variance <= 0
@@ -103,7 +108,32 @@ def combine(
     # An iteration without variance (f constant along the map) is exact.
     any_exact = exact.any(axis=0)
     exact_mean = np.where(exact, estimate, 0).sum(axis=0) / np.maximum(exact.sum(axis=0), 1)
-    return np.where(any_exact, exact_mean, weighted), np.where(any_exact, 0.0, error)
+    mean = np.where(any_exact, exact_mean, weighted)
+    dof = len(estimates) - 1
+    chi2 = (weight * (estimate - mean) ** 2).sum(axis=0)
+    if dof < 1:
+        nan = np.full_like(mean, np.nan)
+        return mean, np.where(any_exact, 0.0, error), nan, nan
+    q = np.array([chi_square_q(float(c), dof) for c in chi2])
+    return mean, np.where(any_exact, 0.0, error), chi2 / dof, q
+
+
+def chi_square_q(chi2: float, dof: int) -> float:
+    """P(χ² ≥ chi2) for ``dof`` ≥ 1 degrees of freedom, by the closed forms for integer dof."""
+    x = chi2 / 2
+    if dof % 2 == 0:  # e^-x Σ_{i < dof/2} x^i / i!
+        term = total = 1.0
+        for i in range(1, dof // 2):
+            term *= x / i
+            total += term
+        return math.exp(-x) * total
+    # erfc(√x) + e^-x Σ_{i=1}^{(dof-1)/2} x^(i-1/2) / Γ(i + 1/2)
+    total = math.erfc(math.sqrt(x))
+    term = math.sqrt(x) / math.gamma(1.5)
+    for i in range(1, (dof + 1) // 2):
+        total += math.exp(-x) * term
+        term *= x / (i + 0.5)
+    return total
 
 
 def split(total: int, parts: int) -> list[int]:
@@ -116,7 +146,7 @@ class Vegas(Integrator):
     summary = "VEGAS adaptive Monte Carlo (Lepage 1978), in Python"
 
     def __init__(
-        self, iterations: int = 10, bins: int = 50, alpha: float = 1.5, discard: int = 2
+        self, iterations: int = 10, bins: int = 50, alpha: float = 0.5, discard: int = 2
     ) -> None:
         if iterations < 1:
             raise ValueError("property 'iterations' must be ≥ 1")
@@ -139,7 +169,7 @@ class Vegas(Integrator):
         evaluations: int,
         seed: int,
         sampler: PointSource | None,
-    ) -> tuple[np.ndarray, np.ndarray, int]:
+    ) -> tuple[np.ndarray, np.ndarray, int, np.ndarray, np.ndarray]:
         d = len(lower)
         iterations = max(1, min(self.iterations, evaluations // MIN_POINTS_PER_CALL))
         discard = min(self.discard, iterations - 1)
@@ -166,5 +196,5 @@ class Vegas(Integrator):
                 estimates.append(jf.mean(axis=0))
                 variances.append(jf.var(axis=0, ddof=1) / len(jf) if len(jf) > 1 else jf[0] * 0)
             grid.refine(np.concatenate(bin_parts), jf[:, 0], self.alpha)
-        estimate, error = combine(estimates, variances)
-        return estimate, error, spent
+        estimate, error, chi2_per_dof, q = combine(estimates, variances)
+        return estimate, error, spent, chi2_per_dof, q
