@@ -1,14 +1,15 @@
 """Writes components/cpp/samplers/sobol_directions.h: the Sobol direction
 numbers of Joe & Kuo (new-joe-kuo-6.21201, "Constructing Sobol sequences
 with better two-dimensional projections", SIAM J. Sci. Comput. 30, 2008),
-for the first DIMENSIONS dimensions, from the copy scipy ships
+for all 21201 of its dimensions, from the copy scipy ships
 (scipy/stats/_sobol_direction_numbers.npz, arrays `poly` and `vinit`).
 
 Each dimension is stored as Joe & Kuo list it: its primitive polynomial
 over GF(2) (all coefficients, the leading and constant 1 included) and its
 initial direction numbers m_1 … m_s (s the polynomial's degree, m_k odd
-and below 2^k). The sampler expands them to 32-bit direction numbers at
-compile time. Run from the repository with the venv's Python:
+and below 2^k). The sampler expands them to 32-bit direction numbers the
+first time it is made. tests/test_sobol_directions.py checks that the
+file is what this writes. Run from the repository with the venv's Python:
 
     .venv/bin/python tools/sobol_directions.py
 """
@@ -26,14 +27,13 @@ OUT = (
     / "samplers"
     / "sobol_directions.h"
 )
-# The path tracer takes 8 dimensions per bounce after a handful for the
-# camera, so 1024 covers paths of over 120 bounces and integrands of up to
-# 1024 variables, while keeping the table small (polynomials of degree
-# ≤ 13, about 40 kB of source, 128 kB once expanded). The file has 21201.
-DIMENSIONS = 1024
+# All of them: integrands of up to 21201 variables, paths of any practical
+# length.
+DIMENSIONS = 21201
 
 
-def main() -> None:
+def header_text() -> str:
+    """The header's text, from the direction numbers scipy ships."""
     import scipy
     import scipy.stats
 
@@ -55,11 +55,10 @@ def main() -> None:
             assert not vinit[j, degree:].any(), j
         max_degree = max(max_degree, degree)
         rows.append(f"    {{{p}, {{{', '.join(str(v) for v in m)}}}}},")
-    OUT.write_text(
+    return (
         '// Sobol direction numbers of Joe & Kuo (new-joe-kuo-6.21201; "Constructing\n'
         '// Sobol sequences with better two-dimensional projections", SIAM J. Sci.\n'
-        "// Comput. 30, 2008), first "
-        f"{DIMENSIONS} of its 21201 dimensions. Written by\n"
+        f"// Comput. 30, 2008), all {DIMENSIONS} dimensions. Written by\n"
         "// tools/sobol_directions.py from scipy/stats/_sobol_direction_numbers.npz\n"
         f"// (scipy {scipy.__version__}); do not edit by hand.\n"
         "//\n"
@@ -73,11 +72,15 @@ def main() -> None:
         f"inline constexpr int kMaxDegree = {max_degree};\n\n"
         "struct Primitive {\n"
         "  uint32_t polynomial;\n"
-        "  uint16_t m[kMaxDegree];\n"
+        "  uint32_t m[kMaxDegree];\n"
         "};\n\n"
         "inline constexpr Primitive kPrimitives[kDimensions] = {\n" + "\n".join(rows) + "\n};\n\n"
         "}  // namespace yarf::sobol\n"
     )
+
+
+def main() -> None:
+    OUT.write_text(header_text())
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-// sobol_nd — the Sobol sequence in up to 1024 dimensions, Owen-scrambled
+// sobol_nd — the Sobol sequence in up to 21201 dimensions, Owen-scrambled
 //
 // Coordinate d of point i is the d-th dimension of the Sobol sequence
 // with Joe & Kuo's direction numbers (new-joe-kuo-6.21201, chosen so that
@@ -19,7 +19,8 @@
 // bars (the rqmc integrator's replicates).
 //
 // Bounds: indices below 2^32 (direction numbers of 32 bits) and
-// dimensions below 1024 (the tabulated ones, see sobol_directions.h);
+// dimensions below 21201 (all that Joe & Kuo tabulate, see
+// sobol_directions.h);
 // anything beyond is refused with an Error rather than repeating points.
 // Renders keep `sobol` by default: it has no dimension bound (paths with
 // Russian roulette have no length bound), and on the Cornell box at 64 spp
@@ -36,6 +37,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "sobol_directions.h"
 #include "yarf/hash.h"
@@ -50,14 +52,14 @@ using yarf::sobol::kDimensions;
 constexpr uint64_t kScrambleSalt = 0x534f424f4cull;  // "SOBOL"
 constexpr uint64_t kIndices = uint64_t(1) << 32;
 
-using Directions = std::array<std::array<uint32_t, 32>, kDimensions>;
+using Directions = std::vector<std::array<uint32_t, 32>>;
 
 // Column k of dimension j's generator matrix, top-aligned: v_k = m_k / 2^k
 // for k ≤ s, then Sobol's recurrence from the primitive polynomial
 // x^s + a_1 x^(s-1) + … + a_(s-1) x + 1:
 //   v_k = a_1 v_(k-1) ⊕ … ⊕ a_(s-1) v_(k-s+1) ⊕ v_(k-s) ⊕ (v_(k-s) / 2^s).
-constexpr Directions ExpandDirections() {
-  Directions v{};
+Directions ExpandDirections() {
+  Directions v(kDimensions);
   for (int k = 0; k < 32; ++k) v[0][k] = 1u << (31 - k);  // van der Corput
   for (uint32_t j = 1; j < kDimensions; ++j) {
     const yarf::sobol::Primitive& p = yarf::sobol::kPrimitives[j];
@@ -65,7 +67,7 @@ constexpr Directions ExpandDirections() {
     const uint32_t a = (p.polynomial >> 1) & ((1u << (s - 1)) - 1);
     for (int k = 0; k < 32; ++k) {
       if (k < s) {
-        v[j][k] = uint32_t(p.m[k]) << (31 - k);
+        v[j][k] = p.m[k] << (31 - k);
         continue;
       }
       uint32_t next = v[j][k - s] ^ (v[j][k - s] >> s);
@@ -76,11 +78,17 @@ constexpr Directions ExpandDirections() {
   }
   return v;
 }
-constexpr Directions kDirections = ExpandDirections();
+
+// Every dimension's 32 direction numbers (2.7 MB), expanded once, on first
+// use, and read-only after.
+const Directions& AllDirections() {
+  static const Directions directions = ExpandDirections();
+  return directions;
+}
 
 // The unscrambled coordinate as 32 bits: a fraction of 2^32.
-inline uint32_t SobolBits(uint32_t index, uint32_t dimension) {
-  const std::array<uint32_t, 32>& v = kDirections[dimension];
+inline uint32_t SobolBits(const Directions& directions, uint32_t index, uint32_t dimension) {
+  const std::array<uint32_t, 32>& v = directions[dimension];
   uint32_t bits = 0;
   for (; index != 0; index &= index - 1) bits ^= v[std::countr_zero(index)];
   return bits;
@@ -88,7 +96,8 @@ inline uint32_t SobolBits(uint32_t index, uint32_t dimension) {
 
 class SobolNd final : public yarf::Sampler {
  public:
-  explicit SobolNd(const yarf::Properties& props) : scramble_(props.Bool("scramble", true)) {}
+  explicit SobolNd(const yarf::Properties& props)
+      : scramble_(props.Bool("scramble", true)), directions_(AllDirections()) {}
 
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {
     CheckRange(index, 1, dimension + 1);
@@ -117,19 +126,20 @@ class SobolNd final : public yarf::Sampler {
   }
 
   float Coordinate(uint32_t index, uint32_t dimension, uint64_t seed) const {
-    const uint32_t bits = SobolBits(index, dimension);
+    const uint32_t bits = SobolBits(directions_, index, dimension);
     if (!scramble_) return yarf::ToUnitFloat(bits);
     const uint32_t scramble_seed = uint32_t(yarf::Hash(kScrambleSalt, seed, dimension) >> 32);
     return yarf::ToUnitFloat(yarf::NestedUniformScramble(bits, scramble_seed));
   }
 
   bool scramble_;
+  const Directions& directions_;
 };
 
 }  // namespace
 
 YARF_PLUGIN(registrar) {
   yarf::Register<SobolNd>(registrar, "sobol_nd", "1.0.0",
-                          "Sobol sequence (Joe-Kuo directions, 1024 dimensions) with hash-based "
+                          "Sobol sequence (Joe-Kuo directions, 21201 dimensions) with hash-based "
                           "Owen scrambling");
 }

@@ -1,7 +1,7 @@
 // Tests of sobol_nd (samplers/sobol_nd.cc), loaded through the registry as
 // yarfd loads it: the net properties of the Sobol sequence, which Owen
 // scrambling must keep, in 2-D projections and in every 1-D projection of
-// the 1024 tabulated dimensions, and the bounds it refuses past.
+// all 21201 tabulated dimensions, and the bounds it refuses past.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,7 +18,7 @@
 namespace yarf {
 namespace {
 
-constexpr uint32_t kTabulated = 1024;
+constexpr uint32_t kTabulated = 21201;
 
 class SobolNdTest : public testing::Test {
  protected:
@@ -128,21 +128,26 @@ TEST_F(SobolNdTest, ScramblingKeepsEveryElementaryIntervalCountOfTheFirstDimensi
 
 TEST_F(SobolNdTest, EveryDimensionIsStratifiedAtEveryPowerOfTwo) {
   // Each 1-D projection of the sequence is a (0, 1)-sequence: the first
-  // 2^m points put one in each interval [k/2^m, (k+1)/2^m), in all 1024
-  // dimensions, scrambled or not.
-  constexpr int kMaxM = 12;
-  for (bool scramble : {false, true}) {
-    const auto sobol = Make(scramble);
-    const auto points = Points(*sobol, 0, 1u << kMaxM, kTabulated, 11);
-    for (uint32_t d = 0; d < kTabulated; ++d)
-      for (int m = 0; m <= kMaxM; ++m) {
-        std::vector<uint32_t> counts(size_t(1) << m, 0);
-        for (uint32_t i = 0; i < (1u << m); ++i)
-          ++counts[uint32_t(points[size_t(i) * kTabulated + d] * float(1u << m))];
-        ASSERT_EQ(*std::min_element(counts.begin(), counts.end()), 1u)
-            << "scramble " << scramble << " dimension " << d << " m " << m;
-      }
-  }
+  // 2^m points put one in each interval [k/2^m, (k+1)/2^m), scrambled or
+  // not: up to 2^12 points in the first 1024 dimensions, 2^8 in all.
+  struct Range {
+    uint32_t dimensions;
+    int max_m;
+  };
+  for (const Range range : {Range{1024, 12}, Range{kTabulated, 8}})
+    for (bool scramble : {false, true}) {
+      const auto sobol = Make(scramble);
+      const uint32_t n = 1u << range.max_m;
+      const auto points = Points(*sobol, 0, n, range.dimensions, 11);
+      for (uint32_t d = 0; d < range.dimensions; ++d)
+        for (int m = 0; m <= range.max_m; ++m) {
+          std::vector<uint32_t> counts(size_t(1) << m, 0);
+          for (uint32_t i = 0; i < (1u << m); ++i)
+            ++counts[uint32_t(points[size_t(i) * range.dimensions + d] * float(1u << m))];
+          ASSERT_EQ(*std::min_element(counts.begin(), counts.end()), 1u)
+              << "scramble " << scramble << " dimension " << d << " m " << m;
+        }
+    }
 }
 
 TEST_F(SobolNdTest, ScrambledPointsDifferBySeedAndAreUniformOverSeeds) {
@@ -150,7 +155,7 @@ TEST_F(SobolNdTest, ScrambledPointsDifferBySeedAndAreUniformOverSeeds) {
   // seeds is 1/2 within a few standard errors (1/√(12 n)).
   const auto sobol = Make(true);
   constexpr uint32_t kSeeds = 4096;
-  for (uint32_t d : {0u, 1u, 7u, 500u, 1023u}) {
+  for (uint32_t d : {0u, 1u, 7u, 500u, 1023u, 21200u}) {
     double sum = 0;
     for (uint32_t s = 0; s < kSeeds; ++s) sum += sobol->Sample(3, d, s);
     EXPECT_NEAR(sum / kSeeds, 0.5, 4 / std::sqrt(12.0 * kSeeds)) << "dimension " << d;
@@ -172,7 +177,7 @@ TEST_F(SobolNdTest, RefusesDimensionsAndIndicesPastItsTable) {
   try {
     sobol->Sample(0, kTabulated, 0);
   } catch (const Error& error) {
-    EXPECT_NE(std::string(error.what()).find("1024 dimensions"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("21201 dimensions"), std::string::npos) << error.what();
   }
 }
 
