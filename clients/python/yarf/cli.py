@@ -35,13 +35,16 @@ from yarf.client import (
 )
 from yarf.credentials import resolve as resolve_credentials
 from yarf.images import check_writable, write_image
+from yarf.live_view import LiveView
 from yarf.render_options import (
     ImageSettings,
     OptionError,
     PreparedJob,
     RenderSettings,
+    add_display_argument,
     add_image_arguments,
     add_render_arguments,
+    display_address,
     image_settings,
     render_settings,
 )
@@ -57,6 +60,7 @@ from yarf.scene import (
     write_scene,
 )
 from yarf.server import LocalServer, ServerError
+from yarf.tev import TevError
 from yarf.v1 import render_pb2, scene_pb2
 
 OUTPUT_FORMATS = IMAGE_FORMATS
@@ -121,15 +125,44 @@ def connect(
         yield client
 
 
+@contextmanager
+def live_view(args: argparse.Namespace) -> Iterator[LiveView | None]:
+    """The tev viewer of ``--display``, connected before anything renders; None without
+    the option."""
+    try:
+        address = display_address(args)
+    except OptionError as error:
+        raise CommandError(error.for_command_line(), exit_code=2) from None
+    if address is None:
+        yield None
+        return
+    try:
+        view = LiveView.connect(*address)
+    except TevError as error:
+        raise CommandError(
+            f"--display: {error}: start tev first, or leave out --display", exit_code=2
+        ) from None
+    with view:
+        yield view
+
+
 def _follow(
-    client: Client, job_id: str, *, total: int | None, quiet: bool, time_limit: float | None
+    client: Client,
+    job_id: str,
+    *,
+    total: int | None,
+    quiet: bool,
+    time_limit: float | None,
+    view: LiveView | None = None,
 ) -> render_pb2.JobStatus:
-    """Shows the job's progress until it ends (cancelled at ``time_limit`` seconds);
-    returns its final status."""
+    """Shows the job's progress (and its image in ``view``) until it ends (cancelled at
+    ``time_limit`` seconds); returns its final status."""
     last: render_pb2.JobStatus | None = None
     with tqdm(total=total, unit="spp", disable=quiet, dynamic_ncols=True, leave=True) as bar:
         for status in client.watch_within(job_id, time_limit):
             last = status
+            if view is not None:
+                view.progress(client, status)
             if status.samples_total and bar.total != status.samples_total:
                 bar.total = status.samples_total
                 bar.refresh()
@@ -280,7 +313,7 @@ def render_command(args: argparse.Namespace) -> int:
     image_options = output_settings(args, output)
     job, assets = prepare_job(args, settings)
     scene_path = Path(args.scene)
-    with connect(args.server, threads=args.threads) as client:
+    with live_view(args) as view, connect(args.server, threads=args.threads) as client:
         _send_assets(client, assets, job.scene, scene_path.parent, quiet=args.quiet)
         job_id = submit_job(
             client,
@@ -297,6 +330,7 @@ def render_command(args: argparse.Namespace) -> int:
                 total=job.spp or None,
                 quiet=args.quiet,
                 time_limit=settings.time_limit,
+                view=view,
             )
         except KeyboardInterrupt:
             client.cancel(job_id)
@@ -306,9 +340,11 @@ def render_command(args: argparse.Namespace) -> int:
         except RenderError as error:
             raise CommandError(str(error)) from None
         try:
-            _, pixels, exact = client.image_pixels(job_id)
+            final, pixels, exact = client.image_pixels(job_id)
         except RuntimeError as error:
             raise CommandError(str(error)) from None
+        if view is not None:
+            view.finish(client, final, pixels)
     if not exact and output.suffix.lower() == ".exr" and not image_options.half:
         _say("warning: the film is too large for float pixels in one reply: its values are halves")
     write_image(output, pixels, image_options, window=job.crop)
@@ -413,6 +449,7 @@ def build_parser() -> argparse.ArgumentParser:
         render, spp_default="default: the Mitsuba or pbrt file's, else the server's, 16"
     )
     add_image_arguments(render)
+    add_display_argument(render)
     add_import_options(render)
     render.add_argument(
         "--threads",

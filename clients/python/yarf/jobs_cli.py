@@ -26,12 +26,14 @@ from yarf.cli import (
     _send_assets,
     checked_settings,
     connect,
+    live_view,
     output_settings,
     prepare_job,
     submit_job,
 )
 from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, Client, RenderError, check_ended
-from yarf.render_options import add_image_arguments, add_render_arguments
+from yarf.live_view import LiveView
+from yarf.render_options import add_display_argument, add_image_arguments, add_render_arguments
 from yarf.v1 import render_pb2
 
 # Exit code of `yarf watch` and `yarf submit --watch` for a job that did not succeed.
@@ -84,10 +86,15 @@ def _about_job(job_id: str) -> Iterator[None]:
 
 
 def follow(
-    client: Client, job_id: str, *, quiet: bool = False, time_limit: float | None = None
+    client: Client,
+    job_id: str,
+    *,
+    quiet: bool = False,
+    time_limit: float | None = None,
+    view: LiveView | None = None,
 ) -> render_pb2.JobStatus:
-    """Shows a progress bar (samples, the server's ETA) until the job ends (cancelled at
-    ``time_limit`` seconds); returns the end."""
+    """Shows a progress bar (samples, the server's ETA), and the image in ``view``, until
+    the job ends (cancelled at ``time_limit`` seconds); returns the end."""
     bar_format = "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} spp [{elapsed}{postfix}]"
     with closing(client.watch_within(job_id, time_limit)) as statuses:
         # The first status comes at once and gives the bar its total.
@@ -104,6 +111,8 @@ def follow(
                 for status in chain([last], statuses):
                     last = status
                     _show(bar, status)
+                    if view is not None:
+                        view.progress(client, status)
     if last is None or last.state not in FINAL_STATES:
         # The stream ended early (the server went away?): ask once more.
         last = client.status(job_id)
@@ -122,17 +131,25 @@ def _show(bar: tqdm[None], status: render_pb2.JobStatus) -> None:
 
 
 def _watch_to_end(
-    client: Client, job_id: str, *, quiet: bool, time_limit: float | None = None
+    client: Client,
+    job_id: str,
+    *,
+    quiet: bool,
+    time_limit: float | None = None,
+    view: LiveView | None = None,
 ) -> int:
-    """Follows the job; 0 when it SUCCEEDED (or its time limit stopped it with samples
-    done), else a CommandError naming its state and error."""
+    """Follows the job (its image in ``view`` to the last); 0 when it SUCCEEDED (or its
+    time limit stopped it with samples done), else a CommandError naming its state and
+    error."""
     started = time.monotonic()
     try:
-        status = follow(client, job_id, quiet=quiet, time_limit=time_limit)
+        status = follow(client, job_id, quiet=quiet, time_limit=time_limit, view=view)
     except KeyboardInterrupt:
         raise CommandError(
             f"stopped watching; job {job_id} goes on (`yarf cancel {job_id}` stops it)", 130
         ) from None
+    if view is not None:
+        view.finish(client, status)
     try:
         check_ended(status, time_limit, time.monotonic() - started)
     except RenderError as error:
@@ -178,8 +195,8 @@ def submit_command(args: argparse.Namespace) -> int:
 
 
 def watch_command(args: argparse.Namespace) -> int:
-    with _job_server(args) as client, _about_job(args.job):
-        return _watch_to_end(client, args.job, quiet=args.quiet)
+    with live_view(args) as view, _job_server(args) as client, _about_job(args.job):
+        return _watch_to_end(client, args.job, quiet=args.quiet, view=view)
 
 
 def _status_lines(status: render_pb2.JobStatus) -> Iterator[tuple[str, str]]:
@@ -367,6 +384,7 @@ def add_job_commands(
         "watch", "follow a job to its end; exit 0 if it SUCCEEDED, 1 if it failed or was cancelled"
     )
     watch.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_display_argument(watch)
     watch.set_defaults(handler=watch_command)
 
     cancel = job_command("cancel", "stop a queued or running job")

@@ -375,6 +375,34 @@ def add_image_arguments(command: argparse.ArgumentParser) -> None:
     )
 
 
+def parse_display(text: str) -> tuple[str, int]:
+    """``"HOST:PORT"`` (``"[::1]:PORT"`` for an IPv6 address) of a tev viewer as
+    (HOST, PORT)."""
+    host, colon, port = text.strip().rpartition(":")
+    host = host.removeprefix("[").removesuffix("]")
+    if not colon or not host or not port.isdigit() or not 0 < int(port) < 1 << 16:
+        raise OptionError(
+            "display",
+            f"expected HOST:PORT of a tev viewer (tev listens on 127.0.0.1:14158), got {text!r}",
+        )
+    return host, int(port)
+
+
+def add_display_argument(command: argparse.ArgumentParser) -> None:
+    """``--display HOST:PORT``: the live view of ``yarf render`` and ``yarf watch``."""
+    command.add_argument(
+        "--display",
+        metavar="HOST:PORT",
+        help="show the image as it renders in the tev viewer listening at HOST:PORT "
+        "(tev's default: 127.0.0.1:14158; pbrt's --display-server)",
+    )
+
+
+def display_address(args: argparse.Namespace) -> tuple[str, int] | None:
+    """The tev viewer of a command's ``--display``, checked; None without one."""
+    return parse_display(args.display) if args.display is not None else None
+
+
 def render_settings(args: argparse.Namespace) -> RenderSettings:
     """The RenderSettings of a command's options, checked."""
     return RenderSettings.of(
