@@ -179,8 +179,9 @@ def yarf(server: LocalServer, capsys: pytest.CaptureFixture[str]) -> Yarf:
 
 @pytest.fixture(autouse=True)
 def frequent_updates(monkeypatch: pytest.MonkeyPatch) -> None:
-    """An update after every pass at least 50 ms apart, so a short render has several."""
-    monkeypatch.setattr(live_view, "UPDATE_INTERVAL", 0.05)
+    """An update after every sample pass, so that a short render on a fast machine has
+    several."""
+    monkeypatch.setattr(live_view, "UPDATE_INTERVAL", 0.0)
 
 
 def free_address() -> str:
