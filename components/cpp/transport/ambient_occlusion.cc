@@ -38,18 +38,9 @@ namespace yarf {
 namespace {
 
 constexpr uint32_t kDirection = kTransportDimension;
-// Boundaries a ray may cross before it is taken as stopped, so that a
-// degenerate stack of coincident boundaries cannot stall a batch.
+// Boundaries an occlusion ray may cross before it is taken as stopped, so
+// that a degenerate stack of coincident boundaries cannot stall a batch.
 constexpr int kMaxCrossings = 256;
-
-// The ray that goes on through the surface `hit` of `ray`, for what was
-// left of its interval.
-Ray Beyond(const Ray& ray, const Hit& hit) {
-  Ray next = ray;
-  Redirect(next, ray.origin + ray.direction * hit.t, hit.normal, ray.direction);
-  next.tfar = ray.tfar < kInfinity ? std::max(0.0f, ray.tfar - hit.t) : kInfinity;
-  return next;
-}
 
 class AmbientOcclusion final : public Transport {
  public:
@@ -67,19 +58,21 @@ class AmbientOcclusion final : public Transport {
     std::vector<Ray> occlusion;
     std::vector<uint32_t> owners;
     std::vector<float> weights;
-    for (const Surface& s : FirstSurfaces(scene, points, boundaries)) {
-      const float u0 = points.Get(s.point, kDirection), u1 = points.Get(s.point, kDirection + 1);
+    for (const CameraHit& first : FirstCameraHits(scene, points, boundaries)) {
+      // The geometric normal, turned toward the camera.
+      const Vec3 n = Dot(first.hit.normal, first.ray.direction) > 0 ? -first.hit.normal : first.hit.normal;
+      const float u0 = points.Get(first.point, kDirection), u1 = points.Get(first.point, kDirection + 1);
       const Vec3 local = cosine_ ? SampleCosineHemisphere(u0, u1) : SampleUniformHemisphere(u0, u1);
       // cos θ/(π·pdf): 1 for cosine-weighted directions, 2 cos θ for
       // uniform ones; a grazing direction has no density and reads 0.
       const float weight = cosine_ ? 1.0f : 2 * local.z;
       if (!(local.z > 0)) continue;
       Ray ray;
-      Redirect(ray, s.position, s.n, Normalize(Frame(s.n).ToWorld(local)));
+      Redirect(ray, first.ray.origin + first.ray.direction * first.hit.t, n, Normalize(Frame(n).ToWorld(local)));
       ray.tfar = max_distance_;
-      ray.time = s.time;
+      ray.time = first.ray.time;
       occlusion.push_back(ray);
-      owners.push_back(s.point);
+      owners.push_back(first.point);
       weights.push_back(weight);
     }
     const std::vector<uint8_t> open = Open(scene, std::move(occlusion), boundaries);
@@ -89,48 +82,6 @@ class AmbientOcclusion final : public Transport {
   }
 
  private:
-  // Where the camera ray of `point` first met a surface: the geometric
-  // normal turned toward the camera.
-  struct Surface {
-    uint32_t point;
-    Vec3 position, n;
-    float time;
-  };
-
-  static std::vector<Surface> FirstSurfaces(const SceneView& scene, const PrimarySamples& points,
-                                            bool boundaries) {
-    const size_t n = points.Count();
-    std::vector<Surface> surfaces;
-    surfaces.reserve(n);
-    std::vector<Ray> rays(n);
-    std::vector<uint32_t> active(n);
-    for (uint32_t i = 0; i < n; ++i) {
-      rays[i] = CameraRayOf(scene, points, i);
-      active[i] = i;
-    }
-    for (int crossing = 0; !active.empty() && crossing <= kMaxCrossings; ++crossing) {
-      std::vector<Ray> batch(active.size());
-      std::vector<Hit> hits(active.size());
-      for (size_t k = 0; k < active.size(); ++k) batch[k] = rays[active[k]];
-      scene.Intersect(batch, hits);
-      std::vector<uint32_t> next;
-      for (size_t k = 0; k < active.size(); ++k) {
-        const Hit& hit = hits[k];
-        if (!hit.Found()) continue;
-        const Ray& ray = batch[k];
-        if (boundaries && IsNullBoundary(scene, hit.shape)) {
-          rays[active[k]] = Beyond(ray, hit);
-          next.push_back(active[k]);
-          continue;
-        }
-        const Vec3 n = Dot(hit.normal, ray.direction) > 0 ? -hit.normal : hit.normal;
-        surfaces.push_back({active[k], ray.origin + ray.direction * hit.t, n, ray.time});
-      }
-      active = std::move(next);
-    }
-    return surfaces;
-  }
-
   // Whether each ray reaches its tfar without meeting a surface; null
   // boundaries let it through.
   static std::vector<uint8_t> Open(const SceneView& scene, std::vector<Ray> rays, bool boundaries) {

@@ -148,6 +148,61 @@ inline bool IsNullBoundary(const SceneView& scene, uint32_t shape) {
   return (scene.Material(scene.MaterialOf(shape)).Lobes() & kScatterNull) != 0;
 }
 
+// The ray that goes on through the surface `hit` of `ray`, for what was
+// left of its interval.
+inline Ray Beyond(const Ray& ray, const Hit& hit) {
+  Ray next = ray;
+  Redirect(next, ray.origin + ray.direction * hit.t, hit.normal, ray.direction);
+  next.tfar = ray.tfar < kInfinity ? std::max(0.0f, ray.tfar - hit.t) : kInfinity;
+  return next;
+}
+
+// Where the camera ray of a point first met a surface: the ray's last leg
+// and its hit, and where the camera ray started.
+struct CameraHit {
+  uint32_t point;
+  Ray ray;
+  Hit hit;
+  Vec3 start;
+};
+
+// The first surface each camera ray meets, for the points whose ray meets
+// one. With `through_boundaries`, null boundaries (interfaces of media)
+// are not surfaces: the rays go on through them, one Intersect batch per
+// crossing (at most 256, so that a degenerate stack of coincident
+// boundaries cannot stall a batch).
+inline std::vector<CameraHit> FirstCameraHits(const SceneView& scene, const PrimarySamples& points,
+                                              bool through_boundaries) {
+  constexpr int kMaxCrossings = 256;
+  const size_t n = points.Count();
+  std::vector<CameraHit> found;
+  found.reserve(n);
+  std::vector<Ray> rays(n);
+  std::vector<uint32_t> active(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    rays[i] = CameraRayOf(scene, points, i);
+    active[i] = i;
+  }
+  for (int crossing = 0; !active.empty() && crossing <= kMaxCrossings; ++crossing) {
+    std::vector<Ray> batch(active.size());
+    std::vector<Hit> hits(active.size());
+    for (size_t k = 0; k < active.size(); ++k) batch[k] = rays[active[k]];
+    scene.Intersect(batch, hits);
+    std::vector<uint32_t> next;
+    for (size_t k = 0; k < active.size(); ++k) {
+      if (!hits[k].Found()) continue;
+      if (through_boundaries && IsNullBoundary(scene, hits[k].shape)) {
+        rays[active[k]] = Beyond(batch[k], hits[k]);
+        next.push_back(active[k]);
+        continue;
+      }
+      found.push_back({active[k], batch[k], hits[k], CameraRayOf(scene, points, active[k]).origin});
+    }
+    active = std::move(next);
+  }
+  return found;
+}
+
 // A shadow ray that starts in `medium`, its hero channel and its random seed.
 struct ShadowWalk {
   Ray ray;
