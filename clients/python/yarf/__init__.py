@@ -19,6 +19,9 @@ except ImportError as error:  # pragma: no cover - depends on the build
 
 from yarf.client import Client, RenderError, RenderResult, array_to_numpy
 from yarf.integrate import Integral, IntegrationWarning, integrate
+from yarf.notebook import Image, Scene, embedded_server, load, render
+from yarf.params import SceneParameters, UnknownParameterError
+from yarf.render_options import OptionError
 from yarf.scene import (
     SceneError,
     component,
@@ -33,20 +36,28 @@ from yarf.server import LocalServer, ServerError, find_yarfd
 
 __all__ = [
     "Client",
+    "Image",
     "Integral",
     "IntegrationWarning",
     "LocalServer",
+    "OptionError",
     "RenderError",
     "RenderResult",
+    "Scene",
     "SceneError",
+    "SceneParameters",
     "ServerError",
+    "UnknownParameterError",
     "array_to_numpy",
     "component",
+    "embedded_server",
     "find_yarfd",
     "inline_mesh_files",
     "integrate",
+    "load",
     "load_scene",
     "properties",
+    "render",
     "rgb",
     "transform",
     "vec3",
