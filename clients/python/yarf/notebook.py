@@ -173,17 +173,17 @@ class Image:
 
     def _repr_html_(self) -> str:
         data = base64.b64encode(self.png()).decode("ascii")
-        caption = f"{self.width}×{self.height}, {self.spp} spp, {self.seconds:.2f} s"
+        caption = f"{self.width}×{self.height}"
+        if self.spp:
+            caption += f", {self.spp} spp, {self.seconds:.2f} s"
         return (
             f'<figure style="margin:0"><img src="data:image/png;base64,{data}" '
             f'style="image-rendering:pixelated"/><figcaption>{caption}</figcaption></figure>'
         )
 
     def __repr__(self) -> str:
-        return (
-            f"<yarf.Image {self.width}x{self.height}, {self.spp} spp, {self.seconds:.2f} s, "
-            f"mean {self.mean():.4g}>"
-        )
+        rendered = f", {self.spp} spp, {self.seconds:.2f} s" if self.spp else ""
+        return f"<yarf.Image {self.width}x{self.height}{rendered}, mean {self.mean():.4g}>"
 
 
 _embedded: LocalServer | None = None
