@@ -26,6 +26,7 @@ from yarf import Client
 REPO = Path(__file__).resolve().parents[1]
 CORNELL_BOX = REPO / "scenes" / "cornell-box" / "scene.json"
 PBRT_CBOX = REPO.parent / "shared" / "scenes" / "pbrt-cornell-box" / "scene-v4.pbrt"
+MITSUBA_CBOX = REPO.parent / "shared" / "scenes" / "mitsuba-cbox" / "cbox-rgb.xml"
 NOTEBOOK = REPO / "docs" / "notebook.ipynb"
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -119,14 +120,17 @@ def test_camera_to_world_is_the_look_at_frame() -> None:
     assert np.allclose(scene.params["camera.to_world"], moved)
 
 
-def test_params_of_an_imported_pbrt_scene() -> None:
-    if not PBRT_CBOX.exists():
-        pytest.skip(f"{PBRT_CBOX} is not there")
-    scene = yarf.load(PBRT_CBOX)
+@pytest.mark.parametrize("path", [PBRT_CBOX, MITSUBA_CBOX], ids=["pbrt", "mitsuba"])
+def test_params_of_an_imported_scene(path: Path) -> None:
+    if not path.exists():
+        pytest.skip(f"{path} is not there")
+    scene = yarf.load(path)
+    assert scene.sample_count > 0
     types = scene.params.types()
     assert any(kind == "rgb" and key.endswith(".reflectance") for key, kind in types.items())
-    assert any(key.endswith(".radiance") for key in types)
-    assert "camera.fov" in types
+    # Its emitting shape has no name: it is named by its place.
+    assert any(key.startswith("shapes[") and key.endswith(".radiance") for key in types)
+    assert types["camera.fov"] == "float"
 
 
 def test_an_unknown_key_names_the_closest() -> None:
@@ -228,13 +232,25 @@ def test_the_notebook_runs_and_shows_an_image() -> None:
     manager = KernelManager(kernel_name="python3", kernel_spec_manager=specs)
     assert manager.format_kernel_cmd()[0] == sys.executable
     notebook = nbformat.read(NOTEBOOK, as_version=4)
+    # One more cell, to learn the kernel's embedded yarfd.
+    notebook.cells.append(nbformat.v4.new_code_cell("print(yarf.embedded_server().pid)"))
     runner = nbclient.NotebookClient(
         notebook,
         km=manager,
         timeout=300,
         resources={"metadata": {"path": str(NOTEBOOK.parent)}},
     )
-    runner.execute()
-    outputs = [output for cell in notebook.cells for output in cell.get("outputs", [])]
+    try:
+        runner.execute()
+    finally:
+        # A client given its kernel manager leaves the kernel to it: a
+        # graceful shutdown, so that the kernel's exit stops its yarfd.
+        if manager.has_kernel:
+            manager.shutdown_kernel()
+    *cells, probe = notebook.cells
+    outputs = [output for cell in cells for output in cell.get("outputs", [])]
     assert not [output for output in outputs if output.output_type == "error"]
     assert any("image/png" in output.get("data", {}) for output in outputs)
+    pid = int(probe.outputs[0].text)
+    cmdline = Path(f"/proc/{pid}/cmdline")
+    assert not cmdline.exists() or b"yarfd" not in cmdline.read_bytes()
