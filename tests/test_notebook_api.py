@@ -56,6 +56,12 @@ def test_render_of_a_loaded_scene_has_its_film_size(client: Client) -> None:
     assert image.spp == 2
 
 
+def test_render_on_a_given_server_or_address(server: yarf.LocalServer) -> None:
+    for given in (server, server.address):
+        image = yarf.render(CORNELL_BOX, spp=1, res=(8, 8), server=given)
+        check_image(image, 8, 8)
+
+
 def test_the_embedded_server_is_shared_by_renders() -> None:
     yarf.render(CORNELL_BOX, spp=1, res=(8, 8))
     first = yarf.embedded_server()

@@ -269,13 +269,12 @@ def render(
     RenderSettings.of(spp=spp, seed=seed, **options)
     if isinstance(server, Client):
         return _render_with(server, loaded, spp, seed, integrator, sampler, timeout, options)
-    if isinstance(server, LocalServer):
-        address = server.address
-    elif isinstance(server, str):
-        address = server
+    if isinstance(server, str):
+        client = Client(server)
     else:
-        address = embedded_server().address
-    with Client(address) as client:
+        # The server's own client carries its token and certificate, if any.
+        client = (server or embedded_server()).client()
+    with client:
         return _render_with(client, loaded, spp, seed, integrator, sampler, timeout, options)
 
 
