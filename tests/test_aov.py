@@ -11,13 +11,15 @@ shapes' and materials' indices, and −1 where nothing is hit.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import grpc
 import numpy as np
 import pytest
 from conftest import small_scene
 
 from yarf import Client, RenderResult, component, properties, rgb, transform, vec3
-from yarf.v1 import scene_pb2
+from yarf.v1 import render_pb2, scene_pb2
 
 SIZE = 16
 SPP = 16
@@ -127,3 +129,43 @@ def test_null_boundaries_are_not_surfaces(client: Client) -> None:
 def test_an_unknown_variable_is_refused_naming_the_known_ones(client: Client) -> None:
     with pytest.raises((grpc.RpcError, RuntimeError), match="albedo, sh_normal"):
         render(client, "normals")
+
+
+def test_a_job_renders_the_aovs_it_asks_for_beside_its_image(
+    client: Client, tmp_path: Path
+) -> None:
+    scene = small_scene(SIZE)
+    job = client.submit(scene, 8, seed=5, aovs=["depth", "albedo", "shape_index"])
+    client.wait(job)
+    result = client.raw(job)
+    # Listed in a fixed order, whatever the request's.
+    assert list(result.aovs) == ["albedo", "depth", "shape_index"]
+    for name, image in result.aovs.items():
+        # Each is what the aov transport renders alone, with the job's
+        # sampler, seed and spp.
+        alone = client.render(scene, spp=8, seed=5, transport=component("aov", aov=name))
+        np.testing.assert_array_equal(image, alone.pixels, err_msg=name)
+    assert np.isin(result.aovs["shape_index"][..., 0], [-1, 0, 1]).mean() > 0.5
+    # An EXR holds them as channels NAME.R, NAME.G, NAME.B after R, G, B.
+    import OpenImageIO as oiio
+
+    path = tmp_path / "job.exr"
+    path.write_bytes(client.result(job, render_pb2.GetResultRequest.EXR).image)
+    image = oiio.ImageInput.open(str(path))
+    try:
+        names = list(image.spec().channelnames)
+    finally:
+        image.close()
+    assert names == ["R", "G", "B"] + [f"{n}.{c}" for n in result.aovs for c in "RGB"]
+
+
+@pytest.mark.parametrize(
+    ("aovs", "message"),
+    [(["normals"], "aov 'normals' is not one of albedo, sh_normal"), (["uv", "uv"], "twice")],
+)
+def test_unknown_or_repeated_aovs_are_refused_at_submit(
+    client: Client, aovs: list[str], message: str
+) -> None:
+    with pytest.raises(grpc.RpcError, match=message) as refused:
+        client.submit(small_scene(SIZE), 4, aovs=aovs)
+    assert refused.value.code() == grpc.StatusCode.INVALID_ARGUMENT

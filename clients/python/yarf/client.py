@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Self
@@ -75,11 +75,17 @@ def check_ended(status: render_pb2.JobStatus, time_limit: float | None, elapsed:
 
 @dataclass(frozen=True)
 class RenderResult:
-    """A job's image: ``pixels`` and ``variance`` are float32 arrays [H, W, 3]."""
+    """A job's image: ``pixels`` and ``variance`` are float32 arrays [H, W, 3].
+
+    ``aovs`` maps each arbitrary output variable the job asked for
+    (RenderOptions.aovs: "albedo", "sh_normal", "depth"...) to its float32
+    [H, W, 3] image, once the job has ended.
+    """
 
     status: render_pb2.JobStatus
     pixels: np.ndarray
     variance: np.ndarray
+    aovs: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def array_to_numpy(array: component_pb2.Array) -> np.ndarray:
@@ -233,6 +239,7 @@ class Client:
         priority: int | None = None,
         max_retries: int | None = None,
         crop: render_pb2.PixelWindow | None = None,
+        aovs: Sequence[str] = (),
     ) -> str:
         """Queues a render of ``scene``; returns the job id.
 
@@ -240,13 +247,15 @@ class Client:
         server's 60) govern calls to components in other processes.
         ``priority`` (1..100, None: the server's 50) orders the queue;
         ``max_retries`` (None: 0) requeues a job that failed. ``crop``: only
-        these pixels get samples.
+        these pixels get samples. ``aovs``: arbitrary output variables
+        rendered beside the image (RenderOptions.aovs).
         """
         options = render_pb2.RenderOptions(
             spp=spp,
             seed=seed,
             component_retries=component_retries,
             component_timeout_seconds=component_timeout,
+            aovs=list(aovs),
         )
         if transport is not None:
             options.transport.CopyFrom(transport)
@@ -308,6 +317,7 @@ class Client:
             status=reply.status,
             pixels=array_to_numpy(reply.pixels),
             variance=array_to_numpy(reply.variance),
+            aovs={layer.name: array_to_numpy(layer.pixels) for layer in reply.aovs},
         )
 
     def image(self, job_id: str) -> np.ndarray:
@@ -406,6 +416,7 @@ class Client:
         time_limit: float | None = None,
         max_depth: int | None = None,
         materials: Mapping[str, str] | None = None,
+        aovs: Sequence[str] = (),
     ) -> RenderResult:
         """Submits, waits (at most ``timeout`` s) and fetches the image.
 
@@ -417,8 +428,9 @@ class Client:
         the image holds the samples done by then; ``transport``
         ("CLASS[@ADDRESS]" or a ComponentSpec) and ``max_depth`` choose the
         light transport; ``materials`` maps a material's name (or class) to
-        the class it becomes. A bad value raises OptionError (a ValueError)
-        before anything is submitted.
+        the class it becomes; ``aovs`` names arbitrary output variables
+        rendered beside the image (RenderResult.aovs). A bad value raises
+        OptionError (a ValueError) before anything is submitted.
 
         Raises RenderError unless the job SUCCEEDED, or was stopped by its
         time limit after at least one sample pass.
@@ -443,6 +455,7 @@ class Client:
             integrator=integrator,
             sampler=sampler,
             crop=job.crop,
+            aovs=aovs,
         )
         started = time.monotonic()
         last: render_pb2.JobStatus | None = None
@@ -458,7 +471,12 @@ class Client:
         if job.crop is None:
             return result
         window = (slice(job.crop.y0, job.crop.y1), slice(job.crop.x0, job.crop.x1))
-        return RenderResult(result.status, result.pixels[window], result.variance[window])
+        return RenderResult(
+            result.status,
+            result.pixels[window],
+            result.variance[window],
+            {name: image[window] for name, image in result.aovs.items()},
+        )
 
     def cancel(self, job_id: str) -> render_pb2.JobStatus:
         """Asks the job to stop; it ends CANCELLED within a second."""

@@ -24,40 +24,24 @@
 // Primary sample space: 0–1 film, 2–3 lens, 4 time, 6–8 the model sample
 // (albedo only).
 
-#include <algorithm>
-#include <array>
 #include <string>
 #include <vector>
 
 #include "medium_transport.h"
 #include "wavefront.h"
+#include "yarf/aov.h"
 #include "yarf/plugin.h"
 
 namespace yarf {
 namespace {
 
+// In the order of kAovNames.
 enum class Variable { kAlbedo, kShadingNormal, kGeometricNormal, kDepth, kPosition, kUv, kShapeIndex, kMaterialIndex };
 
-struct Named {
-  const char* name;
-  Variable variable;
-};
-constexpr std::array<Named, 8> kVariables = {{{"albedo", Variable::kAlbedo},
-                                              {"sh_normal", Variable::kShadingNormal},
-                                              {"geo_normal", Variable::kGeometricNormal},
-                                              {"depth", Variable::kDepth},
-                                              {"position", Variable::kPosition},
-                                              {"uv", Variable::kUv},
-                                              {"shape_index", Variable::kShapeIndex},
-                                              {"material_index", Variable::kMaterialIndex}}};
-
 Variable ParseVariable(const std::string& name) {
-  std::string known;
-  for (const Named& v : kVariables) {
-    if (name == v.name) return v.variable;
-    known += known.empty() ? v.name : std::string(", ") + v.name;
-  }
-  throw Error("property 'aov' must be one of " + known + ", not '" + name + "'");
+  for (size_t i = 0; i < kAovNames.size(); ++i)
+    if (name == kAovNames[i]) return Variable(i);
+  throw Error("property 'aov' must be one of " + AovNameList() + ", not '" + name + "'");
 }
 
 constexpr uint32_t kModelSample = kTransportDimension;

@@ -10,6 +10,7 @@
 #include "kernel/film_target.h"
 #include "service/job_files.h"
 #include "service/request_checks.h"
+#include "yarf/aov.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -188,10 +189,7 @@ bool Job::CommitRetrying(const std::function<bool(JobRecord&)>& change) {
 void Job::EndUnstored(const StorageError& error) {
   std::cerr << "yarfd: job " << id_ << ": the end of its run cannot be stored: " << error.what() << std::endl;
   // The film may be large; nothing renders into it any more.
-  {
-    std::lock_guard lock(film_mutex_);
-    film_.reset();
-  }
+  DropFilms();
   {
     std::lock_guard lock(mutex_);
     // In memory only: the stored row stays RUNNING, which the next start
@@ -343,6 +341,7 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
       std::lock_guard lock(film_mutex_);
       film_ = checkpoint ? std::make_unique<Film>(std::move(checkpoint->film))
                          : std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
+      aov_films_.clear();
     }
     if (checkpoint) share.first_sample = std::max(share.first_sample, checkpoint->samples_done);
     {
@@ -377,6 +376,7 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
     const auto served = resources.scenes.Serve(kernel, target);
     parts.transport->Prepare(*kernel);
     parts.integrator->Render(*parts.transport, *kernel, *parts.sampler, target);
+    RenderAovs(parts, *kernel, share);
     Progress(samples_done_, counters->ClosestHitRays(), counters->ShadowRays());
     return {outcome(Outcome::kSucceeded), ""};
   } catch (const std::exception& e) {
@@ -386,6 +386,57 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
     // A plugin may throw anything; it fails the job, not the server.
     return {outcome(Outcome::kFailed), "a component threw an exception that is not a std::exception"};
   }
+}
+
+void Job::RenderAovs(JobComponents& parts, const KernelScene& kernel, const FilmTarget::Share& share) {
+  if (parts.aovs.empty() || halt_) return;
+  const v1::Film& film = request_->scene().film();
+  const v1::RenderOptions& options = request_->options();
+  // Geometry converges in few samples; the albedo's one model sample per
+  // camera sample wants a few dozen.
+  constexpr uint32_t kMaxAovSpp = 64;
+  const uint32_t spp = std::min(options.spp(), kMaxAovSpp);
+  std::vector<std::pair<std::string, std::unique_ptr<Film>>> films;
+  for (auto& [name, transport] : parts.aovs) {
+    auto aov_film = std::make_unique<Film>(film.width(), film.height(), film.filter());
+    std::mutex unshared;  // nobody reads it before it is done
+    FilmTarget target(*aov_film, unshared, spp, options.seed(), {0, share.crop}, halt_, [](uint32_t) {});
+    parts.aov_integrator->Render(*transport, kernel, *parts.sampler, target);
+    if (halt_) return;
+    films.emplace_back(name, std::move(aov_film));
+  }
+  std::lock_guard lock(film_mutex_);
+  aov_films_ = std::move(films);
+}
+
+std::vector<ImageLayer> Job::AovSnapshot() const {
+  std::vector<ImageLayer> layers;
+  {
+    std::lock_guard lock(film_mutex_);
+    if (!aov_films_.empty()) {
+      for (std::string_view name : kAovNames)
+        for (const auto& [aov, film] : aov_films_)
+          if (aov == name) layers.push_back({aov, film->Pixels()});
+      return layers;
+    }
+    if (film_) return layers;
+  }
+  if (!Finished()) return layers;
+  for (std::string_view name : kAovNames) {
+    try {
+      if (std::optional<JobImage> image = ReadJobImage(AovImagePath(files_.result, name), FileOwner()))
+        layers.push_back({std::string(name), std::move(image->pixels)});
+    } catch (const Error& e) {
+      std::cerr << "yarfd: job " << id_ << ": aov " << name << " discarded, not served: " << e.what() << "\n";
+    }
+  }
+  return layers;
+}
+
+void Job::DropFilms() {
+  std::lock_guard lock(film_mutex_);
+  film_.reset();
+  aov_films_.clear();
 }
 
 std::optional<FilmCheckpoint> Job::UsableCheckpoint(const v1::Film& film, uint32_t spp) const {
@@ -465,10 +516,7 @@ bool Job::StoreEndOfRun(const RunResult& result) {
             return true;
           })) {
         std::cerr << "yarfd: job " << id_ << " failed, queued again: " << result.error << "\n";
-        {
-          std::lock_guard lock(film_mutex_);
-          film_.reset();
-        }
+        DropFilms();
         std::lock_guard lock(mutex_);
         samples_done_ = 0;
         return true;
@@ -487,16 +535,18 @@ bool Job::StoreEndOfRun(const RunResult& result) {
 
 void Job::Finish(v1::JobState state, const std::string& error) {
   // The image first, so that a job that reads SUCCEEDED after a restart has it.
-  JobImage image;
+  std::vector<std::pair<std::filesystem::path, JobImage>> images;
   {
     std::lock_guard lock(film_mutex_);
-    if (film_) image = {film_->width(), film_->height(), film_->Pixels(), film_->Variances()};
+    if (film_) images.emplace_back(files_.result, JobImage{film_->width(), film_->height(), film_->Pixels(), film_->Variances()});
+    for (const auto& [name, film] : aov_films_)
+      images.emplace_back(AovImagePath(files_.result, name), JobImage{film->width(), film->height(), film->Pixels(), film->Variances()});
   }
-  if (!image.pixels.empty()) {
+  for (const auto& [path, image] : images) {
     try {
-      WriteJobImage(files_.result, FileOwner(), image);
+      WriteJobImage(path, FileOwner(), image);
     } catch (const Error& e) {
-      std::cerr << "yarfd: job " << id_ << ": image not kept: " << e.what() << "\n";
+      std::cerr << "yarfd: job " << id_ << ": image " << path.filename().string() << " not kept: " << e.what() << "\n";
     }
   }
   CommitRetrying([&](JobRecord& row) {
@@ -515,10 +565,7 @@ void Job::Finish(v1::JobState state, const std::string& error) {
   // Only once the row has ended: a crash before the commit resumes the run
   // from the checkpoint rather than redoing it.
   RemoveFile(files_.checkpoint);
-  {
-    std::lock_guard lock(film_mutex_);
-    film_.reset();
-  }
+  DropFilms();
   // Other threads read it (Assets) under the lock.
   std::lock_guard lock(mutex_);
   request_.reset();

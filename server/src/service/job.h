@@ -15,6 +15,7 @@
 
 #include "components/remote_instance.h"
 #include "kernel/film.h"
+#include "kernel/image_io.h"
 #include "service/job_components.h"
 #include "service/job_events.h"
 #include "service/job_files.h"
@@ -79,6 +80,10 @@ class Job {
   // The width and height Snapshot would give, without copying the pixels;
   // false when there is no image.
   bool ImageSize(uint32_t& width, uint32_t& height) const;
+  // The arbitrary output variables of an image that is done (RenderOptions.aovs):
+  // name and pixels [height, width, 3], in the order of kAovNames; none
+  // while the image renders.
+  std::vector<ImageLayer> AovSnapshot() const;
 
   // A run, on a worker thread: Begin marks the job RUNNING for one more
   // attempt (false if it no longer waits; throws StorageError, the job
@@ -112,6 +117,11 @@ class Job {
   // (of at most `spp` samples per pixel).
   std::optional<FilmCheckpoint> UsableCheckpoint(const v1::Film& film, uint32_t spp) const;
   void WriteCheckpoint(uint32_t samples_done);
+  // Renders RenderOptions.aovs, each into a film of its own, once the image is done.
+  void RenderAovs(JobComponents& parts, const KernelScene& kernel, const FilmTarget::Share& share);
+  // Drops the films of a run (the image's and its aovs'): nothing renders
+  // into them any more.
+  void DropFilms();
   // Who the job's files belong to: this job, as of its current attempt.
   JobFileOwner FileOwner() const;
   // Describe, with mutex_ held.
@@ -148,6 +158,8 @@ class Job {
 
   // The film while rendering; once the job ends its image is on disk.
   std::unique_ptr<Film> film_;
+  // The aovs' films, from the end of the image's render to the job's.
+  std::vector<std::pair<std::string, std::unique_ptr<Film>>> aov_films_;
   mutable std::mutex film_mutex_;
   bool checkpoint_failed_ = false;
 };

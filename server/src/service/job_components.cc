@@ -89,6 +89,17 @@ JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::str
   parts.integrator = Make<Integrator>(components, integrator, "integrator");
   parts.sampler = Make<Sampler>(components, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
   parts.resumable = integrator.class_name() == "mean_sample" && integrator.address().empty();
+  for (const std::string& name : options.aovs()) {
+    v1::ComponentSpec aov;
+    aov.set_class_name("aov");
+    (*aov.mutable_properties()->mutable_values())["aov"].set_string_value(name);
+    parts.aovs.emplace_back(name, Make<Transport>(components, aov, "aov"));
+  }
+  if (!parts.aovs.empty()) {
+    v1::ComponentSpec mean_sample;
+    mean_sample.set_class_name("mean_sample");
+    parts.aov_integrator = Make<Integrator>(components, mean_sample, "aov integrator");
+  }
   return parts;
 }
 

@@ -4,6 +4,9 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "components/remote_classes.h"
 #include "components/remote_instance.h"
@@ -42,6 +45,10 @@ struct JobComponents {
   // sample with the same per-sample seeds, so a resumed render gives the
   // image an uninterrupted one gives. Other integrators start anew.
   bool resumable = false;
+  // RenderOptions.aovs: an `aov` transport for each, in its order, and the
+  // mean_sample integrator that renders them.
+  std::vector<std::pair<std::string, std::unique_ptr<Transport>>> aovs;
+  std::unique_ptr<Integrator> aov_integrator;
 };
 
 // Builds the scene and makes the components of a job of `owner`; throws

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -47,6 +48,13 @@ struct JobImage {
 };
 
 void WriteJobImage(const std::filesystem::path& path, const JobFileOwner& owner, const JobImage& image);
+// Where the image of the arbitrary output variable `aov` of the job whose
+// image is at `result` lies: beside it.
+inline std::filesystem::path AovImagePath(const std::filesystem::path& result, std::string_view aov) {
+  std::filesystem::path path = result;
+  path.replace_extension(std::string(aov) + result.extension().string());
+  return path;
+}
 // nullopt when there is none. Throws Error for a damaged file or one that
 // is not `owner`'s: an ended job's attempts no longer change, so its image
 // was written by exactly its last attempt.

@@ -11,6 +11,7 @@
 #include "service/job_files.h"
 #include "service/job_memory.h"
 #include "service/request_checks.h"
+#include "yarf/aov.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -281,6 +282,7 @@ void JobManager::ApplyRetention() {
   }
   for (uint64_t number : numbers) {
     RemoveFile(folder_.Result(IdOf(number)));
+    for (std::string_view aov : kAovNames) RemoveFile(AovImagePath(folder_.Result(IdOf(number)), aov));
     RemoveFile(folder_.Checkpoint(IdOf(number)));
   }
   CollectAssets();

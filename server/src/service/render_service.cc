@@ -15,13 +15,13 @@ namespace {
 
 // Whether a RAW reply of a width x height image stays within what a reply
 // may carry; else RESOURCE_EXHAUSTED pointing to the smaller formats.
-grpc::Status RawFits(const std::string& job_id, uint32_t width, uint32_t height) {
-  // Pixels and variances, 3 floats each per pixel, and room for the status.
-  const uint64_t bytes = uint64_t(width) * height * 3 * sizeof(float) * 2 + (64 << 10);
+grpc::Status RawFits(const std::string& job_id, uint32_t width, uint32_t height, size_t aovs = 0) {
+  // Pixels, variances and aovs, 3 floats each per pixel, and room for the status.
+  const uint64_t bytes = uint64_t(width) * height * 3 * sizeof(float) * (2 + aovs) + (64 << 10);
   if (bytes <= uint64_t(kMaxMessageBytes)) return grpc::Status::OK;
   return {grpc::StatusCode::RESOURCE_EXHAUSTED,
           "the RAW result of job '" + job_id + "' (" + std::to_string(width) + "x" + std::to_string(height) +
-              " pixels and their variances) takes " + std::to_string(bytes) + " bytes, more than the " +
+              " pixels, their variances and aovs) takes " + std::to_string(bytes) + " bytes, more than the " +
               std::to_string(kMaxMessageBytes) +
               " (256 MiB) a reply may carry; ask for EXR or PNG (about 6 or 3 bytes a pixel at most)"};
 }
@@ -99,10 +99,13 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1
   // Again for a film that appeared in between.
   if (raw)
     if (grpc::Status fits = RawFits(request->job_id(), width, height); !fits.ok()) return fits;
+  const std::vector<ImageLayer> aovs = job->AovSnapshot();
+  if (raw)
+    if (grpc::Status fits = RawFits(request->job_id(), width, height, aovs.size()); !fits.ok()) return fits;
   try {
     switch (request->format()) {
       case v1::GetResultRequest::EXR:
-        reply->set_image(EncodeImage(pixels, width, height, ImageFormat::kExr));
+        reply->set_image(EncodeImage(pixels, width, height, ImageFormat::kExr, aovs));
         break;
       case v1::GetResultRequest::PNG:
         reply->set_image(EncodeImage(pixels, width, height, ImageFormat::kPng));
@@ -110,6 +113,11 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1
       default:
         *reply->mutable_pixels() = FloatArray(pixels, {height, width, 3});
         *reply->mutable_variance() = FloatArray(variances, {height, width, 3});
+        for (const ImageLayer& aov : aovs) {
+          v1::ImageLayer* layer = reply->add_aovs();
+          layer->set_name(aov.name);
+          *layer->mutable_pixels() = FloatArray(aov.rgb, {height, width, 3});
+        }
     }
   } catch (const Error& e) {
     return {grpc::StatusCode::INTERNAL, e.what()};

@@ -9,10 +9,13 @@
 #include <cstdio>
 #include <istream>
 #include <ostream>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "kernel/scene_builder.h"
 #include "service/access.h"
+#include "yarf/aov.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -143,6 +146,17 @@ void ValidateShare(const v1::SubmitRequest& request) {
     throw Error("first_sample and crop need the mean_sample integrator, not '" + integrator + "'");
 }
 
+// Each arbitrary output variable known, and asked for once.
+void ValidateAovs(const v1::RenderOptions& options) {
+  std::vector<std::string_view> seen;
+  for (const std::string& name : options.aovs()) {
+    if (std::find(kAovNames.begin(), kAovNames.end(), name) == kAovNames.end())
+      throw Error("aov '" + SafeText(name, 64) + "' is not one of " + AovNameList());
+    if (std::find(seen.begin(), seen.end(), name) != seen.end()) throw Error("aov '" + name + "' is asked for twice");
+    seen.push_back(name);
+  }
+}
+
 }  // namespace
 
 v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSource* assets) {
@@ -171,6 +185,7 @@ v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSour
                 std::to_string(SubmitLimits::kMaxRetries) + ")");
   ValidateScene(accepted.scene(), assets);
   ValidateShare(accepted);
+  ValidateAovs(accepted.options());
   return accepted;
 }
 
