@@ -7,7 +7,7 @@
 #   components/go/build.sh          GO=/path/to/go components/go/build.sh
 set -euo pipefail
 
-MODULE_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+MODULE_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd -P)
 ROOT=$(cd "$MODULE_DIR/../.." && pwd)
 TOOLS=$ROOT/.tools
 PROTO_DIR=$ROOT/proto
