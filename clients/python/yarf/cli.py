@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import NoReturn
 
 import grpc
+import numpy as np
 from tqdm import tqdm
 
 from yarf.assets import SceneAssets, scene_assets
@@ -34,6 +35,7 @@ from yarf.client import (
     check_ended,
 )
 from yarf.credentials import resolve as resolve_credentials
+from yarf.denoise import DENOISE_AOVS, DenoiseError, denoise, denoiser, missing_aovs
 from yarf.images import check_writable, write_image
 from yarf.live_view import LiveView
 from yarf.render_options import (
@@ -41,6 +43,7 @@ from yarf.render_options import (
     OptionError,
     PreparedJob,
     RenderSettings,
+    add_denoise_argument,
     add_display_argument,
     add_image_arguments,
     add_render_arguments,
@@ -270,6 +273,7 @@ def submit_job(
             name=name,
             transport=job.transport,
             crop=job.crop,
+            aovs=job.aovs,
             component_retries=component_retries,
             priority=priority,
             max_retries=max_retries,
@@ -298,6 +302,27 @@ def _send_assets(
         _say(f"uploaded {uploaded} file{'s' if uploaded > 1 else ''} the server lacked")
 
 
+def check_denoiser() -> None:
+    """A one-line error, before anything renders, when the denoiser is missing."""
+    try:
+        denoiser()
+    except DenoiseError as error:
+        raise CommandError(f"--denoise: {error}") from None
+
+
+def denoised(pixels: np.ndarray, aovs: dict[str, np.ndarray], job: PreparedJob) -> np.ndarray:
+    """The job's image denoised; the image as it is, with a warning, when the job
+    stopped before its AOVs were rendered."""
+    missing = missing_aovs(aovs)
+    if missing:
+        _say(
+            f"warning: not denoised: the job stopped (at its time limit) before rendering the "
+            f"{' and '.join(missing)} AOVs the denoiser takes"
+        )
+        return pixels
+    return denoise(pixels, aovs, window=job.crop)
+
+
 def render_command(args: argparse.Namespace) -> int:
     output = Path(args.output)
     settings = checked_settings(args)
@@ -311,6 +336,9 @@ def render_command(args: argparse.Namespace) -> int:
                 exit_code=2,
             )
     image_options = output_settings(args, output)
+    if args.denoise:
+        check_denoiser()
+        settings = settings.with_aovs(DENOISE_AOVS)
     job, assets = prepare_job(args, settings)
     scene_path = Path(args.scene)
     with live_view(args) as view, connect(args.server, threads=args.threads) as client:
@@ -340,14 +368,16 @@ def render_command(args: argparse.Namespace) -> int:
         except RenderError as error:
             raise CommandError(str(error)) from None
         try:
-            final, pixels, exact = client.image_pixels(job_id)
+            final, pixels, aovs, exact = client.image_layers(job_id)
         except RuntimeError as error:
             raise CommandError(str(error)) from None
+        if args.denoise:
+            pixels = denoised(pixels, aovs, job)
         if view is not None:
             view.finish(client, final, pixels)
     if not exact and output.suffix.lower() == ".exr" and not image_options.half:
         _say("warning: the film is too large for float pixels in one reply: its values are halves")
-    write_image(output, pixels, image_options, window=job.crop)
+    write_image(output, pixels, image_options, window=job.crop, aovs=aovs)
     stopped = ", stopped at the time limit" if status.state != render_pb2.SUCCEEDED else ""
     print(
         f"wrote {output.resolve()} ({status.samples_done} spp, "
@@ -449,6 +479,7 @@ def build_parser() -> argparse.ArgumentParser:
         render, spp_default="default: the Mitsuba or pbrt file's, else the server's, 16"
     )
     add_image_arguments(render)
+    add_denoise_argument(render)
     add_display_argument(render)
     add_import_options(render)
     render.add_argument(

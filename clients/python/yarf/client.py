@@ -13,9 +13,10 @@ import grpc
 import numpy as np
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 
+from yarf import denoise as denoising
 from yarf.assets import AssetData, asset_chunks, sha256_of
 from yarf.credentials import open_channel
-from yarf.images import decode_exr, write_image
+from yarf.images import decode_exr_layers, write_image
 from yarf.render_options import CropWindow, ImageSettings, RenderSettings, Tonemap
 from yarf.v1 import (
     asset_pb2,
@@ -335,10 +336,20 @@ class Client:
 
         Raises RuntimeError when the job has no image yet.
         """
+        status, pixels, _, exact = self.image_layers(job_id)
+        return status, pixels, exact
+
+    def image_layers(
+        self, job_id: str
+    ) -> tuple[render_pb2.JobStatus, np.ndarray, dict[str, np.ndarray], bool]:
+        """As ``image_pixels``, with the job's AOVs by name (float32 [H, W, 3], once
+        it has ended) between the pixels and whether they are exact.
+        """
         try:
             try:
                 reply = self.result(job_id)
-                return reply.status, array_to_numpy(reply.pixels), True
+                aovs = {layer.name: array_to_numpy(layer.pixels) for layer in reply.aovs}
+                return reply.status, array_to_numpy(reply.pixels), aovs, True
             except grpc.RpcError as error:
                 too_large = isinstance(error, grpc.Call) and (
                     error.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
@@ -346,7 +357,8 @@ class Client:
                 if not too_large:
                     raise
             reply = self.result(job_id, render_pb2.GetResultRequest.EXR)
-            return reply.status, decode_exr(reply.image), False
+            pixels, aovs = decode_exr_layers(reply.image)
+            return reply.status, pixels, aovs, False
         except grpc.RpcError as error:
             if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.FAILED_PRECONDITION:
                 raise RuntimeError(f"job {job_id} has no image yet ({error.details()})") from None
@@ -364,14 +376,18 @@ class Client:
         half: bool = False,
         exposure: float = 0.0,
         tonemap: Tonemap = "linear",
+        denoise: bool = False,
     ) -> render_pb2.JobStatus:
         """Writes the job's image (final or progressive) to ``path``, an .exr or .png file.
 
-        An EXR holds 32-bit floats (``half``: 16-bit); a PNG the radiance
-        scaled by 2^``exposure`` and mapped by ``tonemap`` ("linear" or
-        "aces"), sRGB-encoded. Returns the job's status when the image was
-        taken; raises ValueError for another extension or a bad setting, and
-        RuntimeError when the job has no image yet.
+        An EXR holds 32-bit floats (``half``: 16-bit) and the job's AOVs as
+        channels NAME.R, NAME.G, NAME.B; a PNG the radiance scaled by
+        2^``exposure`` and mapped by ``tonemap`` ("linear" or "aces"),
+        sRGB-encoded. ``denoise``: the image denoised here with the job's
+        albedo and sh_normal AOVs (yarf.denoise). Returns the job's status
+        when the image was taken; raises ValueError for another extension
+        or a bad setting, RuntimeError when the job has no image yet, and
+        DenoiseError when it cannot be denoised.
         """
         path = Path(path)
         if path.suffix.lower() not in IMAGE_FORMATS:
@@ -380,9 +396,19 @@ class Client:
             )
         settings = ImageSettings(half=half, exposure=exposure, tonemap=tonemap)
         settings.check(path.suffix.lower())
-        status, pixels, _ = self.image_pixels(job_id)
+        if denoise:
+            denoising.denoiser()
+        status, pixels, aovs, _ = self.image_layers(job_id)
+        if denoise:
+            missing = denoising.missing_aovs(aovs)
+            if missing:
+                raise denoising.DenoiseError(
+                    f"job {job_id} has no {' and '.join(missing)} AOV to denoise with "
+                    "(submit it with --aov albedo,sh_normal; a job that did not end has none)"
+                )
+            pixels = denoising.denoise(pixels, aovs)
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_image(path, pixels, settings)
+        write_image(path, pixels, settings, aovs=aovs)
         return status
 
     def watch_within(self, job_id: str, time_limit: float | None) -> Iterator[render_pb2.JobStatus]:
@@ -416,7 +442,7 @@ class Client:
         time_limit: float | None = None,
         max_depth: int | None = None,
         materials: Mapping[str, str] | None = None,
-        aovs: Sequence[str] = (),
+        aovs: str | Sequence[str] = (),
     ) -> RenderResult:
         """Submits, waits (at most ``timeout`` s) and fetches the image.
 
@@ -429,7 +455,8 @@ class Client:
         ("CLASS[@ADDRESS]" or a ComponentSpec) and ``max_depth`` choose the
         light transport; ``materials`` maps a material's name (or class) to
         the class it becomes; ``aovs`` names arbitrary output variables
-        rendered beside the image (RenderResult.aovs). A bad value raises
+        rendered beside the image (RenderResult.aovs; any of AOV_NAMES, as a
+        list or "albedo,depth"). A bad value raises
         OptionError (a ValueError) before anything is submitted.
 
         Raises RenderError unless the job SUCCEEDED, or was stopped by its
@@ -444,6 +471,7 @@ class Client:
             transport=transport,
             materials=materials,
             max_depth=max_depth,
+            aovs=aovs,
         )
         job = settings.prepare(scene, integrator=integrator)
         job_id = self.submit(
@@ -455,7 +483,7 @@ class Client:
             integrator=integrator,
             sampler=sampler,
             crop=job.crop,
-            aovs=aovs,
+            aovs=job.aovs,
         )
         started = time.monotonic()
         last: render_pb2.JobStatus | None = None

@@ -1,15 +1,18 @@
 """Image files of a render, written with OpenImageIO.
 
-An EXR holds the linear radiance as 32-bit floats (or halves on request);
-a PNG holds 8-bit sRGB values of the radiance scaled by the exposure and
-mapped by a tone curve. A crop window's image holds the window alone; its
-EXR records where the window lies in the whole film (data and display
-windows), as pbrt writes a cropped render.
+An EXR holds the linear radiance as 32-bit floats (or halves on request),
+and the job's arbitrary output variables (AOVs) as channels NAME.R,
+NAME.G, NAME.B after R, G, B, as the server's EXR does; a PNG holds 8-bit
+sRGB values of the radiance scaled by the exposure and mapped by a tone
+curve. A crop window's image holds the window alone; its EXR records where
+the window lies in the whole film (data and display windows), as pbrt
+writes a cropped render.
 """
 
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -59,6 +62,12 @@ def srgb_bytes(display: np.ndarray) -> np.ndarray:
 
 def decode_exr(data: bytes) -> np.ndarray:
     """The RGB pixels [height, width, 3] of an EXR file's bytes, as float32."""
+    return decode_exr_layers(data)[0]
+
+
+def decode_exr_layers(data: bytes) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The RGB pixels [height, width, 3] of an EXR file's bytes, and its AOVs by name
+    (the channels NAME.R, NAME.G, NAME.B), as float32."""
     import OpenImageIO as oiio  # imported when used: `import yarf` stays light
 
     with tempfile.TemporaryDirectory(prefix="yarf-") as folder:
@@ -68,14 +77,23 @@ def decode_exr(data: bytes) -> np.ndarray:
         if image is None:
             raise OSError(f"cannot read an EXR image: {oiio.geterror()}")
         try:
-            pixels = image.read_image(0, 0, 0, 3, oiio.FLOAT)
-            if pixels is None:
+            spec = image.spec()
+            values = image.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+            if values is None:
                 raise OSError(f"cannot read an EXR image: {image.geterror()}")
-            return np.asarray(pixels, dtype=np.float32).reshape(
-                image.spec().height, image.spec().width, 3
+            channels = np.asarray(values, dtype=np.float32).reshape(
+                spec.height, spec.width, spec.nchannels
             )
+            names = list(spec.channelnames)
         finally:
             image.close()
+    rgb = [names.index(c) for c in "RGB"]
+    aovs: dict[str, np.ndarray] = {}
+    for name in dict.fromkeys(n.rpartition(".")[0] for n in names if "." in n):
+        layer = [f"{name}.{c}" for c in "RGB"]
+        if all(channel in names for channel in layer):
+            aovs[name] = np.ascontiguousarray(channels[..., [names.index(c) for c in layer]])
+    return np.ascontiguousarray(channels[..., rgb]), aovs
 
 
 def check_writable(path: Path) -> None:
@@ -94,9 +112,12 @@ def write_image(
     settings: ImageSettings | None = None,
     *,
     window: render_pb2.PixelWindow | None = None,
+    aovs: Mapping[str, np.ndarray] | None = None,
 ) -> None:
     """Writes linear float pixels [height, width, 3] (the whole film) as an .exr or
-    .png file; with ``window``, only those pixels."""
+    .png file; with ``window``, only those pixels. An EXR holds the ``aovs`` (each
+    [height, width, 3], by name) as channels NAME.R, NAME.G, NAME.B after R, G, B;
+    a PNG the image alone."""
     import OpenImageIO as oiio  # imported when used: `import yarf` stays light
 
     settings = settings or ImageSettings()
@@ -105,6 +126,10 @@ def write_image(
     if window is not None:
         x0, y0 = window.x0, window.y0
         pixels = pixels[window.y0 : window.y1, window.x0 : window.x1]
+    layers = {
+        name: image if window is None else image[window.y0 : window.y1, window.x0 : window.x1]
+        for name, image in (aovs or {}).items()
+    }
     png = path.suffix.lower() == ".png"
     if png:
         data = srgb_bytes(
@@ -113,10 +138,13 @@ def write_image(
         spec = oiio.ImageSpec(data.shape[1], data.shape[0], 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
     else:
-        data = np.ascontiguousarray(pixels, dtype=np.float32)
-        spec = oiio.ImageSpec(
-            data.shape[1], data.shape[0], 3, oiio.HALF if settings.half else oiio.FLOAT
+        data = np.ascontiguousarray(
+            np.concatenate([pixels, *layers.values()], axis=2), dtype=np.float32
         )
+        spec = oiio.ImageSpec(
+            data.shape[1], data.shape[0], data.shape[2], oiio.HALF if settings.half else oiio.FLOAT
+        )
+        spec.channelnames = ("R", "G", "B", *(f"{n}.{c}" for n in layers for c in "RGB"))
         spec.x, spec.y = x0, y0
         spec.full_x, spec.full_y, spec.full_width, spec.full_height = 0, 0, width, height
         spec.attribute("compression", "zip")

@@ -24,6 +24,7 @@ from yarf import dashboard
 from yarf.cli import (
     CommandError,
     _send_assets,
+    check_denoiser,
     checked_settings,
     connect,
     live_view,
@@ -32,8 +33,14 @@ from yarf.cli import (
     submit_job,
 )
 from yarf.client import DEFAULT_ADDRESS, FINAL_STATES, Client, RenderError, check_ended
+from yarf.denoise import DenoiseError
 from yarf.live_view import LiveView
-from yarf.render_options import add_display_argument, add_image_arguments, add_render_arguments
+from yarf.render_options import (
+    add_denoise_argument,
+    add_display_argument,
+    add_image_arguments,
+    add_render_arguments,
+)
 from yarf.v1 import render_pb2
 
 # Exit code of `yarf watch` and `yarf submit --watch` for a job that did not succeed.
@@ -280,11 +287,20 @@ def list_command(args: argparse.Namespace) -> int:
 def fetch_command(args: argparse.Namespace) -> int:
     output = Path(args.output)
     image = output_settings(args, output)
+    if args.denoise:
+        check_denoiser()
     with _job_server(args) as client, _about_job(args.job):
         try:
             status = client.fetch(
-                args.job, output, half=image.half, exposure=image.exposure, tonemap=image.tonemap
+                args.job,
+                output,
+                half=image.half,
+                exposure=image.exposure,
+                tonemap=image.tonemap,
+                denoise=args.denoise,
             )
+        except DenoiseError as error:
+            raise CommandError(f"--denoise: {error}") from None
         except RuntimeError as error:
             raise CommandError(str(error)) from None
     kind = "image" if status.state == render_pb2.SUCCEEDED else f"{_state(status)} job's image"
@@ -400,6 +416,7 @@ def add_job_commands(
     fetch = job_command("fetch", "write a job's image, final or progressive so far")
     fetch.add_argument("-o", "--output", required=True, help="image to write (.exr or .png)")
     add_image_arguments(fetch)
+    add_denoise_argument(fetch)
     fetch.set_defaults(handler=fetch_command)
 
     priority = job_command("priority", "move a queued job in the queue")

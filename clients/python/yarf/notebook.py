@@ -14,7 +14,8 @@ import atexit
 import base64
 import tempfile
 import threading
-from collections.abc import Mapping
+import warnings
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from yarf import denoise as denoising
 from yarf.client import IMAGE_FORMATS, Client
 from yarf.images import write_image
 from yarf.params import SceneParameters
@@ -107,8 +109,12 @@ class Image:
 
     ``variance``: the variance of each pixel's estimate [H, W, 3] (None when
     the server did not give it). ``spp``: samples per pixel done;
-    ``seconds``: the render's time on the server. ``aovs``: extra outputs
-    by name (none yet). Jupyter shows it as an sRGB PNG (``png()``).
+    ``seconds``: the render's time on the server. ``aovs``: the arbitrary
+    output variables the render asked for (``aovs=``, and albedo and
+    sh_normal for ``denoise=True``), float32 [H, W, 3] by name. ``raw``:
+    the image as the server rendered it, when ``pixels`` is its denoised
+    copy (else None; ``variance`` is the raw image's). Jupyter shows it as
+    an sRGB PNG (``png()``).
     """
 
     pixels: np.ndarray
@@ -117,6 +123,7 @@ class Image:
     seconds: float = 0.0
     aovs: dict[str, np.ndarray] = field(default_factory=dict)
     status: render_pb2.JobStatus | None = field(default=None, repr=False, compare=False)
+    raw: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -148,8 +155,9 @@ class Image:
         exposure: float = 0.0,
         tonemap: Tonemap = "linear",
     ) -> None:
-        """Writes an .exr (32-bit floats; ``half``: 16-bit) or .png file (the
-        radiance scaled by 2^``exposure``, mapped by ``tonemap``, sRGB)."""
+        """Writes an .exr (32-bit floats; ``half``: 16-bit; the AOVs as channels
+        NAME.R, NAME.G, NAME.B after R, G, B) or .png file (the radiance scaled by
+        2^``exposure``, mapped by ``tonemap``, sRGB)."""
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix not in IMAGE_FORMATS:
@@ -159,7 +167,7 @@ class Image:
         settings = ImageSettings(half=half, exposure=exposure, tonemap=tonemap)
         settings.check(suffix)
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_image(path, self.pixels, settings)
+        write_image(path, self.pixels, settings, aovs=self.aovs)
 
     def png(self, *, exposure: float = 0.0, tonemap: Tonemap = "linear") -> bytes:
         """The image as PNG file bytes (as ``save`` writes a .png)."""
@@ -238,6 +246,8 @@ def render(
     time_limit: float | None = None,
     max_depth: int | None = None,
     materials: Mapping[str, str] | None = None,
+    aovs: str | Iterable[str] | None = None,
+    denoise: bool = False,
     integrator: scene_pb2.ComponentSpec | None = None,
     sampler: scene_pb2.ComponentSpec | None = None,
     server: str | Client | LocalServer | None = None,
@@ -249,8 +259,12 @@ def render(
     (``RenderSettings``): ``spp`` (None: the file's sample count, else the
     server's 16), ``seed``, ``transport`` ("CLASS[@ADDRESS]"),
     ``res`` ((width, height) or "WxH"), ``crop``, ``time_limit`` seconds,
-    ``max_depth``, ``materials`` ({name or class: CLASS[@ADDRESS]}); a bad
-    value raises OptionError before anything starts. ``server``: the
+    ``max_depth``, ``materials`` ({name or class: CLASS[@ADDRESS]}),
+    ``aovs`` (names of AOV_NAMES, as a list or "albedo,depth": Image.aovs);
+    a bad value raises OptionError before anything starts. ``denoise``:
+    the image denoised on this machine's CPU with Intel Open Image Denoise
+    (``pip install 'yarf[denoise]'``), guided by the albedo and sh_normal
+    AOVs (asked for too); the server's image is in Image.raw. ``server``: the
     address of a yarfd, a Client or a LocalServer; None renders with the
     process's embedded yarfd (``embedded_server()``). ``timeout``: seconds
     to wait for the job. Raises RenderError when the job fails.
@@ -266,16 +280,24 @@ def render(
         "materials": materials,
     }
     # Every value checked before a server is started or asked.
-    RenderSettings.of(spp=spp, seed=seed, **options)
+    settings = RenderSettings.of(spp=spp, seed=seed, aovs=aovs, **options)
+    if denoise:
+        denoising.denoiser()
+        settings = settings.with_aovs(denoising.DENOISE_AOVS)
+    options["aovs"] = settings.aovs
     if isinstance(server, Client):
-        return _render_with(server, loaded, spp, seed, integrator, sampler, timeout, options)
+        return _render_with(
+            server, loaded, spp, seed, integrator, sampler, timeout, options, denoise
+        )
     if isinstance(server, str):
         client = Client(server)
     else:
         # The server's own client carries its token and certificate, if any.
         client = (server or embedded_server()).client()
     with client:
-        return _render_with(client, loaded, spp, seed, integrator, sampler, timeout, options)
+        return _render_with(
+            client, loaded, spp, seed, integrator, sampler, timeout, options, denoise
+        )
 
 
 def _render_with(
@@ -287,6 +309,7 @@ def _render_with(
     sampler: scene_pb2.ComponentSpec | None,
     timeout: float | None,
     options: dict[str, Any],
+    denoised: bool,
 ) -> Image:
     result = client.render(
         scene.message,
@@ -298,10 +321,23 @@ def _render_with(
         **options,
     )
     variance = result.variance if result.variance.size else None
+    pixels, raw = result.pixels, None
+    if denoised:
+        missing = denoising.missing_aovs(result.aovs)
+        if missing:
+            warnings.warn(
+                f"not denoised: the job stopped (at its time limit) before rendering the "
+                f"{' and '.join(missing)} AOVs the denoiser takes",
+                stacklevel=3,
+            )
+        else:
+            pixels, raw = denoising.denoise(result.pixels, result.aovs), result.pixels
     return Image(
-        pixels=result.pixels,
+        pixels=pixels,
         variance=variance,
         spp=int(result.status.samples_done),
         seconds=float(result.status.elapsed_seconds),
+        aovs=dict(result.aovs),
         status=result.status,
+        raw=raw,
     )

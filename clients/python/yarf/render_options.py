@@ -2,7 +2,8 @@
 ``Client.render``.
 
 ``RenderSettings`` says what to render (samples, seed, film size, crop
-window, time limit, transport, materials, path depth) and ``ImageSettings``
+window, time limit, transport, materials, path depth, arbitrary output
+variables) and ``ImageSettings``
 how to write the image (float or half EXR; PNG exposure and tone curve).
 Both check every value before any server is asked for; a bad one raises
 ``OptionError`` naming the option. ``add_render_arguments`` and
@@ -13,6 +14,8 @@ Both check every value before any server is asked for; a bad one raises
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import difflib
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -26,6 +29,20 @@ MAX_FILM_SIDE = 16384
 MAX_FILM_PIXELS = 1 << 26
 # The only integrator that renders a crop window (RenderOptions.crop).
 CROP_INTEGRATOR = "mean_sample"
+
+# The arbitrary output variables a job can ask for (RenderOptions.aovs), in the
+# order the server lists them: kAovNames of server/include/yarf/aov.h, which
+# tests/test_denoise_and_aov_cli.py checks this against.
+AOV_NAMES: tuple[str, ...] = (
+    "albedo",
+    "sh_normal",
+    "geo_normal",
+    "depth",
+    "position",
+    "uv",
+    "shape_index",
+    "material_index",
+)
 
 Tonemap = Literal["linear", "aces"]
 TONEMAPS: tuple[Tonemap, ...] = ("linear", "aces")
@@ -105,6 +122,26 @@ def parse_materials(definitions: Iterable[str]) -> tuple[tuple[str, str], ...]:
     return tuple(pairs)
 
 
+def parse_aovs(names: str | Iterable[str]) -> tuple[str, ...]:
+    """``"albedo,depth"`` (or ``["albedo", "depth"]``) as names of AOV_NAMES, each once."""
+    items = names.split(",") if isinstance(names, str) else list(names)
+    chosen: list[str] = []
+    for item in items:
+        name = item.strip()
+        if not name:
+            raise OptionError("aov", f"expected names separated by commas, got {names!r}")
+        if name not in AOV_NAMES:
+            close = difflib.get_close_matches(name, AOV_NAMES, n=1, cutoff=0.5)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise OptionError(
+                "aov", f"unknown output {name!r} ({hint}known: {', '.join(AOV_NAMES)})"
+            )
+        if name in chosen:
+            raise OptionError("aov", f"{name!r} is named twice")
+        chosen.append(name)
+    return tuple(chosen)
+
+
 def class_at(option: str, text: str) -> tuple[str, str]:
     """CLASS or CLASS@ADDRESS: a class, and the component process serving it (or "")."""
     class_name, _, address = text.partition("@")
@@ -121,6 +158,7 @@ class PreparedJob:
     spp: int
     transport: scene_pb2.ComponentSpec | None
     crop: render_pb2.PixelWindow | None
+    aovs: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -134,6 +172,7 @@ class RenderSettings:
     ComponentSpec. ``materials``: (NAME, CLASS[@ADDRESS]) pairs, each making
     the material NAME (or every material of class NAME) a CLASS, its
     properties kept. ``max_depth``: longest path in segments (-1: unbounded).
+    ``aovs``: names of AOV_NAMES, rendered beside the image.
     """
 
     spp: int | None = None
@@ -144,6 +183,7 @@ class RenderSettings:
     transport: str | scene_pb2.ComponentSpec | None = None
     materials: tuple[tuple[str, str], ...] = field(default_factory=tuple)
     max_depth: int | None = None
+    aovs: tuple[str, ...] = ()
 
     @classmethod
     def of(
@@ -157,10 +197,11 @@ class RenderSettings:
         transport: str | scene_pb2.ComponentSpec | None = None,
         materials: Mapping[str, str] | Iterable[str] | None = None,
         max_depth: int | None = None,
+        aovs: str | Iterable[str] | None = None,
     ) -> RenderSettings:
         """Settings from Python values as a user writes them (``res="640x480"`` or
-        ``(640, 480)``, ``crop=(x0, x1, y0, y1)``, ``materials={"red": "plastic"}``),
-        checked."""
+        ``(640, 480)``, ``crop=(x0, x1, y0, y1)``, ``materials={"red": "plastic"}``,
+        ``aovs="albedo,depth"`` or ``["albedo", "depth"]``), checked."""
         if isinstance(res, str):
             res = parse_res(res)
         if isinstance(crop, str):
@@ -184,6 +225,7 @@ class RenderSettings:
             transport=transport,
             materials=pairs,
             max_depth=max_depth,
+            aovs=parse_aovs(aovs) if aovs is not None else (),
         )
         settings.check()
         return settings
@@ -216,6 +258,12 @@ class RenderSettings:
             raise OptionError(
                 "max_depth", f"must be -1 (unbounded) or at least 0, not {self.max_depth}"
             )
+        parse_aovs(self.aovs)
+
+    def with_aovs(self, names: Iterable[str]) -> RenderSettings:
+        """These settings with the AOVs ``names`` added to theirs (those absent)."""
+        extra = tuple(name for name in names if name not in self.aovs)
+        return dataclasses.replace(self, aovs=self.aovs + extra)
 
     def prepare(
         self,
@@ -248,6 +296,7 @@ class RenderSettings:
             spp=self.spp or default_spp,
             transport=self._transport(prepared),
             crop=crop,
+            aovs=self.aovs,
         )
 
     def _transport(self, scene: scene_pb2.Scene) -> scene_pb2.ComponentSpec | None:
@@ -353,6 +402,24 @@ def add_render_arguments(command: argparse.ArgumentParser, *, spp_default: str) 
         metavar="N",
         help="longest path in segments (1: emitters only, -1: unbounded)",
     )
+    command.add_argument(
+        "--aov",
+        metavar="LIST",
+        help="arbitrary output variables rendered beside the image, comma-separated: "
+        f"{', '.join(AOV_NAMES)}; an EXR holds each as channels NAME.R, NAME.G, NAME.B "
+        "after R, G, B (a PNG holds the image alone)",
+    )
+
+
+def add_denoise_argument(command: argparse.ArgumentParser) -> None:
+    """``--denoise``: the image denoised in the client (``yarf render`` and ``yarf fetch``)."""
+    command.add_argument(
+        "--denoise",
+        action="store_true",
+        help="denoise the image on this machine's CPU with Intel Open Image Denoise "
+        "(pip install 'yarf[denoise]'), guided by the albedo and sh_normal AOVs, which "
+        "yarf render asks for too (an EXR holds them); the server keeps the raw image",
+    )
 
 
 def add_image_arguments(command: argparse.ArgumentParser) -> None:
@@ -414,6 +481,7 @@ def render_settings(args: argparse.Namespace) -> RenderSettings:
         transport=args.transport,
         materials=args.material,
         max_depth=args.max_depth,
+        aovs=args.aov,
     )
 
 
