@@ -19,6 +19,12 @@ REPO = Path(__file__).resolve().parents[1]
 # CI clones the repository with the shared folder beside it.
 SHARED = REPO.parent / "shared"
 CORNELL_BOX = REPO / "scenes" / "cornell-box" / "scene.json"
+MITSUBA_CBOX = SHARED / "scenes" / "mitsuba-cbox" / "cbox-rgb.xml"
+# Mitsuba's Cornell box reference: MITSUBA_CBOX_SIZE² pixels, the mean of
+# independent renders (scalar_rgb, independent sampler, its max_depth 6).
+MITSUBA_CBOX_SIZE = 64
+MITSUBA_CBOX_SEEDS = range(16)
+MITSUBA_CBOX_SPP = 64
 
 # A mesh file in the server's asset root (one triangle).
 ASSET_MESH = "triangle.obj"
@@ -73,6 +79,23 @@ def client(server: LocalServer) -> Iterator[Client]:
 def cornell_box() -> scene_pb2.Scene:
     """The Cornell box the project ships, its meshes inlined."""
     return load_scene(CORNELL_BOX)
+
+
+@pytest.fixture(scope="session")
+def mitsuba_cbox_reference() -> tuple[np.ndarray, np.ndarray]:
+    """Mitsuba 3's mean image of MITSUBA_CBOX and the variance of that mean,
+    rendered once for the tests that compare yarf's Cornell boxes with it."""
+    import mitsuba as mi
+    from imagestats import mean_and_variance
+
+    mi.set_variant("scalar_rgb")
+    assert MITSUBA_CBOX.exists(), f"{MITSUBA_CBOX} is missing (shared/ beside the repository)"
+    scene = mi.load_file(str(MITSUBA_CBOX), res=MITSUBA_CBOX_SIZE)
+    renders = [
+        np.array(mi.render(scene, spp=MITSUBA_CBOX_SPP, seed=seed), dtype=np.float64)[..., :3]
+        for seed in MITSUBA_CBOX_SEEDS
+    ]
+    return mean_and_variance(renders)
 
 
 @pytest.fixture

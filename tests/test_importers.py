@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO, SHARED
-from imagestats import block_z_test, mean_and_variance
+from conftest import MITSUBA_CBOX, MITSUBA_CBOX_SIZE, REPO, SHARED
+from imagestats import block_z_test
 
 from yarf import Client, LocalServer, RenderResult
 from yarf.assets import upload_scene_assets
@@ -29,32 +28,12 @@ from yarf.cli import main
 from yarf.scene import ImportedScene, import_scene, load_scene
 from yarf.v1 import render_pb2, scene_pb2
 
-MITSUBA_CBOX = SHARED / "scenes" / "mitsuba-cbox" / "cbox-rgb.xml"
 PBRT_CBOX = SHARED / "scenes" / "pbrt-cornell-box" / "scene-v4.pbrt"
 TEST_SCENES = REPO / "tests" / "scenes" / "import"
-SIZE = 64
-MITSUBA_SEEDS = range(16)
-MITSUBA_SPP = 64
+SIZE = MITSUBA_CBOX_SIZE
 YARF_SPP = 1024
 # Family-wise rate of false alarms over all pixels (or blocks) and channels.
 FAMILY_ALPHA = 1e-3
-
-
-@pytest.fixture(scope="module")
-def mitsuba_reference() -> tuple[np.ndarray, np.ndarray]:
-    """Mitsuba's mean image of independent renders, and the variance of that mean."""
-    import mitsuba as mi
-
-    mi.set_variant("scalar_rgb")
-    assert MITSUBA_CBOX.exists(), f"{MITSUBA_CBOX} is missing (shared/ beside the repository)"
-    start = time.monotonic()
-    scene = mi.load_file(str(MITSUBA_CBOX), res=SIZE)
-    renders = [
-        np.array(mi.render(scene, spp=MITSUBA_SPP, seed=seed), dtype=np.float64)[..., :3]
-        for seed in MITSUBA_SEEDS
-    ]
-    print(f"Mitsuba: {len(renders)} × {MITSUBA_SPP} spp in {time.monotonic() - start:.1f} s")
-    return mean_and_variance(renders)
 
 
 @pytest.fixture(scope="module")
@@ -75,9 +54,9 @@ def test_mitsuba_cornell_box_imports_without_warnings(imported_cbox: ImportedSce
 
 
 def test_mitsuba_cornell_box_pixels_match_mitsuba_within_noise(
-    yarf_cbox: RenderResult, mitsuba_reference: tuple[np.ndarray, np.ndarray]
+    yarf_cbox: RenderResult, mitsuba_cbox_reference: tuple[np.ndarray, np.ndarray]
 ) -> None:
-    reference, reference_variance = mitsuba_reference
+    reference, reference_variance = mitsuba_cbox_reference
     pixels = yarf_cbox.pixels.astype(np.float64)
     assert pixels.shape == reference.shape == (SIZE, SIZE, 3)
     for block in (1, 8):
