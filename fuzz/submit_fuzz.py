@@ -10,7 +10,7 @@ is rendered by a real yarfd, which must end the job (succeeded or failed
 with an error) and stay alive: what the checks let through must not crash
 the server.
 
-  .venv/bin/python fuzz/submit_fuzz.py --mutants 3000 --renders 40     (make fuzz)
+  .venv/bin/python fuzz/submit_fuzz.py --mutants 3000 --renders 20     (make fuzz)
   .venv/bin/python fuzz/submit_fuzz.py --mutants 10000000 --renders 100000 --seed 7   (hours)
 
 A failure prints the mutant (as text) and writes it to ``--artifacts``.
@@ -246,7 +246,7 @@ def main() -> int:
     )
     parser.add_argument("--mutants", type=int, default=3000, help="mutants checked (default 3000)")
     parser.add_argument(
-        "--renders", type=int, default=40, help="accepted mutants rendered (default 40)"
+        "--renders", type=int, default=20, help="accepted mutants rendered (default 20)"
     )
     parser.add_argument(
         "--seed", type=int, default=int(time.time()), help="random seed (default: the time)"
