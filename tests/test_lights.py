@@ -197,34 +197,47 @@ def test_white_furnace_under_a_uniform_sky(client: Client, tmp_path: Path, trans
         )
 
 
+def render_envmap_scene(
+    client: Client, scene: scene_pb2.Scene, name: str, seed: int, **values: object
+) -> RenderResult:
+    result = client.render(
+        scene,
+        spp=1024,
+        seed=seed,
+        transport=component(name, max_depth=5, **values),
+        sampler=INDEPENDENT,
+        timeout=600,
+    )
+    assert np.isfinite(result.pixels).all()
+    return result
+
+
+@pytest.fixture(scope="module")
+def envmap_scene_and_path_reference(
+    client: Client, tmp_path_factory: pytest.TempPathFactory
+) -> tuple[scene_pb2.Scene, RenderResult]:
+    """A diffuse sphere on a floor under the sky map, and the path tracer's
+    image of it, which every other transport is compared with."""
+    folder = tmp_path_factory.mktemp("envmap")
+    sky(folder / "sky.pfm")
+    scene = load_scene(write_scene(folder, SPHERE, lights=ENVMAP, max_depth=5))
+    upload_scene_assets(client, scene, folder)
+    return scene, render_envmap_scene(client, scene, "path", 1)
+
+
 @pytest.mark.parametrize("transport", ["light", "bdpt", "photon_map", "sppm"])
 def test_transports_agree_under_an_environment_map(
-    client: Client, tmp_path: Path, transport: str
+    client: Client,
+    envmap_scene_and_path_reference: tuple[scene_pb2.Scene, RenderResult],
+    transport: str,
 ) -> None:
     """A diffuse sphere on a floor under the sky map: paths from the camera and
     from the environment (its disk around the scene) estimate the same image."""
-    sky(tmp_path / "sky.pfm")
-    scene = load_scene(write_scene(tmp_path, SPHERE, lights=ENVMAP, max_depth=5))
-    upload_scene_assets(client, scene, tmp_path)
-
+    scene, reference = envmap_scene_and_path_reference
     # The photon map blurs the sphere's contact shadow by the radius of its
     # estimates: enough photons shrink the blur below the noise.
     density = {"photons": 1_000_000} if transport == "photon_map" else {}
-
-    def render(name: str, spp: int, seed: int) -> RenderResult:
-        result = client.render(
-            scene,
-            spp=spp,
-            seed=seed,
-            transport=component(name, max_depth=5, **(density if name == transport else {})),
-            sampler=INDEPENDENT,
-            timeout=600,
-        )
-        assert np.isfinite(result.pixels).all()
-        return result
-
-    reference = render("path", 1024, 1)
-    other = render(transport, 1024, 2)
+    other = render_envmap_scene(client, scene, transport, 2, **density)
     test = block_z_test(
         other.pixels,
         other.variance,
