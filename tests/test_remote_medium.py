@@ -132,8 +132,10 @@ def test_an_exponential_atmosphere_attenuates_a_vertical_ray_by_its_optical_dept
             sigma_s=rgb(*SIGMA_S),
             scale_height=SCALE_HEIGHT,
         )
+        # 1024 spp over 64 pixels: a standard error under 0.002 per channel,
+        # against transmittances some 0.35 above the homogeneous slab's.
         result = client.render(
-            scene, spp=4096, seed=1, transport=component("volpath", max_depth=1), timeout=600
+            scene, spp=1024, seed=1, transport=component("volpath", max_depth=1), timeout=600
         )
     sigma_t = np.array(SIGMA_A) + np.array(SIGMA_S)
     optical_depth = sigma_t * SCALE_HEIGHT * (1 - np.exp(-SLAB_HEIGHT / SCALE_HEIGHT))
