@@ -53,6 +53,7 @@ def test_every_block_of_the_page_runs(page: Path, tmp_path: Path) -> None:
     (tmp_path / "scenes").symlink_to(ROOT / "scenes")
     (tmp_path / "components").symlink_to(ROOT / "components")
     (tmp_path / "build").symlink_to(ROOT / "build")
+    (tmp_path / "tests").symlink_to(ROOT / "tests")
     env = dict(os.environ)
     env["PATH"] = os.pathsep.join(
         [str(Path(sys.executable).parent), str(ROOT / "build" / "bin"), env.get("PATH", "")]

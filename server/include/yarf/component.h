@@ -8,6 +8,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "yarf/interface_version.h"
 #include "yarf/properties.h"
 
 namespace yarf {
@@ -52,8 +53,13 @@ std::vector<std::string> InterfacesOf() {
 
 }  // namespace yarf
 
-// Name of the one function a plugin exports.
+// Names of the two functions a plugin exports: the interface version it
+// was compiled against, checked before anything else, and its registration.
+#define YARF_VERSION_SYMBOL "yarf_interface_version"
 #define YARF_REGISTER_SYMBOL "yarf_register_components"
-// Defines it: YARF_PLUGIN(registrar) { yarf::Register<Lambertian>(registrar, ...); }
-#define YARF_PLUGIN(registrar) \
+// Defines both: YARF_PLUGIN(registrar) { yarf::Register<Lambertian>(registrar, ...); }
+#define YARF_PLUGIN(registrar)                                                                                  \
+  extern "C" __attribute__((visibility("default"))) const char* yarf_interface_version() {                      \
+    return YARF_INTERFACE_VERSION;                                                                              \
+  }                                                                                                             \
   extern "C" __attribute__((visibility("default"))) void yarf_register_components(yarf::Registrar& registrar)

@@ -56,6 +56,20 @@ std::vector<ComponentInfo> Registry::LoadPlugin(const std::filesystem::path& fil
   const std::string path = file.string();
   void* lib = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!lib) throw Error("plugin '" + path + "' failed to load: " + dlerror());
+  // Before any call into it: a plugin built against other headers may lay
+  // out every interface differently.
+  using VersionFunction = const char* (*)();
+  auto version = reinterpret_cast<VersionFunction>(dlsym(lib, YARF_VERSION_SYMBOL));
+  if (!version) {
+    dlclose(lib);
+    throw Error("plugin '" + path + "' exports no " YARF_VERSION_SYMBOL
+                ": it was built against yarf headers older than this yarfd's; rebuild it against them");
+  }
+  if (const std::string built = version(); built != YARF_INTERFACE_VERSION) {
+    dlclose(lib);
+    throw Error("plugin '" + path + "' was built against yarf interface version " + built.substr(0, 32) +
+                ", this yarfd has " YARF_INTERFACE_VERSION ": rebuild it against this yarf's headers");
+  }
   auto fn = reinterpret_cast<RegisterFunction>(dlsym(lib, YARF_REGISTER_SYMBOL));
   if (!fn) {
     dlclose(lib);

@@ -1,0 +1,68 @@
+"""A C++ plugin built outside yarf's tree, against an installed yarf.
+
+`cmake --install` puts the interface headers and the CMake package
+(find_package(yarf): the target yarf::interfaces and yarf_add_plugin) in a
+prefix; a project of its own builds a diffuse reflector against them, and
+yarfd loads it from --plugin-path and renders with it exactly what its
+own lambertian renders. Plugins built against other interface headers are
+refused at load, with a message, and yarfd serves on.
+"""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import small_scene
+
+from yarf import Client, properties, rgb
+from yarf.server import LocalServer
+
+ROOT = Path(__file__).resolve().parent.parent
+BUILD = ROOT / "build"
+
+SOURCES = Path(__file__).resolve().parent / "out_of_tree"
+
+
+def run(*command: str | Path, cwd: Path | None = None) -> None:
+    done = subprocess.run([str(c) for c in command], cwd=cwd, capture_output=True, text=True)
+    assert done.returncode == 0, f"{command}:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+
+
+@pytest.fixture(scope="module")
+def plugins(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder of plugins built outside the tree against an installed yarf."""
+    work = tmp_path_factory.mktemp("out-of-tree")
+    prefix = work / "prefix"
+    run("cmake", "--install", BUILD, "--prefix", prefix)
+    assert (prefix / "include" / "yarf" / "interface_version.h").exists()
+    built = work / "build"
+    run("cmake", "-S", SOURCES, "-B", built, "-G", "Ninja", f"-DCMAKE_PREFIX_PATH={prefix}")
+    run("cmake", "--build", built)
+    for name in ("stale", "unversioned"):
+        run("c++", "-shared", "-fPIC", "-o", built / f"libyarf_{name}.so", SOURCES / f"{name}.cc")
+    return built
+
+
+def test_an_out_of_tree_plugin_renders_as_the_builtin_it_copies(plugins: Path) -> None:
+    with (
+        LocalServer(plugin_paths=[BUILD / "plugins", plugins]) as server,
+        Client(server.address) as client,
+    ):
+        classes = client.list_classes()
+        assert "oot_grey" in {c.class_name for c in classes.classes}
+        scene = small_scene(16)
+        builtin = client.render(scene, spp=8, seed=2).pixels
+        for material in scene.materials:
+            material.class_name = "oot_grey"
+            material.properties.CopyFrom(properties(reflectance=rgb(0.5)))
+        ours = client.render(scene, spp=8, seed=2).pixels
+        np.testing.assert_allclose(ours, builtin, rtol=1e-5, atol=1e-7)
+        failures = {Path(f.path).name: f.message for f in classes.plugin_errors}
+    assert (
+        "was built against yarf interface version 0123456789abcdef" in failures["libyarf_stale.so"]
+    )
+    assert "rebuild it" in failures["libyarf_stale.so"]
+    assert "exports no yarf_interface_version" in failures["libyarf_unversioned.so"]
