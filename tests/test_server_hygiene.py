@@ -302,3 +302,11 @@ def test_metrics_are_off_by_default(json_log_server: LocalServer) -> None:
 def test_yarfd_usage_names_the_new_options() -> None:
     run = run_yarfd("--help")
     assert "--log-json" in run.stderr and "--metrics HOST:PORT" in run.stderr
+
+
+def test_yarfd_started_for_a_process_that_has_ended_stops_at_once() -> None:
+    # --parent-pid names the process yarfd stops with; one that is not its
+    # parent any more (here: never was) has ended as far as yarfd can tell.
+    run = run_yarfd("--parent-pid", "999999999")
+    assert run.returncode == 1
+    assert "the process 999999999 that started it has ended" in run.stderr

@@ -5,6 +5,7 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <tbb/global_control.h>
 
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -47,6 +48,15 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
     std::cerr << "yarfd: refusing to run as root: run it as a user of its own (deploy/systemd does), or pass "
                  "--allow-root (YARF_ALLOW_ROOT=1) where root is all there is, as in a container\n";
     return 2;
+  }
+  // Stops with the process that started it (an embedded server's
+  // notebook or script), however that ends: SIGTERM, as from a user.
+  if (options.parent_pid > 0) {
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != options.parent_pid) {
+      std::cerr << "yarfd: the process " << options.parent_pid << " that started it has ended\n";
+      return 1;
+    }
   }
   // First: a refused address or a bad tokens file stops yarfd before any work.
   const auto credentials = yarf::ListenCredentials(options);

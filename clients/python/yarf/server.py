@@ -2,13 +2,10 @@
 
 from __future__ import annotations
 
-import ctypes
-import functools
 import os
 import shutil
 import signal
 import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Mapping, Sequence
@@ -21,27 +18,6 @@ from yarf.client import DEFAULT_TIMEOUT, Client
 YARFD_ENV = "YARF_YARFD"
 # Where a build of this repository puts the server: <repo>/build/bin/yarfd.
 REPO_YARFD = Path(__file__).resolve().parents[3] / "build" / "bin" / "yarfd"
-
-
-# prctl(2) option: the signal the kernel sends a process when its parent dies.
-_PR_SET_PDEATHSIG = 1
-
-
-def _die_with_parent(parent: int) -> None:
-    """Runs in the child before yarfd starts: on Linux, yarfd gets SIGKILL when the
-    process that started it dies, however it dies (a killed notebook kernel leaves
-    no server behind). Elsewhere nothing: the server is stopped at exit only.
-
-    The kernel watches the thread that started the server: a server started by a
-    thread that ends before it is killed too (``embedded_server`` starts another).
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    if os.getppid() != parent:
-        # The parent died before prctl took effect.
-        os.kill(os.getpid(), signal.SIGKILL)
 
 
 class ServerError(RuntimeError):
@@ -124,6 +100,10 @@ class LocalServer:
         port_file = (self._folder or Path("<folder>")) / "port"
         command = [str(self.binary), "--listen", "127.0.0.1:0", "--port-file", str(port_file)]
         command += ["--state-dir", str(self.state_path)]
+        # yarfd stops with this process however it ends (a killed notebook
+        # kernel leaves no server behind): on Linux, when the thread that
+        # started it ends.
+        command += ["--parent-pid", str(os.getpid())]
         for path in self.plugin_paths:
             command += ["--plugin-path", str(path)]
         if self.asset_root is not None:
@@ -181,7 +161,6 @@ class LocalServer:
                 stdout=log,
                 stderr=subprocess.STDOUT,
                 env=self.env,
-                preexec_fn=functools.partial(_die_with_parent, os.getpid()),
             )
         try:
             self._address = self._wait_until_serving(port_file)

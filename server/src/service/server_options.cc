@@ -43,7 +43,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
       "             [--max-instances-per-user N] [--instance-idle-seconds S] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
       "             [--max-asset-bytes-per-user BYTES[K|M|G]] [--asset-grace-hours H]\n"
       "             [--tls-cert FILE --tls-key FILE] [--tokens FILE] [--allow-load-plugin]\n"
-      "             [--allow-root] [--log-json] [--metrics HOST:PORT]\n"
+      "             [--allow-root] [--log-json] [--metrics HOST:PORT] [--parent-pid PID]\n"
       "       yarfd --check-requests   (SubmitRequests on stdin, SubmitChecks on stdout)";
   ServerOptions options;
   for (int i = 1; i < argc; ++i) {
@@ -89,6 +89,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--tls-key") options.tls_key = value;
     else if (flag == "--tokens") options.tokens_file = value;
     else if (flag == "--metrics") options.metrics = value;
+    else if (flag == "--parent-pid") options.parent_pid = std::atoll(value.c_str());
     else throw Error("unknown option " + flag + "\n" + kUsage);
   }
   if (const char* env = std::getenv("YARF_PLUGIN_PATH")) {
@@ -100,6 +101,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
   if (options.state_dir.empty()) options.state_dir = DefaultStateDir();
   if (const char* env = std::getenv("YARF_ALLOW_ROOT"); env && std::string(env) == "1") options.allow_root = true;
   if (options.max_running_jobs < 1) throw Error("--max-running-jobs must be at least 1");
+  if (options.parent_pid < 0) throw Error("--parent-pid must be a process id");
   if (!(options.checkpoint_seconds >= 0)) throw Error("--checkpoint-seconds must be 0 or more");
   if (!(options.keep_finished_hours >= 0)) throw Error("--keep-finished-hours must be 0 or more");
   if (!(options.asset_grace_hours >= 0)) throw Error("--asset-grace-hours must be 0 or more");

@@ -57,6 +57,8 @@ struct ServerOptions {
   // One line per job event on stderr (job_events.h): key=value text, or
   // with --log-json one JSON object per line.
   bool log_json = false;
+  // The process that started yarfd, when it is to stop with it (0: none).
+  int64_t parent_pid = 0;
   // --metrics HOST:PORT: Prometheus metrics over HTTP at /metrics there;
   // empty (the default): none.
   std::string metrics;
