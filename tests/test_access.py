@@ -295,6 +295,7 @@ def test_another_submitter_may_not_fetch_watch_or_cancel_a_job(
     bob = as_user["bob"]
     for call in (
         lambda: bob.result(alice_job),
+        lambda: bob.details(alice_job),
         lambda: bob.status(alice_job),
         lambda: bob.cancel(alice_job),
         lambda: bob.set_priority(alice_job, 90),

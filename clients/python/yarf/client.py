@@ -241,6 +241,7 @@ class Client:
         max_retries: int | None = None,
         crop: render_pb2.PixelWindow | None = None,
         aovs: Sequence[str] = (),
+        threads: int = 0,
     ) -> str:
         """Queues a render of ``scene``; returns the job id.
 
@@ -249,7 +250,8 @@ class Client:
         ``priority`` (1..100, None: the server's 50) orders the queue;
         ``max_retries`` (None: 0) requeues a job that failed. ``crop``: only
         these pixels get samples. ``aovs``: arbitrary output variables
-        rendered beside the image (RenderOptions.aovs).
+        rendered beside the image (RenderOptions.aovs). ``threads``: the job's
+        worker threads on the server (0: all of the server's).
         """
         options = render_pb2.RenderOptions(
             spp=spp,
@@ -257,6 +259,7 @@ class Client:
             component_retries=component_retries,
             component_timeout_seconds=component_timeout,
             aovs=list(aovs),
+            threads=threads,
         )
         if transport is not None:
             options.transport.CopyFrom(transport)
@@ -443,6 +446,7 @@ class Client:
         max_depth: int | None = None,
         materials: Mapping[str, str] | None = None,
         aovs: str | Sequence[str] = (),
+        threads: int | None = None,
     ) -> RenderResult:
         """Submits, waits (at most ``timeout`` s) and fetches the image.
 
@@ -456,7 +460,8 @@ class Client:
         light transport; ``materials`` maps a material's name (or class) to
         the class it becomes; ``aovs`` names arbitrary output variables
         rendered beside the image (RenderResult.aovs; any of AOV_NAMES, as a
-        list or "albedo,depth"). A bad value raises
+        list or "albedo,depth"); ``threads`` caps the job's worker threads on
+        the server. A bad value raises
         OptionError (a ValueError) before anything is submitted.
 
         Raises RenderError unless the job SUCCEEDED, or was stopped by its
@@ -472,6 +477,7 @@ class Client:
             materials=materials,
             max_depth=max_depth,
             aovs=aovs,
+            threads=threads,
         )
         job = settings.prepare(scene, integrator=integrator)
         job_id = self.submit(
@@ -484,6 +490,7 @@ class Client:
             sampler=sampler,
             crop=job.crop,
             aovs=job.aovs,
+            threads=job.threads,
         )
         started = time.monotonic()
         last: render_pb2.JobStatus | None = None
@@ -522,6 +529,11 @@ class Client:
         """Moves a queued job in the queue (1..100); returns its status."""
         request = render_pb2.SetPriorityRequest(job_id=job_id, priority=priority)
         return self.render_service.SetPriority(request, timeout=self.timeout)
+
+    def details(self, job_id: str) -> render_pb2.JobDetails:
+        """The job's options as it runs, a summary of its scene and its event log."""
+        request = render_pb2.GetJobRequest(job_id=job_id)
+        return self.render_service.GetJob(request, timeout=self.timeout)
 
     # Assets.
 

@@ -7,9 +7,13 @@
 #include <tuple>
 #include <utility>
 
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
 #include "kernel/film_target.h"
 #include "service/job_files.h"
 #include "service/request_checks.h"
+#include "service/scene_summary.h"
 #include "yarf/aov.h"
 #include "yarf/error.h"
 
@@ -29,6 +33,24 @@ void RemoveFile(const std::filesystem::path& path) {
 // many tries, the pauses between them growing threefold.
 constexpr int kCommitTries = 4;
 constexpr std::chrono::milliseconds kFirstCommitPause(100);
+// A job's log keeps its last lines: a long render writes a checkpoint line
+// every few seconds.
+constexpr size_t kMaxLogLines = 200;
+
+// The concurrency of a job's task arena: RenderOptions.threads, at most
+// the server's (0: the server's).
+int WorkerThreads(uint32_t threads) {
+  const size_t server = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  return threads == 0 ? int(server) : int(std::min<size_t>(threads, server));
+}
+
+std::optional<v1::RenderOptions> OptionsOf(const v1::SubmitRequest* request) {
+  return request ? std::optional(request->options()) : std::nullopt;
+}
+
+std::optional<v1::SceneSummary> SummaryOf(const v1::SubmitRequest* request) {
+  return request ? std::optional(SummarizeScene(request->scene())) : std::nullopt;
+}
 
 }  // namespace
 
@@ -43,6 +65,8 @@ Job::Job(std::string id, JobRecord record, std::shared_ptr<const v1::SubmitReque
       persist_(std::move(persist)),
       observer_(observer),
       request_(std::move(request)),
+      options_(OptionsOf(request_.get())),
+      scene_summary_(SummaryOf(request_.get())),
       row_(std::move(record)),
       samples_done_(row_.samples_done),
       closest_hit_rays_(row_.closest_hit_rays),
@@ -81,6 +105,27 @@ v1::JobStatus Job::Status() const {
 JobEvent Job::Describe(JobEventKind kind) const {
   std::lock_guard lock(mutex_);
   return DescribeLocked(kind);
+}
+
+void Job::Tell(JobEventKind kind) { Tell(Describe(kind)); }
+
+void Job::Tell(const JobEvent& event) {
+  {
+    std::lock_guard lock(mutex_);
+    log_.push_back(FormatKeyValue(event));
+    if (log_.size() > kMaxLogLines) log_.pop_front();
+  }
+  if (observer_) observer_->OnJobEvent(event);
+}
+
+v1::JobDetails Job::Details() const {
+  v1::JobDetails details;
+  *details.mutable_status() = Status();
+  if (options_) *details.mutable_options() = *options_;
+  if (scene_summary_) *details.mutable_scene() = *scene_summary_;
+  std::lock_guard lock(mutex_);
+  details.mutable_log()->Assign(log_.begin(), log_.end());
+  return details;
 }
 
 JobEvent Job::DescribeLocked(JobEventKind kind) const {
@@ -168,7 +213,7 @@ bool Job::Commit(const std::function<bool(JobRecord&)>& change) {
     if (row_.state == v1::QUEUED && before.state != v1::QUEUED) queued_since_ = std::chrono::steady_clock::now();
   }
   // Told once stored, as watchers are, and outside the lock.
-  if (event && observer_) observer_->OnJobEvent(*event);
+  if (event) Tell(*event);
   return true;
 }
 
@@ -202,7 +247,7 @@ void Job::EndUnstored(const StorageError& error) {
     ++version_;
     request_.reset();
   }
-  if (observer_) observer_->OnJobEvent(Describe(JobEventKind::kFailed));
+  Tell(JobEventKind::kFailed);
 }
 
 void Job::Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays) {
@@ -326,58 +371,8 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
     return cancel_ ? Outcome::kCancelled : stop_ ? Outcome::kStopped : otherwise;
   };
   try {
-    const v1::Scene& scene = request_->scene();
-    const v1::RenderOptions& options = request_->options();
-    JobComponents parts = MakeJobComponents(*request_, owner(), resources, remote_calls_, halt_);
-    const std::shared_ptr<KernelScene> kernel = parts.scene;
-    const bool resumable = parts.resumable;
-    std::optional<FilmCheckpoint> checkpoint =
-        resumable ? UsableCheckpoint(scene.film(), options.spp()) : std::nullopt;
-    // A checkpoint in use stays until the next one replaces it, so that a
-    // crash before then still resumes from it.
-    if (!checkpoint) RemoveFile(files_.checkpoint);
-    FilmTarget::Share share = ShareOf(options);
-    {
-      std::lock_guard lock(film_mutex_);
-      film_ = checkpoint ? std::make_unique<Film>(std::move(checkpoint->film))
-                         : std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
-      aov_films_.clear();
-    }
-    if (checkpoint) share.first_sample = std::max(share.first_sample, checkpoint->samples_done);
-    {
-      std::lock_guard lock(mutex_);
-      run_first_sample_ = share.first_sample;
-    }
-    Progress(share.first_sample, 0, 0);
-    {
-      // After the first Progress: samples of a checkpoint or of another
-      // share were not rendered by this run.
-      std::lock_guard lock(mutex_);
-      run_pixels_ = share.crop ? uint64_t(share.crop->x1 - share.crop->x0) * (share.crop->y1 - share.crop->y0)
-                               : uint64_t(scene.film().width()) * scene.film().height();
-    }
-
-    const KernelScene* counters = kernel.get();
-    // Checkpoints of a large film take a while to write: at least ten
-    // times that long apart, so that they cost at most a tenth of the time.
-    const std::chrono::duration<double> every(settings.checkpoint_seconds);
-    auto next_checkpoint = std::chrono::steady_clock::now() + every;
-    FilmTarget target(*film_, film_mutex_, options.spp(), options.seed(), share, halt_, [&](uint32_t done) {
-      Progress(done, counters->ClosestHitRays(), counters->ShadowRays());
-      if (!resumable || done >= options.spp() || halt_) return;
-      const auto start = std::chrono::steady_clock::now();
-      if (start < next_checkpoint) return;
-      WriteCheckpoint(done);
-      const auto end = std::chrono::steady_clock::now();
-      next_checkpoint = end + std::max(every, std::chrono::duration<double>(10 * (end - start)));
-    });
-    target.WeighCameraSamples(kernel->CameraRayWeight());
-    // Served while it renders, for transports in other processes.
-    const auto served = resources.scenes.Serve(kernel, target);
-    parts.transport->Prepare(*kernel);
-    parts.integrator->Render(*parts.transport, *kernel, *parts.sampler, target);
-    RenderAovs(parts, *kernel, share);
-    Progress(samples_done_, counters->ClosestHitRays(), counters->ShadowRays());
+    tbb::task_arena arena(WorkerThreads(request_->options().threads()));
+    arena.execute([&] { RenderRun(resources, settings); });
     return {outcome(Outcome::kSucceeded), ""};
   } catch (const std::exception& e) {
     // A halt that cut a remote call short is a cancel or a stop, not a failure.
@@ -386,6 +381,61 @@ Job::RunResult Job::Render(const JobResources& resources, const RunSettings& set
     // A plugin may throw anything; it fails the job, not the server.
     return {outcome(Outcome::kFailed), "a component threw an exception that is not a std::exception"};
   }
+}
+
+void Job::RenderRun(const JobResources& resources, const RunSettings& settings) {
+  const v1::Scene& scene = request_->scene();
+  const v1::RenderOptions& options = request_->options();
+  JobComponents parts = MakeJobComponents(*request_, owner(), resources, remote_calls_, halt_);
+  const std::shared_ptr<KernelScene> kernel = parts.scene;
+  const bool resumable = parts.resumable;
+  std::optional<FilmCheckpoint> checkpoint =
+      resumable ? UsableCheckpoint(scene.film(), options.spp()) : std::nullopt;
+  // A checkpoint in use stays until the next one replaces it, so that a
+  // crash before then still resumes from it.
+  if (!checkpoint) RemoveFile(files_.checkpoint);
+  FilmTarget::Share share = ShareOf(options);
+  {
+    std::lock_guard lock(film_mutex_);
+    film_ = checkpoint ? std::make_unique<Film>(std::move(checkpoint->film))
+                       : std::make_unique<Film>(scene.film().width(), scene.film().height(), scene.film().filter());
+    aov_films_.clear();
+  }
+  if (checkpoint) share.first_sample = std::max(share.first_sample, checkpoint->samples_done);
+  {
+    std::lock_guard lock(mutex_);
+    run_first_sample_ = share.first_sample;
+  }
+  Progress(share.first_sample, 0, 0);
+  {
+    // After the first Progress: samples of a checkpoint or of another
+    // share were not rendered by this run.
+    std::lock_guard lock(mutex_);
+    run_pixels_ = share.crop ? uint64_t(share.crop->x1 - share.crop->x0) * (share.crop->y1 - share.crop->y0)
+                             : uint64_t(scene.film().width()) * scene.film().height();
+  }
+
+  const KernelScene* counters = kernel.get();
+  // Checkpoints of a large film take a while to write: at least ten
+  // times that long apart, so that they cost at most a tenth of the time.
+  const std::chrono::duration<double> every(settings.checkpoint_seconds);
+  auto next_checkpoint = std::chrono::steady_clock::now() + every;
+  FilmTarget target(*film_, film_mutex_, options.spp(), options.seed(), share, halt_, [&](uint32_t done) {
+    Progress(done, counters->ClosestHitRays(), counters->ShadowRays());
+    if (!resumable || done >= options.spp() || halt_) return;
+    const auto start = std::chrono::steady_clock::now();
+    if (start < next_checkpoint) return;
+    WriteCheckpoint(done);
+    const auto end = std::chrono::steady_clock::now();
+    next_checkpoint = end + std::max(every, std::chrono::duration<double>(10 * (end - start)));
+  });
+  target.WeighCameraSamples(kernel->CameraRayWeight());
+  // Served while it renders, for transports in other processes.
+  const auto served = resources.scenes.Serve(kernel, target);
+  parts.transport->Prepare(*kernel);
+  parts.integrator->Render(*parts.transport, *kernel, *parts.sampler, target);
+  RenderAovs(parts, *kernel, share);
+  Progress(samples_done_, counters->ClosestHitRays(), counters->ShadowRays());
 }
 
 void Job::RenderAovs(JobComponents& parts, const KernelScene& kernel, const FilmTarget::Share& share) {

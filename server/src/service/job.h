@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -54,6 +55,10 @@ class Job {
   v1::JobStatus Status() const;
   // The job as an event of `kind` would tell it now.
   JobEvent Describe(JobEventKind kind) const;
+  // Tells the observer, and the job's own log, an event of `kind`.
+  void Tell(JobEventKind kind);
+  // GetJob's answer: status, options, scene summary and log.
+  v1::JobDetails Details() const;
   // Bumped on every change, for watchers.
   uint64_t Version() const;
   bool Finished() const;
@@ -110,6 +115,8 @@ class Job {
   void EndUnstored(const StorageError& error);
   // Progress of the render, shown to watchers but not stored.
   void Progress(uint32_t samples_done, uint64_t closest_hit_rays, uint64_t shadow_rays);
+  // Render's work, in the job's task arena; throws what fails it.
+  void RenderRun(const JobResources& resources, const RunSettings& settings);
   // EndRun's work; throws StorageError when the store keeps failing.
   bool StoreEndOfRun(const RunResult& result);
   void Finish(v1::JobState state, const std::string& error);
@@ -124,6 +131,8 @@ class Job {
   void DropFilms();
   // Who the job's files belong to: this job, as of its current attempt.
   JobFileOwner FileOwner() const;
+  // Tells the observer, and the job's own log, `event`; without mutex_ held.
+  void Tell(const JobEvent& event);
   // Describe, with mutex_ held.
   JobEvent DescribeLocked(JobEventKind kind) const;
   // The event a change of the row from `before` to row_ makes, if any;
@@ -139,6 +148,10 @@ class Job {
   // Read by the worker thread; dropped, under mutex_, once the job ends.
   // Other threads copy the pointer under mutex_ before they read (Assets).
   std::shared_ptr<const v1::SubmitRequest> request_;
+  // What GetJob tells of the request, kept after it is dropped; unset for
+  // a job that had ended before this server started.
+  const std::optional<v1::RenderOptions> options_;
+  const std::optional<v1::SceneSummary> scene_summary_;
   // halt_ stops the render; cancel_ and stop_ say why.
   std::atomic<bool> halt_{false}, cancel_{false}, stop_{false};
   // Calls to components in other processes, ended at once by a halt.
@@ -155,6 +168,8 @@ class Job {
   // pixel samples told to the observer.
   uint64_t run_pixels_ = 0;
   uint64_t version_ = 0;
+  // The job's event lines since this server started, the last kMaxLogLines.
+  std::deque<std::string> log_;
 
   // The film while rendering; once the job ends its image is on disk.
   std::unique_ptr<Film> film_;

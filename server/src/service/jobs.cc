@@ -207,7 +207,7 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
     jobs_[job->number()] = job;
   }
   // Before it is queued, so that the log tells submitted before started.
-  if (observer_) observer_->OnJobEvent(job->Describe(JobEventKind::kSubmitted));
+  job->Tell(JobEventKind::kSubmitted);
   scheduler_.Enqueue(job);
   return job->id();
 }

@@ -132,6 +132,14 @@ grpc::Status RenderServiceImpl::GetResult(grpc::ServerContext* context, const v1
   return grpc::Status::OK;
 }
 
+grpc::Status RenderServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* request,
+                                       v1::JobDetails* reply) {
+  std::shared_ptr<Job> job;
+  if (grpc::Status reached = Reach(*context, request->job_id(), job); !reached.ok()) return reached;
+  *reply = job->Details();
+  return grpc::Status::OK;
+}
+
 grpc::Status RenderServiceImpl::Cancel(grpc::ServerContext* context, const v1::CancelRequest* request,
                                        v1::CancelReply* reply) {
   std::shared_ptr<Job> job;

@@ -21,6 +21,7 @@ class RenderServiceImpl final : public v1::RenderService::WithCallbackMethod_Wat
   grpc::Status Cancel(grpc::ServerContext*, const v1::CancelRequest*, v1::CancelReply*) override;
   grpc::Status List(grpc::ServerContext*, const v1::ListJobsRequest*, v1::ListJobsReply*) override;
   grpc::Status SetPriority(grpc::ServerContext*, const v1::SetPriorityRequest*, v1::JobStatus*) override;
+  grpc::Status GetJob(grpc::ServerContext*, const v1::GetJobRequest*, v1::JobDetails*) override;
 
  private:
   // The job, if the caller may act on it; else why not.

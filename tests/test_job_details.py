@@ -1,0 +1,96 @@
+"""GetJob (the job page's data) and RenderOptions.threads, against a real yarfd."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import grpc
+import pytest
+from conftest import small_scene
+
+from yarf import Client, LocalServer
+from yarf.v1 import render_pb2, scene_pb2
+
+
+def event_names(log: list[str]) -> list[str]:
+    """The `event=` values of log lines, in order."""
+    return [line.split()[0].removeprefix("event=") for line in log]
+
+
+def test_a_finished_job_tells_its_options_scene_and_log(client: Client) -> None:
+    scene = small_scene(24)
+    scene.film.height = 12
+    group = scene.groups.add(name="pair")
+    group.shapes.add(name="in_group", material="grey").sphere.radius = 0.1
+    scene.instances.add(group="pair")
+    scene.instances.add(group="pair")
+    job_id = client.submit(scene, 4, 7, name="details", aovs=["albedo", "depth"], threads=1)
+    assert client.wait(job_id, timeout=120).state == render_pb2.SUCCEEDED
+
+    details = client.details(job_id)
+    assert details.status.job_id == job_id and details.status.state == render_pb2.SUCCEEDED
+    options = details.options
+    assert (options.spp, options.seed, options.threads) == (4, 7, 1)
+    assert list(options.aovs) == ["albedo", "depth"]
+    summary = details.scene
+    assert (summary.width, summary.height) == (24, 12)
+    # Two world shapes and the group's one, counted once however often placed.
+    assert (summary.shapes, summary.instances, summary.materials) == (3, 2, 1)
+    assert summary.lights == 1 and summary.camera == "pinhole"
+    assert event_names(list(details.log)) == ["submitted", "started", "finished"]
+    assert all(f"job={job_id}" in line for line in details.log), details.log
+    assert "spp=4 spp_total=4" in details.log[-1], details.log[-1]
+
+
+def test_a_failed_job_logs_its_error(client: Client) -> None:
+    scene = small_scene()
+    scene.materials[0].class_name = "no_such_surface_model"
+    job_id = client.submit(scene, 1)
+    status = client.wait(job_id, timeout=60)
+    assert status.state == render_pb2.FAILED
+    log = list(client.details(job_id).log)
+    assert event_names(log) == ["submitted", "started", "failed"]
+    assert "no_such_surface_model" in log[-1], log[-1]
+
+
+def test_an_unknown_job_is_not_found(client: Client) -> None:
+    with pytest.raises(grpc.RpcError) as error:
+        client.details("job-999999")
+    assert error.value.code() == grpc.StatusCode.NOT_FOUND  # type: ignore[attr-defined]
+
+
+def cpu_ticks_by_thread(pid: int) -> dict[int, int]:
+    """User and system clock ticks each thread of process ``pid`` has used."""
+    ticks = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            # After the command's ")": state is field 3, utime 14, stime 15.
+            fields = (task / "stat").read_text().rpartition(")")[2].split()
+        except OSError:
+            continue  # the thread ended meanwhile
+        ticks[int(task.name)] = int(fields[11]) + int(fields[12])
+    return ticks
+
+
+def threads_that_rendered(server: LocalServer, client: Client, threads: int) -> int:
+    """Renders a job of a few CPU seconds with ``threads``; how many of yarfd's
+    threads each did at least a fifth of the work (gRPC's threads do next to none)."""
+    before = cpu_ticks_by_thread(server.pid)
+    job_id = client.submit(small_scene(128), 128, threads=threads)
+    assert client.wait(job_id, timeout=300).state == render_pb2.SUCCEEDED
+    after = cpu_ticks_by_thread(server.pid)
+    used = [after[thread] - before.get(thread, 0) for thread in after]
+    return sum(1 for ticks in used if ticks > 0.2 * sum(used))
+
+
+def test_threads_bounds_the_render_threads_of_a_job(server: LocalServer, client: Client) -> None:
+    assert threads_that_rendered(server, client, 1) == 1
+    # 0: every thread of the server's (two or more here).
+    assert threads_that_rendered(server, client, 0) >= 2
+
+
+def test_threads_do_not_change_the_image(client: Client) -> None:
+    scene: scene_pb2.Scene = small_scene(16)
+    one = client.raw(client.wait(client.submit(scene, 8, 3, threads=1)).job_id)
+    many = client.raw(client.wait(client.submit(scene, 8, 3, threads=64)).job_id)
+    assert (one.pixels == many.pixels).all()
