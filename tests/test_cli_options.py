@@ -104,8 +104,7 @@ BAD_INVOCATIONS: list[tuple[str, list[str], str]] = [
     ("render", ["--transport", "@127.0.0.1:1"], "--transport: expected CLASS or CLASS@ADDRESS"),
     ("render", ["--material", "grey"], "--material: expected NAME=CLASS[@ADDRESS]"),
     ("render", ["--material", "nosuch=plastic"], "no material or material class of that name"),
-    ("render", ["--threads", "0"], "--threads: must be at least 1"),
-    ("render", ["--threads", "2"], "--threads: sets the threads of a yarfd this command starts"),
+    ("render", ["--threads", "0"], "--threads: must be 1 to 65536, not 0"),
     ("render", ["-D", "res=3"], "-D sets parameters of Mitsuba scenes only"),
     ("render", ["-o", "{dir}/out.tif"], "the output's extension must be one of .exr, .png"),
     ("render", ["-o", "{dir}/out.png", "--half"], "--half: applies to EXR images"),
@@ -121,6 +120,7 @@ BAD_INVOCATIONS: list[tuple[str, list[str], str]] = [
     ("submit", ["--time-limit", "3"], "--time-limit needs --watch"),
     ("submit", ["--priority", "0"], "--priority must be 1 to 100"),
     ("submit", ["--max-depth", "-5"], "--max-depth: must be -1 (unbounded) or at least 0"),
+    ("submit", ["--threads", "-1"], "--threads: must be 1 to 65536, not -1"),
 ]
 
 

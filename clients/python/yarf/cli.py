@@ -96,11 +96,8 @@ def start_hint(address: str) -> str:
 
 
 @contextmanager
-def connect(
-    address: str | None, *, say: Callable[[str], None] = _say, threads: int | None = None
-) -> Iterator[Client]:
-    """A client of ``address``; without one, of 127.0.0.1:50051 or a local yarfd
-    (always a local one, of ``threads`` threads, when ``threads`` is given)."""
+def connect(address: str | None, *, say: Callable[[str], None] = _say) -> Iterator[Client]:
+    """A client of ``address``; without one, of 127.0.0.1:50051 or a local yarfd."""
     token, tls_ca = _CREDENTIALS.get()
     ca_file = resolve_credentials(token, tls_ca)[1]
     if ca_file and not Path(ca_file).is_file():
@@ -115,16 +112,13 @@ def connect(
                 ) from None
             yield client
         return
-    if threads is None:
-        with Client(DEFAULT_ADDRESS, token=token, tls_ca=tls_ca) as client:
-            if client.is_serving(timeout=0.5):
-                say(f"using the yarfd at {DEFAULT_ADDRESS}")
-                yield client
-                return
-        say("no yarfd at 127.0.0.1:50051: starting one for this command")
-    else:
-        say(f"starting a yarfd of {threads} thread{'s' if threads > 1 else ''} for this command")
-    with LocalServer(threads=threads) as server, server.client() as client:
+    with Client(DEFAULT_ADDRESS, token=token, tls_ca=tls_ca) as client:
+        if client.is_serving(timeout=0.5):
+            say(f"using the yarfd at {DEFAULT_ADDRESS}")
+            yield client
+            return
+    say("no yarfd at 127.0.0.1:50051: starting one for this command")
+    with LocalServer() as server, server.client() as client:
         yield client
 
 
@@ -274,6 +268,7 @@ def submit_job(
             transport=job.transport,
             crop=job.crop,
             aovs=job.aovs,
+            threads=job.threads,
             component_retries=component_retries,
             priority=priority,
             max_retries=max_retries,
@@ -326,22 +321,13 @@ def denoised(pixels: np.ndarray, aovs: dict[str, np.ndarray], job: PreparedJob) 
 def render_command(args: argparse.Namespace) -> int:
     output = Path(args.output)
     settings = checked_settings(args)
-    if args.threads is not None:
-        if args.threads < 1:
-            raise CommandError(f"--threads: must be at least 1, not {args.threads}", 2)
-        if args.server:
-            raise CommandError(
-                f"--threads: sets the threads of a yarfd this command starts; the one at "
-                f"{args.server} keeps its own (yarfd --threads N)",
-                exit_code=2,
-            )
     image_options = output_settings(args, output)
     if args.denoise:
         check_denoiser()
         settings = settings.with_aovs(DENOISE_AOVS)
     job, assets = prepare_job(args, settings)
     scene_path = Path(args.scene)
-    with live_view(args) as view, connect(args.server, threads=args.threads) as client:
+    with live_view(args) as view, connect(args.server) as client:
         _send_assets(client, assets, job.scene, scene_path.parent, quiet=args.quiet)
         job_id = submit_job(
             client,
@@ -482,12 +468,6 @@ def build_parser() -> argparse.ArgumentParser:
     add_denoise_argument(render)
     add_display_argument(render)
     add_import_options(render)
-    render.add_argument(
-        "--threads",
-        type=int,
-        metavar="N",
-        help="render on a yarfd of N threads started for this command (not with --server)",
-    )
     render.add_argument(
         "--component-retries",
         type=int,

@@ -247,6 +247,7 @@ def render(
     max_depth: int | None = None,
     materials: Mapping[str, str] | None = None,
     aovs: str | Iterable[str] | None = None,
+    threads: int | None = None,
     denoise: bool = False,
     integrator: scene_pb2.ComponentSpec | None = None,
     sampler: scene_pb2.ComponentSpec | None = None,
@@ -260,11 +261,12 @@ def render(
     server's 16), ``seed``, ``transport`` ("CLASS[@ADDRESS]"),
     ``res`` ((width, height) or "WxH"), ``crop``, ``time_limit`` seconds,
     ``max_depth``, ``materials`` ({name or class: CLASS[@ADDRESS]}),
-    ``aovs`` (names of AOV_NAMES, as a list or "albedo,depth": Image.aovs);
-    a bad value raises OptionError before anything starts. ``denoise``:
-    the image denoised on this machine's CPU with Intel Open Image Denoise
-    (``pip install 'yarf[denoise]'``), guided by the albedo and sh_normal
-    AOVs (asked for too); the server's image is in Image.raw. ``server``: the
+    ``aovs`` (names of AOV_NAMES, as a list or "albedo,depth": Image.aovs),
+    ``threads`` (the job's worker threads on the server); a bad value
+    raises OptionError before anything starts. ``denoise``: the image
+    denoised on this machine's CPU with Intel Open Image Denoise (``pip
+    install 'yarf[denoise]'``), guided by the albedo and sh_normal AOVs
+    (asked for too); the server's image is in Image.raw. ``server``: the
     address of a yarfd, a Client or a LocalServer; None renders with the
     process's embedded yarfd (``embedded_server()``). ``timeout``: seconds
     to wait for the job. Raises RenderError when the job fails.
@@ -278,6 +280,7 @@ def render(
         "time_limit": time_limit,
         "max_depth": max_depth,
         "materials": materials,
+        "threads": threads,
     }
     # Every value checked before a server is started or asked.
     settings = RenderSettings.of(spp=spp, seed=seed, aovs=aovs, **options)

@@ -27,6 +27,8 @@ from yarf.v1 import render_pb2, scene_pb2
 MAX_SPP = 1 << 20
 MAX_FILM_SIDE = 16384
 MAX_FILM_PIXELS = 1 << 26
+# A sanity bound: the server runs a job on at most its own threads.
+MAX_THREADS = 1 << 16
 # The only integrator that renders a crop window (RenderOptions.crop).
 CROP_INTEGRATOR = "mean_sample"
 
@@ -159,6 +161,7 @@ class PreparedJob:
     transport: scene_pb2.ComponentSpec | None
     crop: render_pb2.PixelWindow | None
     aovs: tuple[str, ...] = ()
+    threads: int = 0
 
 
 @dataclass(frozen=True)
@@ -172,7 +175,8 @@ class RenderSettings:
     ComponentSpec. ``materials``: (NAME, CLASS[@ADDRESS]) pairs, each making
     the material NAME (or every material of class NAME) a CLASS, its
     properties kept. ``max_depth``: longest path in segments (-1: unbounded).
-    ``aovs``: names of AOV_NAMES, rendered beside the image.
+    ``aovs``: names of AOV_NAMES, rendered beside the image. ``threads``: the
+    job's worker threads on the server, at most the server's own.
     """
 
     spp: int | None = None
@@ -184,6 +188,7 @@ class RenderSettings:
     materials: tuple[tuple[str, str], ...] = field(default_factory=tuple)
     max_depth: int | None = None
     aovs: tuple[str, ...] = ()
+    threads: int | None = None
 
     @classmethod
     def of(
@@ -198,6 +203,7 @@ class RenderSettings:
         materials: Mapping[str, str] | Iterable[str] | None = None,
         max_depth: int | None = None,
         aovs: str | Iterable[str] | None = None,
+        threads: int | None = None,
     ) -> RenderSettings:
         """Settings from Python values as a user writes them (``res="640x480"`` or
         ``(640, 480)``, ``crop=(x0, x1, y0, y1)``, ``materials={"red": "plastic"}``,
@@ -226,6 +232,7 @@ class RenderSettings:
             materials=pairs,
             max_depth=max_depth,
             aovs=parse_aovs(aovs) if aovs is not None else (),
+            threads=threads,
         )
         settings.check()
         return settings
@@ -259,6 +266,10 @@ class RenderSettings:
                 "max_depth", f"must be -1 (unbounded) or at least 0, not {self.max_depth}"
             )
         parse_aovs(self.aovs)
+        if self.threads is not None and not (
+            isinstance(self.threads, int) and 1 <= self.threads <= MAX_THREADS
+        ):
+            raise OptionError("threads", f"must be 1 to {MAX_THREADS}, not {self.threads}")
 
     def with_aovs(self, names: Iterable[str]) -> RenderSettings:
         """These settings with the AOVs ``names`` added to theirs (those absent)."""
@@ -297,6 +308,7 @@ class RenderSettings:
             transport=self._transport(prepared),
             crop=crop,
             aovs=self.aovs,
+            threads=self.threads or 0,
         )
 
     def _transport(self, scene: scene_pb2.Scene) -> scene_pb2.ComponentSpec | None:
@@ -409,6 +421,13 @@ def add_render_arguments(command: argparse.ArgumentParser, *, spp_default: str) 
         f"{', '.join(AOV_NAMES)}; an EXR holds each as channels NAME.R, NAME.G, NAME.B "
         "after R, G, B (a PNG holds the image alone)",
     )
+    command.add_argument(
+        "--threads",
+        type=int,
+        metavar="N",
+        help="worker threads the server renders the job with, at most its own "
+        "(default: all of the server's)",
+    )
 
 
 def add_denoise_argument(command: argparse.ArgumentParser) -> None:
@@ -482,6 +501,7 @@ def render_settings(args: argparse.Namespace) -> RenderSettings:
         materials=args.material,
         max_depth=args.max_depth,
         aovs=args.aov,
+        threads=args.threads,
     )
 
 
