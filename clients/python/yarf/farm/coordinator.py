@@ -14,7 +14,7 @@ import json
 import logging
 import time
 import uuid
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 
@@ -26,14 +26,15 @@ from nats.js.errors import NotFoundError, ObjectNotFoundError
 from nats.js.kv import KeyValue
 
 from yarf.assets import scene_asset_hashes
-from yarf.farm import streams
+from yarf.farm import job_log, streams
 from yarf.farm.assets import FarmAssets
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
+from yarf.farm.scene_summary import summarize_scene
 from yarf.farm.store import JobRecord, JobStore
 from yarf.farm.tasks import SplitPolicy, Task, split, task_options
 from yarf.farm.validation import InvalidRequest, SubmitChecker
-from yarf.v1 import render_pb2
+from yarf.v1 import render_pb2, scene_pb2
 
 log = logging.getLogger("yarf.farm.coordinator")
 
@@ -41,6 +42,9 @@ FINAL_STATES = frozenset({render_pb2.SUCCEEDED, render_pb2.FAILED, render_pb2.CA
 # Merged images of finished jobs kept in memory (the others are rebuilt
 # from the job table when asked for).
 FINISHED_IMAGES_KEPT = 16
+# Scene summaries kept in memory, by scene hash (the others are read back
+# from the scene bucket when GetJob asks).
+SCENE_SUMMARIES_KEPT = 256
 # A task whose node reported within this many seconds is being rendered
 # (nodes report every second; after the ack wait it goes to another node).
 HEARTBEAT_FRESH_SECONDS = streams.TASK_ACK_WAIT
@@ -73,6 +77,10 @@ class Job:
     # When each running task's last heartbeat came (time.monotonic()).
     heartbeats: dict[int, float] = field(default_factory=dict)
     merge: ImageMerge | None = None
+    # What this coordinator saw of the job and does not store, for its log.
+    seen: deque[job_log.Event] = field(default_factory=lambda: deque(maxlen=job_log.MAX_LINES))
+    # (task, node) pairs whose heartbeats were heard: each starts one log line.
+    heard: set[tuple[int, str]] = field(default_factory=set)
     # Set (and replaced) at every change, waking the Watch streams.
     changed: asyncio.Event = field(default_factory=asyncio.Event)
 
@@ -122,6 +130,7 @@ class Coordinator:
         self._scenes_stored: set[str] = set()
         self._scene_uploads: dict[str, asyncio.Task[None]] = {}
         self._finished_merges: OrderedDict[str, None] = OrderedDict()
+        self._scene_summaries: OrderedDict[str, render_pb2.SceneSummary] = OrderedDict()
         self._background: list[asyncio.Task[None]] = []
 
     # Start and stop.
@@ -180,6 +189,10 @@ class Coordinator:
                 record.attempts += 1
                 self._store.update_job(record)
             await self._publish_tasks(job, job.pending_tasks())
+            tasks_left = len(job.pending_tasks())
+            self._observe(
+                job, job_log.status_fields("resumed", self.status(job), tasks_left=tasks_left)
+            )
         log.info("resumed %d jobs", sum(not job.final for job in self._jobs.values()))
 
     async def _flagged(self, job_id: str) -> bool:
@@ -214,6 +227,7 @@ class Coordinator:
         scene_bytes = request.scene.SerializeToString(deterministic=True)
         scene_hash = hashlib.sha256(scene_bytes).hexdigest()
         await self._store_scene(scene_hash, scene_bytes)
+        self._keep_scene_summary(scene_hash, summarize_scene(request.scene))
         seq = self._next_seq
         self._next_seq += 1
         record = JobRecord(
@@ -296,6 +310,39 @@ class Coordinator:
     def list(self) -> list[render_pb2.JobStatus]:
         jobs = sorted(self._jobs.values(), key=lambda job: -job.record.seq)
         return [self.status(job) for job in jobs]
+
+    def log(self, job: Job) -> list[str]:
+        """The job's event lines, oldest first (see yarf.farm.job_log)."""
+        record = job.record
+        return job_log.job_log(
+            self.status(job),
+            first_sample=render_pb2.RenderOptions.FromString(record.options).first_sample,
+            submitted_at=record.submitted_at,
+            started_at=record.started_at,
+            tasks=job.tasks,
+            results=self._store.results(record.id),
+            seen=job.seen,
+        )
+
+    async def scene_summary(self, job: Job) -> render_pb2.SceneSummary | None:
+        """A summary of the job's scene; None if the scene bucket lost it."""
+        scene_hash = job.record.scene_hash
+        summary = self._scene_summaries.get(scene_hash)
+        if summary is None:
+            try:
+                data = (await self._buckets.scenes.get(scene_hash)).data or b""
+            except ObjectNotFoundError:
+                return None
+            scene = await asyncio.to_thread(scene_pb2.Scene.FromString, bytes(data))
+            summary = summarize_scene(scene)
+        self._keep_scene_summary(scene_hash, summary)
+        return summary
+
+    def _keep_scene_summary(self, scene_hash: str, summary: render_pb2.SceneSummary) -> None:
+        self._scene_summaries[scene_hash] = summary
+        self._scene_summaries.move_to_end(scene_hash)
+        while len(self._scene_summaries) > SCENE_SUMMARIES_KEPT:
+            self._scene_summaries.popitem(last=False)
 
     def image(self, job: Job) -> tuple[np.ndarray, np.ndarray] | None:
         """The merged pixels and variances, or None before any task has finished."""
@@ -420,6 +467,10 @@ class Coordinator:
 
     # State changes.
 
+    def _observe(self, job: Job, fields: job_log.Fields) -> None:
+        """Adds a line the job table cannot rebuild to the job's log."""
+        job.seen.append(job_log.Event(time.time(), fields))
+
     def _notify(self, job: Job) -> None:
         job.changed.set()
         job.changed = asyncio.Event()
@@ -466,11 +517,23 @@ class Coordinator:
         if deleted:
             log.info("deleted %d ended jobs: %s", len(deleted), " ".join(deleted))
 
-    async def _task_failed(self, job: Job, task: int, error: str) -> None:
+    async def _task_failed(self, job: Job, task: int, error: str, node: str = "") -> None:
         if job.final or task in job.done:
             return
         record = job.record
         record.failures += 1
+        failed = job_log.task_fields(
+            "task_failed",
+            record.id,
+            job.tasks[task],
+            node,
+            failures=record.failures,
+            max_retries=record.max_retries,
+            error=error,
+        )
+        self._observe(job, failed)
+        # Its next try starts a line of its own, on whichever node.
+        job.heard = {heard for heard in job.heard if heard[0] != task}
         if record.failures <= record.max_retries:
             log.warning("job %s task %d failed, queued again: %s", record.id, task, error)
             self._store.update_job(record)
@@ -514,7 +577,7 @@ class Coordinator:
             await message.ack()
             return
         if not result.ok:
-            await self._task_failed(job, result.task, result.error)
+            await self._task_failed(job, result.task, result.error, result.node)
             await message.ack()
             return
         if result.task in job.done:
@@ -538,7 +601,7 @@ class Coordinator:
                 raise ValueError(f"an image of {image.window}, {image.samples} samples")
         except ValueError as error:
             await self._task_failed(
-                job, task.index, f"node {result.node} sent a bad image: {error}"
+                job, task.index, f"node {result.node} sent a bad image: {error}", result.node
             )
             await message.ack()
             return
@@ -603,7 +666,9 @@ class Coordinator:
         if job.final or task in job.done or task >= len(job.tasks):
             return
         try:
-            job.progress[task] = int(json.loads(value).get("samples", 0))
+            progress = json.loads(value)
+            job.progress[task] = int(progress.get("samples", 0))
+            node = str(progress.get("node", ""))
         except (ValueError, AttributeError):
             return
         job.heartbeats[task] = time.monotonic()
@@ -611,6 +676,11 @@ class Coordinator:
             self._mark_running(job)
             self._store.update_job(job.record)
             log.info("job %s: running", job_id)
+        if (task, node) not in job.heard:
+            # After the job's start (same heartbeat): its line comes first.
+            job.heard.add((task, node))
+            started = job_log.task_fields("task_started", job_id, job.tasks[task], node)
+            self._observe(job, started)
         self._notify(job)
 
     async def _on_max_deliveries(self, advisory: Msg) -> None:

@@ -135,6 +135,20 @@ class FarmRenderService(render_pb2_grpc.RenderServiceServicer):
         await self._coordinator.set_priority(job, request.priority)
         return self._coordinator.status(job)
 
+    async def GetJob(
+        self, request: render_pb2.GetJobRequest, context: grpc.aio.ServicerContext
+    ) -> render_pb2.JobDetails:
+        job = await self._job(request.job_id, context)
+        details = render_pb2.JobDetails(
+            status=self._coordinator.status(job), log=self._coordinator.log(job)
+        )
+        # The options after Submit's defaults, as stored: what every task is cut from.
+        details.options.ParseFromString(job.record.options)
+        summary = await self._coordinator.scene_summary(job)
+        if summary is not None:
+            details.scene.CopyFrom(summary)
+        return details
+
 
 async def _health_check(request: bytes, context: grpc.aio.ServicerContext) -> bytes:
     return _SERVING

@@ -14,6 +14,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+from yarf.farm.job_log import TaskResult
 from yarf.farm.merge import TaskImage
 from yarf.farm.tasks import Task, Window
 from yarf.v1 import render_pb2
@@ -264,6 +265,15 @@ class JobStore:
                     f"DELETE FROM {table} WHERE {column} = ?", [(job_id,) for job_id in ids]
                 )
         return ids
+
+    def results(self, job_id: str) -> list[TaskResult]:
+        """The job's task results without their images, in task order."""
+        rows = self._db.execute(
+            "SELECT task, node, closest_hit_rays + shadow_rays, finished_at FROM results "
+            "WHERE job = ? ORDER BY task",
+            (job_id,),
+        )
+        return [TaskResult(int(r[0]), str(r[1]), int(r[2]), float(r[3])) for r in rows]
 
     def images(self, job_id: str) -> Iterator[TaskImage]:
         rows = self._db.execute("SELECT image FROM results WHERE job = ? ORDER BY task", (job_id,))
