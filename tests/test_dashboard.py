@@ -445,7 +445,7 @@ def test_uploads_are_refused_with_their_reasons(dashboard: str) -> None:
         (MITSUBA_SCENE, "file=ball.xml&time_limit=5", 400, "no time limit"),
         (b"", "file=empty.json", 400, "empty"),
         (b'{"shapes": [{"mesh": {"file": "../../etc/passwd"}}]}', "file=m.json", 400, "inline"),
-        (b'Include "/etc/hostname"\n', "file=inc.pbrt", 400, "reads another file"),
+        (b'Include "/etc/hostname"\n', "file=inc.pbrt", 400, "includes or reads another file"),
         (b"x" * (MAX_UPLOAD_BYTES + 1), "file=big.xml", 413, "at most 16 MiB"),
     ]
     for data, query, expected, message in refusals:
@@ -582,7 +582,7 @@ def test_a_scene_uploaded_with_the_form_is_queued_and_opens_its_page(
     form.locator("button[type=submit]").click()
     status = page.locator("#upload-status a")
     expect(status).to_have_text(re.compile(r"Submitted job-\d+"), timeout=WAIT_MS)
-    job_id = status.text_content().split()[-1]
+    job_id = re.search(r"job-\d+", status.text_content() or "")[0]
     expect(page.locator("#upload-error")).to_be_hidden()
     expect(row(page, job_id).locator(".name")).to_have_text("ball.xml", timeout=WAIT_MS)
     expect(row(page, job_id).locator(".state")).to_have_text("SUCCEEDED", timeout=WAIT_MS)

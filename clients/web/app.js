@@ -225,7 +225,11 @@ async function uploadScene(form) {
     });
     const data = await reply.json().catch(() => ({}));
     if (!reply.ok) throw new Error(data.error || `${reply.status} ${reply.statusText}`);
-    status.textContent = `Submitted ${data.job_id}`;
+    // What the importer ignored or approximated, in the link's tooltip.
+    const warnings = data.warnings || [];
+    const noted = warnings.length === 1 ? "1 import warning" : `${warnings.length} import warnings`;
+    status.textContent = `Submitted ${data.job_id}${warnings.length ? ` (${noted})` : ""}`;
+    status.title = warnings.join("\n");
     status.href = jobPageHash(data.job_id);
     showText("upload-error", "");
     form.reset();

@@ -368,8 +368,8 @@ def _about_upload(message: str, path: Path) -> str:
     about another file than the upload."""
     if not message.startswith(f"{path}") and _LOCATED.match(message):
         return (
-            f"{path.name}: reading it reads another file, which an uploaded scene cannot "
-            "(upload a scene that is one file)"
+            f"{path.name}: includes or reads another file, which an uploaded scene cannot "
+            "(upload one file that holds the whole scene)"
         )
     folder = str(path.parent)
     return message.replace(folder + "/", "").replace(folder, "the upload's folder")
