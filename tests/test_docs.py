@@ -2,14 +2,19 @@
 in order, in a fresh folder holding the repository's scenes, with the
 virtual environment's and the build's programs on PATH. A page's Python
 blocks share one namespace; a failing block fails its page's test with
-the block and its output."""
+the block and its output. A page runs in a process group of its own:
+whatever it left running in the background (a page that failed before
+its last block stops the servers it started) is stopped at its end."""
 
 from __future__ import annotations
 
 import os
 import re
+import signal
 import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -17,6 +22,8 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = sorted((ROOT / "docs").glob("*.md"))
 BLOCK = re.compile(r"^```(bash|python)\n(.*?)^```", re.M | re.S)
+# How long what a page left running has to stop after SIGTERM.
+STOP_SECONDS = 10.0
 
 # Runs a page's blocks, given as (language, code) pairs on stdin.
 DRIVER = """
@@ -36,12 +43,29 @@ def blocks(page: Path) -> list[tuple[str, str]]:
     return [(m.group(1), m.group(2)) for m in BLOCK.finditer(page.read_text())]
 
 
+def stop_group(group: int) -> None:
+    """SIGTERM to the process group, then SIGKILL to what is left of it."""
+    for number in (signal.SIGTERM, signal.SIGKILL):
+        try:
+            os.killpg(group, number)
+        except ProcessLookupError:
+            return
+        deadline = time.monotonic() + STOP_SECONDS
+        while time.monotonic() < deadline:
+            try:
+                os.killpg(group, 0)
+            except ProcessLookupError:
+                return
+            time.sleep(0.1)
+
+
 def test_there_are_pages_with_code() -> None:
     assert {p.name for p in PAGES} >= {
         "getting-started.md",
         "python.md",
         "components.md",
         "scenes.md",
+        "farm.md",
     }
     assert all(blocks(p) for p in PAGES)
 
@@ -58,13 +82,27 @@ def test_every_block_of_the_page_runs(page: Path, tmp_path: Path) -> None:
     env["PATH"] = os.pathsep.join(
         [str(Path(sys.executable).parent), str(ROOT / "build" / "bin"), env.get("PATH", "")]
     )
-    done = subprocess.run(
-        [sys.executable, "-c", DRIVER],
-        input=json.dumps(blocks(page)),
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert done.returncode == 0, f"{page.name}:\n{done.stdout[-4000:]}\n{done.stderr[-4000:]}"
+    # Files, not pipes: a process a page leaves running keeps no pipe open.
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        driver = subprocess.Popen(
+            [sys.executable, "-c", DRIVER],
+            stdin=subprocess.PIPE,
+            stdout=out,
+            stderr=err,
+            cwd=tmp_path,
+            env=env,
+            text=True,
+            start_new_session=True,
+        )
+        try:
+            driver.communicate(json.dumps(blocks(page)), timeout=600)
+        finally:
+            if driver.poll() is None:
+                driver.kill()
+            driver.wait()
+            # The group outlives its leader while any of its processes runs.
+            stop_group(driver.pid)
+        out.seek(0)
+        err.seek(0)
+        stdout, stderr = out.read(), err.read()
+    assert driver.returncode == 0, f"{page.name}:\n{stdout[-4000:]}\n{stderr[-4000:]}"
