@@ -79,6 +79,51 @@ def test_unknown_material_class_is_an_error_naming_the_class(
     assert_still_renders()
 
 
+@pytest.mark.parametrize(
+    ("misspell", "where", "meant"),
+    [
+        (
+            lambda s: setattr(s.materials[0], "class_name", "lambertain"),
+            "scene.materials[0] ('grey')",
+            "lambertian",
+        ),
+        (
+            lambda s: setattr(s.shapes[0].emitter, "class_name", "difuse_area"),
+            "scene.shapes[0] ('light').emitter",
+            "diffuse_area",
+        ),
+        (lambda s: setattr(s.transport, "class_name", "bpdt"), "scene.transport", "bdpt"),
+        (lambda s: setattr(s.integrator, "class_name", "vegass"), "scene.integrator", "vegas"),
+    ],
+    ids=["material", "emitter", "transport", "integrator"],
+)
+def test_a_misspelt_class_is_refused_at_submit_naming_where_and_the_nearest_class(
+    client: Client,
+    scene: scene_pb2.Scene,
+    misspell: Callable[[scene_pb2.Scene], None],
+    where: str,
+    meant: str,
+) -> None:
+    misspell(scene)
+    with pytest.raises(grpc.RpcError) as error:
+        client.submit(scene, 1)
+    assert error.value.code() == grpc.StatusCode.INVALID_ARGUMENT  # type: ignore[attr-defined]
+    message = error.value.details()  # type: ignore[attr-defined]
+    assert message.startswith(f"{where}.class_name: unknown component class"), message
+    assert f"did you mean '{meant}'?" in message, message
+
+
+def test_a_class_far_from_every_known_one_gets_no_suggestion(
+    client: Client, scene: scene_pb2.Scene
+) -> None:
+    scene.sampler.class_name = "quasirandom_halton_leaped"
+    with pytest.raises(grpc.RpcError) as error:
+        client.submit(scene, 1)
+    message = error.value.details()  # type: ignore[attr-defined]
+    assert "scene.sampler.class_name: unknown component class" in message, message
+    assert "did you mean" not in message, message
+
+
 def test_an_integrator_without_an_image_mode_fails_the_job_saying_so(
     client: Client, scene: scene_pb2.Scene, assert_still_renders: StillRenders
 ) -> None:

@@ -42,15 +42,16 @@ def test_a_finished_job_tells_its_options_scene_and_log(client: Client) -> None:
     assert "spp=4 spp_total=4" in details.log[-1], details.log[-1]
 
 
-def test_a_failed_job_logs_its_error(client: Client) -> None:
+def test_a_failed_job_logs_its_error(client: Client, tmp_path: Path) -> None:
+    # A material served by a component process that is not there.
     scene = small_scene()
-    scene.materials[0].class_name = "no_such_surface_model"
+    scene.materials[0].address = f"unix:{tmp_path / 'nobody.sock'}"
     job_id = client.submit(scene, 1)
     status = client.wait(job_id, timeout=60)
     assert status.state == render_pb2.FAILED
     log = list(client.details(job_id).log)
     assert event_names(log) == ["submitted", "started", "failed"]
-    assert "no_such_surface_model" in log[-1], log[-1]
+    assert "nobody.sock" in log[-1], log[-1]
 
 
 def test_an_unknown_job_is_not_found(client: Client) -> None:

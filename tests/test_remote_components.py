@@ -163,8 +163,11 @@ def test_a_registered_component_is_made_by_class_name_until_its_lease_runs_out(
         process.kill()
         time.sleep(2.5)
         assert "py_lambertian" not in classes_of(client)
-        status = render(client, cornell_box("py_lambertian"), seed=1)
-        assert status.state == render_pb2.FAILED and "py_lambertian" in status.error
+        # A class no longer known is refused at Submit.
+        with pytest.raises(grpc.RpcError) as error:
+            render(client, cornell_box("py_lambertian"), seed=1)
+        assert error.value.code() == grpc.StatusCode.INVALID_ARGUMENT  # type: ignore[attr-defined]
+        assert "unknown component class 'py_lambertian'" in error.value.details()  # type: ignore[attr-defined]
 
 
 def test_a_component_stopped_cleanly_unregisters_at_once(

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "kernel/scene_builder.h"
+#include "service/class_checks.h"
 #include "service/job_files.h"
 #include "service/job_memory.h"
 #include "service/request_checks.h"
@@ -172,6 +173,13 @@ void JobManager::Restore() {
   }
 }
 
+std::vector<std::string> JobManager::KnownClasses() const {
+  std::vector<std::string> names;
+  for (const ComponentInfo& info : resources_.registry.Classes()) names.push_back(info.class_name);
+  for (const ComponentInfo& info : resources_.remote_classes.Classes()) names.push_back(info.class_name);
+  return names;
+}
+
 std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
   {
     std::lock_guard lock(mutex_);
@@ -185,6 +193,7 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
   std::optional<UserAssets> assets;
   if (resources_.assets) assets.emplace(*resources_.assets, owner);
   auto accepted = std::make_shared<const v1::SubmitRequest>(AcceptSubmit(request, assets ? &*assets : nullptr));
+  CheckClassesKnown(*accepted, KnownClasses());
   if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root);
       bytes > options_.max_job_bytes)
     throw LimitReached("the job would need about " + std::to_string(bytes >> 20) + " MiB (its film, meshes and " +
