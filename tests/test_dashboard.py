@@ -445,12 +445,25 @@ def test_uploads_are_refused_with_their_reasons(dashboard: str) -> None:
         (MITSUBA_SCENE, "file=ball.xml&time_limit=5", 400, "no time limit"),
         (b"", "file=empty.json", 400, "empty"),
         (b'{"shapes": [{"mesh": {"file": "../../etc/passwd"}}]}', "file=m.json", 400, "inline"),
-        (b'Include "/etc/hostname"\n', "file=inc.pbrt", 400, "includes or reads another file"),
+        (b'Include "/etc/passwd"\n', "file=inc.pbrt", 400, "not found inside the scene's"),
+        (
+            b'<scene version="3.0.0"><include filename="/etc/passwd"/></scene>',
+            "file=i.xml",
+            400,
+            "not found inside the scene's",
+        ),
         (b"x" * (MAX_UPLOAD_BYTES + 1), "file=big.xml", 413, "at most 16 MiB"),
     ]
     for data, query, expected, message in refusals:
         status, reply = upload(dashboard, data, query)
         assert status == expected and message in reply["error"], (query, reply)
+    # A file of this machine outside the upload is never read, and whether it
+    # exists cannot be told from the answer.
+    answers = [
+        upload(dashboard, f'Include "{name}"\n'.encode(), "file=inc.pbrt")[1]["error"]
+        for name in ("/etc/passwd", "/etc/no_such_file_here")
+    ]
+    assert answers[0].replace("passwd", "X") == answers[1].replace("no_such_file_here", "X")
     # The importer's own message about the broken file, without the server's folders.
     status, reply = upload(dashboard, MITSUBA_SCENE[:200], "file=broken.xml")
     assert "malformed XML" in reply["error"] and "/tmp" not in reply["error"], reply

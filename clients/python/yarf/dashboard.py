@@ -331,18 +331,19 @@ def load_uploaded_scene(data: bytes, file_name: str) -> UploadedScene:
     """Loads an uploaded scene file as ``yarf submit`` loads one of that extension;
     SceneError for a bad file, or one that names other files.
 
-    The file is written alone into a private temporary folder. The importer
-    follows names of other files (includes, meshes, spectra) anywhere: a
-    message about a file other than the upload is withheld, as it may quote
-    that file, and a scene left naming a file is refused, since the
-    dashboard sends only what was uploaded.
+    The file is written alone into a private temporary folder, and the
+    importer is confined to it: an include, mesh or spectrum named anywhere
+    else is not found, whether it exists or not, so that an upload reads
+    nothing of this machine. A message about a file other than the upload
+    is withheld all the same, and a scene left naming a file is refused,
+    since the dashboard sends only what was uploaded.
     """
     with tempfile.TemporaryDirectory(prefix="yarf-upload-") as folder:
         path = Path(folder) / file_name
         path.write_bytes(data)
         try:
             if path.suffix.lower() in IMPORTED_SUFFIXES:
-                imported = import_scene(path, inline_files=False)
+                imported = import_scene(path, inline_files=False, confine=True)
                 scene, spp, warnings = imported.scene, imported.sample_count, imported.warnings
             else:
                 scene, spp, warnings = load_scene(path, inline_files=False), 0, []

@@ -93,6 +93,7 @@ def import_scene(
     parameters: Mapping[str, str] | None = None,
     inline_files: bool = True,
     strict: bool = False,
+    confine: bool = False,
 ) -> ImportedScene:
     """Converts a Mitsuba 3 (.xml) or pbrt-v4 (.pbrt) file with yarf-import.
 
@@ -100,9 +101,12 @@ def import_scene(
     file's ``<default>``s). Mesh files are named relative to the file's
     folder; with ``inline_files`` they become inline data. ``strict``: any
     construct that would be ignored or approximated is a SceneError.
+    ``confine``: the file may name only files inside its folder (for a
+    scene from someone else: nothing else of this machine is read).
     """
     path = Path(path)
-    command = [str(find_yarf_import()), str(path), *(["--strict"] if strict else [])]
+    command = [str(find_yarf_import()), str(path)]
+    command += [*(["--strict"] if strict else []), *(["--confine"] if confine else [])]
     for name, value in (parameters or {}).items():
         command += ["-D", f"{name}={value}"]
     try:

@@ -19,6 +19,10 @@ struct ImportOptions {
   // Values of Mitsuba scene parameters ($name), overriding the file's
   // <default> elements (as `mitsuba -D name=value`).
   std::map<std::string, std::string> parameters;
+  // The scene may name only files inside its folder (symbolic links
+  // followed): for a scene from someone else, e.g. one uploaded to a web
+  // page, which must not read the importing user's other files.
+  bool confine_to_folder = false;
 };
 
 struct ImportResult {

@@ -21,7 +21,7 @@ constexpr size_t kMaxAttributeDepth = 10000;
 }  // namespace
 
 ImportResult ImportPbrt(std::string_view text, const fs::path& file, const ImportOptions& options) {
-  const SceneFolder folder(file);
+  const SceneFolder folder(file, options.confine_to_folder);
   Diagnostics diagnostics;
   if (!options.parameters.empty())
     Fail({folder.Display(file), 0}, "pbrt scenes take no parameters (-D is for Mitsuba scenes)");

@@ -2,7 +2,11 @@
 // tests/scenes/import/pbrt_*.pbrt and malformed/*.pbrt.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "importers/importer_test_support.h"
 
@@ -317,6 +321,41 @@ TEST(PbrtImport, ALeftHandedLookAtMirrorsTheWorldAndKeepsTheLitSide) {
 
 TEST(PbrtImport, NamesFilesOutsideTheSceneFolderRelativeToIt) {
   EXPECT_EQ(Import("beside/outside.pbrt").scene.shapes(0).mesh().file(), "../assets/quad.ply");
+}
+
+// Confined, a file outside the folder is not found, and whether it exists
+// cannot be told from the message: a scene from someone else learns
+// nothing of the importing user's files.
+TEST(PbrtImport, ConfinedFindsNoFileOutsideTheSceneFolder) {
+  ImportOptions confined;
+  confined.confine_to_folder = true;
+  const auto message = [&](const std::filesystem::path& file) -> std::string {
+    try {
+      ImportSceneFile(file, confined);
+    } catch (const ImportError& error) {
+      return error.what();
+    }
+    return "";
+  };
+  EXPECT_NE(message(TestScene("beside/outside.pbrt")).find("not found inside the scene's folder"), std::string::npos);
+  EXPECT_GT(ImportSceneFile(TestScene("pbrt_include.pbrt"), confined).scene.shapes_size(), 0);
+
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / ("yarf-confined-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(folder / "inner");
+  const auto write = [&](const char* name, const std::string& text) {
+    std::ofstream(folder / name) << text;
+    return folder / name;
+  };
+  // An existing file outside (through an absolute path and through a
+  // symbolic link inside the folder) and a missing one: the same answer.
+  std::filesystem::create_symlink("/etc/passwd", folder / "inner" / "link.pbrt");
+  const std::string existing = message(write("a.pbrt", "Include \"/etc/passwd\"\n"));
+  const std::string linked = message(write("b.pbrt", "Include \"inner/link.pbrt\"\n"));
+  const std::string missing = message(write("c.pbrt", "Include \"/etc/no_such_file_here\"\n"));
+  std::filesystem::remove_all(folder);
+  for (const std::string& text : {existing, linked, missing})
+    EXPECT_NE(text.find("not found inside the scene's folder"), std::string::npos) << text;
+  EXPECT_EQ(existing.substr(existing.find("not found")), missing.substr(missing.find("not found")));
 }
 
 TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {

@@ -10,7 +10,8 @@ namespace yarf::importers {
 
 namespace fs = std::filesystem;
 
-SceneFolder::SceneFolder(const fs::path& scene_file) : user_root_(scene_file.parent_path()) {
+SceneFolder::SceneFolder(const fs::path& scene_file, bool confined)
+    : confined_(confined), user_root_(scene_file.parent_path()) {
   std::error_code error;
   const fs::path folder = user_root_.empty() ? fs::path(".") : user_root_;
   root_ = fs::weakly_canonical(fs::absolute(folder, error), error);
@@ -39,9 +40,10 @@ fs::path SceneFolder::Resolve(const std::string& name, const fs::path& from_file
   for (const fs::path& candidate : candidates) {
     std::error_code error;
     const fs::path canonical = fs::weakly_canonical(candidate, error);
-    if (error) continue;
+    if (error || (confined_ && !Inside(canonical))) continue;
     if (!must_exist || fs::is_regular_file(canonical, error)) return canonical;
   }
+  if (confined_) Fail(where, "file '" + name + "' not found inside the scene's folder, the only one it may name");
   Fail(where, "file '" + name + "' not found (looked in the including file's folder, " + root_.string() +
                   (search_.empty() ? std::string() : " and the scene's <path> folders") + ")");
 }

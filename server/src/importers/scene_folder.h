@@ -2,7 +2,8 @@
 // meshes, textures) are looked for. The importer runs as its user, who may
 // name any file they can read (Mitsuba's "../textures/wood.png"): the
 // client uploads what it reads by hash, and confining the paths a server is
-// sent is the server's rule (the kernel's scene builder).
+// sent is the server's rule (the kernel's scene builder). A confined folder
+// is for a scene from someone else: it finds only files inside it.
 #pragma once
 
 #include <filesystem>
@@ -16,12 +17,13 @@ namespace yarf::importers {
 class SceneFolder {
  public:
   // `scene_file` as the user named it; its folder is the root.
-  explicit SceneFolder(const std::filesystem::path& scene_file);
+  explicit SceneFolder(const std::filesystem::path& scene_file, bool confined = false);
 
   // The file `name` refers to from `from_file`: relative to from_file's
   // folder, else to the root, else to the folders added by AddSearchFolder
   // (in order). Fails (at `where`) when, with must_exist, none is a
-  // regular file.
+  // regular file. Confined, a file outside the root is never found, and
+  // the message is the same whether it exists or not.
   std::filesystem::path Resolve(const std::string& name, const std::filesystem::path& from_file,
                                 const SourceLocation& where, bool must_exist = true) const;
 
@@ -41,6 +43,7 @@ class SceneFolder {
  private:
   bool Inside(const std::filesystem::path& canonical) const;
 
+  bool confined_ = false;
   std::filesystem::path root_;        // canonical
   std::filesystem::path user_root_;   // as given
   std::vector<std::filesystem::path> search_;  // absolute

@@ -5,7 +5,7 @@
 namespace yarf::importers {
 
 ImportResult ImportMitsuba(std::string_view text, const std::filesystem::path& file, const ImportOptions& options) {
-  SceneFolder folder(file);
+  SceneFolder folder(file, options.confine_to_folder);
   Diagnostics diagnostics;
   const XmlElement scene = LoadMitsubaDocument(text, file, folder, options.parameters, diagnostics);
   MitsubaImporter importer(folder, diagnostics);

@@ -277,6 +277,23 @@ TEST(MitsubaImport, NamesFilesOutsideTheSceneFolderAndSearchesPathFolders) {
   EXPECT_EQ(ShapeNamed(Import("beside/search_path.xml").scene, "found").mesh().file(), "../assets/triangle.obj");
 }
 
+// Confined, as for a scene from someone else, the same files are not found.
+TEST(MitsubaImport, ConfinedFindsNoFileOutsideTheSceneFolder) {
+  ImportOptions confined;
+  confined.confine_to_folder = true;
+  for (const char* file : {"beside/outside.xml", "beside/search_path.xml"}) {
+    try {
+      Import(file, confined);
+      ADD_FAILURE() << file << " imported although it names a file outside its folder";
+    } catch (const ImportError& error) {
+      EXPECT_NE(std::string(error.what()).find("not found inside the scene's folder"), std::string::npos)
+          << error.what();
+    }
+  }
+  // Files inside it are found as ever.
+  EXPECT_GT(Import("mitsuba_include.xml", confined).scene.shapes_size(), 0);
+}
+
 TEST(MitsubaImport, MalformedFilesFailWithFileAndLine) {
   const std::pair<const char*, const char*> cases[] = {
       {"malformed/truncated.xml", "truncated.xml:3: malformed XML"},

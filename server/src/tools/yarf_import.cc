@@ -1,7 +1,7 @@
 // yarf-import — converts a Mitsuba 3 (.xml) or pbrt-v4 (.pbrt) scene into
 // yarf's own Scene (protobuf JSON or text format).
 //
-//   yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]... [--strict]
+//   yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]... [--strict] [--confine]
 //
 // The scene goes to stdout as JSON, or to OUT in the format its extension
 // names. On stderr: one "warning: file:line: ..." line per construct that
@@ -10,6 +10,8 @@
 // not the Scene). Mesh files stay files, named relative to IN's folder.
 // -D sets a Mitsuba scene parameter ($name), overriding its <default>.
 // --strict makes every warning an error: nothing is ignored or approximated.
+// --confine finds only files inside IN's folder (symbolic links followed),
+// for a scene from someone else.
 //
 // Exit status: 0 on success, 2 when IN cannot be imported (one line on
 // stderr: "yarf-import: error: file:line: message") or the command line
@@ -27,7 +29,7 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]... [--strict]\n";
+    "usage: yarf-import IN.(xml|pbrt) [-o OUT.json|OUT.textproto] [-D name=value]... [--strict] [--confine]\n";
 
 int UsageError(const std::string& message) {
   std::cerr << "yarf-import: error: " << message << "\n" << kUsage;
@@ -52,6 +54,10 @@ int main(int argc, char** argv) {
     }
     if (arg == "--strict") {
       strict = true;
+      continue;
+    }
+    if (arg == "--confine") {
+      options.confine_to_folder = true;
       continue;
     }
     if (arg == "-o" || arg == "-D") {
