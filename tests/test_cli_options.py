@@ -188,6 +188,16 @@ def test_crop_renders_only_the_window(
     np.testing.assert_array_equal(pixels, full[2:10, 4:20])
     assert client.list()[0].samples_total == 8
 
+    # A submitted crop job, fetched later, is written as `render` writes it.
+    job_id = client.list()[0].job_id
+    fetched = tmp_path / "fetched.exr"
+    assert client.wait(job_id).state == render_pb2.SUCCEEDED
+    code, _, err = yarf("fetch", job_id, "-o", str(fetched))
+    assert code == 0, err
+    spec, again = read_image(fetched)
+    assert (spec.width, spec.height, spec.x, spec.y) == (16, 8, 4, 2)
+    np.testing.assert_array_equal(again, pixels)
+
     result = client.render(small_scene(), spp=4, seed=5, crop=(0.25, 0.75, 0.0, 0.5))
     assert result.pixels.shape == (8, 8, 3)
 

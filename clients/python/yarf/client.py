@@ -386,8 +386,10 @@ class Client:
         An EXR holds 32-bit floats (``half``: 16-bit) and the job's AOVs as
         channels NAME.R, NAME.G, NAME.B; a PNG the radiance scaled by
         2^``exposure`` and mapped by ``tonemap`` ("linear" or "aces"),
-        sRGB-encoded. ``denoise``: the image denoised here with the job's
-        albedo and sh_normal AOVs (yarf.denoise). Returns the job's status
+        sRGB-encoded. The image of a job with a crop window holds the window
+        alone, as ``yarf render --crop`` writes it. ``denoise``: the image
+        denoised here with the job's albedo and sh_normal AOVs
+        (yarf.denoise). Returns the job's status
         when the image was taken; raises ValueError for another extension
         or a bad setting, RuntimeError when the job has no image yet, and
         DenoiseError when it cannot be denoised.
@@ -402,6 +404,7 @@ class Client:
         if denoise:
             denoising.denoiser()
         status, pixels, aovs, _ = self.image_layers(job_id)
+        window = self.crop_window(job_id)
         if denoise:
             missing = denoising.missing_aovs(aovs)
             if missing:
@@ -409,10 +412,21 @@ class Client:
                     f"job {job_id} has no {' and '.join(missing)} AOV to denoise with "
                     "(submit it with --aov albedo,sh_normal; a job that did not end has none)"
                 )
-            pixels = denoising.denoise(pixels, aovs)
+            pixels = denoising.denoise(pixels, aovs, window=window)
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_image(path, pixels, settings, aovs=aovs)
+        write_image(path, pixels, settings, window=window, aovs=aovs)
         return status
+
+    def crop_window(self, job_id: str) -> render_pb2.PixelWindow | None:
+        """The job's crop window (RenderOptions.crop); None for the whole film, and
+        from a server without GetJob."""
+        try:
+            options = self.details(job_id).options
+        except grpc.RpcError as error:
+            if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.UNIMPLEMENTED:
+                return None
+            raise
+        return options.crop if options.HasField("crop") else None
 
     def watch_within(self, job_id: str, time_limit: float | None) -> Iterator[render_pb2.JobStatus]:
         """The job's statuses as ``watch`` gives them; at ``time_limit`` seconds (None:
