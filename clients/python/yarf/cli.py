@@ -26,6 +26,7 @@ import numpy as np
 from tqdm import tqdm
 
 from yarf.assets import SceneAssets, scene_assets
+from yarf.class_reference import describe_class, find_class, markdown_reference
 from yarf.client import (
     DEFAULT_ADDRESS,
     FINAL_STATES,
@@ -396,8 +397,25 @@ def convert_command(args: argparse.Namespace) -> int:
 
 
 def classes_command(args: argparse.Namespace) -> int:
+    if args.class_name and not args.verbose:
+        raise CommandError("a CLASS is described with -v: yarf classes -v CLASS", exit_code=2)
     with connect(args.server) as client:
         reply = client.list_classes()
+    if args.markdown:
+        # The plugins' classes: a component process's come and go.
+        plugins = [info for info in reply.classes if not info.origin.startswith("remote ")]
+        print(markdown_reference(plugins), end="")
+        return 0
+    if args.verbose:
+        try:
+            shown = (
+                [find_class(reply.classes, args.class_name)] if args.class_name else reply.classes
+            )
+        except LookupError as error:
+            raise CommandError(str(error), exit_code=2) from None
+        for info in sorted(shown, key=lambda info: info.class_name):
+            print("\n".join(describe_class(info)))
+        return 0
     for info in sorted(reply.classes, key=lambda info: info.class_name):
         interfaces = ", ".join(info.interfaces)
         print(f"{info.class_name:<22} {info.version:<9} {interfaces}  [{info.origin}]")
@@ -488,6 +506,17 @@ def build_parser() -> argparse.ArgumentParser:
     convert.set_defaults(handler=convert_command)
 
     classes = commands.add_parser("classes", help="list the server's classes and plugin errors")
+    classes.add_argument(
+        "class_name", nargs="?", metavar="CLASS", help="with -v: describe this class alone"
+    )
+    classes.add_argument(
+        "-v", "--verbose", action="store_true", help="each class's parameters: type, default, range"
+    )
+    classes.add_argument(
+        "--markdown",
+        action="store_true",
+        help="the plugin reference of the plugins' classes in Markdown (docs/plugins.md)",
+    )
     add_server_option(classes)
     classes.set_defaults(handler=classes_command)
 

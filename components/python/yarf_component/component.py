@@ -7,6 +7,7 @@ import re
 from typing import ClassVar
 
 from yarf.v1 import component_pb2
+from yarf_component.properties import Signature, parameter_infos
 
 CLASS_NAME = re.compile(r"[a-z][a-z0-9]*(_[a-z0-9]+)*")
 VERSION = re.compile(r"\d+\.\d+\.\d+")
@@ -46,12 +47,16 @@ class Component(abc.ABC):
 
     @classmethod
     def info(cls) -> component_pb2.ComponentInfo:
+        """Describe's answer, the parameters those ``__init__`` declares (properties.py)."""
+        parameters = parameter_infos(Signature.of(cls.class_name, cls.__init__))
         return component_pb2.ComponentInfo(
             class_name=cls.class_name,
             version=cls.version,
             interfaces=cls.interfaces(),
             summary=cls.summary,
             origin=cls.origin(),
+            declares_parameters=parameters is not None,
+            parameters=parameters or [],
         )
 
 

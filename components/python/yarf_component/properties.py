@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import enum
 import inspect
+import math
 import types
 import typing
 from collections.abc import Callable, Mapping
@@ -237,3 +238,72 @@ class Signature:
         if missing:
             raise PropertyError(f"component '{self.class_name}': missing property '{missing[0]}'")
         return arguments
+
+
+def _parameter_type(annotation: object) -> tuple[str, list[str], str] | None:
+    """The ParameterInfo type, choices and doc of an annotation; None when no one type
+    of the IDL says what it accepts (a union of several kinds, no annotation)."""
+    origin = get_origin(annotation)
+    if origin is Annotated:
+        base, *metadata = get_args(annotation)
+        doc = " ".join(m for m in metadata if isinstance(m, str))
+        marker = _marker(tuple(metadata))
+        if marker is not None:
+            return {"rgb": "rgb", "vec3": "vector", "transform": "transform"}[marker.value], [], doc
+        found = _parameter_type(base)
+        return (found[0], found[1], doc or found[2]) if found else None
+    if origin in (Union, types.UnionType):
+        arms = [a for a in get_args(annotation) if a is not type(None)]
+        return _parameter_type(arms[0]) if len(arms) == 1 else None
+    if origin is Literal:
+        values = get_args(annotation)
+        return ("string", list(values), "") if all(isinstance(v, str) for v in values) else None
+    names = {float: "float", int: "int", bool: "bool", str: "string", np.ndarray: "float array"}
+    return (names[annotation], [], "") if annotation in names else None  # type: ignore[index]
+
+
+def _default_text(value: object) -> str | None:
+    """A default as ParameterInfo.default_value writes it; None when it has none to give."""
+    if value is inspect.Parameter.empty or value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and not math.isfinite(value):
+        return ""  # the IDL's defaults are finite: an infinite one goes unsaid
+    if isinstance(value, int | float):
+        return repr(float(value)) if isinstance(value, float) else str(value)
+    if isinstance(value, str):
+        return value
+    if (
+        isinstance(value, tuple)
+        and len(value) == 3
+        and all(isinstance(v, int | float) for v in value)
+    ):
+        return ", ".join(repr(float(v)) for v in value)
+    return None
+
+
+def parameter_infos(signature: Signature) -> list[component_pb2.ParameterInfo] | None:
+    """The parameters a class declares through its ``__init__``, for Describe; None when
+    the signature cannot be said in the IDL's types (``**kwargs``, an annotation of
+    several kinds): the class then takes what its ``__init__`` accepts, unchecked."""
+    if signature.extra is not None:
+        return None
+    infos = []
+    for name, parameter in signature.parameters.items():
+        found = _parameter_type(signature.annotations.get(name, inspect.Parameter.empty))
+        default = _default_text(parameter.default)
+        if found is None or default is None:
+            return None
+        type_name, choices, doc = found
+        infos.append(
+            component_pb2.ParameterInfo(
+                name=name,
+                type=type_name,
+                default_value=default if type_name != "float array" else "",
+                required=parameter.default is inspect.Parameter.empty,
+                choices=choices,
+                doc=doc,
+            )
+        )
+    return infos

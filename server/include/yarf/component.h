@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "yarf/interface_version.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 
 namespace yarf {
@@ -20,6 +21,10 @@ struct ComponentInfo {
   std::vector<std::string> interfaces;
   std::string summary;
   std::string origin;
+  // The class's parameters, when it declares them (declares_parameters):
+  // then a property not among them is refused.
+  bool declares_parameters = false;
+  std::vector<Parameter> parameters;
 };
 
 class Component {

@@ -16,10 +16,16 @@ namespace yarf {
 // Registers class T, constructible from Properties, under `name`.
 template <typename T>
 void Register(Registrar& registrar, std::string name, std::string version, std::string summary) {
-  ComponentInfo info{std::move(name), std::move(version),
-                     InterfacesOf<T, Function, Integrator, Sampler, Generator, RootFinder, Warp,
-                                  SurfaceModel, Emitter, Transport, Texture, Medium>(),
-                     std::move(summary), ""};
+  ComponentInfo info;
+  info.class_name = std::move(name);
+  info.version = std::move(version);
+  info.interfaces = InterfacesOf<T, Function, Integrator, Sampler, Generator, RootFinder, Warp, SurfaceModel,
+                                 Emitter, Transport, Texture, Medium>();
+  info.summary = std::move(summary);
+  if constexpr (DeclaresParameters<T>) {
+    info.declares_parameters = true;
+    info.parameters = T::Parameters();
+  }
   registrar.Add(std::move(info), [](const Properties& p) -> std::unique_ptr<Component> {
     return std::make_unique<T>(p);
   });

@@ -38,6 +38,12 @@ class Properties {
                              std::filesystem::path, std::vector<float>>;
 
   void Set(const std::string& key, Value value) { values_[key] = std::move(value); }
+  // Sets a key the scene left out to the class's declared default: a key
+  // the class may leave unread (it reads it only in some modes).
+  void SetDefault(const std::string& key, Value value) {
+    values_[key] = std::move(value);
+    read_.insert(key);
+  }
   bool Has(const std::string& key) const { return values_.count(key) != 0; }
 
   double Float(const std::string& key, double fallback) const {

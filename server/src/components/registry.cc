@@ -4,6 +4,8 @@
 
 #include <algorithm>
 
+#include "components/parameter_checks.h"
+
 namespace yarf {
 namespace {
 
@@ -78,6 +80,7 @@ std::vector<ComponentInfo> Registry::LoadPlugin(const std::filesystem::path& fil
   CollectingRegistrar collected;
   try {
     fn(collected);
+    for (const auto& item : collected.items) CheckSchema(item.info);
   } catch (const std::exception& e) {
     dlclose(lib);
     throw Error("plugin '" + path + "' failed to register: " + e.what());
@@ -107,13 +110,24 @@ std::unique_ptr<Component> Registry::Create(const std::string& class_name,
     if (it == classes_.end()) throw Error("unknown component class '" + class_name + "'");
     entry = it->second;
   }
+  // The declared defaults of the keys left out reach the class.
+  Properties given = props;
+  for (const Parameter& parameter : entry.info.parameters)
+    if (parameter.default_value && !given.Has(parameter.name)) given.SetDefault(parameter.name, *parameter.default_value);
   std::unique_ptr<Component> instance;
   try {
-    instance = entry.factory(props);
+    instance = entry.factory(given);
   } catch (const std::exception& e) {
     throw Error("component '" + class_name + "': " + e.what());
   }
-  std::vector<std::string> unread = props.Unread();
+  std::vector<std::string> unread = given.Unread();
+  if (entry.info.declares_parameters && !unread.empty()) {
+    std::vector<std::string> names;
+    for (const Parameter& parameter : entry.info.parameters) names.push_back(parameter.name);
+    const std::string nearest = DidYouMean(unread.front(), names);
+    throw Error("component '" + class_name + "' has no parameter '" + unread.front() + "'" +
+                (nearest.empty() ? "" : "; did you mean '" + nearest + "'?"));
+  }
   if (!unread.empty()) {
     std::string keys;
     for (const auto& k : unread) keys += (keys.empty() ? "'" : ", '") + k + "'";
@@ -133,6 +147,13 @@ std::vector<ComponentInfo> Registry::Classes() const {
 std::vector<PluginFailure> Registry::Failures() const {
   std::lock_guard lock(mutex_);
   return failures_;
+}
+
+std::optional<ComponentInfo> Registry::Info(const std::string& class_name) const {
+  std::lock_guard lock(mutex_);
+  const auto it = classes_.find(class_name);
+  if (it == classes_.end()) return std::nullopt;
+  return it->second.info;
 }
 
 bool Registry::Has(const std::string& class_name) const {

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -51,6 +52,8 @@ class Registry final {
   std::vector<ComponentInfo> Classes() const;
   std::vector<PluginFailure> Failures() const;
   bool Has(const std::string& class_name) const;
+  // What Describe says of a class; none for an unknown one.
+  std::optional<ComponentInfo> Info(const std::string& class_name) const;
 
  private:
   struct Entry {

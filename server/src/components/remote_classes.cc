@@ -1,5 +1,7 @@
 #include "components/remote_classes.h"
 
+#include "components/parameter_checks.h"
+#include "components/properties_proto.h"
 #include "components/remote_instance.h"
 #include "yarf/v1/component.grpc.pb.h"
 
@@ -17,12 +19,16 @@ std::vector<ComponentInfo> RemoteClasses::Register(const std::string& address, s
   std::vector<ComponentInfo> classes;
   for (const v1::ComponentInfo& c : reply.classes()) {
     if (c.class_name().empty()) throw Error("the component at " + address + " lists a class without a name");
-    ComponentInfo info{c.class_name(), c.version(), {}, c.summary(), "remote " + address};
-    for (const std::string& id : c.interfaces()) {
+    for (const std::string& id : c.interfaces())
       if (!SpeaksOurIdl(id))
         throw Error("class '" + c.class_name() + "' at " + address + " serves " + id +
                     ", an interface of another IDL version (this server speaks yarf.v1.*)");
-      info.interfaces.push_back(id);
+    ComponentInfo info;
+    try {
+      info = FromProto(c, "remote " + address);
+      CheckSchema(info);
+    } catch (const Error& e) {
+      throw Error("the component at " + address + " declares parameters yarf cannot check: " + e.what());
     }
     classes.push_back(std::move(info));
   }

@@ -1,30 +1,15 @@
 #include "service/class_checks.h"
 
 #include <algorithm>
+#include <string>
 
+#include "components/parameter_checks.h"
 #include "yarf/error.h"
 
 namespace yarf {
 namespace {
 
 namespace pb = google::protobuf;
-
-// Insertions, deletions, substitutions and swaps of neighbours ("bpdt"
-// for "bdpt" is one), each counting one.
-size_t EditDistance(std::string_view a, std::string_view b) {
-  const size_t columns = b.size() + 1;
-  std::vector<size_t> d((a.size() + 1) * columns);
-  const auto at = [&](size_t i, size_t j) -> size_t& { return d[i * columns + j]; };
-  for (size_t i = 0; i <= a.size(); ++i) at(i, 0) = i;
-  for (size_t j = 0; j <= b.size(); ++j) at(0, j) = j;
-  for (size_t i = 1; i <= a.size(); ++i)
-    for (size_t j = 1; j <= b.size(); ++j) {
-      at(i, j) = std::min({at(i - 1, j) + 1, at(i, j - 1) + 1, at(i - 1, j - 1) + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
-        at(i, j) = std::min(at(i, j), at(i - 2, j - 2) + 1);
-    }
-  return at(a.size(), b.size());
-}
 
 // Where a message is in the request, with its name when it has one.
 std::string Place(const std::string& path, const pb::Message& message) {
@@ -39,15 +24,24 @@ bool NamesAClass(const pb::Descriptor& type) {
          type.full_name() == v1::Material::descriptor()->full_name();
 }
 
-void Check(const pb::Message& message, const std::string& path, const std::vector<std::string>& known) {
+void Check(const pb::Message& message, const std::string& path, const std::vector<ComponentInfo>& known) {
   const pb::Reflection& reflection = *message.GetReflection();
   if (NamesAClass(*message.GetDescriptor())) {
     const std::string class_name = reflection.GetString(message, message.GetDescriptor()->FindFieldByName("class_name"));
     const std::string address = reflection.GetString(message, message.GetDescriptor()->FindFieldByName("address"));
     // An empty class is the slot's default; a class at an address is that process's to know.
     if (class_name.empty() || !address.empty()) return;
-    if (std::find(known.begin(), known.end(), class_name) != known.end()) return;
-    const std::string nearest = DidYouMean(class_name, known);
+    const auto info = std::find_if(known.begin(), known.end(),
+                                   [&](const ComponentInfo& k) { return k.class_name == class_name; });
+    if (info != known.end()) {
+      const auto* properties = message.GetDescriptor()->FindFieldByName("properties");
+      CheckProperties(*info, static_cast<const v1::Properties&>(reflection.GetMessage(message, properties)),
+                      path + ".properties");
+      return;
+    }
+    std::vector<std::string> names;
+    for (const ComponentInfo& k : known) names.push_back(k.class_name);
+    const std::string nearest = DidYouMean(class_name, names);
     throw Error(path + ".class_name: unknown component class '" + class_name + "'" +
                 (nearest.empty() ? "" : "; did you mean '" + nearest + "'?") +
                 " (`yarf classes` lists the classes this server can make)");
@@ -71,22 +65,7 @@ void Check(const pb::Message& message, const std::string& path, const std::vecto
 
 }  // namespace
 
-std::string DidYouMean(std::string_view name, const std::vector<std::string>& candidates) {
-  // Near enough: a few letters wrong, fewer for short names.
-  const size_t most = std::max<size_t>(1, std::min<size_t>(3, name.size() / 3));
-  std::string nearest;
-  size_t best = most + 1;
-  for (const std::string& candidate : candidates) {
-    const size_t distance = EditDistance(name, candidate);
-    if (distance < best) {
-      best = distance;
-      nearest = candidate;
-    }
-  }
-  return nearest;
-}
-
-void CheckClassesKnown(const v1::SubmitRequest& request, const std::vector<std::string>& known) {
+void CheckComponents(const v1::SubmitRequest& request, const std::vector<ComponentInfo>& known) {
   Check(request.scene(), "scene", known);
   Check(request.options(), "options", known);
 }

@@ -2,6 +2,7 @@
 
 #include <random>
 
+#include "components/parameter_checks.h"
 #include "components/properties_proto.h"
 
 namespace yarf {
@@ -149,6 +150,8 @@ grpc::Status FactoryServiceImpl::Create(grpc::ServerContext* context, const v1::
       return {grpc::StatusCode::FAILED_PRECONDITION, "class '" + request->class_name() + "' lives in the component at " +
                                                          *address + ": create its instances there"};
   try {
+    if (const auto info = registry_.Info(request->class_name()))
+      CheckProperties(*info, request->properties(), "properties");
     auto instance = registry_.Create(request->class_name(), FromProto(request->properties()));
     *reply->mutable_info() = ToProto(instance->Describe());
     reply->set_handle(instances_.Add(std::move(instance), CallerOf(*context).user));

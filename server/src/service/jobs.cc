@@ -173,11 +173,10 @@ void JobManager::Restore() {
   }
 }
 
-std::vector<std::string> JobManager::KnownClasses() const {
-  std::vector<std::string> names;
-  for (const ComponentInfo& info : resources_.registry.Classes()) names.push_back(info.class_name);
-  for (const ComponentInfo& info : resources_.remote_classes.Classes()) names.push_back(info.class_name);
-  return names;
+std::vector<ComponentInfo> JobManager::KnownClasses() const {
+  std::vector<ComponentInfo> classes = resources_.registry.Classes();
+  for (ComponentInfo& info : resources_.remote_classes.Classes()) classes.push_back(std::move(info));
+  return classes;
 }
 
 std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
@@ -193,7 +192,7 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
   std::optional<UserAssets> assets;
   if (resources_.assets) assets.emplace(*resources_.assets, owner);
   auto accepted = std::make_shared<const v1::SubmitRequest>(AcceptSubmit(request, assets ? &*assets : nullptr));
-  CheckClassesKnown(*accepted, KnownClasses());
+  CheckComponents(*accepted, KnownClasses());
   if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root);
       bytes > options_.max_job_bytes)
     throw LimitReached("the job would need about " + std::to_string(bytes >> 20) + " MiB (its film, meshes and " +

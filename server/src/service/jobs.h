@@ -76,7 +76,7 @@ class JobManager {
  private:
   // The classes a job may name without an address: the plugins' and those
   // of component processes registered now.
-  std::vector<std::string> KnownClasses() const;
+  std::vector<ComponentInfo> KnownClasses() const;
   void Restore();
   // Ends the row of a job cancelled before a crash.
   void EndCancelled(JobRecord& row) const;
