@@ -9,13 +9,11 @@ import (
 )
 
 // LambertianClass is go_lambertian, the ideal diffuse reflector.
-//
-// Parameters
-//
-//	reflectance   rgb (or float)   default 0.5
-//	    Fraction of the incident light reflected, per channel in [0, 1].
 var LambertianClass = component.NewClass("go_lambertian", "1.0.0",
-	"Ideal diffuse (Lambertian) reflection, two-sided", NewLambertian)
+	"Ideal diffuse (Lambertian) reflection, two-sided", NewLambertian).WithParameters(
+	component.Parameter{Name: "reflectance", Type: "rgb", Default: "0.5", Min: component.Bound(0), Max: component.Bound(1),
+		Doc: "fraction of the incident light reflected, per channel"},
+)
 
 const (
 	lambertianLobe         = component.ScatterReflect | component.ScatterDiffuse

@@ -317,6 +317,11 @@ func TestLobesAndDefaults(t *testing.T) {
 	if !slices.Equal(info.GetInterfaces(), []string{"yarf.v1.SurfaceModel"}) || !strings.HasPrefix(info.GetOrigin(), "go ") {
 		t.Errorf("info %v", info)
 	}
+	// The declared default is the one the class takes (the weight below).
+	if params := info.GetParameters(); !info.GetDeclaresParameters() || len(params) != 1 ||
+		params[0].GetName() != "reflectance" || params[0].GetType() != "rgb" || params[0].GetDefaultValue() != "0.5" {
+		t.Errorf("declared parameters %v", params)
+	}
 	lobes, err := surface.Lobes(ctx, &yarfv1.LobesRequest{Handle: created.GetHandle()})
 	if err != nil || lobes.GetFlags() != lobe {
 		t.Errorf("lobes %v, %v", lobes, err)

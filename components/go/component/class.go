@@ -12,6 +12,8 @@ type Class struct {
 	name, version, summary string
 	interfaces             []string
 	create                 func(*Properties) (any, error)
+	declaresParameters     bool
+	parameters             []Parameter
 }
 
 // NewClass describes a class: its name (unique on a host,
@@ -52,7 +54,7 @@ func (c Class) check() error {
 	case c.create == nil:
 		return fmt.Errorf("class %s has no constructor", c.name)
 	}
-	return nil
+	return c.checkParameters()
 }
 
 // info is what Describe answers for the class and its instances.
@@ -63,5 +65,8 @@ func (c Class) info(origin string) *yarfv1.ComponentInfo {
 		Interfaces: c.Interfaces(),
 		Summary:    c.summary,
 		Origin:     origin,
+
+		DeclaresParameters: c.declaresParameters,
+		Parameters:         c.parameterInfos(),
 	}
 }

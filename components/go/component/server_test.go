@@ -288,6 +288,14 @@ func TestListenRejectsBadClasses(t *testing.T) {
 		{"version", []component.Class{component.NewClass("echo", "1.0", "", notAnInterface)}, "not MAJOR.MINOR.PATCH"},
 		{"no interface", []component.Class{component.NewClass("echo", "1.0.0", "", notAnInterface)},
 			"implements no interface"},
+		{"parameter type", []component.Class{echo.WithParameters(component.Parameter{Name: "gain", Type: "number"})},
+			`parameter "gain": unknown type "number"`},
+		{"parameter twice", []component.Class{echo.WithParameters(
+			component.Parameter{Name: "gain", Type: "float"}, component.Parameter{Name: "gain", Type: "float"})},
+			`declares parameter "gain" twice`},
+		{"parameter bounds", []component.Class{echo.WithParameters(
+			component.Parameter{Name: "gain", Type: "float", Min: component.Bound(1), Max: component.Bound(0)})},
+			"least value is above its most"},
 	}
 	for _, test := range tests {
 		t.Run(test.name, func(t *testing.T) {
