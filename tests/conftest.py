@@ -53,6 +53,23 @@ def small_scene(size: int = 16) -> scene_pb2.Scene:
     return scene
 
 
+def grouped_scene() -> scene_pb2.Scene:
+    """A small scene with a group placed twice and a texture: every count of a job's
+    scene summary differs."""
+    scene = small_scene(24)
+    scene.film.height = 12
+    group = scene.groups.add(name="pair")
+    group.shapes.add(name="in_group", material="grey").sphere.radius = 0.1
+    scene.instances.add(group="pair")
+    scene.instances.add(group="pair")
+    texture = scene.textures.add(name="checks")
+    texture.texture.class_name = "checkerboard"
+    scene.camera.model = scene_pb2.Camera.THIN_LENS
+    scene.camera.lens_radius = 0.01
+    scene.camera.focus_distance = 4.0
+    return scene
+
+
 @pytest.fixture(scope="session")
 def asset_root(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The server's --asset-root, holding one mesh file."""

@@ -17,10 +17,13 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Self, TypeVar
+
+import pytest
 
 from yarf import Client
 
@@ -329,3 +332,17 @@ class Farm:
         for path in self.folder.glob("*.log"):
             self.logs[path.name] = path.read_text(errors="replace")
         shutil.rmtree(self.folder, ignore_errors=True)
+
+
+@contextmanager
+def two_node_farm(session: pytest.Session, coordinator_args: Sequence[str]) -> Iterator[Farm]:
+    """A coordinator and two nodes for a module's tests; their logs are printed at the
+    end when a test of ``session`` (pytest's) failed meanwhile."""
+    failed_before = session.testsfailed
+    with Farm(coordinator_args=coordinator_args) as running:
+        running.start_coordinator()
+        running.start_node()
+        running.start_node()
+        yield running
+        if session.testsfailed > failed_before:
+            print(running.log_tail())

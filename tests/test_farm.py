@@ -21,7 +21,7 @@ import grpc
 import numpy as np
 import pytest
 from conftest import CORNELL_BOX, small_scene
-from farm_processes import Farm, Node, find_nats_server, free_port
+from farm_processes import Farm, Node, find_nats_server, free_port, two_node_farm
 from imagestats import block_z_test
 
 from yarf import Client, LocalServer, RenderResult, load_scene
@@ -63,14 +63,8 @@ def reference() -> Iterator[Client]:
 @pytest.fixture(scope="module")
 def farm(request: pytest.FixtureRequest) -> Iterator[Farm]:
     """A coordinator and two nodes shared by the tests that leave them running."""
-    failed_before = request.session.testsfailed
-    with Farm(coordinator_args=COORDINATOR_ARGS) as running:
-        running.start_coordinator()
-        running.start_node()
-        running.start_node()
+    with two_node_farm(request.session, COORDINATOR_ARGS) as running:
         yield running
-        if request.session.testsfailed > failed_before:
-            print(running.log_tail())
 
 
 @pytest.fixture

@@ -15,14 +15,14 @@ from collections.abc import Iterator
 
 import grpc
 import pytest
-from conftest import CORNELL_BOX, small_scene
-from farm_processes import Farm, find_nats_server
+from conftest import CORNELL_BOX, grouped_scene, small_scene
+from farm_processes import Farm, find_nats_server, two_node_farm
 from test_access import ALICE, BOB, ROOT, Secrets
 
 from yarf import LocalServer, load_scene
 from yarf.farm.job_log import format_line
 from yarf.farm.scene_summary import summarize_scene
-from yarf.v1 import render_pb2, scene_pb2
+from yarf.v1 import render_pb2
 
 try:
     find_nats_server()
@@ -53,30 +53,8 @@ def events_of(log: list[str]) -> list[str]:
 @pytest.fixture(scope="module")
 def farm(request: pytest.FixtureRequest) -> Iterator[Farm]:
     """A coordinator and two nodes of one render thread each."""
-    failed_before = request.session.testsfailed
-    with Farm(coordinator_args=COORDINATOR_ARGS) as running:
-        running.start_coordinator()
-        running.start_node()
-        running.start_node()
+    with two_node_farm(request.session, COORDINATOR_ARGS) as running:
         yield running
-        if request.session.testsfailed > failed_before:
-            print(running.log_tail())
-
-
-def grouped_scene() -> scene_pb2.Scene:
-    """A small scene with a group placed twice and a texture: every count differs."""
-    scene = small_scene(24)
-    scene.film.height = 12
-    group = scene.groups.add(name="pair")
-    group.shapes.add(name="in_group", material="grey").sphere.radius = 0.1
-    scene.instances.add(group="pair")
-    scene.instances.add(group="pair")
-    texture = scene.textures.add(name="checks")
-    texture.texture.class_name = "checkerboard"
-    scene.camera.model = scene_pb2.Camera.THIN_LENS
-    scene.camera.lens_radius = 0.01
-    scene.camera.focus_distance = 4.0
-    return scene
 
 
 def test_the_scene_summary_counts_what_the_scene_holds() -> None:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import grpc
 import pytest
-from conftest import small_scene
+from conftest import grouped_scene, small_scene
 
 from yarf import Client, LocalServer
 from yarf.v1 import render_pb2, scene_pb2
@@ -18,12 +18,7 @@ def event_names(log: list[str]) -> list[str]:
 
 
 def test_a_finished_job_tells_its_options_scene_and_log(client: Client) -> None:
-    scene = small_scene(24)
-    scene.film.height = 12
-    group = scene.groups.add(name="pair")
-    group.shapes.add(name="in_group", material="grey").sphere.radius = 0.1
-    scene.instances.add(group="pair")
-    scene.instances.add(group="pair")
+    scene = grouped_scene()
     job_id = client.submit(scene, 4, 7, name="details", aovs=["albedo", "depth"], threads=1)
     assert client.wait(job_id, timeout=120).state == render_pb2.SUCCEEDED
 
@@ -35,8 +30,8 @@ def test_a_finished_job_tells_its_options_scene_and_log(client: Client) -> None:
     summary = details.scene
     assert (summary.width, summary.height) == (24, 12)
     # Two world shapes and the group's one, counted once however often placed.
-    assert (summary.shapes, summary.instances, summary.materials) == (3, 2, 1)
-    assert summary.lights == 1 and summary.camera == "pinhole"
+    assert (summary.shapes, summary.instances, summary.materials, summary.textures) == (3, 2, 1, 1)
+    assert summary.lights == 1 and summary.camera == "thin_lens"
     assert event_names(list(details.log)) == ["submitted", "started", "finished"]
     assert all(f"job={job_id}" in line for line in details.log), details.log
     assert "spp=4 spp_total=4" in details.log[-1], details.log[-1]
