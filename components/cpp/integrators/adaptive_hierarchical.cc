@@ -39,9 +39,7 @@
 // points in iteration t are the sampler's sequence for the seed
 // Hash(seed, t, c's bounds), so a result depends only on (seed, budget).
 //
-// Properties: int "iterations" (default 8, in [2, 1000]), int "discard"
-// (default 1, less than iterations), int "cell_points" (default 16, in
-// [4, 4096]), float "floor" (default 0.2, in [0, 1]).
+// Parameters: AdaptiveHierarchicalIntegrator::Parameters() below.
 
 #include <algorithm>
 #include <cmath>
@@ -139,6 +137,16 @@ uint64_t CellId(const Cell& cell) {
 
 class AdaptiveHierarchicalIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Int("iterations").Default(8).Range(2, 1000).Doc("iterations T, each refining the tree"),
+        P::Int("discard").Default(1).Min(0).Doc("leading iterations left out of the average, fewer than T"),
+        P::Int("cell_points").Default(16).Range(4, 4096).Doc("a leaf is cut while it holds twice this many"),
+        P::Float("floor").Default(0.2).Range(0, 1).Doc("defensive share of the points given by volume"),
+    };
+  }
+
   explicit AdaptiveHierarchicalIntegrator(const Properties& props)
       : iterations_(props.Int("iterations", 8)),
         discard_(props.Int("discard", 1)),

@@ -21,8 +21,7 @@
 // and its error bar honest; it counts in `evaluations`, the full budget.
 // Each output of f gets its own fit (one shared normal matrix).
 //
-// Properties: int "degree" (default 4, in [0, 8]), float "pilot_fraction"
-// (default 0.2, in (0, 1)).
+// Parameters: ControlVariateIntegrator::Parameters() below.
 
 #include <algorithm>
 #include <cmath>
@@ -198,6 +197,14 @@ class LegendreFit final : public Function {
 
 class ControlVariateIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Int("degree").Default(4).Range(0, kMaxDegree).Doc("most total degree D of the Legendre fit"),
+        P::Float("pilot_fraction").Default(0.2).Range(0, 1).Doc("share of the budget that fits g, in (0, 1)"),
+    };
+  }
+
   explicit ControlVariateIntegrator(const Properties& props)
       : degree_(props.Int("degree", 4)), pilot_fraction_(props.Float("pilot_fraction", 0.2)) {
     if (degree_ < 0 || degree_ > kMaxDegree)

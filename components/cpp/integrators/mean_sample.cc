@@ -10,10 +10,10 @@
 // 32×32 tiles, one sample pass over all tiles at a time, tiles in
 // parallel; progress is reported and cancellation checked per tile.
 //
-// Properties: int "tile_size" (default 32); int "samples_per_pass"
-// (default 1): samples per pixel each tile's batch carries. More makes
-// larger batches and fewer calls, which matters when the transport or its
-// surface models live in other processes; progress is reported per pass.
+// Parameters: MeanSampleIntegrator::Parameters() below. More samples per
+// pass make larger batches and fewer calls, which matters when the
+// transport or its surface models live in other processes; progress is
+// reported per pass.
 
 #include <cmath>
 #include <vector>
@@ -27,6 +27,14 @@ namespace {
 
 class MeanSampleIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Int("tile_size").Default(32).Range(1, 1024).Doc("side in pixels of the tiles rendered in parallel"),
+        P::Int("samples_per_pass").Default(1).Range(1, 1024).Doc("samples per pixel each tile's batch carries"),
+    };
+  }
+
   explicit MeanSampleIntegrator(const Properties& props)
       : tile_size_(uint32_t(props.Int("tile_size", 32))),
         samples_per_pass_(uint32_t(props.Int("samples_per_pass", 1))) {

@@ -37,9 +37,7 @@
 // every interior node and the points of every leaf of a level go to f
 // together, in calls of up to 8192 points, rather than one call per node.
 //
-// Properties: float "explore_fraction" (default 0.1, in (0, 1)), int
-// "min_points" (default 60, at least 2), float "dither" (default 0.05,
-// in [0, 0.5)).
+// Parameters: MiserIntegrator::Parameters() below.
 
 #include <algorithm>
 #include <cmath>
@@ -71,6 +69,15 @@ struct Node {
 
 class MiserIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Float("explore_fraction").Default(0.1).Range(0, 1).Doc("share of a node's points spent exploring, (0, 1)"),
+        P::Int("min_points").Default(60).Min(2).Doc("a node with fewer points is a leaf"),
+        P::Float("dither").Default(0.05).Range(0, 0.5).Doc("cuts at 0.5 ± dither of an axis, in [0, 0.5)"),
+    };
+  }
+
   explicit MiserIntegrator(const Properties& props)
       : explore_fraction_(props.Float("explore_fraction", 0.1)),
         min_points_(props.Int("min_points", 60)),

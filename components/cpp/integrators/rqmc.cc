@@ -17,7 +17,7 @@
 // works; with "independent" this is plain Monte Carlo in batches, and the
 // padded "sobol" (random pairings of 2-D nets) is a net only pair by pair.
 //
-// Properties: int "replicates" (default 16, at least 2).
+// Parameters: RqmcIntegrator::Parameters() below.
 
 #include <algorithm>
 #include <cmath>
@@ -38,6 +38,13 @@ constexpr uint64_t kBatch = 8192;
 
 class RqmcIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Int("replicates").Default(16).Range(2, 1 << 20).Doc("independent randomizations R"),
+    };
+  }
+
   explicit RqmcIntegrator(const Properties& props) : replicates_(props.Int("replicates", 16)) {
     if (replicates_ < 2 || replicates_ > (int64_t(1) << 20))
       throw Error("property 'replicates' must be in [2, 2^20]");

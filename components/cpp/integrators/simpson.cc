@@ -21,8 +21,7 @@
 // (n+1)^d ≤ evaluations, unless "intervals" sets it; `evaluations` in the
 // result is (n+1)^d, the points actually used.
 //
-// Properties: int "intervals" (default 0: chosen from the budget; else even
-// and ≥ 2).
+// Parameters: SimpsonIntegrator::Parameters() below.
 
 #include <algorithm>
 #include <cmath>
@@ -75,6 +74,13 @@ std::vector<double> CoarseWeights(uint64_t n) {
 
 class SimpsonIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Int("intervals").Default(0).Range(0, 1 << 24).Doc("intervals per axis, even; 0: the most the budget allows"),
+    };
+  }
+
   // The weights are a vector of intervals + 1: bounded before they are made.
   explicit SimpsonIntegrator(const Properties& props) : intervals_(props.Int("intervals", 0, 0, 1 << 24)) {
     if (intervals_ != 0 && (intervals_ < 2 || intervals_ % 2 != 0))

@@ -12,8 +12,8 @@
 // Carlo's. Point i of the sampler's sequence (for the job's seed) is the
 // (i mod p)-th point of cell ⌊i / p⌋, placed by its first d coordinates.
 //
-// Properties: int "points_per_cell" (default 2, at least 2: a cell's
-// variance needs two points).
+// Parameters: StratifiedIntegrator::Parameters() below; a cell's variance
+// needs two points.
 
 #include <algorithm>
 #include <cmath>
@@ -32,6 +32,13 @@ constexpr uint64_t kBatch = 8192;
 
 class StratifiedIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Int("points_per_cell").Default(2).Range(2, double(int64_t(1) << 32)).Doc("fewest points per cell"),
+    };
+  }
+
   explicit StratifiedIntegrator(const Properties& props)
       : points_per_cell_(props.Int("points_per_cell", 2)) {
     if (points_per_cell_ < 2 || points_per_cell_ > (int64_t(1) << 32))
