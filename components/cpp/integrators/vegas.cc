@@ -70,16 +70,11 @@
 // Iteration t uses the sampler's points after those of the earlier
 // iterations, so a result is a pure function of the seed.
 //
-// Properties (Lepage's names where he has one; yarf.integrate also takes
-// his nitn and neval):
-//   int   "bins"       grid bins per axis, >= 2 (default: a tenth of the
-//                      points per iteration, at most 1000, see above)
-//   int   "iterations" iterations, his nitn, >= 1 (default 10)
-//   float "alpha"      damping exponent of the refinement, >= 0; 0 freezes
-//                      the grid (default 0.5, as Lepage)
-//   int   "discard"    leading iterations left out of the result, in
-//                      [0, iterations - 1] (default 2, or iterations - 1
-//                      when that is smaller)
+// Parameters: VegasIntegrator::Parameters() below, Lepage's names where
+// he has one (yarf.integrate also takes his nitn and neval). Without
+// "bins", a tenth of the points per iteration, at most 1000 (see above;
+// 50 when rendering); without "discard", 2, or iterations - 1 when that
+// is smaller. alpha's default 0.5 is Lepage's.
 
 #include <cstdint>
 #include <span>
@@ -94,6 +89,8 @@ namespace {
 
 class VegasIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() { return VegasSettings::Parameters(); }
+
   explicit VegasIntegrator(const Properties& props) : settings_(props) { settings_.CheckDiscard(); }
 
   IntegrationResult Integrate(Function& f, std::span<const double> lower,

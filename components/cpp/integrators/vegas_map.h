@@ -13,6 +13,7 @@
 
 #include "integration_box.h"
 #include "yarf/math.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 
 namespace yarf {
@@ -310,15 +311,31 @@ struct VegasSettings {
   static constexpr double kDefaultAlpha = 0.5;
   // Bins of the image mode's map when "bins" is not given.
   static constexpr uint32_t kImageBins = 50;
+  // Bounds of "bins" and "iterations": beyond them a job is a mistake.
+  static constexpr int64_t kMaxBins = 1 << 20, kMaxIterations = 100000;
+
+  // The parameters read here, which vegas and vegas_plus declare. "bins"
+  // and "discard" have no declared default: theirs depend on the job.
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Int("bins").Range(2, kMaxBins).Doc(
+            "map bins per axis; default: points per iteration / 10 (≤ 1000), 50 in renders"),
+        P::Int("iterations").Default(10).Range(1, kMaxIterations).Doc("iterations, Lepage's nitn"),
+        P::Float("alpha").Default(kDefaultAlpha).Min(0).Doc("damping exponent of the map refinement; 0 freezes it"),
+        P::Int("discard").Min(0).Doc("leading iterations left out, < iterations; default min(2, iterations − 1)"),
+    };
+  }
 
   explicit VegasSettings(const Properties& props)
       : bins(props.Int("bins", 0)), iterations(props.Int("iterations", 10)),
         alpha(props.Float("alpha", kDefaultAlpha)),
         // The default shrinks with `iterations` so that one iteration alone is valid.
         discard(props.Int("discard", std::clamp<int64_t>(iterations - 1, 0, 2))) {
-    if (props.Has("bins") && (bins < 2 || bins > (1 << 20)))
-      throw Error("property 'bins' must be in [2, 1048576]");
-    if (iterations < 1 || iterations > 100000) throw Error("property 'iterations' must be in [1, 100000]");
+    if (props.Has("bins") && (bins < 2 || bins > kMaxBins))
+      throw Error("property 'bins' must be in [2, " + std::to_string(kMaxBins) + "]");
+    if (iterations < 1 || iterations > kMaxIterations)
+      throw Error("property 'iterations' must be in [1, " + std::to_string(kMaxIterations) + "]");
     if (!(alpha >= 0) || !std::isfinite(alpha)) throw Error("property 'alpha' must be a finite number >= 0");
   }
 

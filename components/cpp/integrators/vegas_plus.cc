@@ -34,18 +34,9 @@
 // average the points unweighted, which leans the map towards the
 // hypercubes that had many points.
 //
-// Properties (Lepage's names where he has one; yarf.integrate also takes
-// his nitn and neval):
-//   int   "bins"       map bins per axis, >= 2 (default: a tenth of the
-//                      points per iteration, at most 1000, as in vegas)
-//   int   "iterations" iterations, his nitn, >= 1 (default 10)
-//   float "alpha"      damping exponent of the map refinement, >= 0; 0
-//                      freezes the map (default 0.5, as Lepage)
-//   float "beta"       exponent of the sample allocation, in [0, 1]
-//                      (default 0.75, as Lepage)
-//   int   "discard"    leading iterations left out of the result, in
-//                      [0, iterations - 1] (default 2, or iterations - 1
-//                      when that is smaller)
+// Parameters: VegasPlusIntegrator::Parameters() below: those of vegas
+// (defaults explained in vegas.cc) and beta, whose default 0.75 is
+// Lepage's.
 
 #include <cstdint>
 #include <span>
@@ -60,6 +51,13 @@ namespace {
 
 class VegasPlusIntegrator final : public Integrator {
  public:
+  static ParameterSchema Parameters() {
+    ParameterSchema schema = VegasSettings::Parameters();
+    schema.push_back(
+        Parameter::Float("beta").Default(0.75).Range(0, 1).Doc("exponent of the sample allocation; 0 is vegas"));
+    return schema;
+  }
+
   explicit VegasPlusIntegrator(const Properties& props) : settings_(props), beta_(props.Float("beta", 0.75)) {
     if (!(beta_ >= 0 && beta_ <= 1)) throw Error("property 'beta' must be in [0, 1]");
     settings_.CheckDiscard();
