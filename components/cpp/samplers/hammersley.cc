@@ -26,14 +26,12 @@
 // Deterministic and stateless: the same (index, dimension, seed) always
 // gives the same number in [0, 1).
 //
-// Parameters:
-//   sample_count  int  points per set, 1 ≤ N ≤ 2^24 (default 16); powers
-//                      of two make the first two dimensions a net
+// Parameters: Hammersley::Parameters() below; powers of two for
+// sample_count make the first two dimensions a net.
 #include <bit>
 #include <cstdint>
-#include <string>
 
-#include "yarf/error.h"
+#include "sample_count.h"
 #include "yarf/hash.h"
 #include "yarf/owen.h"
 #include "yarf/plugin.h"
@@ -45,12 +43,11 @@ namespace {
 constexpr uint64_t kJitterSalt = 0x484a4954ull;     // "HJIT"
 constexpr uint64_t kScrambleSalt = 0x48534352ull;   // "HSCR"
 
-// A float can resolve at most 2^24 strata of [0, 1).
-constexpr int64_t kMaxCount = int64_t(1) << 24;
-
 class Hammersley final : public yarf::Sampler {
  public:
-  explicit Hammersley(const yarf::Properties& props) : count_(Count(props)) {}
+  static yarf::ParameterSchema Parameters() { return {yarf::SampleCountParameter("points per set N")}; }
+
+  explicit Hammersley(const yarf::Properties& props) : count_(yarf::ReadSampleCount(props, "hammersley")) {}
 
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {
     const uint64_t block = index / count_;
@@ -71,14 +68,6 @@ class Hammersley final : public yarf::Sampler {
   }
 
  private:
-  static uint32_t Count(const yarf::Properties& props) {
-    const int64_t count = props.Int("sample_count", 16);
-    if (count < 1 || count > kMaxCount)
-      throw yarf::Error("hammersley: property 'sample_count' must lie in [1, " +
-                        std::to_string(kMaxCount) + "], got " + std::to_string(count));
-    return uint32_t(count);
-  }
-
   uint32_t count_;
 };
 

@@ -15,12 +15,10 @@
 // Deterministic and stateless: the same (index, dimension, seed) always
 // gives the same number in [0, 1).
 //
-// Parameters:
-//   sample_count  int  points per block, 1 ≤ N ≤ 2^24 (default 16)
+// Parameters: LatinHypercube::Parameters() below.
 #include <cstdint>
-#include <string>
 
-#include "yarf/error.h"
+#include "sample_count.h"
 #include "yarf/hash.h"
 #include "yarf/owen.h"
 #include "yarf/plugin.h"
@@ -32,12 +30,11 @@ namespace {
 constexpr uint64_t kPermutationSalt = 0x4c4853ull;  // "LHS"
 constexpr uint64_t kJitterSalt = 0x4c4a4954ull;     // "LJIT"
 
-// A float can resolve at most 2^24 strata of [0, 1).
-constexpr int64_t kMaxCount = int64_t(1) << 24;
-
 class LatinHypercube final : public yarf::Sampler {
  public:
-  explicit LatinHypercube(const yarf::Properties& props) : count_(Count(props)) {}
+  static yarf::ParameterSchema Parameters() { return {yarf::SampleCountParameter("points per block N")}; }
+
+  explicit LatinHypercube(const yarf::Properties& props) : count_(yarf::ReadSampleCount(props, "latin_hypercube")) {}
 
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {
     const uint64_t block = index / count_;
@@ -48,14 +45,6 @@ class LatinHypercube final : public yarf::Sampler {
   }
 
  private:
-  static uint32_t Count(const yarf::Properties& props) {
-    const int64_t count = props.Int("sample_count", 16);
-    if (count < 1 || count > kMaxCount)
-      throw yarf::Error("latin_hypercube: property 'sample_count' must lie in [1, " +
-                        std::to_string(kMaxCount) + "], got " + std::to_string(count));
-    return uint32_t(count);
-  }
-
   uint32_t count_;
 };
 

@@ -17,12 +17,10 @@
 // Deterministic and stateless: the same (index, dimension, seed) always
 // gives the same number in [0, 1).
 //
-// Parameters:
-//   sample_count  int  points per block, 1 ≤ N ≤ 2^24 (default 16)
+// Parameters: Stratified::Parameters() below.
 #include <cstdint>
-#include <string>
 
-#include "yarf/error.h"
+#include "sample_count.h"
 #include "yarf/hash.h"
 #include "yarf/owen.h"
 #include "yarf/plugin.h"
@@ -34,12 +32,11 @@ namespace {
 constexpr uint64_t kPermutationSalt = 0x43454c4cull;  // "CELL"
 constexpr uint64_t kJitterSalt = 0x4a4954ull;         // "JIT"
 
-// A float can resolve at most 2^24 strata of [0, 1).
-constexpr int64_t kMaxCount = int64_t(1) << 24;
-
 class Stratified final : public yarf::Sampler {
  public:
-  explicit Stratified(const yarf::Properties& props) : count_(Count(props)) {
+  static yarf::ParameterSchema Parameters() { return {yarf::SampleCountParameter("points per block N")}; }
+
+  explicit Stratified(const yarf::Properties& props) : count_(yarf::ReadSampleCount(props, "stratified")) {
     // The largest divisor of N not above √N gives the squarest grid.
     columns_ = 1;
     for (uint32_t n = 1; uint64_t(n) * n <= count_; ++n)
@@ -58,14 +55,6 @@ class Stratified final : public yarf::Sampler {
   }
 
  private:
-  static uint32_t Count(const yarf::Properties& props) {
-    const int64_t count = props.Int("sample_count", 16);
-    if (count < 1 || count > kMaxCount)
-      throw yarf::Error("stratified: property 'sample_count' must lie in [1, " +
-                        std::to_string(kMaxCount) + "], got " + std::to_string(count));
-    return uint32_t(count);
-  }
-
   uint32_t count_;
   uint32_t columns_;  // strata along dimension 2k
   uint32_t rows_;     // strata along dimension 2k+1
