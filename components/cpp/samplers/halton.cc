@@ -23,7 +23,7 @@
 // Deterministic and stateless: the same (index, dimension, seed) always
 // gives the same number in [0, 1).
 //
-// Parameters: none.
+// Parameters: none (Halton::Parameters() below).
 #include <cstdint>
 
 #include "yarf/hash.h"
@@ -37,6 +37,8 @@ constexpr uint64_t kScrambleSalt = 0x48414c54ull;  // "HALT"
 
 class Halton final : public yarf::Sampler {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Halton(const yarf::Properties&) {}
 
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {

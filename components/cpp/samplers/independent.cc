@@ -6,7 +6,7 @@
 // same (index, dimension, seed) always gives the same number. Error of a
 // Monte Carlo estimate falls as 1/√N.
 //
-// Parameters: none.
+// Parameters: none (Independent::Parameters() below).
 #include <cstdint>
 
 #include "yarf/hash.h"
@@ -16,6 +16,8 @@ namespace {
 
 class Independent final : public yarf::Sampler {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Independent(const yarf::Properties&) {}
 
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {

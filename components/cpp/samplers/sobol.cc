@@ -12,7 +12,7 @@
 // Deterministic and stateless: the same (index, dimension, seed) always
 // gives the same number in [0, 1).
 //
-// Parameters: none.
+// Parameters: none (Sobol::Parameters() below).
 //
 // zsobol — pbrt-v4's ZSobol (Ahmed & Wonka 2020)
 //
@@ -28,7 +28,7 @@
 // coordinate as in sobol. Films up to 2^16 pixels a side; a film and
 // sample count of more than 2^32 points in all are refused.
 //
-// Parameters: none.
+// Parameters: none (ZSobol::Parameters() below).
 #include <array>
 #include <bit>
 #include <cstdint>
@@ -111,6 +111,8 @@ inline float Coordinate(uint32_t reversed_shuffled, uint32_t dimension, uint64_t
 
 class Sobol final : public yarf::Sampler {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Sobol(const yarf::Properties&) {}
 
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override {
@@ -178,6 +180,8 @@ constexpr uint64_t kOddBit = 1, kDigitsShift = 1, kDigitsMask = 0x1f, kSeedShift
 
 class ZSobol final : public yarf::Sampler {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit ZSobol(const yarf::Properties&) {}
 
   FilmPoint AtPixel(uint32_t x, uint32_t y, uint32_t width, uint32_t height, uint64_t sample,

@@ -29,9 +29,7 @@
 // Deterministic and stateless: the same (index, dimension, seed) always
 // gives the same number in [0, 1).
 //
-// Parameters:
-//   bool "scramble"  Owen-scramble the points (default true); false gives
-//                    the plain Sobol sequence, the same for every seed.
+// Parameters: SobolNd::Parameters() below.
 #include <array>
 #include <bit>
 #include <cstdint>
@@ -96,6 +94,12 @@ inline uint32_t SobolBits(const Directions& directions, uint32_t index, uint32_t
 
 class SobolNd final : public yarf::Sampler {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return {
+        yarf::Parameter::Bool("scramble").Default(true).Doc("Owen-scramble; false: the plain sequence, for every seed"),
+    };
+  }
+
   explicit SobolNd(const yarf::Properties& props)
       : scramble_(props.Bool("scramble", true)), directions_(AllDirections()) {}
 
