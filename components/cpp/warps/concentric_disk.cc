@@ -8,7 +8,7 @@
 // area; 0 outside the disk. Inverse: exact; points outside the disk map
 // to the edge of the square.
 //
-// Parameters: none.
+// Parameters: none (ConcentricDisk::Parameters() below).
 #include <array>
 #include <cstdint>
 
@@ -21,6 +21,7 @@ namespace {
 struct ConcentricDisk {
   static constexpr uint32_t kImageDimensions = 2;
 
+  static yarf::ParameterSchema Parameters() { return {}; }
   explicit ConcentricDisk(const yarf::Properties&) {}
 
   void Sample(float u0, float u1, float* point) const {

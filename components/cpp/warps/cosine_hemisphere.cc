@@ -8,7 +8,7 @@
 // 0 for z ≤ 0 and for points that are not unit vectors. Inverse: exact
 // (the disk's inverse of (x, y)).
 //
-// Parameters: none.
+// Parameters: none (CosineHemisphere::Parameters() below).
 #include <array>
 
 #include "square_warp.h"
@@ -20,6 +20,7 @@ namespace {
 using yarf::Vec3;
 
 struct CosineHemisphere {
+  static yarf::ParameterSchema Parameters() { return {}; }
   explicit CosineHemisphere(const yarf::Properties&) {}
   Vec3 Sample(float u0, float u1) const { return yarf::SampleCosineHemisphere(u0, u1); }
   float Density(Vec3 w) const { return yarf::CosineHemispherePdf(w.z); }

@@ -13,14 +13,8 @@
 // m; 0 where wi·m ≤ 0, for z ≤ 0 and for points that are not unit vectors.
 // Inverse: none.
 //
-// Parameters
-//   alpha_x   float   default 0.1
-//       Roughness along x (GGX α, the slope's scale), at least 1e-4.
-//   alpha_y   float   default alpha_x
-//       Roughness along y, at least 1e-4.
-//   wi        vec3    default (0, 0, 1)
-//       The view direction (normalised here); must point above the
-//       surface, z > 0.
+// Parameters: GgxVisibleNormals::Parameters() below. wi is normalised
+// here and must point above the surface (z > 0).
 #include <cmath>
 #include <string>
 
@@ -55,6 +49,15 @@ Vec3 RequireDirectionAbove(Vec3 wi) {
 class GgxVisibleNormals {
  public:
   static const char* Name() { return "ggx_visible_normals"; }
+
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::Float("alpha_x").Default(0.1).Min(kMinAlpha).Doc("roughness along x (GGX α, the slope's scale)"),
+        P::Float("alpha_y").Min(kMinAlpha).Doc("roughness along y; alpha_x when not given"),
+        P::Vector("wi").Default(Vec3(0.0f, 0.0f, 1.0f)).Doc("the view direction, above the surface (z > 0)"),
+    };
+  }
 
   explicit GgxVisibleNormals(const yarf::Properties& props)
       : alpha_x_(RequireAlpha("alpha_x", props.Float("alpha_x", 0.1))),

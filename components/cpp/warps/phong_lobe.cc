@@ -8,9 +8,7 @@
 // per steradian; 0 for z ≤ 0 and for points that are not unit vectors.
 // Inverse: exact, u0 = cos^(n+1) θ, u1 = φ / 2π.
 //
-// Parameters
-//   exponent   float   default 30
-//       The lobe's exponent n ≥ 0.
+// Parameters: PhongLobe::Parameters() below.
 #include <array>
 #include <cmath>
 
@@ -30,6 +28,10 @@ float RequireExponent(double exponent) {
 
 class PhongLobe {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return {yarf::Parameter::Float("exponent").Default(30).Min(0).Doc("the lobe's exponent n")};
+  }
+
   explicit PhongLobe(const yarf::Properties& props)
       : exponent_(RequireExponent(props.Float("exponent", 30.0))) {}
 

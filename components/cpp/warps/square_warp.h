@@ -1,7 +1,8 @@
 // The Warp boilerplate of this folder's warps from [0,1)². SquareWarp<Map>
 // loops over a batch of points and leaves each point to Map, which has
 //   static constexpr uint32_t kImageDimensions
-//   explicit Map(const yarf::Properties&)      reads and checks the parameters
+//   static yarf::ParameterSchema Parameters()  the parameters it reads
+//   explicit Map(const yarf::Properties&)      reads and checks them
 //   void Sample(float u0, float u1, float* point) const
 //   float Density(const float* point) const    0 off the image
 //   std::array<float, 2> Invert(const float* point) const
@@ -9,7 +10,8 @@
 // Name(), which the error of Inverse quotes.
 // DirectionWarp<Map> is the same for maps onto unit vectors, whose Map
 // deals in yarf::Vec3 instead of float* (and gets Density only for unit
-// vectors: off the unit sphere the density is 0).
+// vectors: off the unit sphere the density is 0). The warp declares its
+// map's parameters as its own.
 #pragma once
 
 #include <array>
@@ -19,6 +21,7 @@
 #include <string>
 
 #include "yarf/math.h"
+#include "yarf/parameters.h"
 #include "yarf/vecmath.h"
 #include "yarf/warps.h"
 
@@ -27,6 +30,8 @@ namespace yarf {
 template <typename Map>
 class SquareWarp final : public Warp {
  public:
+  static ParameterSchema Parameters() { return Map::Parameters(); }
+
   explicit SquareWarp(const Properties& props) : map_(props) {}
 
   uint32_t DomainDimensions() const override { return 2; }
@@ -75,6 +80,8 @@ template <typename Directions>
 class OntoSphere {
  public:
   static constexpr uint32_t kImageDimensions = 3;
+
+  static ParameterSchema Parameters() { return Directions::Parameters(); }
 
   explicit OntoSphere(const Properties& props) : directions_(props) {}
 

@@ -9,10 +9,8 @@
 // per steradian; 0 outside the cone and for points that are not unit
 // vectors. Inverse: exact, u0 = (1 - cos θ) / (1 - cos θmax), u1 = φ / 2π.
 //
-// Parameters
-//   cos_theta_max   float   default 0.9
-//       Cosine of the cone's half-angle, in (-1, 1) (a negative value
-//       makes a cone wider than the hemisphere).
+// Parameters: UniformCone::Parameters() below; a negative cos_theta_max
+// makes a cone wider than the hemisphere.
 #include <array>
 
 #include "square_warp.h"
@@ -33,6 +31,11 @@ float RequireCosThetaMax(double value) {
 
 class UniformCone {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {P::Float("cos_theta_max").Default(0.9).Range(-1, 1).Doc("cosine of the cone's half-angle, in (-1, 1)")};
+  }
+
   explicit UniformCone(const yarf::Properties& props)
       : cos_theta_max_(RequireCosThetaMax(props.Float("cos_theta_max", 0.9))) {}
 

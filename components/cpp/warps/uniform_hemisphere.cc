@@ -7,7 +7,7 @@
 // 0 for z < 0 and for points that are not unit vectors. Inverse: exact,
 // u0 = cos θ, u1 = φ / 2π.
 //
-// Parameters: none.
+// Parameters: none (UniformHemisphere::Parameters() below).
 #include <array>
 
 #include "square_warp.h"
@@ -19,6 +19,7 @@ namespace {
 using yarf::Vec3;
 
 struct UniformHemisphere {
+  static yarf::ParameterSchema Parameters() { return {}; }
   explicit UniformHemisphere(const yarf::Properties&) {}
   Vec3 Sample(float u0, float u1) const { return yarf::SampleUniformHemisphere(u0, u1); }
   float Density(Vec3 w) const { return yarf::UniformHemispherePdf(w.z); }

@@ -7,7 +7,7 @@
 // 0 for points that are not unit vectors. Inverse: exact,
 // u0 = (1 - cos θ) / 2, u1 = φ / 2π.
 //
-// Parameters: none.
+// Parameters: none (UniformSphere::Parameters() below).
 #include <array>
 
 #include "square_warp.h"
@@ -19,6 +19,7 @@ namespace {
 using yarf::Vec3;
 
 struct UniformSphere {
+  static yarf::ParameterSchema Parameters() { return {}; }
   explicit UniformSphere(const yarf::Properties&) {}
   Vec3 Sample(float u0, float u1) const { return yarf::SampleUniformSphere(u0, u1); }
   float Density(Vec3) const { return yarf::UniformSpherePdf(); }

@@ -13,7 +13,7 @@
 // coordinates that do not sum to 1). Inverse: exact; only b0 and b1 are
 // read.
 //
-// Parameters: none.
+// Parameters: none (UniformTriangle::Parameters() below).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -31,6 +31,7 @@ constexpr float kBarycentricArea = 0.5f;
 struct UniformTriangle {
   static constexpr uint32_t kImageDimensions = 3;
 
+  static yarf::ParameterSchema Parameters() { return {}; }
   explicit UniformTriangle(const yarf::Properties&) {}
 
   void Sample(float u0, float u1, float* b) const {
