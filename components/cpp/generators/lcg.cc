@@ -19,7 +19,7 @@
 // Deterministic and stateless between calls: the same (seed, stream,
 // offset) always gives the same numbers.
 //
-// Parameters: none.
+// Parameters: none (Lcg::Parameters() below).
 #include <cstdint>
 #include <span>
 
@@ -51,6 +51,8 @@ constexpr uint64_t Advance(uint64_t state, uint64_t steps, uint64_t increment) {
 
 class Lcg final : public yarf::Generator {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Lcg(const yarf::Properties&) {}
 
   void Next(uint64_t seed, uint64_t stream, uint64_t offset, std::span<float> out) override {

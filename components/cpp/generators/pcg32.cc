@@ -27,7 +27,7 @@
 // Deterministic and stateless between calls: the same (seed, stream,
 // offset) always gives the same numbers.
 //
-// Parameters: none.
+// Parameters: none (Pcg32::Parameters() below).
 #include <bit>
 #include <cstdint>
 #include <span>
@@ -77,6 +77,8 @@ Pcg32State Seeded(uint64_t seed, uint64_t stream) {
 
 class Pcg32 final : public yarf::Generator {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Pcg32(const yarf::Properties&) {}
 
   void Next(uint64_t seed, uint64_t stream, uint64_t offset, std::span<float> out) override {

@@ -25,7 +25,7 @@
 // Deterministic and stateless between calls: the same (seed, stream,
 // offset) always gives the same numbers.
 //
-// Parameters: none.
+// Parameters: none (Xoshiro256StarStar::Parameters() below).
 #include <array>
 #include <bit>
 #include <cstdint>
@@ -193,6 +193,8 @@ constexpr State Seeded(uint64_t seed, uint64_t stream) {
 
 class Xoshiro256StarStar final : public yarf::Generator {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Xoshiro256StarStar(const yarf::Properties&) {}
 
   void Next(uint64_t seed, uint64_t stream, uint64_t offset, std::span<float> out) override {

@@ -17,7 +17,7 @@
 // the bracket still too wide after max_iterations ("did not converge"),
 // tolerance ≤ 0, lower ≥ upper, f not of one variable, f not finite.
 //
-// Parameters: none.
+// Parameters: none (Bisection::Parameters() below).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -29,6 +29,8 @@ namespace {
 
 class Bisection final : public yarf::BracketingRootFinder {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Bisection(const yarf::Properties&) {}
 
  private:

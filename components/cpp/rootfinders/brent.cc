@@ -23,7 +23,7 @@
 // the bracket still too wide after max_iterations ("did not converge"),
 // tolerance ≤ 0, lower ≥ upper, f not of one variable, f not finite.
 //
-// Parameters: none.
+// Parameters: none (Brent::Parameters() below).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -39,6 +39,8 @@ namespace {
 
 class Brent final : public yarf::BracketingRootFinder {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Brent(const yarf::Properties&) {}
 
  private:

@@ -25,7 +25,7 @@
 // ≤ 0, lower ≥ upper, f not of one variable, f not finite. A derivative
 // that is not finite makes that step a bisection.
 //
-// Parameters: none.
+// Parameters: none (Newton::Parameters() below).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -39,6 +39,8 @@ namespace {
 
 class Newton final : public yarf::BracketingRootFinder {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Newton(const yarf::Properties&)
       : BracketingRootFinder(2, "newton needs a function of one variable with 2 outputs (f, f')") {}
 
