@@ -8,17 +8,9 @@
 // and only Sample finds it. One-sided, as in Mitsuba: light arriving from
 // below (wi.z ≤ 0) is not reflected.
 //
-// Parameters
-//   material               string           default "none"
-//       A named metal of metals.h ("Ag", "Al", "Au", "Cu"), or "none": the
-//       index given by eta and k.
-//   eta                    rgb (or float, or a texture)   default 0    real part η ≥ 0 of the index
-//   k                      rgb (or float, or a texture)   default 1    imaginary part κ ≥ 0
-//       The defaults η = 0, κ = 1 make F = 1 at every angle: a perfect
-//       mirror, as Mitsuba's material "none". Not with a named material.
-//   specular_reflectance   rgb, float or texture   default 1
-//       A factor on the Fresnel reflectance, per channel in [0, 1] (a
-//       texture's values are clamped to it).
+// Parameters: Conductor::Parameters() below. The defaults η = 0, κ = 1
+// make F = 1 at every angle: a perfect mirror, as Mitsuba's material
+// "none". A texture's specular_reflectance is clamped to [0, 1].
 //
 // Lobes: delta reflection. Sample returns wo = (-wi.x, -wi.y, wi.z),
 // weight = specular_reflectance · F(cos θi), pdf = 1 (the only lobe).
@@ -29,6 +21,7 @@
 #include "metals.h"
 #include "microfacet.h"
 #include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
 #include "yarf/warps.h"
@@ -41,6 +34,16 @@ constexpr uint32_t kMirrorLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 
 class Conductor final : public yarf::DeltaSurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return yarf::JoinParameters({
+        yarf::metals::ConductorIorParameters(),
+        {yarf::Parameter::RgbTexture("specular_reflectance")
+             .Default(1.0)
+             .Range(0, 1)
+             .Doc("a factor on the Fresnel reflectance, per channel")},
+    });
+  }
+
   explicit Conductor(const yarf::Properties& props)
       : ior_(yarf::metals::ReadConductorIor(props)),
         specular_(yarf::TexturedValue::Color(props, "specular_reflectance", Vec3(1.0f, 1.0f, 1.0f),

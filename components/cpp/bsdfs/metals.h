@@ -8,9 +8,11 @@
 #include <cmath>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "yarf/error.h"
 #include "yarf/named_metals.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
@@ -21,10 +23,17 @@ namespace yarf::metals {
 // angle (a perfect mirror).
 inline constexpr ComplexIor kPerfectMirror = {{0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f}};
 
-// The names 'material' accepts, for messages.
+// The names 'material' accepts: its parameter's choices.
+inline std::vector<std::string> Names() {
+  std::vector<std::string> names = {"none"};
+  for (const NamedMetal& metal : kMetals) names.emplace_back(metal.name);
+  return names;
+}
+
+// The same, for messages.
 inline std::string KnownNames() {
-  std::string out = "none";
-  for (const NamedMetal& metal : kMetals) out += std::string(", ") + metal.name;
+  std::string out;
+  for (const std::string& name : Names()) out += (out.empty() ? "" : ", ") + name;
   return out;
 }
 
@@ -71,6 +80,17 @@ inline TexturedIor ReadConductorIor(const Properties& props) {
       throw Error("properties 'eta' and 'k' are both 0 in a channel: no such conductor");
   }
   return {eta.Clamped(0, kLargest), k.Clamped(0, kLargest)};
+}
+
+// The parameters ReadConductorIor reads. material "none" behaves as when
+// it is left out; eta and k have no declared default: they exclude a
+// named metal.
+inline std::vector<Parameter> ConductorIorParameters() {
+  return {
+      Parameter::String("material").Default("none").Choices(Names()).Doc("a named metal, or none: eta and k"),
+      Parameter::RgbTexture("eta").Min(0).Doc("real part η of the complex index, with material none (default 0)"),
+      Parameter::RgbTexture("k").Min(0).Doc("imaginary part κ of the complex index, with material none (default 1)"),
+  };
 }
 
 }  // namespace yarf::metals

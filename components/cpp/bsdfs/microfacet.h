@@ -1,9 +1,9 @@
 // Pieces the microfacet and coated surface models share (bsdfs/rough*.cc,
-// conductor.cc, plastic.cc): their roughness property, Smith's joint
-// masking-shadowing, reflection and refraction about a microfacet normal,
-// the Fresnel factor of a conductor and the hemispherical averages the
-// coated models need. Indices of refraction are read in
-// surface_properties.h.
+// conductor.cc, plastic.cc): their roughness property and its parameters,
+// Smith's joint masking-shadowing, reflection and refraction about a
+// microfacet normal, the Fresnel factor of a conductor and the
+// hemispherical averages the coated models need. Indices of refraction
+// are read in surface_properties.h.
 // Two distributions of microfacet normals: GGX (its D, G1 and sampling of
 // visible normals are in yarf/warps.h) and Beckmann (Mitsuba's default),
 // each anisotropic, with Smith's masking and sampling of visible normals.
@@ -17,11 +17,14 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <sstream>
 #include <span>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "yarf/error.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
@@ -123,6 +126,32 @@ inline Roughness ReadRoughness(const Properties& props, double fallback, bool an
       throw Error("property '" + std::string(property) +
                   "' must be a number: this model's roughness cannot vary over the surface");
   return {roughness.alpha_x.Constant().x, roughness.alpha_y.Constant().x, roughness.distribution};
+}
+
+// The parameters ReadTexturedRoughness (`textured`) or ReadRoughness reads
+// with these arguments. An anisotropic model's alpha has no declared
+// default: it excludes alpha_u and alpha_v.
+inline std::vector<Parameter> RoughnessParameters(double fallback, bool anisotropic, bool textured) {
+  const auto number = [&](const char* name) {
+    return Parameter::Of(name, textured ? ParameterType::kFloatTexture : ParameterType::kFloat).Min(0);
+  };
+  std::ostringstream alpha_default;
+  alpha_default << fallback;
+  std::vector<Parameter> out;
+  if (anisotropic) {
+    out.push_back(number("alpha").Doc("roughness α > 0; " + alpha_default.str() +
+                                      " when neither it nor alpha_u, alpha_v is given"));
+    out.push_back(number("alpha_u").Doc("roughness along the shading frame's x, with alpha_v, instead of alpha"));
+    out.push_back(number("alpha_v").Doc("roughness along the shading frame's y, with alpha_u, instead of alpha"));
+  } else {
+    out.push_back(number("alpha").Default(fallback).Doc(textured ? "roughness α > 0"
+                                                                 : "roughness α > 0, one number over the surface"));
+  }
+  out.push_back(Parameter::String("distribution")
+                    .Default("ggx")
+                    .Choices({"ggx", "beckmann"})
+                    .Doc("the microfacet normals' distribution"));
+  return out;
 }
 
 // --- Geometry about a microfacet -------------------------------------------

@@ -14,15 +14,7 @@
 // the albedo drops below R·F as roughness grows). One-sided, as Mitsuba
 // 3's `roughconductor`: 0 unless wi and wo both lie above (z > 0).
 //
-// Parameters
-//   alpha                  float or texture        default 0.1      GGX roughness α > 0
-//   alpha_u, alpha_v       float or texture                         anisotropic roughness along
-//       the shading frame's x and y, instead of alpha (both or neither)
-//   distribution           string                  default "ggx"    the only one
-//   material               string                  default "none"   a named metal (metals.h)
-//   eta, k                 rgb, float or texture   default 0, 1     complex index η + iκ, with
-//       material "none" (the defaults make F = 1: a perfect mirror)
-//   specular_reflectance   rgb, float or texture   default 1        R, per channel in [0, 1]
+// Parameters: RoughConductor::Parameters() below.
 // A texture's values are clamped: α to ≥ 10⁻⁴ (microfacet.h), R to [0, 1].
 //
 // Lobes: glossy reflection. Sample draws a microfacet normal from the
@@ -37,6 +29,7 @@
 #include "metals.h"
 #include "microfacet.h"
 #include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
 #include "yarf/warps.h"
@@ -50,6 +43,14 @@ constexpr uint32_t kLobe = yarf::kScatterReflect | yarf::kScatterGlossy;
 
 class RoughConductor final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return yarf::JoinParameters({
+        mf::RoughnessParameters(0.1, /*anisotropic=*/true, /*textured=*/true),
+        yarf::metals::ConductorIorParameters(),
+        {yarf::Parameter::RgbTexture("specular_reflectance").Default(1.0).Range(0, 1).Doc("R, a factor per channel")},
+    });
+  }
+
   explicit RoughConductor(const yarf::Properties& props)
       : roughness_(mf::ReadTexturedRoughness(props, 0.1, /*anisotropic=*/true)),
         ior_(yarf::metals::ReadConductorIor(props)),

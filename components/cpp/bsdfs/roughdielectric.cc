@@ -22,16 +22,10 @@
 // scatter (wi.z < 0 means the ray arrives from inside); microfacets
 // facing away from wi or wo contribute nothing.
 //
-// Parameters
-//   int_ior            float    default 1.5046     interior index of refraction (BK7 glass)
-//   ext_ior            float    default 1.000277   exterior index of refraction (air)
-//       They must differ: matched indices make the interface a delta
-//       pass-through (use `dielectric`).
-//   alpha              float or texture   default 0.1   GGX roughness α > 0
-//   alpha_u, alpha_v   float or texture                 anisotropic roughness (x, y), instead
-//       of alpha
-//   distribution       string             default "ggx" the only one
-// A texture's α is clamped to ≥ 10⁻⁴ (microfacet.h).
+// Parameters: RoughDielectric::Parameters() below; the indices' defaults
+// are BK7 glass inside and air outside. They must differ: matched indices
+// make the interface a delta pass-through (use `dielectric`). A texture's
+// α is clamped to ≥ 10⁻⁴ (microfacet.h).
 //
 // Lobes: glossy reflection and glossy refraction. Sample draws a normal m
 // from the normals visible from wi (Heitz, JCGT 2018), then reflects with
@@ -70,6 +64,13 @@ float RequireDistinctIndices(float eta) {
 
 class RoughDielectric final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return yarf::JoinParameters({
+        yarf::RelativeIndexParameters(1.5046, 1.000277),
+        mf::RoughnessParameters(0.1, /*anisotropic=*/true, /*textured=*/true),
+    });
+  }
+
   explicit RoughDielectric(const yarf::Properties& props)
       : eta_(RequireDistinctIndices(yarf::ReadRelativeIndex(props, 1.5046, 1.000277))),
         roughness_(mf::ReadTexturedRoughness(props, 0.1, /*anisotropic=*/true)) {}

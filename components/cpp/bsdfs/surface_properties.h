@@ -3,18 +3,30 @@
 // throws an Error that names the property, so a scene's mistake points at
 // its key; a texture, which cannot be checked before it is looked up, is
 // brought into range at each point instead. (Roughness is read in
-// microfacet.h, a conductor's complex index in metals.h.)
+// microfacet.h, a conductor's complex index in metals.h.) Each reader's
+// parameters are declared beside it; JoinParameters makes a class's
+// schema of them.
 #pragma once
 
 #include <cmath>
+#include <initializer_list>
 #include <string>
+#include <vector>
 
 #include "yarf/error.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
 
 namespace yarf {
+
+// One schema of the parts several readers declare, in order.
+inline std::vector<Parameter> JoinParameters(std::initializer_list<std::vector<Parameter>> parts) {
+  std::vector<Parameter> out;
+  for (const std::vector<Parameter>& part : parts) out.insert(out.end(), part.begin(), part.end());
+  return out;
+}
 
 inline float RequireIndex(double ior, const std::string& property) {
   if (!(ior > 0.0 && std::isfinite(ior)))
@@ -27,6 +39,14 @@ inline float RequireIndex(double ior, const std::string& property) {
 inline float ReadRelativeIndex(const Properties& props, double int_ior, double ext_ior) {
   return RequireIndex(props.Float("int_ior", int_ior), "int_ior") /
          RequireIndex(props.Float("ext_ior", ext_ior), "ext_ior");
+}
+
+// The parameters ReadRelativeIndex reads, with the same defaults.
+inline std::vector<Parameter> RelativeIndexParameters(double int_ior, double ext_ior) {
+  return {
+      Parameter::Float("int_ior").Default(int_ior).Min(0).Doc("index of refraction inside (the -z side), > 0"),
+      Parameter::Float("ext_ior").Default(ext_ior).Min(0).Doc("index of refraction outside (the +z side), > 0"),
+  };
 }
 
 // Throws unless a + b ≤ 1 in every channel: two lobes' colours (named by
