@@ -7,9 +7,8 @@
 // Dirac delta lobes, so Evaluate and Pdf return 0 and only Sample finds
 // them. wi.z < 0 means the ray arrives from inside.
 //
-// Parameters
-//   int_ior   float   default 1.5046     interior index of refraction (BK7 glass)
-//   ext_ior   float   default 1.000277   exterior index of refraction (air)
+// Parameters: Dielectric::Parameters() below; the defaults are BK7 glass
+// inside and air outside.
 //
 // Lobes: delta reflection and delta refraction. Sample chooses between
 // them with probability F and 1 - F, so the weight is 1 for reflection
@@ -39,6 +38,8 @@ constexpr uint32_t kRefractLobe = yarf::kScatterRefract | yarf::kScatterDelta;
 
 class Dielectric final : public yarf::DeltaSurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() { return yarf::RelativeIndexParameters(1.5046, 1.000277); }
+
   explicit Dielectric(const yarf::Properties& props)
       : eta_(yarf::ReadRelativeIndex(props, 1.5046, 1.000277)) {}
 

@@ -10,9 +10,7 @@
 // Both sides alike; no radiance scaling (the same medium on both sides),
 // so f is symmetric and the two transport modes agree.
 //
-// Parameters
-//   reflectance     rgb, float or texture   default 0.25   per channel in [0, 1]
-//   transmittance   rgb, float or texture   default 0.25   per channel in [0, 1]
+// Parameters: DiffuseTransmission::Parameters() below.
 // reflectance + transmittance must not exceed 1 in any channel (energy
 // conservation). Texture values are clamped to [0, 1], and where a
 // textured pair sums to more than 1 both are scaled down to sum to 1.
@@ -45,6 +43,14 @@ constexpr uint32_t kTransmitLobe = yarf::kScatterRefract | yarf::kScatterDiffuse
 
 class DiffuseTransmission final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::RgbTexture("reflectance").Default(0.25).Range(0, 1).Doc("diffuse reflection, per channel"),
+        P::RgbTexture("transmittance").Default(0.25).Range(0, 1).Doc("diffuse transmission, per channel"),
+    };
+  }
+
   explicit DiffuseTransmission(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.25f, 0.25f, 0.25f),
                                                 /*unit=*/true)),

@@ -5,10 +5,8 @@
 // side of the surface, 0 otherwise. Both sides reflect alike (a two-sided
 // material, as pbrt's DiffuseBxDF); there is no transmission.
 //
-// Parameters
-//   reflectance   rgb, float or texture   default 0.5
-//       Fraction of the incident light reflected, per channel in [0, 1]
-//       (a texture's values are clamped to it).
+// Parameters: Lambertian::Parameters() below. A texture's values are
+// clamped to [0, 1].
 //
 // Lobes: reflection. Sample draws wo from the cosine-weighted hemisphere
 // on wi's side, so its weight is the reflectance itself.
@@ -30,6 +28,13 @@ constexpr uint32_t kLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 
 class Lambertian final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return {yarf::Parameter::RgbTexture("reflectance")
+                .Default(0.5)
+                .Range(0, 1)
+                .Doc("fraction of the incident light reflected, per channel")};
+  }
+
   explicit Lambertian(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.5f, 0.5f, 0.5f),
                                                 /*unit=*/true)) {}

@@ -4,10 +4,8 @@
 // scaled by the reflectance: a Dirac delta lobe, so Evaluate and Pdf
 // return 0 and only Sample finds it. Both sides reflect alike.
 //
-// Parameters
-//   reflectance   rgb, float or texture   default 1
-//       Fraction of the incident light reflected, per channel in [0, 1]
-//       (a texture's values are clamped to it).
+// Parameters: Mirror::Parameters() below. A texture's values are clamped
+// to [0, 1].
 //
 // Lobes: delta reflection. Sample returns wo = (-wi.x, -wi.y, wi.z),
 // weight = reflectance, pdf = 1 (the probability of the only lobe).
@@ -29,6 +27,13 @@ constexpr uint32_t kMirrorLobe = yarf::kScatterReflect | yarf::kScatterDelta;
 
 class Mirror final : public yarf::DeltaSurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return {yarf::Parameter::RgbTexture("reflectance")
+                .Default(1.0)
+                .Range(0, 1)
+                .Doc("fraction of the incident light reflected, per channel")};
+  }
+
   explicit Mirror(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(1.0f, 1.0f, 1.0f),
                                                 /*unit=*/true)) {}

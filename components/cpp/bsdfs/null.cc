@@ -3,7 +3,7 @@
 // "interface" material): methods that know media step through it without
 // counting a bounce; the others see a delta transmission of weight 1.
 //
-// No parameters.
+// Parameters: Null::Parameters() below (none).
 //
 // Lobes: null (with refract and delta). Sample returns wo = -wi,
 // weight = 1, pdf = 1.
@@ -21,6 +21,8 @@ constexpr uint32_t kNullLobe = yarf::kScatterNull | yarf::kScatterRefract | yarf
 
 class Null final : public yarf::DeltaSurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() { return {}; }
+
   explicit Null(const yarf::Properties&) {}
 
   void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints&,

@@ -10,10 +10,7 @@
 // lobe reflect at most ks (exactly ks at normal incidence). Both sides
 // reflect alike (two-sided); wi and wo on opposite sides give 0.
 //
-// Parameters
-//   diffuse_reflectance    rgb, float or texture   default 0.5   kd, per channel in [0, 1]
-//   specular_reflectance   rgb, float or texture   default 0.2   ks, per channel in [0, 1]
-//   exponent               float or texture        default 30    n ≥ 0; larger is shinier
+// Parameters: Phong::Parameters() below.
 // kd + ks must not exceed 1 in any channel (energy conservation). Texture
 // values are clamped to these ranges, and where textured kd + ks exceeds
 // 1 in a channel both are scaled down to sum to 1.
@@ -58,6 +55,15 @@ yarf::TexturedValue ReadExponent(const yarf::Properties& props) {
 
 class Phong final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::RgbTexture("diffuse_reflectance").Default(0.5).Range(0, 1).Doc("kd, per channel"),
+        P::RgbTexture("specular_reflectance").Default(0.2).Range(0, 1).Doc("ks, per channel"),
+        P::FloatTexture("exponent").Default(30.0).Min(0).Doc("n; larger is shinier"),
+    };
+  }
+
   explicit Phong(const yarf::Properties& props)
       : diffuse_(yarf::TexturedValue::Color(props, "diffuse_reflectance",
                                             Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
@@ -70,7 +76,7 @@ class Phong final : public yarf::SurfaceModel {
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 const yarf::SurfacePoints& at, std::span<float> value) const override {
-    const Parameters parameters(*this, at);
+    const PointParameters parameters(*this, at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
       return parameters[k].Value(in, out, true, true);
     });
@@ -83,7 +89,7 @@ class Phong final : public yarf::SurfaceModel {
     const size_t count = wi.size() / 3;
     const bool can_diffuse = yarf::LobeAllowed(kDiffuseLobe, allowed);
     const bool can_glossy = yarf::LobeAllowed(kGlossyLobe, allowed);
-    const Parameters parameters(*this, at);
+    const PointParameters parameters(*this, at);
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     for (size_t k = 0; k < count; ++k) {
       const Local local = parameters[k];
@@ -119,7 +125,7 @@ class Phong final : public yarf::SurfaceModel {
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    const Parameters parameters(*this, at);
+    const PointParameters parameters(*this, at);
     yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       const Local local = parameters[k];
       return local.Density(in, out, local.specular_probability);
@@ -160,9 +166,9 @@ class Phong final : public yarf::SurfaceModel {
   };
 
   // The parameters at a call's points.
-  class Parameters {
+  class PointParameters {
    public:
-    Parameters(const Phong& model, const yarf::SurfacePoints& at)
+    PointParameters(const Phong& model, const yarf::SurfacePoints& at)
         : diffuse_(model.diffuse_.At(at)),
           specular_(model.specular_.At(at)),
           exponent_(model.exponent_.FloatsAt(at)) {

@@ -14,9 +14,8 @@
 // lobes, so Evaluate and Pdf return 0 and only Sample finds them. Both
 // sides alike; no radiance scaling (wi and wo lie in the same medium).
 //
-// Parameters
-//   int_ior   float   default 1.5046     index of refraction of the pane (BK7 glass)
-//   ext_ior   float   default 1.000277   index of refraction around it (air)
+// Parameters: ThinDielectric::Parameters() below: int_ior is the pane's
+// index (default BK7 glass), ext_ior the index around it (air).
 //
 // Lobes: delta reflection and delta transmission (kScatterRefract: wo on
 // the other side). Sample picks them with probability R and T, so the
@@ -41,6 +40,8 @@ constexpr uint32_t kTransmitLobe = yarf::kScatterRefract | yarf::kScatterDelta;
 
 class ThinDielectric final : public yarf::DeltaSurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() { return yarf::RelativeIndexParameters(1.5046, 1.000277); }
+
   explicit ThinDielectric(const yarf::Properties& props)
       : eta_(yarf::ReadRelativeIndex(props, 1.5046, 1.000277)) {}
 
