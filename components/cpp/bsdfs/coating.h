@@ -3,16 +3,34 @@
 // it: the base's value, corrected for the light the coating reflects back
 // inside, and Mitsuba's odds of sampling the coating's lobe or the base's.
 // How the coating itself reflects and transmits differs between the two
-// and stays in each file.
+// and stays in each file. Also the parameters both read alike.
 #pragma once
 
 #include <optional>
 #include <span>
+#include <vector>
 
+#include "yarf/parameters.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
 
 namespace yarf::coating {
+
+// The parameters both models read alike: the base's colour ρ
+// (diffuse_reflectance), the coating's R (specular_reflectance) and
+// nonlinear.
+inline std::vector<Parameter> CoatingParameters() {
+  return {
+      Parameter::RgbTexture("diffuse_reflectance").Default(0.5).Range(0, 1).Doc("ρ, the base's colour, per channel"),
+      Parameter::RgbTexture("specular_reflectance")
+          .Default(1.0)
+          .Range(0, 1)
+          .Doc("R, a factor on the coating's reflection (for realism, 1)"),
+      Parameter::Bool("nonlinear")
+          .Default(false)
+          .Doc("ρ' = ρ / (1 - ρ r̄), darker and more saturated, not ρ / (1 - r̄)"),
+  };
+}
 
 // The mean of the channels, by which Mitsuba weighs the lobes.
 inline float Mean(Vec3 v) { return (v.x + v.y + v.z) / 3.0f; }

@@ -17,14 +17,9 @@
 // (1 - F_dr,int)). nonlinear = true darkens and saturates it as a real
 // coating does. One-sided, as in Mitsuba: 0 unless wi and wo lie above.
 //
-// Parameters
-//   diffuse_reflectance    rgb, float or texture  default 0.5       ρ, per channel in [0, 1]
-//   specular_reflectance   rgb, float or texture  default 1         a factor on F, in [0, 1]
-//                                                                   (for realism, 1)
-//   int_ior                float                  default 1.49      interior index (polypropylene)
-//   ext_ior                float                  default 1.000277  exterior index (air)
-//   nonlinear              bool                   default false     see above
-// A texture's values are clamped to [0, 1].
+// Parameters: Plastic::Parameters() below; the indices' defaults are
+// polypropylene inside and air outside. A texture's values are clamped to
+// [0, 1].
 //
 // Lobes: delta reflection and diffuse reflection. Evaluate and Pdf see
 // the diffuse lobe only. Sample picks the specular lobe with probability
@@ -56,6 +51,13 @@ constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 
 class Plastic final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return yarf::JoinParameters({
+        yarf::coating::CoatingParameters(),
+        yarf::RelativeIndexParameters(1.49, 1.000277),
+    });
+  }
+
   explicit Plastic(const yarf::Properties& props)
       : diffuse_(yarf::TexturedValue::Color(props, "diffuse_reflectance",
                                             Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),

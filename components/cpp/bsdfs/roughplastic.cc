@@ -23,16 +23,10 @@
 // of the light at α = 0.02, 0.94 at 0.1, 0.83 at 0.2, 0.63 at 0.5.
 // One-sided, as in Mitsuba: 0 unless wi and wo lie above.
 //
-// Parameters
-//   diffuse_reflectance    rgb, float or texture  default 0.5       ρ, per channel in [0, 1]
-//   specular_reflectance   rgb, float or texture  default 1         R, in [0, 1] (for realism, 1)
-//   alpha                  float                  default 0.1       GGX roughness α > 0
-//       (isotropic; a number, as in Mitsuba: t and r̄ are tabulated for it)
-//   distribution           string                 default "ggx"     the only one
-//   int_ior                float                  default 1.49      interior index (polypropylene)
-//   ext_ior                float                  default 1.000277  exterior index (air)
-//   nonlinear              bool                   default false     see above and plastic.cc
-// A texture's values are clamped to [0, 1].
+// Parameters: RoughPlastic::Parameters() below; the indices' defaults are
+// polypropylene inside and air outside. alpha is isotropic and a number,
+// as in Mitsuba: t and r̄ are tabulated for it. A texture's values are
+// clamped to [0, 1].
 //
 // Lobes: glossy reflection and diffuse reflection. Sample picks the glossy
 // lobe with probability (1 - t) s / ((1 - t) s + t (1 - s)), s =
@@ -67,6 +61,14 @@ constexpr uint32_t kDiffuseLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;
 
 class RoughPlastic final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return yarf::JoinParameters({
+        yarf::coating::CoatingParameters(),
+        mf::RoughnessParameters(0.1, /*anisotropic=*/false, /*textured=*/false),
+        yarf::RelativeIndexParameters(1.49, 1.000277),
+    });
+  }
+
   explicit RoughPlastic(const yarf::Properties& props)
       : diffuse_(yarf::TexturedValue::Color(props, "diffuse_reflectance",
                                             Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
