@@ -40,24 +40,8 @@
 // (microfacet.h) where Mitsuba multiplies two G1s, as for the other rough
 // models; the luminance is Rec. 709's (vecmath.h).
 //
-// Parameters (each float or rgb may be a texture; its values are clamped
-// to the range given)
-//   base_color                          rgb    default 0.5   in [0, 1]
-//   roughness                           float  default 0.5   in [0, 1]
-//   anisotropic                         float  default 0     in [0, 1]
-//   metallic                            float  default 0     in [0, 1]
-//   spec_trans                          float  default 0     in [0, 1]
-//   eta                                 float                > 0, interior over exterior index
-//   specular                            float  default 0.5   in [0, 1], instead of eta
-//   spec_tint                           float  default 0     in [0, 1]
-//   sheen                               float  default 0     in [0, 1]
-//   sheen_tint                          float  default 0     in [0, 1] (Mitsuba's default)
-//   flatness                            float  default 0     in [0, 1]
-//   clearcoat                           float  default 0     in [0, 1]
-//   clearcoat_gloss                     float  default 0     in [0, 1]
-//   diffuse_reflectance_sampling_rate   float  default 1     ≥ 0, a number
-//   main_specular_sampling_rate         float  default 1     ≥ 0, a number
-//   clearcoat_sampling_rate             float  default 1     ≥ 0, a number
+// Parameters: Principled::Parameters() below. A texture's values are
+// clamped to the parameter's range.
 // With spec_trans, η = 1 becomes 1.001 and specular = 0 becomes 0.001, as
 // in Mitsuba: matched indices would refract without bending.
 //
@@ -103,9 +87,16 @@ enum Parameter {
   kClearcoat, kClearcoatGloss, kParameterCount
 };
 constexpr pr::ParameterInfo kParameters[kParameterCount] = {
-    {"roughness", 0.5f}, {"anisotropic", 0.0f}, {"metallic", 0.0f},  {"spec_trans", 0.0f},
-    {"spec_tint", 0.0f}, {"sheen", 0.0f},       {"sheen_tint", 0.0f}, {"flatness", 0.0f},
-    {"clearcoat", 0.0f}, {"clearcoat_gloss", 0.0f}};
+    {"roughness", 0.5f, "ρ: the specular lobes' GGX α is ρ²"},
+    {"anisotropic", 0.0f, "stretches the specular lobes along the shading frame's x"},
+    {"metallic", 0.0f, "m: the share of the metal"},
+    {"spec_trans", 0.0f, "s: the glass's share of what is not metal"},
+    {"spec_tint", 0.0f, "tints the dielectric reflection toward the hue of base_color"},
+    {"sheen", 0.0f, "the sheen at grazing angles"},
+    {"sheen_tint", 0.0f, "tints the sheen toward the hue of base_color"},
+    {"flatness", 0.0f, "blends the diffuse base toward the fake subsurface term"},
+    {"clearcoat", 0.0f, "the clear coat's weight"},
+    {"clearcoat_gloss", 0.0f, "the clear coat's gloss: α from 0.1 to 0.001"}};
 
 // η from 'eta' or 'specular' (they exclude each other); `refracts` moves
 // it off 1, where a refraction would not bend.
@@ -182,8 +173,21 @@ struct Pair {
 
 class Principled final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    yarf::ParameterSchema schema = {pr::BaseColorParameter()};
+    for (const pr::ParameterInfo& info : kParameters) schema.push_back(pr::WeightParameter(info));
+    schema.push_back(P::Float("eta").Min(0).Doc("η, the interior over the exterior index, instead of specular"));
+    schema.push_back(
+        P::Float("specular").Range(0, 1).Doc("η = 2 / (1 - √(0.08 specular)) - 1 instead; 0.5 without eta"));
+    for (const char* rate : {"diffuse_reflectance_sampling_rate", "main_specular_sampling_rate",
+                             "clearcoat_sampling_rate"})
+      schema.push_back(pr::SamplingRateParameter(rate));
+    return schema;
+  }
+
   explicit Principled(const yarf::Properties& props)
-      : base_(yarf::TexturedValue::Color(props, "base_color", Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
+      : base_(pr::ReadBaseColor(props)),
         values_(ReadParameters(props)),
         eta_(ReadEta(props, !values_[kSpecTrans].IsZero())),
         diffuse_rate_(pr::ReadSamplingRate(props, "diffuse_reflectance_sampling_rate")),

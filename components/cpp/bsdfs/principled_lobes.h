@@ -1,6 +1,7 @@
 // What the two Disney models (principled.cc, principledthin.cc) share, as
-// Mitsuba 3 writes them: their parameters in [0, high] (numbers or
-// textures), read at a call's points, and sampling rates; Schlick's Fresnel approximation, the hue
+// Mitsuba 3 writes them: their base colour and parameters in [0, high]
+// (numbers or textures), read at a call's points, and sampling rates, each
+// with its declared parameter; Schlick's Fresnel approximation, the hue
 // of the base colour, Disney's roughness remapping, and the diffuse base
 // with its retro-reflection, fake subsurface and sheen.
 #pragma once
@@ -16,6 +17,7 @@
 
 #include "microfacet.h"
 #include "yarf/error.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/surface_points.h"
 #include "yarf/texture.h"
@@ -25,12 +27,29 @@ namespace yarf::principled {
 
 // --- Parameters ------------------------------------------------------------
 
-// A weight parameter: its property, default, and range [0, high].
+// A weight parameter: its property, default, what it does, and range
+// [0, high].
 struct ParameterInfo {
   const char* name;
   float fallback;
+  const char* doc;
   float high = 1.0f;
 };
+
+// The parameter ReadWeight reads.
+inline Parameter WeightParameter(const ParameterInfo& info) {
+  return Parameter::FloatTexture(info.name).Default(double(info.fallback)).Range(0, info.high).Doc(info.doc);
+}
+
+// The base colour c both models read: a reflectance, clamped into [0, 1]
+// where it is a texture.
+inline TexturedValue ReadBaseColor(const Properties& props) {
+  return TexturedValue::Color(props, "base_color", Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true);
+}
+
+inline Parameter BaseColorParameter() {
+  return Parameter::RgbTexture("base_color").Default(0.5).Range(0, 1).Doc("c, the base colour, per channel");
+}
 
 // A weight as a number (checked against its range) or a texture (clamped
 // into it at each point).
@@ -73,6 +92,10 @@ inline float ReadSamplingRate(const Properties& props, const std::string& name) 
   const double rate = props.Float(name, 1.0);
   if (!(rate >= 0.0 && std::isfinite(rate))) throw Error("property '" + name + "' must be a finite number ≥ 0");
   return float(rate);
+}
+
+inline Parameter SamplingRateParameter(const std::string& name) {
+  return Parameter::Float(name).Default(1.0).Min(0).Doc("the odds Sample gives its lobe, relative to the others");
 }
 
 // --- Fresnel and colour ----------------------------------------------------

@@ -34,23 +34,8 @@
 // translucent lobes, and every density, are Mitsuba's. The luminance is
 // Rec. 709's (vecmath.h).
 //
-// Parameters (each float or rgb may be a texture; its values are clamped
-// to the range given)
-//   base_color                              rgb    default 0.5   in [0, 1]
-//   roughness                               float  default 0.5   in [0, 1]
-//   anisotropic                             float  default 0     in [0, 1]
-//   spec_trans                              float  default 0     in [0, 1]
-//   eta                                     float  default 1.5   > 0 (textures: [0.01, 100])
-//   spec_tint                               float  default 0     in [0, 1]
-//   sheen                                   float  default 0     in [0, 1]
-//   sheen_tint                              float  default 0     in [0, 1]
-//   flatness                                float  default 0     in [0, 1]
-//   diff_trans                              float  default 0     in [0, 2]: 2 transmits
-//                                                                all of the diffuse lobe
-//   specular_reflectance_sampling_rate      float  default 1     ≥ 0, a number
-//   specular_transmittance_sampling_rate    float  default 1     ≥ 0, a number
-//   diffuse_reflectance_sampling_rate       float  default 1     ≥ 0, a number
-//   diffuse_transmittance_sampling_rate     float  default 1     ≥ 0, a number
+// Parameters: PrincipledThin::Parameters() below. A texture's values are
+// clamped to the parameter's range (eta's to [0.01, 100]).
 //
 // Lobes: diffuse reflection (diffuse and sheen); when spec_trans is not 0,
 // glossy reflection and glossy transmission (kScatterRefract: wo on the
@@ -95,8 +80,14 @@ enum Parameter {
 };
 // The weights among them (all but eta).
 constexpr pr::ParameterInfo kWeights[kEta] = {
-    {"roughness", 0.5f}, {"anisotropic", 0.0f}, {"spec_trans", 0.0f}, {"spec_tint", 0.0f},
-    {"sheen", 0.0f},     {"sheen_tint", 0.0f},  {"flatness", 0.0f},   {"diff_trans", 0.0f, 2.0f}};
+    {"roughness", 0.5f, "ρ: the specular lobes' GGX α is ρ²"},
+    {"anisotropic", 0.0f, "stretches the specular lobes along the shading frame's x"},
+    {"spec_trans", 0.0f, "s: the share of the specular reflection and transmission"},
+    {"spec_tint", 0.0f, "tints the specular reflection toward the hue of base_color"},
+    {"sheen", 0.0f, "the sheen at grazing angles"},
+    {"sheen_tint", 0.0f, "tints the sheen toward the hue of base_color"},
+    {"flatness", 0.0f, "blends the diffuse base toward the fake subsurface term"},
+    {"diff_trans", 0.0f, "twice the diffuse lobe's share sent to the other side (2: all of it)", 2.0f}};
 
 // A textured index is kept where the Fresnel factor and the roughness
 // scaling stay finite and meaningful.
@@ -157,8 +148,18 @@ bool At(Vec3 wi, Vec3 wo, Pair* out) {
 
 class PrincipledThin final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    yarf::ParameterSchema schema = {pr::BaseColorParameter()};
+    for (const pr::ParameterInfo& info : kWeights) schema.push_back(pr::WeightParameter(info));
+    schema.push_back(yarf::Parameter::FloatTexture("eta").Default(1.5).Min(0).Doc("the sheet's index of refraction"));
+    for (const char* rate : {"specular_reflectance_sampling_rate", "specular_transmittance_sampling_rate",
+                             "diffuse_reflectance_sampling_rate", "diffuse_transmittance_sampling_rate"})
+      schema.push_back(pr::SamplingRateParameter(rate));
+    return schema;
+  }
+
   explicit PrincipledThin(const yarf::Properties& props)
-      : base_(yarf::TexturedValue::Color(props, "base_color", Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
+      : base_(pr::ReadBaseColor(props)),
         values_(ReadParameters(props)),
         specular_reflect_rate_(pr::ReadSamplingRate(props, "specular_reflectance_sampling_rate")),
         specular_transmit_rate_(pr::ReadSamplingRate(props, "specular_transmittance_sampling_rate")),
