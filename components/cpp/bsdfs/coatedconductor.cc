@@ -23,20 +23,8 @@
 // Differences from pbrt-v4: those of coateddiffuse.cc; the default copper
 // is yarf/named_metals.h's RGB.
 //
-// Parameters (pbrt-v4's names and defaults)
-//   interface.roughness       float or texture  default 0      the coat's GGX roughness, ≥ 0
-//   interface.uroughness, interface.vroughness   float or texture   along x and y
-//   interface.eta             float             default 1.5    > 0
-//   conductor.roughness       float or texture  default 0      the metal's GGX roughness, ≥ 0
-//   conductor.uroughness, conductor.vroughness   float or texture   along x and y
-//   conductor.eta, conductor.k   rgb or texture default Cu     finite, ≥ 0
-//   reflectance               rgb or texture                   in [0, 1], instead of eta and k
-//   remaproughness            bool              default true   α = √roughness, for both layers
-//   thickness                 float or texture  default 0.01   > 0
-//   albedo                    rgb or texture    default 0      in [0, 1]
-//   g                         float or texture  default 0      in (-1, 1)
-//   maxdepth                  int               default 10     in [1, 1000]
-//   nsamples                  int               default 1      in [1, 1000]
+// Parameters: CoatedConductor::Parameters() below, pbrt-v4's names and
+// defaults. A texture's values are clamped into the ranges given.
 //
 // Lobes: glossy reflection (the walk, or a rough coat's own), diffuse
 // reflection (the walk, when the slab scatters), delta reflection (a
@@ -52,6 +40,7 @@
 
 #include "layered.h"
 #include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/named_metals.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
@@ -137,6 +126,21 @@ struct PointLayers {
 
 class CoatedConductor final : public layered::LayeredSurfaceModel<CoatedConductor> {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return yarf::JoinParameters({
+        layered::PbrtRoughnessParameters("interface.", "the coat"),
+        layered::PbrtRoughnessParameters("conductor.", "the metal"),
+        {layered::RemapParameter()},
+        {
+            P::RgbTexture("conductor.eta").Min(0).Doc("η of the metal's index; copper's unless reflectance is given"),
+            P::RgbTexture("conductor.k").Min(0).Doc("κ of the metal's index; copper's unless reflectance is given"),
+            P::RgbTexture("reflectance").Range(0, 1).Doc("the metal's normal-incidence reflectance, instead of eta, k"),
+        },
+        layered::SlabParameters("interface.eta"),
+    });
+  }
+
   explicit CoatedConductor(const yarf::Properties& props)
       : index_(ReadConductorIndex(props)),
         interface_(layered::ReadPbrtRoughness(props, "interface.")),

@@ -51,20 +51,8 @@
 // random numbers come from yarf's hash, not pbrt's RNG, so single
 // estimates differ while their means agree.
 //
-// Parameters (pbrt-v4's names and defaults; each "texture" may be a
-// texture reference)
-//   reflectance               rgb or texture    default 0.5    the base's albedo, in [0, 1]
-//   roughness                 float or texture  default 0      the coat's GGX roughness, ≥ 0
-//   uroughness, vroughness    float or texture  default roughness   along x and y
-//   remaproughness            bool              default true   α = √roughness (else α = roughness);
-//       α < 10⁻³ is a smooth coat
-//   eta                       float             default 1.5    the coat's index over the outside's, > 0
-//   thickness                 float or texture  default 0.01   > 0, in mean free paths
-//   albedo                    rgb or texture    default 0      the medium's, in [0, 1]
-//   g                         float or texture  default 0      in (-1, 1)
-//   maxdepth                  int               default 10     in [1, 1000]
-//   nsamples                  int               default 1      in [1, 1000]
-// A texture's values are clamped into the ranges given.
+// Parameters: CoatedDiffuse::Parameters() below, pbrt-v4's names and
+// defaults. A texture's values are clamped into the ranges given.
 //
 // Lobes: diffuse reflection (the walk), glossy reflection (a rough coat's
 // own) or delta reflection (a smooth coat's own).
@@ -74,6 +62,7 @@
 
 #include "layered.h"
 #include "scatter_rows.h"
+#include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
 
@@ -104,6 +93,15 @@ struct PointLayers {
 
 class CoatedDiffuse final : public layered::LayeredSurfaceModel<CoatedDiffuse> {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return yarf::JoinParameters({
+        {yarf::Parameter::RgbTexture("reflectance").Default(0.5).Range(0, 1).Doc("the base's albedo")},
+        layered::PbrtRoughnessParameters("", "the coat"),
+        {layered::RemapParameter()},
+        layered::SlabParameters("eta"),
+    });
+  }
+
   explicit CoatedDiffuse(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
         roughness_(layered::ReadPbrtRoughness(props, "")),

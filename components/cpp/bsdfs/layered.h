@@ -51,11 +51,13 @@
 #include <string>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "microfacet.h"
 #include "scatter_rows.h"
 #include "yarf/error.h"
 #include "yarf/hash.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/surface.h"
 #include "yarf/surface_points.h"
@@ -595,6 +597,23 @@ inline PbrtRoughness ReadPbrtRoughness(const Properties& props, const std::strin
   return out;
 }
 
+// The parameters ReadPbrtRoughness reads under `prefix`, without
+// remaproughness (one for both layers: RemapParameter). uroughness and
+// vroughness have no declared default: left out, they are roughness.
+inline std::vector<Parameter> PbrtRoughnessParameters(const std::string& prefix, const std::string& layer) {
+  return {
+      Parameter::FloatTexture(prefix + "roughness").Default(0.0).Min(0).Doc(layer + "'s GGX roughness"),
+      Parameter::FloatTexture(prefix + "uroughness").Min(0).Doc(layer + "'s roughness along x; default roughness"),
+      Parameter::FloatTexture(prefix + "vroughness").Min(0).Doc(layer + "'s roughness along y; default roughness"),
+  };
+}
+
+inline Parameter RemapParameter() {
+  return Parameter::Bool("remaproughness")
+      .Default(true)
+      .Doc("α = √roughness (else α = roughness); α < 10⁻³ is smooth");
+}
+
 // The parameters of the slab and the walk, which both coated models read
 // under pbrt's names.
 struct Slab {
@@ -634,6 +653,18 @@ inline Slab ReadSlab(const Properties& props, const std::string& eta_key) {
   slab.max_depth = int(props.Int("maxdepth", 10, 1, 1000));
   slab.samples = int(props.Int("nsamples", 1, 1, 1000));
   return slab;
+}
+
+// The parameters ReadSlab reads, the coat's index under `eta_key`.
+inline std::vector<Parameter> SlabParameters(const std::string& eta_key) {
+  return {
+      Parameter::Float(eta_key).Default(1.5).Min(0).Doc("the coat's index over the outside's, > 0"),
+      Parameter::FloatTexture("thickness").Default(0.01).Min(0).Doc("the slab's thickness, > 0, in mean free paths"),
+      Parameter::RgbTexture("albedo").Default(0.0).Range(0, 1).Doc("the slab medium's albedo (0: no medium)"),
+      Parameter::FloatTexture("g").Default(0.0).Range(-1, 1).Doc("the slab's phase function's asymmetry, in (-1, 1)"),
+      Parameter::Int("maxdepth").Default(10).Range(1, 1000).Doc("the most events of a walk"),
+      Parameter::Int("nsamples").Default(1).Range(1, 1000).Doc("walks per evaluation"),
+  };
 }
 
 // --- The SurfaceModel calls ---------------------------------------------------
