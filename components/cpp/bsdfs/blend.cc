@@ -12,10 +12,7 @@
 // blended density, so the estimate has the blend's own density whichever
 // model drew it.
 //
-// Parameters
-//   weight   float or texture   default 0.5   the share of bsdf_1, in [0, 1]
-//   bsdf_0   material (a name of the scene's materials, defined before)
-//   bsdf_1   material (likewise)
+// Parameters: Blend::Parameters() below.
 //
 // Lobes: both models' lobes.
 #include <algorithm>
@@ -36,6 +33,15 @@ using yarf::Vec3;
 
 class Blend final : public yarf::SurfaceModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::FloatTexture("weight").Default(0.5).Range(0, 1).Doc("the share of bsdf_1"),
+        P::Material("bsdf_0").Required().Doc("a material defined before"),
+        P::Material("bsdf_1").Required().Doc("a material defined before"),
+    };
+  }
+
   explicit Blend(const yarf::Properties& props)
       : weight_(yarf::TexturedValue::Float(props, "weight", 0.5f).Clamped(0.0f, 1.0f)),
         models_{props.SurfaceModelOf("bsdf_0"), props.SurfaceModelOf("bsdf_1")} {

@@ -13,13 +13,9 @@
 // sidedness as for normal maps (PerturbedFrameModel), without the
 // terminator softening, as Mitsuba's bumpmap.
 //
-// Parameters
-//   bsdf     material (a name of the scene's materials, defined before)
-//       The model on the bumped surface.
-//   bumpmap  texture (float, or RGB read as its luminance)
-//       The height at each uv, in units of the scene's length per unit uv.
-//   scale    float (default 1)
-//       The factor applied to the height's gradient.
+// Parameters: BumpMap::Parameters() below. The height texture is a float
+// one, or RGB read as its luminance, in units of the scene's length per
+// unit uv.
 //
 // Lobes: the nested model's. Points whose ∂p/∂u, ∂p/∂v the caller does
 // not give are left unbumped.
@@ -40,6 +36,15 @@ using yarf::Vec3;
 
 class BumpMap final : public yarf::PerturbedFrameModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::Material("bsdf").Required().Doc("the model on the bumped surface, a material defined before"),
+        P::FloatTexture("bumpmap").Required().Doc("a texture of the scene: the height at each uv"),
+        P::Float("scale").Default(1.0).Doc("the factor applied to the height's gradient"),
+    };
+  }
+
   explicit BumpMap(const yarf::Properties& props)
       : PerturbedFrameModel(props.SurfaceModelOf("bsdf"), /*soften_terminator=*/false),
         height_(HeightOf(props)),

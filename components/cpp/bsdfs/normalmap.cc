@@ -7,12 +7,9 @@
 // faces away from wi is mirrored about the shading normal (its x and y
 // negated), and the shadow terminator is softened (PerturbedFrameModel).
 //
-// Parameters
-//   bsdf        material (a name of the scene's materials, defined before)
-//       The model seen through the map.
-//   normalmap   texture (rgb, stored linearly: a bitmap with raw = true)
-//       The tangent-space normal at each uv; (0.5, 0.5, 1) leaves the
-//       model as it is.
+// Parameters: NormalMap::Parameters() below. The map is an RGB texture
+// stored linearly (a bitmap with raw = true); (0.5, 0.5, 1) leaves the
+// model as it is.
 //
 // Lobes: the nested model's.
 #include <cstdint>
@@ -31,6 +28,14 @@ using yarf::Vec3;
 
 class NormalMap final : public yarf::PerturbedFrameModel {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::Material("bsdf").Required().Doc("the model seen through the map, a material defined before"),
+        P::RgbTexture("normalmap").Required().Doc("a texture of the scene: the tangent-space normal at each uv"),
+    };
+  }
+
   explicit NormalMap(const yarf::Properties& props)
       : PerturbedFrameModel(props.SurfaceModelOf("bsdf"), /*soften_terminator=*/true),
         normals_(NormalsOf(props)) {}
