@@ -11,18 +11,11 @@
 // Its majorant is scale · (sigma_a + sigma_s) over the whole box, d never
 // exceeding 1. It does not emit.
 //
-// Properties:
-//   density     float            default 1          the density before clamping to [0, 1]
-//   wispiness   float            default 1          how far the noise's gradient moves lookups (≤ 0: not)
-//   frequency   float            default 5          the noise's frequency, per unit of the medium's space
-//   sigma_a     rgb (or float)   default 1          absorption per unit length at density 1, ≥ 0
-//   sigma_s     rgb (or float)   default 1          scattering per unit length at density 1, ≥ 0
-//   scale       float            default 1          multiplies both, ≥ 0 (not in pbrt-v4)
-//   p0, p1      vec3             (0,0,0), (1,1,1)   opposite corners of the box, medium space
-//   to_world    transform        identity           the medium's space to the world
-//   g, g2, blend                                    the phase function (phase.h)
+// Parameters: Cloud::Parameters() below; g, g2 and blend give the phase
+// function (phase.h). scale is not in pbrt-v4.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "coefficients.h"
 #include "majorant_grid.h"
@@ -106,6 +99,22 @@ float FiniteProperty(const Properties& props, const char* key, double fallback) 
 
 class Cloud final : public UniformPhaseMedium {
  public:
+  static ParameterSchema Parameters() {
+    ParameterSchema schema = {
+        Parameter::Float("density").Default(1.0).Doc("the density before clamping to [0, 1]"),
+        Parameter::Float("wispiness").Default(1.0).Doc("how far the noise's gradient moves lookups (≤ 0: not)"),
+        Parameter::Float("frequency").Default(5.0).Doc("the noise's frequency, per unit of the medium's space"),
+        Parameter::Rgb("sigma_a").Default(1.0).Min(0).Doc("absorption per unit length at density 1"),
+        Parameter::Rgb("sigma_s").Default(1.0).Min(0).Doc("scattering per unit length at density 1"),
+        ScaleParameter(),
+        Parameter::Vector("p0").Default(Vec3(0, 0, 0)).Doc("a corner of the box, in the medium's space"),
+        Parameter::Vector("p1").Default(Vec3(1, 1, 1)).Doc("the opposite corner"),
+        Parameter::Matrix("to_world").Doc("the medium's space to the world; identity when left out"),
+    };
+    for (Parameter& parameter : PhaseFunction::Parameters()) schema.push_back(std::move(parameter));
+    return schema;
+  }
+
   explicit Cloud(const Properties& props)
       : UniformPhaseMedium(props),
         sigma_a_(NonNegativeColor(props, "sigma_a", Vec3(1, 1, 1)) * Scale(props)),

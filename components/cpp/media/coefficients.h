@@ -1,10 +1,12 @@
-// The checks every medium makes of its coefficient properties.
+// The checks every medium makes of its coefficient properties, and the
+// parameters they read.
 #pragma once
 
 #include <string>
 
 #include "yarf/error.h"
 #include "yarf/geometry.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 
 namespace yarf {
@@ -23,6 +25,10 @@ inline float Scale(const Properties& props) {
   const float scale = float(props.Float("scale", 1));
   if (!(scale >= 0 && scale < kInfinity)) throw Error("property 'scale' must be finite and non-negative");
   return scale;
+}
+
+inline Parameter ScaleParameter() {
+  return Parameter::Float("scale").Default(1.0).Min(0).Doc("multiplies sigma_a and sigma_s");
 }
 
 }  // namespace yarf

@@ -5,13 +5,10 @@
 // Its majorant is its own extinction, so null-scattering tracking never
 // meets a null collision in it.
 //
-// Properties:
-//   sigma_a    rgb (or float)   default 0   absorption, per unit length, ≥ 0
-//   sigma_s    rgb (or float)   default 0   scattering, per unit length, ≥ 0
-//   scale      float            default 1   multiplies both, ≥ 0
-//   emission   rgb (or float)   default 0   radiance emitted where it absorbs (pbrt's Le), ≥ 0
-//   g, g2, blend                            the phase function (phase.h)
+// Parameters: Homogeneous::Parameters() below; g, g2 and blend give the
+// phase function (phase.h).
 #include <algorithm>
+#include <utility>
 
 #include "coefficients.h"
 #include "phase.h"
@@ -22,6 +19,17 @@ namespace {
 
 class Homogeneous final : public UniformPhaseMedium {
  public:
+  static ParameterSchema Parameters() {
+    ParameterSchema schema = {
+        Parameter::Rgb("sigma_a").Default(0.0).Min(0).Doc("absorption per unit length"),
+        Parameter::Rgb("sigma_s").Default(0.0).Min(0).Doc("scattering per unit length"),
+        ScaleParameter(),
+        Parameter::Rgb("emission").Default(0.0).Min(0).Doc("radiance emitted where it absorbs (pbrt's Le)"),
+    };
+    for (Parameter& parameter : PhaseFunction::Parameters()) schema.push_back(std::move(parameter));
+    return schema;
+  }
+
   explicit Homogeneous(const Properties& props)
       : UniformPhaseMedium(props),
         sigma_a_(NonNegativeColor(props, "sigma_a") * Scale(props)),

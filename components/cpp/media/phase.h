@@ -9,9 +9,11 @@
 #pragma once
 
 #include <cmath>
+#include <vector>
 
 #include "yarf/error.h"
 #include "yarf/medium.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/warps.h"
 
@@ -33,7 +35,16 @@ inline float SampleHenyeyGreensteinCosine(float g, float u) {
 class PhaseFunction {
  public:
   // Properties: g (the mean cosine, in (-1, 1), default 0: isotropic);
-  // for a second lobe, g2 and blend (its weight, in [0, 1], default 0).
+  // for a second lobe, g2 and blend (its weight, in [0, 1], default 0):
+  // Parameters().
+  static std::vector<Parameter> Parameters() {
+    return {
+        Parameter::Float("g").Default(0.0).Range(-1, 1).Doc("the mean cosine, in (-1, 1); > 0 scatters forward"),
+        Parameter::Float("g2").Default(0.0).Range(-1, 1).Doc("the second lobe's mean cosine, in (-1, 1)"),
+        Parameter::Float("blend").Default(0.0).Range(0, 1).Doc("the second lobe's weight"),
+    };
+  }
+
   explicit PhaseFunction(const Properties& props)
       : g_(Asymmetry(props, "g")), g2_(Asymmetry(props, "g2")), blend_(float(props.Float("blend", 0))) {
     if (!(blend_ >= 0 && blend_ <= 1)) throw Error("property 'blend' must lie in [0, 1]");
