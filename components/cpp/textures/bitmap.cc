@@ -1,37 +1,23 @@
 // bitmap — an image file looked up by uv (Mitsuba's `bitmap`, pbrt-v4's
 // `imagemap`), filtered by OpenImageIO's TextureSystem
 //
-// Parameters (Mitsuba's name first; pbrt's where it differs)
-//   filename                 file            required
-//       The image, as the server resolved it (any format OpenImageIO reads).
-//   filter_type / filter     string          default "bilinear"
-//       "nearest" (pbrt: "point"): the texel containing the point;
-//       "bilinear": bilinear between the four nearest texels of the full
-//       image, no MIP map (as Mitsuba and pbrt's bilinear);
-//       "trilinear": bilinear in the two MIP levels the footprint's width
-//       selects, blended; "ewa": OpenImageIO's anisotropic MIP filter
-//       along the footprint's major axis.
-//   wrap_mode / wrap         string          default "repeat"
-//       Outside [0, 1]²: "repeat", "mirror" (Mitsuba), "clamp", or
-//       "black" (pbrt). pbrt's "octahedralsphere" is refused.
-//   raw                      bool            default false
-//   encoding                 string          default "sRGB"
-//       How an integer (8- or 16-bit) image encodes linear values: raw =
-//       false or "sRGB" decode the sRGB curve, raw = true or "linear" take
-//       the stored values, "gamma G" (pbrt) gives value^G. Decoding comes
-//       before filtering; float images are linear and never decoded.
-//   to_uv                    transform       default identity
-//   uscale, vscale, udelta, vdelta   float   default 1, 1, 0, 0
-//       The uv map before lookup: Mitsuba's transform (its action on
-//       (u, v, 0)) or pbrt's u' = u·uscale + udelta, v' = v·vscale + vdelta,
-//       applied to yarf's uv (v = 0 at the image's top row).
-//   mapping                  string          default "uv"
-//       pbrt's; "uv" is the only one (the others need surface positions).
-//   scale                    float           default 1
-//   invert                   bool            default false
-//       pbrt's: the value is scale · texel, then max(0, 1 − that) if inverted.
-//   maxanisotropy            float           default 8
-//       pbrt's bound on the ewa filter's major / minor axis ratio.
+// Parameters: Bitmap::Parameters() below. Several settings have two
+// names, Mitsuba's and pbrt's (filter_type / filter, wrap_mode / wrap,
+// raw / encoding): a texture gives one of each pair.
+//   Filters: "nearest" (pbrt: "point"), the texel containing the point;
+//   "bilinear", between the four nearest texels of the full image, no
+//   MIP map (as Mitsuba and pbrt's bilinear); "trilinear", bilinear in
+//   the two MIP levels the footprint's width selects, blended; "ewa",
+//   OpenImageIO's anisotropic MIP filter along the footprint's major axis.
+//   Wraps: "repeat", "mirror" (Mitsuba), "clamp", "black" (pbrt); pbrt's
+//   "octahedralsphere" (of its equal-area environment maps) is refused.
+//   Encoding of integer (8- or 16-bit) images: raw = false or "sRGB"
+//   decode the sRGB curve, raw = true or "linear" take the stored values,
+//   "gamma G" (pbrt) gives value^G. Decoding comes before filtering;
+//   float images are linear and never decoded.
+//   The uv map before lookup (uv_map.h) is applied to yarf's uv (v = 0
+//   at the image's top row). The value is scale · texel, then
+//   max(0, 1 − that) if inverted (pbrt's order).
 //
 // Channels: 1 for a grey image (with or without alpha), else 3 (the first
 // three; alpha is ignored). Mean: the mean over the texels of the value
@@ -179,6 +165,27 @@ struct TextureSystemDeleter {
 
 class Bitmap final : public yarf::Texture {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    const std::vector<std::string> filters = {"nearest", "point", "bilinear", "trilinear", "ewa"};
+    const std::vector<std::string> wraps = {"repeat", "mirror", "clamp", "black"};
+    yarf::ParameterSchema schema = yarf::textures::ImageFileParameters("the image; it or asset is required");
+    schema.insert(schema.end(), {
+        P::String("filter_type").Choices(filters).Doc("the lookup's filter (Mitsuba's name); bilinear when absent"),
+        P::String("filter").Choices(filters).Doc("the same, pbrt's name"),
+        P::String("wrap_mode").Choices(wraps).Doc("outside [0, 1]² (Mitsuba's name); repeat when absent"),
+        P::String("wrap").Choices(wraps).Doc("the same, pbrt's name"),
+        P::Bool("raw").Doc("takes an integer image's values as they are (Mitsuba); false when absent"),
+        P::String("encoding").Doc("integer images' encoding: sRGB (when absent), linear or \"gamma G\" (pbrt)"),
+        P::Float("scale").Default(1).Doc("multiplies the texels"),
+        P::Bool("invert").Default(false).Doc("gives max(0, 1 − value) (pbrt)"),
+        P::Float("maxanisotropy").Default(8).Range(1, 1024).Doc("bound on the ewa filter's axis ratio (pbrt)"),
+    });
+    const yarf::ParameterSchema map = yarf::textures::UvMapParameters();
+    schema.insert(schema.end(), map.begin(), map.end());
+    return schema;
+  }
+
   explicit Bitmap(const Properties& props)
       : file_(props.ResolvedFile("filename")),
         lookup_(ReadLookup(props)),

@@ -1,24 +1,18 @@
 // checkerboard — two colours in alternating square cells (Mitsuba's and
 // pbrt-v4's `checkerboard`)
 //
-// Parameters, Mitsuba's form
-//   color0   rgb (or float, or a texture)   default 0.4
-//   color1   rgb (or float, or a texture)   default 0.2
-//   to_uv    transform                      default identity
-//       2 × 2 cells over the unit square of the mapped uv (u', v'):
-//       color0 where frac(u') and frac(v') lie on the same side of ½
-//       (both ≤ ½ or both > ½), color1 elsewhere, as Mitsuba 3's eval.
-// Parameters, pbrt-v4's form
-//   tex1     rgb (or float, or a texture)   default 1
-//   tex2     rgb (or float, or a texture)   default 0
-//   uscale, vscale   float   default 1;   udelta, vdelta   float   default 0
-//       Cells of side 1 in (s, t) = (u·uscale + udelta, v·vscale + vdelta):
-//       tex1 where ⌊s⌋ + ⌊t⌋ is even, tex2 where it is odd. With the
-//       default scales the whole unit square is one tex1 cell, as in pbrt.
-//   mapping  string   default "uv" (the only one; the others need surface
-//       positions). pbrt's 3-D checkerboard (`dimension` 3) is not offered.
-// The keys given choose the form (none: Mitsuba's); keys of both forms
-// in one texture are an error.
+// Parameters: Checkerboard::Parameters() below, in two forms. The keys
+// given choose the form (none: Mitsuba's); keys of both forms in one
+// texture are an error, so none has a declared default.
+//   Mitsuba's (color0, color1, to_uv): 2 × 2 cells over the unit square
+//   of the mapped uv (u', v'): color0 where frac(u') and frac(v') lie on
+//   the same side of ½ (both ≤ ½ or both > ½), color1 elsewhere, as
+//   Mitsuba 3's eval.
+//   pbrt-v4's (tex1, tex2, uscale, vscale, udelta, vdelta, mapping):
+//   cells of side 1 in (s, t) = (u·uscale + udelta, v·vscale + vdelta):
+//   tex1 where ⌊s⌋ + ⌊t⌋ is even, tex2 where it is odd. With the default
+//   scales the whole unit square is one tex1 cell, as in pbrt. pbrt's
+//   3-D checkerboard (`dimension` 3) is not offered.
 //
 // Filtering: a point lookup (no footprint) gives the exact cell colour.
 // With a footprint, the value is the average of the pattern over a box
@@ -99,6 +93,19 @@ Form ReadForm(const yarf::Properties& props) {
 
 class Checkerboard final : public yarf::Texture {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    yarf::ParameterSchema schema = {
+        P::RgbTexture("color0").Doc("Mitsuba's first colour (0.4 when absent)"),
+        P::RgbTexture("color1").Doc("Mitsuba's second colour (0.2 when absent)"),
+        P::RgbTexture("tex1").Doc("pbrt's colour of even cells (1 when absent)"),
+        P::RgbTexture("tex2").Doc("pbrt's colour of odd cells (0 when absent)"),
+    };
+    const yarf::ParameterSchema map = yarf::textures::UvMapParameters();
+    schema.insert(schema.end(), map.begin(), map.end());
+    return schema;
+  }
+
   explicit Checkerboard(const yarf::Properties& props)
       : form_(ReadForm(props)),
         first_(form_ == Form::kPbrt ? TextureInput::Color(props, "tex1", Vec3(1, 1, 1))

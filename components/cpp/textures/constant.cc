@@ -2,9 +2,7 @@
 // texture; registered under a longer name because "constant" is the
 // constant environment emitter's, as in Mitsuba)
 //
-// Parameters
-//   value   rgb (or float, or a texture)   default 1
-//       The value at every point (a texture given here is passed through).
+// Parameters: Constant::Parameters() below.
 //
 // Channels: 3 (a float value is returned in all three). Mean: the value.
 #include <cstdint>
@@ -21,6 +19,11 @@ using yarf::Vec3;
 
 class Constant final : public yarf::Texture {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return {yarf::Parameter::RgbTexture("value").Default(1.0).Doc(
+        "the value at every point (a texture given here is passed through)")};
+  }
+
   explicit Constant(const yarf::Properties& props)
       : value_(yarf::textures::TextureInput::Color(props, "value", Vec3(1, 1, 1))) {}
 

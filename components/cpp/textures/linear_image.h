@@ -17,8 +17,22 @@
 #include <vector>
 
 #include "yarf/error.h"
+#include "yarf/parameters.h"
 
 namespace yarf::textures {
+
+// The declarations of the image file a class reads as
+// props.ResolvedFile("filename"): a scene names it by `filename`, a path
+// in the scene's folder, or by `asset`, the SHA-256 of an uploaded file;
+// the server finds either and hands the class `filename`. Neither is
+// declared required, as a scene gives one or the other; `doc` says what
+// the image is and when it is needed.
+inline std::vector<Parameter> ImageFileParameters(const std::string& doc) {
+  return {
+      Parameter::File("filename").Doc(doc),
+      Parameter::String("asset").Doc("the SHA-256 of an uploaded image, in place of filename"),
+  };
+}
 
 // How the integer texels of a file encode linear values.
 struct Encoding {

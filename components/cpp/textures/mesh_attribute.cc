@@ -7,9 +7,7 @@
 // value, scaled by `scale`. Points on shapes without the attribute, and
 // points whose caller gives no location (a remote lookup), read 0.
 //
-// Parameters
-//   name    string (required): "vertex_…" or "face_…"
-//   scale   float   default 1
+// Parameters: MeshAttribute::Parameters() below.
 //
 // Channels: 3 (a one-channel attribute in all three). Mean: 0.5 in each
 // channel, a stand-in: the texture alone cannot know the meshes it is
@@ -28,6 +26,14 @@ namespace {
 
 class MeshAttribute final : public yarf::Texture {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::String("name").Required().Doc("the attribute: \"vertex_…\" or \"face_…\""),
+        P::Float("scale").Default(1).Doc("multiplies the attribute"),
+    };
+  }
+
   explicit MeshAttribute(const yarf::Properties& props)
       : name_(props.String("name", "")), scale_(float(props.Float("scale", 1.0))) {
     if (!name_.starts_with("vertex_") && !name_.starts_with("face_"))

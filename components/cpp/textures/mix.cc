@@ -1,13 +1,8 @@
 // mix — a blend of two textures (pbrt-v4's `mix`)
 //
-// Parameters
-//   tex1     rgb (or float, or a texture)   default 0
-//   tex2     rgb (or float, or a texture)   default 1
-//       The two values blended.
-//   amount   float (or a texture)           default 0.5
-//       The weight of tex2: 0 gives tex1, 1 gives tex2. Any finite
-//       number is accepted (pbrt does not bound it either); a colour
-//       texture is read as its luminance.
+// Parameters: Mix::Parameters() below. Any finite amount is accepted
+// (pbrt does not bound it either); a colour texture there is read as its
+// luminance.
 //
 // Channels: 3. Value: (1 − amount) · tex1 + amount · tex2 at each point.
 // Mean: the same blend of the means, exact unless `amount` and one of
@@ -27,6 +22,15 @@ using yarf::textures::TextureInput;
 
 class Mix final : public yarf::Texture {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::RgbTexture("tex1").Default(0.0).Doc("the value where amount is 0"),
+        P::RgbTexture("tex2").Default(1.0).Doc("the value where amount is 1"),
+        P::FloatTexture("amount").Default(0.5).Doc("the weight of tex2"),
+    };
+  }
+
   explicit Mix(const yarf::Properties& props)
       : tex1_(TextureInput::Color(props, "tex1", Vec3(0, 0, 0))),
         tex2_(TextureInput::Color(props, "tex2", Vec3(1, 1, 1))),

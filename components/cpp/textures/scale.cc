@@ -1,11 +1,7 @@
 // scale — a texture times a factor (pbrt-v4's `scale`)
 //
-// Parameters
-//   tex     rgb (or float, or a texture)   default 1
-//       The value scaled.
-//   scale   float (or a texture)           default 1
-//       The factor; a colour texture here is read as its luminance, as
-//       pbrt's float texture parameter.
+// Parameters: Scale::Parameters() below. A colour texture given as the
+// scale is read as its luminance, as pbrt's float texture parameter.
 //
 // Channels: 3 (a float `tex` gives its value in all three).
 // Value: tex · scale at each point. Mean: mean(tex) · mean(scale), exact
@@ -25,6 +21,14 @@ using yarf::textures::TextureInput;
 
 class Scale final : public yarf::Texture {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        P::RgbTexture("tex").Default(1.0).Doc("the value scaled"),
+        P::FloatTexture("scale").Default(1.0).Doc("the factor"),
+    };
+  }
+
   explicit Scale(const yarf::Properties& props)
       : tex_(TextureInput::Color(props, "tex", Vec3(1, 1, 1))), scale_(TextureInput::Float(props, "scale", 1.0f)) {}
 

@@ -251,7 +251,7 @@ TEST_F(BitmapTextureTest, BadPropertiesAndFilesGiveClearErrors) {
   expect_error(With({{"filename", file}, {"scale", std::nan("")}}), "'scale'");
   expect_error(With({{"filename", file}, {"uscale", HUGE_VAL}}), "'uscale'");
   expect_error(With({{"filename", file}, {"filter_type", S("nearest")}, {"filter", S("point")}}), "two names");
-  expect_error(With({{"filename", file}, {"colour", 1.0}}), "does not understand");
+  expect_error(With({{"filename", file}, {"colour", 1.0}}), "has no parameter 'colour'");
   const std::filesystem::path text = folder_.path() / "not_an_image.png";
   { std::ofstream(text) << "not an image"; }
   expect_error(With({{"filename", text}}), "cannot be read");

@@ -6,8 +6,10 @@
 #include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "yarf/error.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/vecmath.h"
 
@@ -37,6 +39,19 @@ struct UvMap {
 inline double RequireFinite(double x, const std::string& key) {
   if (!std::isfinite(x)) throw Error("property '" + key + "' must be a finite number");
   return x;
+}
+
+// The parameters ReadUvMap reads. None has a declared default: a key
+// given chooses Mitsuba's form or pbrt's.
+inline std::vector<Parameter> UvMapParameters() {
+  return {
+      Parameter::Matrix("to_uv").Doc("Mitsuba's uv map: its action on (u, v, 0); identity when absent"),
+      Parameter::Float("uscale").Doc("pbrt's u' = u·uscale + udelta (1 when absent)"),
+      Parameter::Float("vscale").Doc("pbrt's v' = v·vscale + vdelta (1 when absent)"),
+      Parameter::Float("udelta").Doc("pbrt's offset of u' (0 when absent)"),
+      Parameter::Float("vdelta").Doc("pbrt's offset of v' (0 when absent)"),
+      Parameter::String("mapping").Choices({"uv"}).Doc("pbrt's; uv, the only one (others need surface positions)"),
+  };
 }
 
 // Mitsuba's to_uv is a 4×4 transform of which the map is its action on
