@@ -5,12 +5,9 @@
 // nothing from the back, as Mitsuba's one-sided area emitter; or from both
 // sides alike (pbrt-v4's "twosided" area light, twice the power).
 //
-// Parameters
-//   radiance   rgb, float or texture   required
-//       Emitted radiance in W·m⁻²·sr⁻¹, per channel ≥ 0; a texture is
-//       looked up at the emitting point's uv, its values clamped to ≥ 0.
-//   two_sided  bool   default false
-//       Emits from the back as from the front.
+// Parameters: DiffuseArea::Parameters() below.
+// A radiance texture is looked up at the emitting point's uv, its values
+// clamped to >= 0.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -27,6 +24,13 @@ using yarf::Vec3;
 
 class DiffuseArea final : public yarf::Emitter {
  public:
+  static yarf::ParameterSchema Parameters() {
+    return {
+        yarf::TexturedIntensityParameter("radiance", "emitted radiance, W·m⁻²·sr⁻¹").Required(),
+        yarf::Parameter::Bool("two_sided").Default(false).Doc("emits from the back as from the front"),
+    };
+  }
+
   explicit DiffuseArea(const yarf::Properties& props)
       : radiance_(yarf::RequiredTexturedIntensity(props, "radiance")),
         two_sided_(props.Bool("two_sided", false)) {}

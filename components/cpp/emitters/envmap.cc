@@ -5,19 +5,16 @@
 // kind ENVIRONMENT, placed by to_world); the image is looked up toward
 // -w, where the light comes from.
 //
-// Parameters
-//   filename   file     required   any image OpenImageIO reads; float
-//                                  images (EXR, HDR, PFM) are linear,
-//                                  integer ones are decoded from sRGB
-//   scale      float    default 1  multiplies the radiance
-//   mapping    string   default "latlong"
-//       "latlong" (Mitsuba): u = atan2(d.x, −d.z) / 2π, v = acos(d.y) / π,
-//       +y up; looked up bilinearly as Mitsuba 3 does: texel (x, y) of a
-//       W × H image sits at u = (x + ½) / W, v = y / (H − 1), so the first
-//       row is the zenith and the last the nadir, and u wraps around.
-//       "equal_area" (pbrt-v4): Clarberg's equal-area octahedral map of
-//       the sphere onto a square image, +z up, looked up at the nearest
-//       texel as pbrt-v4 does.
+// Parameters: EnvironmentMap::Parameters() below.
+// The image is any OpenImageIO reads: float images (EXR, HDR, PFM) are
+// linear, integer ones are decoded from sRGB. The mappings:
+//   "latlong" (Mitsuba): u = atan2(d.x, −d.z) / 2π, v = acos(d.y) / π,
+//   +y up; looked up bilinearly as Mitsuba 3 does: texel (x, y) of a
+//   W × H image sits at u = (x + ½) / W, v = y / (H − 1), so the first
+//   row is the zenith and the last the nadir, and u wraps around.
+//   "equal_area" (pbrt-v4): Clarberg's equal-area octahedral map of
+//   the sphere onto a square image, +z up, looked up at the nearest
+//   texel as pbrt-v4 does.
 //
 // Directions are sampled from a piecewise-constant distribution over the
 // image's cells (sin θ-weighted for latlong, whose cells are not of equal
@@ -45,6 +42,18 @@ using yarf::kPi;
 
 class EnvironmentMap final : public yarf::Emitter {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    yarf::ParameterSchema schema =
+        yarf::textures::ImageFileParameters("the environment image; it or asset is required");
+    schema.insert(schema.end(), {
+        P::Float("scale").Default(1).Min(0).Doc("multiplies the radiance"),
+        P::String("mapping").Default("latlong").Choices({"latlong", "equal_area"}).Doc(
+            "how the image covers the sphere: latlong (Mitsuba) or equal_area (pbrt-v4)"),
+    });
+    return schema;
+  }
+
   explicit EnvironmentMap(const yarf::Properties& props) {
     const std::string mapping = props.String("mapping", "latlong");
     if (mapping != "latlong" && mapping != "equal_area")

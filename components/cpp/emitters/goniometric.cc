@@ -17,13 +17,8 @@
 // g; a direction's world density is 1 / 4π times the texel's share times
 // |M·l|³ / |det M|.
 //
-// Parameters
-//   filename    file             required          a square image; integer
-//                                                  images are decoded from sRGB
-//   intensity   rgb (or float)   default 1         W·sr⁻¹, per channel ≥ 0
-//   scale       float            default 1         ≥ 0
-//   to_world    transform        default identity  the light's placement
-//                                                  (the same as its Light's)
+// Parameters: Goniometric::Parameters() below. Integer images are decoded
+// from sRGB.
 #include <algorithm>
 #include <cmath>
 #include <span>
@@ -44,6 +39,18 @@ using yarf::kPi;
 
 class Goniometric final : public yarf::Emitter {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    yarf::ParameterSchema schema =
+        yarf::textures::ImageFileParameters("the square equal-area image g; it or asset is required");
+    schema.insert(schema.end(), {
+        yarf::IntensityParameter("intensity", "intensity where g is 1, W·sr⁻¹").Default(1.0),
+        P::Float("scale").Default(1).Min(0).Doc("multiplies the intensity"),
+        yarf::LightToWorldParameter(),
+    });
+    return schema;
+  }
+
   explicit Goniometric(const yarf::Properties& props)
       : frame_(props.Matrix("to_world", yarf::Transform::Identity())) {
     const float scale = float(props.Float("scale", 1.0));

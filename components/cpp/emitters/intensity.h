@@ -6,10 +6,22 @@
 #include <string>
 #include <utility>
 
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/texture.h"
 
 namespace yarf {
+
+// The declaration of a property RequiredIntensity reads: an rgb or a
+// float, every channel >= 0; `doc` says what it is and its unit.
+inline Parameter IntensityParameter(const std::string& name, std::string doc) {
+  return Parameter::Rgb(name).Min(0).Doc(std::move(doc));
+}
+
+// The declaration of one RequiredTexturedIntensity reads: a texture too.
+inline Parameter TexturedIntensityParameter(const std::string& name, std::string doc) {
+  return Parameter::RgbTexture(name).Min(0).Doc(std::move(doc));
+}
 
 // A required rgb (or float) property, finite and non-negative.
 inline Vec3 RequiredIntensity(const Properties& props, const std::string& name) {

@@ -9,9 +9,15 @@
 #include <cmath>
 
 #include "yarf/error.h"
+#include "yarf/parameters.h"
 #include "yarf/vecmath.h"
 
 namespace yarf {
+
+// The declaration of that property.
+inline Parameter LightToWorldParameter() {
+  return Parameter::Matrix("to_world").Doc("the light's placement, as its Light's to_world; identity when absent");
+}
 
 // A 3 × 3 matrix in double, row-major, acting on column vectors.
 struct Matrix3 {

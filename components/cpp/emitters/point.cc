@@ -13,10 +13,8 @@
 // constant (a Light of kind ENVIRONMENT): radiance L in W·m⁻²·sr⁻¹
 // arriving from every direction; directions are sampled uniformly.
 //
-// Parameters
-//   intensity    rgb (or float)   required (point)         W·sr⁻¹, per channel ≥ 0
-//   irradiance   rgb (or float)   required (directional)   W·m⁻², per channel ≥ 0
-//   radiance     rgb (or float)   required (constant)      W·m⁻²·sr⁻¹, per channel ≥ 0
+// Parameters: IsotropicLight::Parameters() below (each class its one
+// power property: intensity, irradiance or radiance).
 #include <cstdint>
 #include <span>
 
@@ -28,10 +26,13 @@ namespace {
 
 using yarf::Vec3;
 
-// The same in every direction; `power` names the property.
-template <const char* power>
+// The same in every direction; `power` names the property, `doc` says
+// what it is.
+template <const char* power, const char* doc>
 class IsotropicLight final : public yarf::Emitter {
  public:
+  static yarf::ParameterSchema Parameters() { return {yarf::IntensityParameter(power, doc).Required()}; }
+
   explicit IsotropicLight(const yarf::Properties& props)
       : intensity_(yarf::RequiredIntensity(props, power)) {}
 
@@ -59,16 +60,19 @@ class IsotropicLight final : public yarf::Emitter {
 };
 
 constexpr char kIntensity[] = "intensity";
+constexpr char kIntensityDoc[] = "intensity toward every direction, W·sr⁻¹";
 constexpr char kIrradiance[] = "irradiance";
+constexpr char kIrradianceDoc[] = "irradiance on a surface facing the light, W·m⁻²";
 constexpr char kRadiance[] = "radiance";
+constexpr char kRadianceDoc[] = "radiance from every direction, W·m⁻²·sr⁻¹";
 
 }  // namespace
 
 YARF_PLUGIN(registrar) {
-  yarf::Register<IsotropicLight<kIntensity>>(registrar, "point", "1.0.0",
-                                             "Isotropic point light of given intensity");
-  yarf::Register<IsotropicLight<kIrradiance>>(registrar, "directional", "1.0.0",
-                                              "Light from infinitely far, of given irradiance");
-  yarf::Register<IsotropicLight<kRadiance>>(registrar, "constant", "1.0.0",
-                                            "Uniform environment: the same radiance from every direction");
+  yarf::Register<IsotropicLight<kIntensity, kIntensityDoc>>(registrar, "point", "1.0.0",
+                                                            "Isotropic point light of given intensity");
+  yarf::Register<IsotropicLight<kIrradiance, kIrradianceDoc>>(registrar, "directional", "1.0.0",
+                                                              "Light from infinitely far, of given irradiance");
+  yarf::Register<IsotropicLight<kRadiance, kRadianceDoc>>(
+      registrar, "constant", "1.0.0", "Uniform environment: the same radiance from every direction");
 }

@@ -35,25 +35,12 @@
 // density times |M·q|³ / |det M| (q on the plane, M to_world's linear
 // part), 1 / (A·cos³θ)-shaped for a uniform image.
 //
-// Parameters
-//   filename      file             required unless irradiance
-//       the projected image (any image OpenImageIO reads; integer images
-//       are decoded from sRGB unless raw)
-//   irradiance    rgb (or float)   a constant image (1 × 1) instead of a file
-//   raw           bool             default false
-//   filter_type   string           default "bilinear"   or "nearest"
-//   wrap_mode     string           default "repeat"     or "mirror", "clamp"
-//   scale         float            default 1           ≥ 0, multiplies the image
-//   fov           float            required            degrees, in (0, 180)
-//   fov_axis      string           default "x"         "x", "y", "diagonal",
-//                                                      "smaller" or "larger"
-//   to_world      transform        default identity    the light's placement
-//                                                      (the same as its Light's)
-//   image         string           default "irradiance"
-//       "irradiance": the image as above (Mitsuba); "intensity": the image
-//       is the intensity itself, I = scale · E(u, v) in W·sr⁻¹ with no π
-//       and no 1/cos³θ (pbrt-v4's ProjectionLight; for a non-rigid
-//       to_world, the intensity in the light's own space)
+// Parameters: Projector::Parameters() below. The image is any
+// OpenImageIO reads; integer images are decoded from sRGB unless raw.
+// With image "intensity" the image is the intensity itself,
+// I = scale · E(u, v) in W·sr⁻¹ with no π and no 1/cos³θ (pbrt-v4's
+// ProjectionLight; for a non-rigid to_world, the intensity in the light's
+// own space).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -93,6 +80,27 @@ double TanHalfFovX(double fov, const std::string& axis, double aspect) {
 
 class Projector final : public yarf::Emitter {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    yarf::ParameterSchema schema =
+        yarf::textures::ImageFileParameters("the projected image; it (or asset) or irradiance is required");
+    schema.insert(schema.end(), {
+        yarf::IntensityParameter("irradiance", "a constant image (1 × 1) in place of a file"),
+        P::Bool("raw").Default(false).Doc("takes an integer image's values as they are, not as sRGB"),
+        P::String("filter_type").Default("bilinear").Choices({"bilinear", "nearest"}).Doc("the image's lookup"),
+        P::String("wrap_mode").Default("repeat").Choices({"repeat", "mirror", "clamp"}).Doc(
+            "the texels beyond the image's border"),
+        P::Float("scale").Default(1).Min(0).Doc("multiplies the image"),
+        P::Float("fov").Required().Range(0, 180).Doc("field of view in degrees, along fov_axis"),
+        P::String("fov_axis").Default("x").Choices({"x", "y", "diagonal", "smaller", "larger"}).Doc(
+            "the image's extent fov spans"),
+        yarf::LightToWorldParameter(),
+        P::String("image").Default("irradiance").Choices({"irradiance", "intensity"}).Doc(
+            "what the image is: irradiance on the plane z = 1 (Mitsuba) or intensity (pbrt-v4)"),
+    });
+    return schema;
+  }
+
   explicit Projector(const yarf::Properties& props) {
     scale_ = float(props.Float("scale", 1.0));
     if (!(scale_ >= 0) || !std::isfinite(scale_)) throw Error("property 'scale' must be finite and >= 0");

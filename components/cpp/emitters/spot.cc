@@ -6,12 +6,7 @@
 // coneangle − conedelta is beam_width). The light's frame comes from the
 // scene's Light.to_world.
 //
-// Parameters
-//   intensity      rgb (or float)   required   W·sr⁻¹ on the axis, per channel ≥ 0
-//   cutoff_angle   float            default 20            degrees, in (0, 90]
-//   beam_width     float            default ¾·cutoff      degrees, in [0, cutoff_angle]
-//   falloff        string           default "linear"      "linear" (Mitsuba) or
-//                                                         "smoothstep" (pbrt-v4)
+// Parameters: SpotLight::Parameters() below.
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -29,6 +24,17 @@ float Radians(double degrees) { return float(degrees * 3.14159265358979323846 / 
 
 class SpotLight final : public yarf::Emitter {
  public:
+  static yarf::ParameterSchema Parameters() {
+    using P = yarf::Parameter;
+    return {
+        yarf::IntensityParameter("intensity", "intensity on the axis, W·sr⁻¹").Required(),
+        P::Float("cutoff_angle").Default(20).Range(0, 90).Doc("degrees from the axis where the light ends, > 0"),
+        P::Float("beam_width").Range(0, 90).Doc("degrees of full intensity, <= cutoff_angle; ¾ of it when absent"),
+        P::String("falloff").Default("linear").Choices({"linear", "smoothstep"}).Doc(
+            "linear in the angle (Mitsuba) or smoothstep in the cosine (pbrt-v4)"),
+    };
+  }
+
   explicit SpotLight(const yarf::Properties& props)
       : intensity_(yarf::RequiredIntensity(props, "intensity")),
         cutoff_(Radians(props.Float("cutoff_angle", 20.0))),
