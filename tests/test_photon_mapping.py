@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import grpc
 import numpy as np
 import pytest
 from conftest import REPO
@@ -156,25 +157,42 @@ def test_sppm_renders_the_caustic(client: Client, caustic_reference: np.ndarray)
     assert abs(value - reference) < 0.1 * reference, f"caustic {value:.4f} vs bdpt {reference:.4f}"
 
 
+def refusal(client: Client, transport: scene_pb2.ComponentSpec) -> str:
+    """Why a job with ``transport`` is refused at Submit, or else fails."""
+    try:
+        job_id = client.submit(small(DIFFUSE_BOX, 8), spp=1, seed=0, transport=transport)
+    except grpc.RpcError as error:
+        assert error.code() == grpc.StatusCode.INVALID_ARGUMENT  # type: ignore[attr-defined]
+        return str(error.details())  # type: ignore[attr-defined]
+    status = client.wait(job_id, timeout=30)
+    assert status.state == render_pb2.FAILED, render_pb2.JobState.Name(status.state)
+    return status.error
+
+
 @pytest.mark.parametrize(
     ("transport", "message"),
     [
-        (component("photon_map", photons=-1), "'photons' must lie in [0, 50000000]"),
-        (component("photon_map", photons=10**10), "'photons' must lie in [0, 50000000]"),
-        (
-            component("photon_map", caustic_photons=-5),
-            "'caustic_photons' must lie in [0, 50000000]",
-        ),
-        (component("photon_map", nearest=0), "'nearest' must be >= 1"),
-        (component("sppm", photons_per_pass=-1), "'photons_per_pass' must lie in [1, 50000000]"),
-        (component("sppm", alpha=1.5), "'alpha' must be in (0, 1)"),
+        (component("photon_map", photons=-1), "photons: -1 is below 0"),
+        (component("photon_map", photons=10**10), "photons: 1e+10 is above 5e+07"),
+        (component("photon_map", caustic_photons=-5), "caustic_photons: -5 is below 0"),
+        (component("photon_map", nearest=0), "nearest: 0 is below 1"),
+        (component("sppm", photons_per_pass=-1), "photons_per_pass: -1 is below 1"),
+        (component("sppm", alpha=1.5), "alpha: 1.5 is above 1"),
+        (component("sppm", alpha=0.0), "'alpha' must be in (0, 1)"),
     ],
-    ids=["photons", "too_many_photons", "caustic_photons", "nearest", "photons_per_pass", "alpha"],
+    ids=[
+        "photons",
+        "too_many_photons",
+        "caustic_photons",
+        "nearest",
+        "photons_per_pass",
+        "alpha",
+        "alpha_zero",
+    ],
 )
-def test_bad_properties_fail_the_job_with_a_clear_error(
+def test_bad_properties_are_refused_with_a_clear_error(
     client: Client, transport: scene_pb2.ComponentSpec, message: str
 ) -> None:
-    job_id = client.submit(small(DIFFUSE_BOX, 8), spp=1, seed=0, transport=transport)
-    status = client.wait(job_id, timeout=30)
-    assert status.state == render_pb2.FAILED, render_pb2.JobState.Name(status.state)
-    assert message in status.error, status.error
+    """At Submit where the declared parameters refuse them, else when the job runs."""
+    reason = refusal(client, transport)
+    assert message in reason, reason

@@ -17,10 +17,7 @@
 // 4 time, then 8 per bounce from 6: light position pair, direction pair,
 // (light choice, lobe choice), (Russian roulette, unused).
 //
-// Properties:
-//   int max_depth  longest path in segments (Mitsuba's convention), -1
-//                  (default) unbounded.
-//   int rr_depth   depth from which Russian roulette may end paths (5).
+// Parameters: DistributionRayTracer::Parameters() below.
 
 #include <algorithm>
 #include <vector>
@@ -46,6 +43,8 @@ struct Path {
 
 class DistributionRayTracer final : public Transport {
  public:
+  static ParameterSchema Parameters() { return PathLength::Parameters(); }
+
   explicit DistributionRayTracer(const Properties& props)
       : length_(props) {}
 

@@ -22,10 +22,8 @@
 // emission direction, (10) light choice; from 12 on, 4 per bounce: the
 // BSDF direction pair, then (lobe choice, Russian roulette).
 //
-// Properties:
-//   int max_depth  longest path in segments, counting the one to the
-//                  camera (Mitsuba's convention); -1 (default) unbounded.
-//   int rr_depth   bounces after which Russian roulette may end paths (5).
+// Parameters: LightTracer::Parameters() below; max_depth counts the
+// segment to the camera.
 
 #include <algorithm>
 #include <vector>
@@ -64,6 +62,8 @@ uint32_t FloatBits(float f) { return std::bit_cast<uint32_t>(f); }
 
 class LightTracer final : public Transport {
  public:
+  static ParameterSchema Parameters() { return PathLength::Parameters(); }
+
   explicit LightTracer(const Properties& props)
       : length_(props) {}
 

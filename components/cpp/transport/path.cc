@@ -23,11 +23,7 @@
 // does, E (glossy|specular)* any-lobe L, for checking one against the
 // other.
 //
-// Properties:
-//   int max_depth  longest path in segments, Mitsuba's convention: 1 shows
-//                  emitters only, 2 direct light; -1 (default) unbounded.
-//   int rr_depth   depth from which Russian roulette may end paths (5).
-//   bool diffuse_indirect   whether paths go on after a diffuse bounce (true).
+// Parameters: PathTracer::Parameters() below.
 
 #include <algorithm>
 #include <vector>
@@ -65,6 +61,13 @@ struct Vertex {
 
 class PathTracer final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    ParameterSchema schema = PathLength::Parameters();
+    schema.push_back(
+        Parameter::Bool("diffuse_indirect").Default(true).Doc("whether paths go on after a diffuse bounce"));
+    return schema;
+  }
+
   explicit PathTracer(const Properties& props)
       : length_(props), diffuse_indirect_(props.Bool("diffuse_indirect", true)) {}
 

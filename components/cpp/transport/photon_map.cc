@@ -30,19 +30,9 @@
 // exactly one of the terms, so the result converges to the path integral
 // as photons grow (the estimates' bias falls with photon density).
 //
-// Properties:
-//   int photons          photon paths shot for the global map (200000).
-//   int caustic_photons  photon paths shot for the caustic map (200000).
-//   int nearest          photons per estimate, k, on surfaces and in
-//                        media (64).
-//   bool final_gather    gather indirect light with one ray (true).
-//   int max_depth        longest path in segments, Mitsuba's convention,
-//                        for photon paths (-1, default: unbounded); it also
-//                        bounds the non-diffuse bounces of camera and
-//                        gather rays (16 when unbounded).
-//   int rr_depth         bounces after which roulette may end photons (5).
-//   int seed             the photons' random stream (0): photons are a
-//                        pure function of the scene and the seed.
+// Parameters: PhotonMapper::Parameters() below. max_depth bounds photon
+// paths, and also the non-diffuse bounces of camera and gather rays (16
+// when unbounded); photons are a pure function of the scene and the seed.
 //
 // Primary sample space: 0–1 film, 2–3 lens, 4 time; from 6, 4 per camera
 // bounce B through non-diffuse surfaces (direction pair, lobe, unused);
@@ -64,6 +54,21 @@ constexpr int64_t kMaxPhotons = 50'000'000;
 
 class PhotonMapper final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    ParameterSchema schema = {
+        P::Int("photons").Default(200000).Range(0, double(kMaxPhotons)).Doc("photon paths shot for the global map"),
+        P::Int("caustic_photons").Default(200000).Range(0, double(kMaxPhotons)).Doc(
+            "photon paths shot for the caustic map"),
+        P::Int("nearest").Default(64).Min(1).Doc("photons per estimate, k, on surfaces and in media"),
+        P::Bool("final_gather").Default(true).Doc("gather indirect light with one ray"),
+        P::Int("seed").Default(0).Doc("the photons' random stream"),
+    };
+    const ParameterSchema length = PathLength::Parameters();
+    schema.insert(schema.end(), length.begin(), length.end());
+    return schema;
+  }
+
   explicit PhotonMapper(const Properties& props)
       : length_(props),
         photons_(props.Int("photons", 200000, 0, kMaxPhotons)),

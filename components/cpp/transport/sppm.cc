@@ -25,18 +25,9 @@
 // same pass wait for one build), and the maps of passes before the last
 // few are dropped.
 //
-// Properties:
-//   int photons_per_pass  photon paths shot per pass (50000).
-//   float initial_radius  r_1 in scene units; 0 or absent (default):
-//                         1.5% of the diagonal of the bounding box of the
-//                         first pass's photons.
-//   float alpha           how fast the radius shrinks, in (0, 1) (2/3).
-//   int max_depth         longest path in segments, Mitsuba's convention,
-//                         for photon paths (-1, default: unbounded); it
-//                         also bounds the non-diffuse bounces of camera
-//                         rays (16 when unbounded).
-//   int rr_depth          bounces after which roulette may end photons (5).
-//   int seed              the photons' random stream (0).
+// Parameters: StochasticProgressivePhotonMapper::Parameters() below.
+// max_depth bounds photon paths, and also the non-diffuse bounces of
+// camera rays (16 when unbounded).
 //
 // Primary sample space: 0–1 film, 2–3 lens, 4 time; from 6, 4 per camera
 // bounce through non-diffuse surfaces (direction pair, lobe, unused); then
@@ -72,6 +63,20 @@ using PhotonMapOfPass = std::shared_future<std::shared_ptr<const PassMaps>>;
 
 class StochasticProgressivePhotonMapper final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    ParameterSchema schema = {
+        P::Int("photons_per_pass").Default(50000).Range(1, 50'000'000).Doc("photon paths shot per pass"),
+        P::Float("initial_radius").Default(0).Min(0).Doc(
+            "r_1 in scene units; 0: 1.5% of the diagonal of the first pass's photons' bounds"),
+        P::Float("alpha").Default(2.0 / 3.0).Range(0, 1).Doc("how fast the radius shrinks, in (0, 1)"),
+        P::Int("seed").Default(0).Doc("the photons' random stream"),
+    };
+    const ParameterSchema length = PathLength::Parameters();
+    schema.insert(schema.end(), length.begin(), length.end());
+    return schema;
+  }
+
   explicit StochasticProgressivePhotonMapper(const Properties& props)
       : length_(props),
         photons_per_pass_(props.Int("photons_per_pass", 50000, 1, 50'000'000)),

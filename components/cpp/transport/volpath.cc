@@ -24,11 +24,9 @@
 // roulette); the walks through media draw from a hash of the path's
 // coordinates, as do vertices beyond the 64th.
 //
-// Properties (as `path`):
-//   int max_depth  longest path in segments, Mitsuba's convention: 1 shows
-//                  emitters only, 2 direct light; medium collisions count
-//                  as vertices, null boundaries not; -1 (default) unbounded.
-//   int rr_depth   vertices after which Russian roulette may end paths (5).
+// Parameters: VolPathTracer::Parameters() below, as `path`'s; medium
+// collisions count as vertices in max_depth and rr_depth, null boundaries
+// not.
 
 #include <algorithm>
 #include <bit>
@@ -90,6 +88,8 @@ uint32_t FloatBits(float f) { return std::bit_cast<uint32_t>(f); }
 
 class VolPathTracer final : public Transport {
  public:
+  static ParameterSchema Parameters() { return PathLength::Parameters(); }
+
   explicit VolPathTracer(const Properties& props) : length_(props) {}
 
   uint32_t Dimensions() const override {

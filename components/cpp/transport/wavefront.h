@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "yarf/error.h"
+#include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/shading.h"
 #include "yarf/transport.h"
@@ -149,6 +150,14 @@ struct PathLength {
       : max_depth(int(props.Int("max_depth", -1))), rr_depth(int(props.Int("rr_depth", 5))) {
     if (max_depth < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
     if (rr_depth < 1) throw Error("property 'rr_depth' must be >= 1");
+  }
+  // The declarations of the two, for the schemas of the methods that read them.
+  static std::vector<Parameter> Parameters() {
+    return {
+        Parameter::Int("max_depth").Default(-1).Min(-1).Doc(
+            "longest path in segments (Mitsuba's: 1 emitters only, 2 direct light); -1 unbounded"),
+        Parameter::Int("rr_depth").Default(5).Min(1).Doc("depth from which Russian roulette may end paths"),
+    };
   }
   // Bounces to reserve primary-sample dimensions for: 64 when unbounded.
   uint32_t Bounces() const { return uint32_t(max_depth < 0 ? 64 : max_depth); }
