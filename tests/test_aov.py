@@ -127,7 +127,7 @@ def test_null_boundaries_are_not_surfaces(client: Client) -> None:
 
 
 def test_an_unknown_variable_is_refused_naming_the_known_ones(client: Client) -> None:
-    with pytest.raises((grpc.RpcError, RuntimeError), match="albedo, sh_normal"):
+    with pytest.raises((grpc.RpcError, RuntimeError), match="'albedo', 'sh_normal'"):
         render(client, "normals")
 
 

@@ -19,11 +19,7 @@
 //
 // Primary sample space: 0–1 film, 2–3 lens, 4 time, 6–7 the direction.
 //
-// Properties:
-//   bool  cossample    cosine-weighted directions (default true); false:
-//                      uniform over the hemisphere, each weighted 2 cos θ.
-//   float maxdistance  farthest an occluder counts, from the surface
-//                      (default infinity).
+// Parameters: AmbientOcclusion::Parameters() below.
 
 #include <algorithm>
 #include <utility>
@@ -44,6 +40,15 @@ constexpr int kMaxCrossings = 256;
 
 class AmbientOcclusion final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    return {
+        Parameter::Bool("cossample").Default(true).Doc(
+            "cosine-weighted directions; false: uniform over the hemisphere, each weighted 2 cos θ"),
+        Parameter::Float("maxdistance").Min(0).Doc(
+            "farthest an occluder counts, from the surface; infinity when absent"),
+    };
+  }
+
   explicit AmbientOcclusion(const Properties& props)
       : cosine_(props.Bool("cossample", true)), max_distance_(float(props.Float("maxdistance", kInfinity))) {
     if (!(max_distance_ > 0)) throw Error("property 'maxdistance' must be > 0");

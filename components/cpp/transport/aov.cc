@@ -4,7 +4,8 @@
 // samples through the film's filter, as every image does, so edges blend
 // (a box filter of radius 0.5 keeps them per pixel).
 //
-// Property "aov", one of (R, G, B of the image):
+// Parameters: Aov::Parameters() below. What each value of "aov" gives
+// (R, G, B of the image):
 //   albedo          the directional albedo ρ(ω_o) = ∫ f |cos θ| dω of the
 //                   surface's model toward the camera, estimated by one
 //                   model sample per camera sample (f |cos| / pdf); what
@@ -48,6 +49,13 @@ constexpr uint32_t kModelSample = kTransportDimension;
 
 class Aov final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    return {Parameter::String("aov")
+                .Default("albedo")
+                .Choices(std::vector<std::string>(kAovNames.begin(), kAovNames.end()))
+                .Doc("the variable rendered")};
+  }
+
   explicit Aov(const Properties& props) : variable_(ParseVariable(props.String("aov", "albedo"))) {}
 
   uint32_t Dimensions() const override { return kTransportDimension + 3; }

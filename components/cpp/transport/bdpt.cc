@@ -35,9 +35,8 @@
 // camera vertex (direction pair, lobe, unused), then four per light
 // vertex; the walks through media draw from a hash of the coordinates.
 //
-// Properties:
-//   int max_depth  longest path in segments (Mitsuba's convention), ≥ 1,
-//                  default 8; bidirectional weights need it finite.
+// Parameters: Bdpt::Parameters() below; bidirectional weights need
+// max_depth finite.
 
 #include <algorithm>
 #include <bit>
@@ -173,6 +172,10 @@ float DiskPdf(const SceneView& scene) {
 
 class Bdpt final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    return {Parameter::Int("max_depth").Default(8).Min(1).Doc("longest path in segments (Mitsuba's convention)")};
+  }
+
   explicit Bdpt(const Properties& props) : max_depth_(int(props.Int("max_depth", 8))) {
     if (max_depth_ < 1)
       throw Error("property 'max_depth' must be >= 1: bidirectional weights need a finite depth");

@@ -44,19 +44,11 @@
 // from 6: light position pair, specular direction pair, (light choice,
 // lobe choice), two unused.
 //
-// Properties:
-//   float accuracy     Ward's a (0.2): smaller makes more records.
-//   int gather_rays    rays per record (512); M×N is the nearest product
-//                      not above it (13×39 = 507 for 512).
-//   float min_spacing  least R, as a fraction of the scene's extent, the
-//                      diagonal of its triangles' bounds (0.01).
-//   float max_spacing  largest R, likewise (0.25).
-//   int prepare_grid   camera rays per pixel and axis visited by Prepare (2).
-//   int max_depth      longest specular chain from the camera, in
-//                      segments (8).
-//   string cache_file  where records are kept between jobs ("": none): a
-//                      file name in the submitting user's folder on the
-//                      server (<state-dir>/files/<user>/), never a path.
+// Parameters: IrradianceCache::Parameters() below. gather_rays: M×N is
+// the nearest product not above it (13×39 = 507 for 512); the spacings
+// are fractions of the scene's extent, the diagonal of its triangles'
+// bounds; cache_file is a file name in the submitting user's folder on
+// the server (<state-dir>/files/<user>/), never a path.
 
 #include <algorithm>
 #include <bit>
@@ -181,6 +173,19 @@ uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
 
 class IrradianceCache final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Float("accuracy").Default(0.2).Range(0, 2).Doc("Ward's a, > 0: smaller makes more records"),
+        P::Int("gather_rays").Default(512).Range(16, 1 << 20).Doc("rays per record"),
+        P::Float("min_spacing").Default(0.01).Min(0).Doc("least R, as a fraction of the scene's extent, > 0"),
+        P::Float("max_spacing").Default(0.25).Min(0).Doc("largest R, likewise, >= min_spacing"),
+        P::Int("prepare_grid").Default(2).Range(1, 64).Doc("camera rays per pixel and axis visited by Prepare"),
+        P::Int("max_depth").Default(8).Range(1, 64).Doc("longest specular chain from the camera, in segments"),
+        P::File("cache_file").Doc("a file name in your folder on the server for the records; none when absent"),
+    };
+  }
+
   explicit IrradianceCache(const Properties& props) : settings_(props), records_(settings_.accuracy, 1) {}
 
   uint32_t Dimensions() const override { return kTransportDimension + kPerSegment * uint32_t(settings_.max_depth); }

@@ -26,27 +26,11 @@
 // Primary sample space: 0–1 film, 2–3 lens, 4 time; with final_gather
 // also 6–7 light position, 8–9 gather direction, 10 light choice, 11 lobe.
 //
-// Properties:
-//   float max_patch_area  elements are cut until smaller than this, in
-//                         scene units² (default: the scene's area / 1024).
-//   int subdivision       cut every triangle this many times instead (-1).
-//   int shooter_levels    shooters are this many levels coarser (2).
-//   int shooter_points    form-factor sample points per shooter: 1, 4, 16
-//                         or 64 (4).
-//   float tolerance       stop when the unshot power is below this
-//                         fraction of the emitted power (1e-3).
-//   int max_shots         stop after this many shots (100000).
-//   bool ambient          add Cohen et al.'s ambient term for the power
-//                         still unshot (true).
-//   string shading        "gouraud" (default; vertices receive too, ~1.5×
-//                         the rays) or "flat".
-//   bool final_gather     gather at visible points (false).
-//   bool report           print the solve's totals to the server's log
-//                         (false): one line "radiosity: elements N
-//                         shooters N shots N rays N scaled_shots N" then
-//                         "emitted", "absorbed", "escaped", "unshot" and
-//                         "absorbed_by_solution", each three numbers (RGB
-//                         power, W). emitted = absorbed + escaped + unshot.
+// Parameters: Radiosity::Parameters() below. Gouraud shading has the
+// vertices receive too (~1.5× the rays). report prints one line
+// "radiosity: elements N shooters N shots N rays N scaled_shots N" then
+// "emitted", "absorbed", "escaped", "unshot" and "absorbed_by_solution",
+// each three numbers (RGB power, W); emitted = absorbed + escaped + unshot.
 
 #include <cinttypes>
 #include <cstdio>
@@ -93,6 +77,24 @@ struct Solution {
 
 class Radiosity final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    using P = Parameter;
+    return {
+        P::Float("max_patch_area").Min(0).Doc(
+            "elements are cut until smaller, in scene units²; the scene's area / 1024 when absent"),
+        P::Int("subdivision").Default(-1).Range(-1, 10).Doc("cut every triangle this many times instead; -1: by area"),
+        P::Int("shooter_levels").Default(2).Range(0, 10).Doc("shooters are this many levels coarser"),
+        P::Int("shooter_points").Default(4).Range(1, 64).Doc("form-factor sample points per shooter: 1, 4, 16 or 64"),
+        P::Float("tolerance").Default(1e-3).Min(0).Doc(
+            "stop when the unshot power is below this fraction of the emitted"),
+        P::Int("max_shots").Default(100000).Range(0, 100'000'000).Doc("stop after this many shots"),
+        P::Bool("ambient").Default(true).Doc("add Cohen et al.'s ambient term for the power still unshot"),
+        P::String("shading").Default("gouraud").Choices({"gouraud", "flat"}).Doc("how elements are shown"),
+        P::Bool("final_gather").Default(false).Doc("gather at visible points"),
+        P::Bool("report").Default(false).Doc("print the solve's totals to the server's log"),
+    };
+  }
+
   explicit Radiosity(const Properties& props)
       : max_patch_area_(props.Float("max_patch_area", -1)),
         subdivision_(int(props.Int("subdivision", -1))),

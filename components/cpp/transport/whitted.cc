@@ -15,9 +15,7 @@
 //
 // Primary sample space: 0–1 film, 2–3 lens, 4 time; nothing more.
 //
-// Properties:
-//   int max_depth  longest path in segments, counting the shadow ray
-//                  (Mitsuba's convention: 1 shows emitters only); default 6.
+// Parameters: Whitted::Parameters() below.
 
 #include <vector>
 
@@ -36,6 +34,11 @@ struct Branch {
 
 class Whitted final : public Transport {
  public:
+  static ParameterSchema Parameters() {
+    return {Parameter::Int("max_depth").Default(6).Min(0).Doc(
+        "longest path in segments, counting the shadow ray (Mitsuba's: 1 emitters only)")};
+  }
+
   explicit Whitted(const Properties& props) : max_depth_(int(props.Int("max_depth", 6))) {
     if (max_depth_ < 0) throw Error("property 'max_depth' must be >= 0");
   }
