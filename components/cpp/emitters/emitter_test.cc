@@ -321,7 +321,7 @@ TEST_F(EmitterTest, AnEnvironmentMapShowsItsTexelsWhereMitsubaAndPbrtPutThem) {
   // toward u = (x + ½) / W, v = y / (H − 1), where d = (sin θ sin φ, cos θ,
   // −sin θ cos φ) with φ = 2πu, θ = πv; w is the direction of travel, −d.
   const auto latlong = Make("envmap", EnvironmentMap("latlong", 16, 8, 2));
-  for (const auto [x, y] : {std::pair{5, 2}, {0, 1}, {3, 6}, {15, 4}, {8, 3}}) {
+  for (const auto& [x, y] : {std::pair{5, 2}, {0, 1}, {3, 6}, {15, 4}, {8, 3}}) {
     const float phi = 2 * kPi * (float(x) + 0.5f) / 16, theta = kPi * float(y) / 7;
     const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
     const Vec3 l = RadianceToward(*latlong, -d), expected = Sky(x, y) * 2;

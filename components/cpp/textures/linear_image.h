@@ -29,7 +29,7 @@ namespace yarf::textures {
 // the image is and when it is needed.
 inline std::vector<Parameter> ImageFileParameters(const std::string& doc) {
   return {
-      Parameter::File("filename").Doc(doc),
+      Parameter::File("filename").Required().Doc(doc),
       Parameter::String("asset").Doc("the SHA-256 of an uploaded image, in place of filename"),
   };
 }

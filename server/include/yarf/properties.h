@@ -75,12 +75,13 @@ class Properties {
   Vec3 Vector(const std::string& key, Vec3 fallback) const {
     return Has(key) ? Get<Vec3>(key, Find(key), "vec3") : fallback;
   }
-  // An RGB value; a plain float f is accepted as (f, f, f).
+  // An RGB value; a plain number f (float or int) is accepted as (f, f, f).
   Vec3 Color(const std::string& key, Vec3 fallback) const { return Has(key) ? Color(key) : fallback; }
   // A required RGB value.
   Vec3 Color(const std::string& key) const {
     const Value& v = Find(key);
     if (auto* f = std::get_if<double>(&v)) return Vec3(float(*f), float(*f), float(*f));
+    if (auto* i = std::get_if<int64_t>(&v)) return Vec3(float(*i), float(*i), float(*i));
     return Get<Rgb>(key, v, "rgb").value;
   }
   // An RGB reflectance: every channel in [0, 1].

@@ -107,6 +107,16 @@ void CheckValue(const Parameter& parameter, const v1::Property& value, const std
   }
 }
 
+// Whether a scene gives `parameter`: a file named `...filename` may come as
+// the hash of an uploaded asset, `...asset`, which the server resolves.
+bool Given(const v1::Properties& properties, const Parameter& parameter) {
+  if (properties.values().contains(parameter.name)) return true;
+  constexpr std::string_view kFile = "filename";
+  const std::string& name = parameter.name;
+  if (parameter.type != ParameterType::kFile || !name.ends_with(kFile)) return false;
+  return properties.values().contains(name.substr(0, name.size() - kFile.size()) + "asset");
+}
+
 std::vector<std::string> NamesOf(const std::vector<Parameter>& parameters) {
   std::vector<std::string> names;
   for (const Parameter& parameter : parameters) names.push_back(parameter.name);
@@ -150,7 +160,7 @@ void CheckProperties(const ComponentInfo& info, const v1::Properties& properties
     CheckValue(*parameter, value, place);
   }
   for (const Parameter& parameter : info.parameters)
-    if (parameter.required && !properties.values().contains(parameter.name))
+    if (parameter.required && !Given(properties, parameter))
       throw Error(where + ": '" + info.class_name + "' needs parameter '" + parameter.name + "' (" +
                   ParameterTypeName(parameter.type) + (parameter.doc.empty() ? "" : ": " + parameter.doc) + ")");
 }

@@ -86,6 +86,18 @@ TEST(ParameterChecks, RefuseIllTypedOutOfRangeAndUnlistedValues) {
   EXPECT_NE(Refusal(Metal(), v1::Properties()).find("'metal' needs parameter 'nested'"), std::string::npos);
 }
 
+TEST(ParameterChecks, AnUploadedAssetStandsInForARequiredFile) {
+  ComponentInfo info = Metal();
+  info.parameters = {Parameter::File("filename").Required(), Parameter::String("asset"),
+                     Parameter::File("density_filename").Required(), Parameter::String("density_asset")};
+  v1::Properties properties;
+  (*properties.mutable_values())["asset"].set_string_value(std::string(64, 'a'));
+  (*properties.mutable_values())["density_filename"].set_string_value("smoke.vol");
+  EXPECT_EQ(Refusal(info, properties), "");
+  properties.mutable_values()->erase("asset");
+  EXPECT_NE(Refusal(info, properties).find("needs parameter 'filename'"), std::string::npos);
+}
+
 TEST(ParameterChecks, AClassWithoutASchemaIsNotChecked) {
   ComponentInfo info = Metal();
   info.declares_parameters = false;
