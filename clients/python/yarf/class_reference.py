@@ -6,11 +6,14 @@ from __future__ import annotations
 
 import difflib
 import math
+import textwrap
 from collections.abc import Iterable
 
 from yarf.v1 import component_pb2
 
 NO_SCHEMA = "(declares no parameters: it takes what its code reads)"
+# A range wider than this (a long list of choices) gets lines of its own in a terminal.
+RANGE_COLUMN = 24
 
 
 def _number(value: float) -> str:
@@ -64,11 +67,19 @@ def describe_class(info: component_pb2.ComponentInfo) -> list[str]:
         return lines
     if not info.parameters:
         lines.append("  (no parameters)")
-    rows = [(p.name, p.type, default_text(p), value_range(p), p.doc) for p in info.parameters]
+    ranges = [value_range(p) for p in info.parameters]
+    rows = [
+        (p.name, p.type, default_text(p), r if len(r) <= RANGE_COLUMN else "(below)", p.doc)
+        for p, r in zip(info.parameters, ranges, strict=True)
+    ]
     widths = [max(len(row[i]) for row in rows) for i in range(4)] if rows else []
-    for row in rows:
+    for row, full_range in zip(rows, ranges, strict=True):
         cells = [cell.ljust(width) for cell, width in zip(row[:4], widths, strict=True)]
         lines.append(("  " + "  ".join(cells) + "  " + row[4]).rstrip())
+        if len(full_range) > RANGE_COLUMN:
+            lines += textwrap.wrap(
+                full_range, 96, initial_indent="      ", subsequent_indent="      "
+            )
     return lines
 
 
