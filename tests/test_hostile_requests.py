@@ -238,7 +238,7 @@ def test_photon_counts_beyond_their_range_are_refused_at_submit(client: Client) 
         )
     assert refused.value.code() == grpc.StatusCode.INVALID_ARGUMENT  # type: ignore[attr-defined]
     details = str(refused.value.details())  # type: ignore[attr-defined]
-    assert "options.transport.properties.photons: 1e+10 is above 5e+07" in details, details
+    assert "options.transport.properties.photons: 10000000000 is above 50000000" in details, details
 
 
 def start_shooting_photons(client: Client, scene: scene_pb2.Scene, name: str) -> str:

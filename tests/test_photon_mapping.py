@@ -173,7 +173,7 @@ def refusal(client: Client, transport: scene_pb2.ComponentSpec) -> str:
     ("transport", "message"),
     [
         (component("photon_map", photons=-1), "photons: -1 is below 0"),
-        (component("photon_map", photons=10**10), "photons: 1e+10 is above 5e+07"),
+        (component("photon_map", photons=10**10), "photons: 10000000000 is above 50000000"),
         (component("photon_map", caustic_photons=-5), "caustic_photons: -5 is below 0"),
         (component("photon_map", nearest=0), "nearest: 0 is below 1"),
         (component("sppm", photons_per_pass=-1), "photons_per_pass: -1 is below 1"),

@@ -73,9 +73,14 @@ const char* KindName(Kind kind) {
   }
 }
 
+// A bound or value as people write it: whole numbers in full (a photon
+// count of 50000000, not 5e+07).
 std::string Number(double value) {
   char text[32];
-  std::snprintf(text, sizeof text, "%g", value);
+  if (value == std::floor(value) && std::fabs(value) < 1e15)
+    std::snprintf(text, sizeof text, "%.0f", value);
+  else
+    std::snprintf(text, sizeof text, "%g", value);
   return text;
 }
 
