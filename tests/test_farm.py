@@ -21,7 +21,7 @@ import grpc
 import numpy as np
 import pytest
 from conftest import CORNELL_BOX, small_scene
-from farm_processes import Farm, Node, find_nats_server, free_port, two_node_farm
+from farm_processes import Farm, Node, free_port, two_node_farm
 from imagestats import block_z_test
 
 from yarf import Client, LocalServer, RenderResult, load_scene
@@ -31,11 +31,6 @@ from yarf.farm.cache import SceneCache
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.tasks import SplitPolicy, Task, Window, split
 from yarf.v1 import render_pb2, scene_pb2
-
-try:
-    find_nats_server()
-except FileNotFoundError:
-    pytest.skip("nats-server is not installed", allow_module_level=True)
 
 # Small tasks, so that small test jobs still spread over several nodes:
 # 8 sample shares per job, and images over 1024 pixels cut into 16² tiles.

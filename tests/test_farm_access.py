@@ -16,7 +16,7 @@ from pathlib import Path
 import grpc
 import pytest
 from conftest import small_scene
-from farm_processes import Coordinator, Farm, NatsServer, find_nats_server
+from farm_processes import Coordinator, Farm, NatsServer
 from test_access import (
     ALICE,
     BOB,
@@ -29,11 +29,6 @@ from test_access import (
 
 from yarf import Client, LocalServer
 from yarf.v1 import render_pb2
-
-try:
-    find_nats_server()
-except FileNotFoundError:
-    pytest.skip("nats-server is not installed", allow_module_level=True)
 
 # Small tasks: a test job still makes several.
 SPLIT_ARGS = ["--shares", "4", "--min-task-work", "256"]

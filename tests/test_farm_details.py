@@ -16,18 +16,13 @@ from collections.abc import Iterator
 import grpc
 import pytest
 from conftest import CORNELL_BOX, grouped_scene, small_scene
-from farm_processes import Farm, find_nats_server, two_node_farm
+from farm_processes import Farm, two_node_farm
 from test_access import ALICE, BOB, ROOT, Secrets
 
 from yarf import LocalServer, load_scene
 from yarf.farm.job_log import format_line
 from yarf.farm.scene_summary import summarize_scene
 from yarf.v1 import render_pb2
-
-try:
-    find_nats_server()
-except FileNotFoundError:
-    pytest.skip("nats-server is not installed", allow_module_level=True)
 
 # Four sample shares per job, even of small images.
 COORDINATOR_ARGS = ["--shares", "4", "--min-task-work", "256"]
