@@ -89,7 +89,7 @@ class SceneAssets:
         return len(missing)
 
 
-def _file_components(scene: scene_pb2.Scene) -> Iterator[tuple[str, scene_pb2.ComponentSpec]]:
+def file_components(scene: scene_pb2.Scene) -> Iterator[tuple[str, scene_pb2.ComponentSpec]]:
     """The components of ``scene`` that may read files of their own (textures'
     images, environment maps, media's grids), each with where it is for errors."""
     for index, texture in enumerate(scene.textures):
@@ -132,7 +132,7 @@ def scene_assets(scene: scene_pb2.Scene, base_dir: str | Path) -> SceneAssets:
     base = Path(base_dir).resolve()
     assets = SceneAssets()
     hashes_of_files: dict[Path, str] = {}
-    for where, spec in _file_components(scene):
+    for where, spec in file_components(scene):
         for key, value in spec.properties.values.items():
             if not is_file_key(key) or value.WhichOneof("value") != "string_value":
                 continue
@@ -172,7 +172,7 @@ def scene_asset_hashes(scene: scene_pb2.Scene) -> list[str]:
     """The hashes of the uploaded assets ``scene`` names (meshes' ``asset`` and
     textures' ``asset`` property), each once, in the order first named."""
     hashes: dict[str, None] = {}
-    for _, spec in _file_components(scene):
+    for _, spec in file_components(scene):
         for key, value in spec.properties.values.items():
             if is_asset_key(key) and value.WhichOneof("value") == "string_value":
                 hashes[value.string_value] = None

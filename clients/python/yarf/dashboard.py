@@ -28,7 +28,7 @@ import json
 import re
 import socket
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -38,9 +38,8 @@ from urllib.parse import parse_qsl, unquote, urlsplit
 
 import grpc
 import numpy as np
-from google.protobuf.message import Message
 
-from yarf.assets import is_file_key
+from yarf.assets import file_components, is_file_key
 from yarf.client import FINAL_STATES, Client
 from yarf.images import srgb_bytes
 from yarf.render_options import AOV_NAMES, OptionError, add_render_arguments, render_settings
@@ -302,29 +301,11 @@ def file_references(scene: scene_pb2.Scene) -> list[str]:
         for where, shape in iter_shapes(scene)
         if shape.WhichOneof("geometry") == "mesh" and shape.mesh.WhichOneof("source") == "file"
     ]
-    for spec in _component_specs(scene):
+    for where, spec in file_components(scene):
         for key, value in spec.properties.values.items():
             if is_file_key(key) and value.WhichOneof("value") == "string_value":
-                found.append(f"{spec.class_name}: {key} {value.string_value!r}")
+                found.append(f"{where}: {key} {value.string_value!r}")
     return found
-
-
-def _component_specs(message: Message) -> Iterator[scene_pb2.ComponentSpec]:
-    """Every ComponentSpec set anywhere in ``message``."""
-    for field, value in message.ListFields():
-        if field.message_type is None:
-            continue
-        if field.message_type.GetOptions().map_entry:
-            entry = field.message_type.fields_by_name["value"]
-            items = list(value.values()) if entry.message_type is not None else []
-        elif field.is_repeated:
-            items = list(value)
-        else:
-            items = [value]
-        for item in items:
-            if isinstance(item, scene_pb2.ComponentSpec):
-                yield item
-            yield from _component_specs(item)
 
 
 def load_uploaded_scene(data: bytes, file_name: str) -> UploadedScene:
