@@ -484,13 +484,15 @@ class Coordinator:
 
     async def _finish(self, job: Job, state: int, error: str = "") -> None:
         record = job.record
+        # Ended in memory before the first await: a heartbeat or result handled
+        # meanwhile sees a final job and adds nothing to it.
+        record.state = state
+        record.error = error
+        record.finished_at = time.time()
         if state != render_pb2.SUCCEEDED:
             # Nodes watch the flag and stop the job's running tasks: first,
             # before the disk. A restart reads the flag back (see _resume).
             await self._kv.put(streams.cancel_key(record.id), b"1")
-        record.state = state
-        record.error = error
-        record.finished_at = time.time()
         if record.started_at is None:
             record.started_at = record.finished_at
         self._store.update_job(record)
