@@ -63,18 +63,24 @@ class TilePoints : public PrimarySamples {
   // The sampler's coordinate `dimension` of point i, made with its pair
   // (2k, 2k + 1) at the first use of either and kept: the two share the
   // sampler's work on the index, and a coordinate asked for twice (the
-  // film position) is made once. Points whose paths ended never pay.
+  // film position) is made once. Pairs are made for an aligned block of
+  // points at once, one call the sampler can vectorise; a block whose
+  // paths have all ended never pays.
   float Uniform(size_t i, uint32_t dimension) const {
     const uint32_t pair = dimension / 2;
     if (pair >= pairs_.size()) pairs_.resize(pair + 1);
     std::vector<float>& values = pairs_[pair];
     if (values.empty()) values.assign(2 * indices_.size(), kUnmade);
-    float* made = &values[2 * i];
-    if (made[0] == kUnmade) sampler_.SamplePairs({&indices_[i], 1}, {&seeds_[i], 1}, pair, {made, 2});
-    return made[dimension % 2];
+    if (values[2 * i] == kUnmade) {
+      const size_t first = i - i % kBlock, count = std::min(kBlock, indices_.size() - first);
+      sampler_.SamplePairs({&indices_[first], count}, {&seeds_[first], count}, pair,
+                           {&values[2 * first], 2 * count});
+    }
+    return values[2 * i + dimension % 2];
   }
   // Marks a pair not made yet: samplers give values in [0, 1).
   static constexpr float kUnmade = -1;
+  static constexpr size_t kBlock = 16;
 
   struct Pixel {
     uint32_t x, y;
