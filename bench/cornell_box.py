@@ -22,6 +22,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from bench_report import cpu_model
 
 from yarf.client import Client
 from yarf.scene import load_scene
@@ -39,10 +40,10 @@ EQUAL_TIME_SEEDS = (7, 8, 9)
 
 
 def yarf_render(
-    client: Client, spp: int, seed: int, scene_path: Path = SCENE
+    client: Client, spp: int, seed: int, scene_path: Path = SCENE, threads: int = 0
 ) -> tuple[np.ndarray, dict[str, float]]:
     scene = load_scene(scene_path)
-    job = client.submit(scene, spp=spp, seed=seed, name=f"bench {spp} spp")
+    job = client.submit(scene, spp=spp, seed=seed, name=f"bench {spp} spp", threads=threads)
     status = client.wait(job)
     if status.error:
         sys.exit(f"yarf render failed: {status.error}")
@@ -108,12 +109,22 @@ def spp_for(seconds: float, samples_per_second: float, pixels: int) -> int:
 
 
 def main() -> None:
-    report: dict[str, object] = {}
+    report: dict[str, object] = {"cpu_model": cpu_model()}
     with LocalServer() as server:
         client = server.client()
         yarf_render(client, 4, 99)  # warm-up: plugins, caches
         _, yarf = yarf_render(client, THROUGHPUT_SPP, 1)
         report["yarf"] = yarf
+
+        # Scaling: the same render on one thread and on every thread.
+        cores = os.cpu_count() or 1
+        _, one = yarf_render(client, THROUGHPUT_SPP, 1, threads=1)
+        _, every = yarf_render(client, THROUGHPUT_SPP, 1, threads=cores)
+        report["threads"] = {
+            "threads": cores,
+            "one_thread_samples_per_second": one["samples_per_second"],
+            "samples_per_second": every["samples_per_second"],
+        }
 
         ceiling = embree_ceiling()
         c_best, s_best = ceiling["closest"]["best"], ceiling["shadow"]["best"]
@@ -166,6 +177,8 @@ def main() -> None:
         / mitsuba["llvm_ad_rgb"]["samples_per_second"],
         "samples_vs_mitsuba_scalar": yarf["samples_per_second"]
         / mitsuba["scalar_rgb"]["samples_per_second"],
+        "threads_speedup": report["threads"]["samples_per_second"]
+        / report["threads"]["one_thread_samples_per_second"],
         "equal_time_rmse_vs_mitsuba_llvm": eq["yarf"]["rmse"] / eq["mitsuba_llvm_ad_rgb"]["rmse"],
         "equal_spp_rmse_vs_mitsuba_llvm": report["equal_spp_16"]["yarf_rmse"]
         / report["equal_spp_16"]["mitsuba_llvm_ad_rgb_rmse"],
@@ -175,6 +188,7 @@ def main() -> None:
     out = ROOT / "out" / "bench"
     out.mkdir(parents=True, exist_ok=True)
     (out / "cornell_box.json").write_text(json.dumps(report, indent=2))
+    print(f"cpu: {report['cpu_model']}")
     print(
         f"yarf: {yarf['samples_per_second'] / 1e6:.2f} M samples/s, "
         f"{yarf['closest_hit_rays_per_second'] / 1e6:.2f} M closest-hit rays/s, "

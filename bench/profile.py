@@ -15,7 +15,6 @@ bench/profiles/ keeps committed copies.
 from __future__ import annotations
 
 import os
-import platform
 import re
 import signal
 import subprocess
@@ -24,11 +23,12 @@ import tempfile
 import time
 from pathlib import Path
 
+from bench_report import cpu_model
+from cornell_box import LLVM, MITSUBA_SCENE, SCENE
+
 from yarf.client import Client
 from yarf.scene import load_scene
 from yarf.server import LocalServer
-
-from cornell_box import LLVM, MITSUBA_SCENE, SCENE
 
 ROOT = Path(__file__).resolve().parent.parent
 SPP = int(os.environ.get("YARF_PROFILE_SPP", "128"))
@@ -36,17 +36,21 @@ TOP = 25
 COUNTERS = "cycles,instructions,cache-references,cache-misses"
 
 
-def cpu_model() -> str:
-    for line in Path("/proc/cpuinfo").read_text().splitlines():
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip()
-    return platform.processor() or "unknown"
-
-
 def report(data: Path, sort: str) -> list[str]:
     """perf's table of the top entries by share of samples, lines with a %."""
     result = subprocess.run(
-        ["perf", "report", "-i", str(data), "--no-children", "--sort", sort, "--stdio", "-g", "none"],
+        [
+            "perf",
+            "report",
+            "-i",
+            str(data),
+            "--no-children",
+            "--sort",
+            sort,
+            "--stdio",
+            "-g",
+            "none",
+        ],
         capture_output=True,
         text=True,
         check=True,
@@ -64,7 +68,7 @@ def counters(stat_output: str) -> list[str]:
         if match:
             values[match.group(2)] = float(match.group(1).replace(",", ""))
     if "cycles" not in values or "instructions" not in values:
-        return ["hardware counters: not supported on this machine (perf stat lists them <not supported>)"]
+        return ["hardware counters: not supported on this machine (perf stat: <not supported>)"]
     lines = [f"IPC: {values['instructions'] / values['cycles']:.2f}"]
     if values.get("cache-references"):
         share = values.get("cache-misses", 0) / values["cache-references"]
@@ -119,7 +123,11 @@ def profile_mitsuba(folder: Path) -> list[str]:
         str(SPP),
     ]
     stat = subprocess.run(
-        ["perf", "stat", "-e", COUNTERS, "--", *command], env=env, capture_output=True, text=True, check=True
+        ["perf", "stat", "-e", COUNTERS, "--", *command],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
     )
     subprocess.run(
         ["perf", "record", "-F", "999", "-o", str(data), "--", *command],
@@ -143,11 +151,16 @@ def profile_mitsuba(folder: Path) -> list[str]:
 
 def main() -> None:
     commit = subprocess.run(
-        ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=False
+        ["git", "rev-parse", "--short", "HEAD"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=False,
     ).stdout.strip()
     with tempfile.TemporaryDirectory() as folder:
         lines = [
-            f"# Cornell box profile — CPU: {cpu_model()}, {os.cpu_count()} threads, commit {commit}",
+            f"# Cornell box profile — CPU: {cpu_model()}, {os.cpu_count()} threads, "
+            f"commit {commit}",
             "",
             *profile_yarf(Path(folder)),
             "",
