@@ -49,11 +49,11 @@ class TilePoints : public PrimarySamples {
   size_t Count() const override { return indices_.size(); }
   uint64_t SampleIndex(size_t i) const override { return first_index_ + i % samples_; }
   float Get(size_t i, uint32_t dimension) const override {
-    const size_t pixel = i / samples_;
     const float u = Uniform(i, dimension);
-    if (dimension == 0) return (pixels_[pixel].x + u) * inv_width_;
-    if (dimension == 1) return (pixels_[pixel].y + u) * inv_height_;
-    return Warp(i, dimension, u);
+    if (dimension >= 2) return Warp(i, dimension, u);
+    // Only the film position needs the point's pixel (a division).
+    const Pixel& pixel = pixels_[i / samples_];
+    return dimension == 0 ? (pixel.x + u) * inv_width_ : (pixel.y + u) * inv_height_;
   }
 
  protected:
