@@ -268,7 +268,7 @@ def main() -> int:
         except Exception:
             request = render_pb2.SubmitRequest()  # the checker sees the wire bytes as they are
         try:
-            accepted.append(checker.check_wire(wire))
+            accepted.append(checker.check_wire(wire).accepted)
         except (InvalidRequest, AddressNotAllowed):
             refused += 1
         except (OSError, EOFError) as error:

@@ -30,6 +30,7 @@ from yarf.farm import streams
 from yarf.farm.cache import SceneCache
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.tasks import SplitPolicy, Task, Window, split
+from yarf.farm.validation import SubmitChecker
 from yarf.v1 import render_pb2, scene_pb2
 
 # Small tasks, so that small test jobs still spread over several nodes:
@@ -72,14 +73,31 @@ def own_farm(request: pytest.FixtureRequest) -> Iterator[Farm]:
             print(running.log_tail())
 
 
-def split_of(scene: scene_pb2.Scene, spp: int, policy: SplitPolicy) -> list[Task]:
-    request = render_pb2.SubmitRequest(scene=scene, options=render_pb2.RenderOptions(spp=spp))
-    return split(request, policy)
+@pytest.fixture(scope="module")
+def checker() -> Iterator[SubmitChecker]:
+    """yarfd's own checks, which read how a job may be divided from its classes."""
+    running = SubmitChecker()
+    yield running
+    running.close()
+
+
+def split_of(
+    checker: SubmitChecker,
+    scene: scene_pb2.Scene,
+    spp: int,
+    policy: SplitPolicy,
+    options: render_pb2.RenderOptions | None = None,
+) -> list[Task]:
+    options = options or render_pb2.RenderOptions(spp=spp)
+    checked = checker.check(render_pb2.SubmitRequest(scene=scene, options=options), admin=True)
+    return split(checked.accepted, checked.splits, policy)
 
 
 @pytest.mark.parametrize(("width", "height", "spp"), [(32, 32, 64), (48, 32, 7), (100, 30, 1)])
-def test_tasks_cover_every_sample_of_every_pixel_once(width: int, height: int, spp: int) -> None:
-    tasks = split_of(cornell(width, height), spp, SplitPolicy(8, 16, 1024, 16))
+def test_tasks_cover_every_sample_of_every_pixel_once(
+    checker: SubmitChecker, width: int, height: int, spp: int
+) -> None:
+    tasks = split_of(checker, cornell(width, height), spp, SplitPolicy(8, 16, 1024, 16))
     covered = np.zeros((height, width, spp), dtype=int)
     for task in tasks:
         w = task.window
@@ -88,11 +106,12 @@ def test_tasks_cover_every_sample_of_every_pixel_once(width: int, height: int, s
     assert len({task.index for task in tasks}) == len(tasks)
 
 
-def test_a_share_of_a_job_asked_for_is_split_within_its_samples_and_window() -> None:
+def test_a_share_of_a_job_asked_for_is_split_within_its_samples_and_window(
+    checker: SubmitChecker,
+) -> None:
     options = render_pb2.RenderOptions(spp=40, first_sample=8)
     options.crop.CopyFrom(render_pb2.PixelWindow(x0=4, y0=2, x1=40, y1=30))
-    request = render_pb2.SubmitRequest(scene=cornell(48, 32), options=options)
-    tasks = split(request, SplitPolicy(8, 16, 256, 16))
+    tasks = split_of(checker, cornell(48, 32), 40, SplitPolicy(8, 16, 256, 16), options)
     covered = np.zeros((32, 48, 40), dtype=int)
     for task in tasks:
         w = task.window
@@ -102,19 +121,29 @@ def test_a_share_of_a_job_asked_for_is_split_within_its_samples_and_window() -> 
     assert covered.sum() == 28 * 36 * 32
 
 
-def test_only_transports_writing_their_own_pixel_are_tiled() -> None:
+def test_jobs_are_divided_by_their_classes_capabilities(checker: SubmitChecker) -> None:
+    """Sample shares need an integrator declaring sample_passes; tiles a pixel_local
+    transport too, and a filter no wider than a pixel. The light tracer (class
+    "light") and BDPT splat anywhere on the film, so their jobs are never tiled."""
     policy = SplitPolicy(shares=4, min_task_work=1, tile_pixels=256, tile_size=16)
-    assert any(task.crop for task in split_of(cornell(32), 16, policy))
-    splatting = cornell(32)
-    splatting.transport.class_name = "bdpt"
+    assert any(task.crop for task in split_of(checker, cornell(32), 16, policy))
     wide_filter = cornell(32)
     wide_filter.film.filter.kind = scene_pb2.ReconstructionFilter.GAUSSIAN
+    untiled = [wide_filter]
+    for transport in ("light", "bdpt"):
+        splatting = cornell(32)
+        splatting.transport.class_name = transport
+        untiled.append(splatting)
+    for scene in untiled:
+        tasks = split_of(checker, scene, 16, policy)
+        assert not any(task.crop for task in tasks) and len(tasks) == 4, scene.transport
+    for transport in ("volpath", "sppm"):
+        tiled = cornell(32)
+        tiled.transport.class_name = transport
+        assert any(task.crop for task in split_of(checker, tiled, 16, policy)), transport
     other_integrator = cornell(32)
     other_integrator.integrator.class_name = "vegas"
-    for scene in (splatting, wide_filter):
-        tasks = split_of(scene, 16, policy)
-        assert not any(task.crop for task in tasks) and len(tasks) == 4
-    assert len(split_of(other_integrator, 16, policy)) == 1
+    assert len(split_of(checker, other_integrator, 16, policy)) == 1
 
 
 def test_merge_weights_shares_by_their_sample_counts() -> None:

@@ -152,34 +152,80 @@ def test_a_python_component_declares_its_init_and_submit_checks_it(
         process.stop()
 
 
-class MalformedSchema(component_pb2_grpc.RegistryServicer):
-    """A component process whose class declares a default its type cannot hold."""
+class Lister(component_pb2_grpc.RegistryServicer):
+    """A component process that lists one class, described as given."""
 
-    INFO = component_pb2.ComponentInfo(
-        class_name="odd_bsdf",
-        version="1.0.0",
-        interfaces=["yarf.v1.SurfaceModel"],
-        declares_parameters=True,
-        parameters=[component_pb2.ParameterInfo(name="roughness", type="float", default_value="x")],
-    )
+    def __init__(self, info: component_pb2.ComponentInfo) -> None:
+        self.info = info
 
     def ListClasses(
         self, request: object, context: grpc.ServicerContext
     ) -> component_pb2.ListClassesReply:
-        return component_pb2.ListClassesReply(classes=[self.INFO])
+        return component_pb2.ListClassesReply(classes=[self.info])
 
 
-def test_a_registration_with_a_malformed_schema_is_refused(client: Client) -> None:
+ODD_BSDF = component_pb2.ComponentInfo(
+    class_name="odd_bsdf", version="1.0.0", interfaces=["yarf.v1.SurfaceModel"]
+)
+# A default its type cannot hold, and a capability there is none of.
+MALFORMED_SCHEMA = component_pb2.ComponentInfo(
+    declares_parameters=True,
+    parameters=[component_pb2.ParameterInfo(name="roughness", type="float", default_value="x")],
+)
+UNKNOWN_CAPABILITY = component_pb2.ComponentInfo(capabilities=["pixel_local", "sample_pases"])
+
+
+@pytest.mark.parametrize(
+    ("description", "expected"),
+    [
+        (MALFORMED_SCHEMA, ("parameter 'roughness'", "'x' is not float")),
+        (UNKNOWN_CAPABILITY, ("unknown capability 'sample_pases'", "sample_passes, pixel_local")),
+    ],
+)
+def test_a_registration_yarf_cannot_check_is_refused(
+    client: Client, description: component_pb2.ComponentInfo, expected: tuple[str, str]
+) -> None:
+    info = component_pb2.ComponentInfo()
+    info.CopyFrom(ODD_BSDF)
+    info.MergeFrom(description)
     other = grpc.server(futures.ThreadPoolExecutor(max_workers=2))
-    component_pb2_grpc.add_RegistryServicer_to_server(MalformedSchema(), other)
+    component_pb2_grpc.add_RegistryServicer_to_server(Lister(info), other)
     address = f"127.0.0.1:{other.add_insecure_port('127.0.0.1:0')}"
     other.start()
     try:
         with pytest.raises(grpc.RpcError) as refused:
             client.registry.Register(component_pb2.RegisterRequest(address=address))
         details = refused.value.details() or ""  # type: ignore[attr-defined]
-        assert "declares parameters yarf cannot check" in details, details
-        assert "parameter 'roughness'" in details and "'x' is not float" in details, details
+        assert "describes its classes in a way yarf cannot check" in details, details
+        for part in expected:
+            assert part in details, details
         assert "odd_bsdf" not in [c.class_name for c in client.list_classes().classes]
     finally:
         other.stop(None)
+
+
+def test_a_python_component_declares_its_capabilities(
+    client: Client, server: LocalServer, tmp_path: Path
+) -> None:
+    """py_path declares pixel_local: yarfd lists it, and a job of it may be tiled."""
+    target = f"{EXAMPLES / 'path.py'}:PathTracer"
+    with ComponentProcess.python(
+        [target], f"unix:{tmp_path / 'c.sock'}", "--register", server.address
+    ) as process:
+        assert list(registered(client, "py_path").capabilities) == ["pixel_local"]
+        process.stop()
+
+
+def test_the_python_sdk_refuses_an_unknown_capability() -> None:
+    from yarf_component import Transport
+    from yarf_component.component import check_component_class
+
+    class Splatty(Transport):
+        class_name = "py_splatty"
+        capabilities = ("pixel_locale",)
+
+        def dimensions(self) -> int:
+            return 2
+
+    with pytest.raises(TypeError, match=r"unknown capabilities \['pixel_locale'\]"):
+        check_component_class(Splatty)

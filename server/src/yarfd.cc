@@ -179,6 +179,14 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   return 0;
 }
 
+// --check-requests: touches no state and listens nowhere; loads the
+// plugins only to read their classes' capabilities.
+int CheckRequests(const yarf::ServerOptions& options) {
+  yarf::Registry registry;
+  for (const auto& dir : options.plugin_paths) registry.LoadDirectory(dir);
+  return yarf::ServeRequestChecks(std::cin, std::cout, registry.Classes());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -190,8 +198,7 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   try {
     const yarf::ServerOptions options = yarf::ParseServerOptions(argc, argv);
-    // Touches no state, loads no plugin, listens nowhere.
-    if (options.check_requests) return yarf::ServeRequestChecks(std::cin, std::cout);
+    if (options.check_requests) return CheckRequests(options);
     return Serve(options, signals);
   } catch (const std::exception& e) {
     std::cerr << "yarfd: " << e.what() << "\n";

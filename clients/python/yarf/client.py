@@ -493,7 +493,7 @@ class Client:
             aovs=aovs,
             threads=threads,
         )
-        job = settings.prepare(scene, integrator=integrator)
+        job = settings.prepare(scene)
         job_id = self.submit(
             job.scene,
             job.spp,

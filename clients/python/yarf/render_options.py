@@ -29,8 +29,6 @@ MAX_FILM_SIDE = 16384
 MAX_FILM_PIXELS = 1 << 26
 # A sanity bound: the server runs a job on at most its own threads.
 MAX_THREADS = 1 << 16
-# The only integrator that renders a crop window (RenderOptions.crop).
-CROP_INTEGRATOR = "mean_sample"
 
 # The arbitrary output variables a job can ask for (RenderOptions.aovs), in the
 # order the server lists them: kAovNames of server/include/yarf/aov.h, which
@@ -169,7 +167,8 @@ class RenderSettings:
     """What to render. ``None`` keeps the scene's (or the server's) choice.
 
     ``spp``: 1 to 2^20 samples per pixel. ``res``: the film's (width, height).
-    ``crop``: only these pixels get samples (the mean_sample integrator).
+    ``crop``: only these pixels get samples (an integrator that declares
+    sample_passes, as mean_sample).
     ``time_limit``: seconds, after which the job is cancelled and the image
     holds the samples done so far. ``transport``: CLASS[@ADDRESS] or a
     ComponentSpec. ``materials``: (NAME, CLASS[@ADDRESS]) pairs, each making
@@ -281,7 +280,6 @@ class RenderSettings:
         scene: scene_pb2.Scene,
         *,
         default_spp: int = 0,
-        integrator: scene_pb2.ComponentSpec | None = None,
     ) -> PreparedJob:
         """A copy of ``scene`` with the film size and materials set, the transport and
         crop window for RenderOptions, and the spp (``default_spp`` when unset, 0: the
@@ -296,12 +294,9 @@ class RenderSettings:
         if self.crop is not None:
             if not prepared.film.width or not prepared.film.height:
                 raise OptionError("crop", "the scene's film has no size: give --res too")
+            # Whether the job's integrator can render a crop is the server's
+            # check (its class's capabilities).
             crop = self.crop.pixels(prepared.film.width, prepared.film.height)
-            chosen = (integrator.class_name if integrator else "") or prepared.integrator.class_name
-            if chosen and chosen != CROP_INTEGRATOR:
-                raise OptionError(
-                    "crop", f"needs the {CROP_INTEGRATOR} integrator, and the job's is {chosen!r}"
-                )
         return PreparedJob(
             scene=prepared,
             spp=self.spp or default_spp,

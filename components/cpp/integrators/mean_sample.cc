@@ -27,6 +27,8 @@ namespace {
 
 class MeanSampleIntegrator final : public Integrator {
  public:
+  // Passes from any first sample, over any crop, with the same seeds per sample.
+  static std::vector<std::string> Capabilities() { return {kSamplePassesCapability}; }
   static ParameterSchema Parameters() {
     using P = Parameter;
     return {

@@ -40,6 +40,8 @@ constexpr int kMaxCrossings = 256;
 
 class AmbientOcclusion final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     return {
         Parameter::Bool("cossample").Default(true).Doc(

@@ -49,6 +49,8 @@ constexpr uint32_t kModelSample = kTransportDimension;
 
 class Aov final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     return {Parameter::String("aov")
                 .Default("albedo")

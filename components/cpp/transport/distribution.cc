@@ -43,6 +43,8 @@ struct Path {
 
 class DistributionRayTracer final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() { return PathLength::Parameters(); }
 
   explicit DistributionRayTracer(const Properties& props)

@@ -173,6 +173,8 @@ uint64_t SceneKey(const SceneView& scene, const Settings& settings) {
 
 class IrradianceCache final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     using P = Parameter;
     return {

@@ -61,6 +61,8 @@ struct Vertex {
 
 class PathTracer final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     ParameterSchema schema = PathLength::Parameters();
     schema.push_back(

@@ -54,6 +54,8 @@ constexpr int64_t kMaxPhotons = 50'000'000;
 
 class PhotonMapper final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     using P = Parameter;
     ParameterSchema schema = {

@@ -77,6 +77,8 @@ struct Solution {
 
 class Radiosity final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     using P = Parameter;
     return {

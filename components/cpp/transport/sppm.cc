@@ -63,6 +63,8 @@ using PhotonMapOfPass = std::shared_future<std::shared_ptr<const PassMaps>>;
 
 class StochasticProgressivePhotonMapper final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     using P = Parameter;
     ParameterSchema schema = {

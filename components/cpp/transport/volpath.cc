@@ -88,6 +88,8 @@ uint32_t FloatBits(float f) { return std::bit_cast<uint32_t>(f); }
 
 class VolPathTracer final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() { return PathLength::Parameters(); }
 
   explicit VolPathTracer(const Properties& props) : length_(props) {}

@@ -34,6 +34,8 @@ struct Branch {
 
 class Whitted final : public Transport {
  public:
+  // Each sample lands in its own pixel: the film may be rendered in tiles.
+  static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
     return {Parameter::Int("max_depth").Default(6).Min(0).Doc(
         "longest path in segments, counting the shadow ray (Mitsuba's: 1 emitters only)")};

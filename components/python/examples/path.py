@@ -99,6 +99,8 @@ class Vertices:
 class PathTracer(Transport):
     class_name = "py_path"
     summary = "Path tracer with next-event estimation and MIS, batched per bounce, in Python"
+    # Camera samples only, each in its own pixel: the farm may tile its jobs.
+    capabilities = ("pixel_local",)
 
     def __init__(self, max_depth: int = 5) -> None:
         if max_depth < 1:

@@ -11,13 +11,19 @@ from yarf_component.properties import Signature, parameter_infos
 
 CLASS_NAME = re.compile(r"[a-z][a-z0-9]*(_[a-z0-9]+)*")
 VERSION = re.compile(r"\d+\.\d+\.\d+")
+# What a class may declare it can do (ComponentInfo.capabilities); the
+# server refuses a registration naming another.
+CAPABILITIES = frozenset({"sample_passes", "pixel_local"})
 
 
 class Component(abc.ABC):
     """A component class: subclass an interface (SurfaceModel, Sampler...), not this.
 
     ``class_name`` names the class on a host (lower_snake_case, required);
-    ``version`` is "MAJOR.MINOR.PATCH"; ``summary`` is one line for people.
+    ``version`` is "MAJOR.MINOR.PATCH"; ``summary`` is one line for people;
+    ``capabilities`` what it can do beyond its interface (a Transport whose
+    samples land only in their own pixels declares "pixel_local", and the
+    farm may then render its jobs in tiles).
     An instance is made from a scene's Properties passed to ``__init__`` as
     keyword arguments, checked against its annotations (see properties.py).
     """
@@ -25,6 +31,7 @@ class Component(abc.ABC):
     class_name: ClassVar[str]
     version: ClassVar[str] = "1.0.0"
     summary: ClassVar[str] = ""
+    capabilities: ClassVar[tuple[str, ...]] = ()
     # Full service name, set by each interface's base class only.
     interface_name: ClassVar[str] = ""
 
@@ -57,6 +64,7 @@ class Component(abc.ABC):
             origin=cls.origin(),
             declares_parameters=parameters is not None,
             parameters=parameters or [],
+            capabilities=list(cls.capabilities),
         )
 
 
@@ -71,6 +79,12 @@ def check_component_class(cls: object) -> type[Component]:
         )
     if not isinstance(cls.version, str) or not VERSION.fullmatch(cls.version):
         raise TypeError(f"{cls.__qualname__}.version must be 'MAJOR.MINOR.PATCH'")
+    unknown = sorted(set(cls.capabilities) - CAPABILITIES)
+    if unknown:
+        raise TypeError(
+            f"{cls.__qualname__} declares unknown capabilities {unknown}; "
+            f"there are {sorted(CAPABILITIES)}"
+        )
     if not cls.interfaces():
         raise TypeError(f"{cls.__qualname__} implements no interface (subclass e.g. SurfaceModel)")
     missing = sorted(getattr(cls, "__abstractmethods__", ()))

@@ -2,9 +2,11 @@
 // a plugin registers its classes through one exported function.
 #pragma once
 
+#include <concepts>
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
@@ -25,6 +27,33 @@ struct ComponentInfo {
   // then a property not among them is refused.
   bool declares_parameters = false;
   std::vector<Parameter> parameters;
+  // What the class can do beyond its interfaces (kCapabilities), which the
+  // service and the farm read instead of comparing class names.
+  std::vector<std::string> capabilities;
+};
+
+// Capabilities a class may declare.
+// An Integrator that renders any range of sample passes, from
+// RenderTarget::FirstSample() on, and only RenderTarget::Crop()'s pixels,
+// with the same per-sample seeds whatever the range: its jobs resume from
+// a checkpoint, split into sample shares and tiles, and take a crop.
+inline constexpr char kSamplePassesCapability[] = "sample_passes";
+// A Transport whose film samples land only where their own points' film
+// coordinates put them (it never splats): tiles rendered apart make the
+// whole film.
+inline constexpr char kPixelLocalCapability[] = "pixel_local";
+inline const std::vector<std::string> kCapabilities = {kSamplePassesCapability, kPixelLocalCapability};
+
+inline bool HasCapability(const ComponentInfo& info, std::string_view capability) {
+  for (const std::string& c : info.capabilities)
+    if (c == capability) return true;
+  return false;
+}
+
+// A class declares capabilities with `static std::vector<std::string> Capabilities()`.
+template <typename T>
+concept DeclaresCapabilities = requires {
+  { T::Capabilities() } -> std::convertible_to<std::vector<std::string>>;
 };
 
 class Component {

@@ -26,6 +26,7 @@ void Register(Registrar& registrar, std::string name, std::string version, std::
     info.declares_parameters = true;
     info.parameters = T::Parameters();
   }
+  if constexpr (DeclaresCapabilities<T>) info.capabilities = T::Capabilities();
   registrar.Add(std::move(info), [](const Properties& p) -> std::unique_ptr<Component> {
     return std::make_unique<T>(p);
   });

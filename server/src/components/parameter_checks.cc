@@ -171,6 +171,13 @@ void CheckProperties(const ComponentInfo& info, const v1::Properties& properties
 }
 
 void CheckSchema(const ComponentInfo& info) {
+  for (const std::string& capability : info.capabilities)
+    if (std::find(kCapabilities.begin(), kCapabilities.end(), capability) == kCapabilities.end()) {
+      std::string known;
+      for (const std::string& name : kCapabilities) known += (known.empty() ? "" : ", ") + name;
+      throw Error("class '" + info.class_name + "' declares an unknown capability '" + capability +
+                  "' (there are " + known + ")");
+    }
   std::set<std::string> seen;
   for (const Parameter& parameter : info.parameters) {
     const std::string what = "class '" + info.class_name + "', parameter '" + parameter.name + "'";

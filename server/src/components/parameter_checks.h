@@ -22,7 +22,8 @@ void CheckProperties(const ComponentInfo& info, const v1::Properties& properties
 
 // Throws Error for a schema a class or a component process declares that
 // could not be checked against: an empty or repeated name, a default of
-// another type than its parameter, bounds the wrong way round.
+// another type than its parameter, bounds the wrong way round; or for a
+// capability that is not one of kCapabilities.
 void CheckSchema(const ComponentInfo& info);
 
 // The entry of `candidates` nearest to `name` in edit distance, if near

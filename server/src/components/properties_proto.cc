@@ -150,6 +150,7 @@ v1::ComponentInfo ToProto(const ComponentInfo& info) {
   out.set_summary(info.summary);
   out.set_origin(info.origin);
   out.set_declares_parameters(info.declares_parameters);
+  for (const std::string& capability : info.capabilities) out.add_capabilities(capability);
   for (const Parameter& parameter : info.parameters) {
     v1::ParameterInfo* p = out.add_parameters();
     p->set_name(parameter.name);
@@ -172,6 +173,7 @@ ComponentInfo FromProto(const v1::ComponentInfo& info, const std::string& origin
   out.origin = origin;
   out.interfaces.assign(info.interfaces().begin(), info.interfaces().end());
   out.declares_parameters = info.declares_parameters();
+  out.capabilities.assign(info.capabilities().begin(), info.capabilities().end());
   for (const v1::ParameterInfo& p : info.parameters()) {
     const std::string what = "class '" + info.class_name() + "', parameter '" + p.name() + "'";
     const std::optional<ParameterType> type = TypeNamed(p.type());

@@ -28,7 +28,8 @@ std::vector<ComponentInfo> RemoteClasses::Register(const std::string& address, s
       info = FromProto(c, "remote " + address);
       CheckSchema(info);
     } catch (const Error& e) {
-      throw Error("the component at " + address + " declares parameters yarf cannot check: " + e.what());
+      throw Error("the component at " + address + " describes its classes in a way yarf cannot check: " +
+                  e.what());
     }
     classes.push_back(std::move(info));
   }

@@ -1,23 +1,16 @@
 #include "service/job_components.h"
 
+#include <algorithm>
 #include <optional>
 #include <string>
 
 #include "components/make_component.h"
+#include "service/job_splits.h"
 #include "service/user_files.h"
 #include "yarf/error.h"
 
 namespace yarf {
 namespace {
-
-// The job's choice, else the scene's, else the default class.
-v1::ComponentSpec Choose(const v1::ComponentSpec& job, const v1::ComponentSpec& scene, const char* fallback) {
-  if (!job.class_name().empty()) return job;
-  if (!scene.class_name().empty()) return scene;
-  v1::ComponentSpec spec;
-  spec.set_class_name(fallback);
-  return spec;
-}
 
 // Whether the job calls a component in another process: a class named
 // with an address, or registered by a component process.
@@ -33,18 +26,24 @@ bool CallsOtherProcesses(const v1::Scene& scene, const v1::RenderOptions& option
   return false;
 }
 
-// The integrator a job runs: its own, else the scene's, else mean_sample.
-// For jobs that call other processes, mean_sample works in large batches
-// (128² pixels × 4 samples per call) unless told otherwise, since every
-// call costs a round trip whatever its size.
+// The integrator a job runs: its own, else the scene's, else the default.
+// For jobs that call other processes, an integrator that batches tiles
+// and passes (declaring tile_size and samples_per_pass) works in large
+// batches (128² pixels × 4 samples per call) unless told otherwise, since
+// every call costs a round trip whatever its size.
 v1::ComponentSpec IntegratorSpec(const v1::ComponentSpec& job, const v1::ComponentSpec& scene,
-                                 bool calls_other_processes) {
-  v1::ComponentSpec spec = Choose(job, scene, "mean_sample");
-  if (calls_other_processes && spec.class_name() == "mean_sample" && spec.address().empty()) {
-    auto& values = *spec.mutable_properties()->mutable_values();
-    if (!values.contains("tile_size")) values["tile_size"].set_int_value(128);
-    if (!values.contains("samples_per_pass")) values["samples_per_pass"].set_int_value(4);
-  }
+                                 bool calls_other_processes, const Registry& registry) {
+  v1::ComponentSpec spec = Chosen(job, scene, kDefaultIntegrator);
+  if (!calls_other_processes || !spec.address().empty()) return spec;
+  const std::optional<ComponentInfo> info = registry.Info(spec.class_name());
+  const auto declares = [&](const char* name) {
+    return info && std::any_of(info->parameters.begin(), info->parameters.end(),
+                               [&](const Parameter& p) { return p.name == name; });
+  };
+  if (!declares("tile_size") || !declares("samples_per_pass")) return spec;
+  auto& values = *spec.mutable_properties()->mutable_values();
+  if (!values.contains("tile_size")) values["tile_size"].set_int_value(128);
+  if (!values.contains("samples_per_pass")) values["samples_per_pass"].set_int_value(4);
   return spec;
 }
 
@@ -68,6 +67,12 @@ std::unique_ptr<I> Make(const ComponentSources& sources, const v1::ComponentSpec
 
 }  // namespace
 
+std::vector<ComponentInfo> KnownClasses(const JobResources& resources) {
+  std::vector<ComponentInfo> classes = resources.registry.Classes();
+  for (ComponentInfo& info : resources.remote_classes.Classes()) classes.push_back(std::move(info));
+  return classes;
+}
+
 JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::string& owner,
                                 const JobResources& resources, std::shared_ptr<RemoteCalls> calls,
                                 const std::atomic<bool>& stop) {
@@ -83,12 +88,13 @@ JobComponents MakeJobComponents(const v1::SubmitRequest& request, const std::str
   parts.scene = BuildScene(scene, SceneSources{components, resources.device, resources.asset_root,
                                                assets ? &*assets : nullptr, &stop});
   parts.scene->SetSamplesPerPixel(options.spp());
-  parts.transport = Make<Transport>(components, Choose(options.transport(), scene.transport(), "path"), "transport");
+  parts.transport = Make<Transport>(components, Chosen(options.transport(), scene.transport(), kDefaultTransport), "transport");
   const v1::ComponentSpec integrator =
-      IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources));
+      IntegratorSpec(options.integrator(), scene.integrator(), CallsOtherProcesses(scene, options, resources),
+                     resources.registry);
   parts.integrator = Make<Integrator>(components, integrator, "integrator");
-  parts.sampler = Make<Sampler>(components, Choose(options.sampler(), scene.sampler(), "sobol"), "sampler");
-  parts.resumable = integrator.class_name() == "mean_sample" && integrator.address().empty();
+  parts.sampler = Make<Sampler>(components, Chosen(options.sampler(), scene.sampler(), kDefaultSampler), "sampler");
+  parts.resumable = SplitsOf(request, KnownClasses(resources)).sample_ranges();
   for (const std::string& name : options.aovs()) {
     v1::ComponentSpec aov;
     aov.set_class_name("aov");

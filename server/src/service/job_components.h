@@ -35,15 +35,19 @@ struct JobResources {
   std::filesystem::path user_files;
 };
 
+// The classes a job may name without an address: the plugins' and those
+// of component processes registered now.
+std::vector<ComponentInfo> KnownClasses(const JobResources& resources);
+
 struct JobComponents {
   std::shared_ptr<KernelScene> scene;
   std::unique_ptr<Transport> transport;
   std::unique_ptr<Integrator> integrator;
   std::unique_ptr<Sampler> sampler;
-  // Whether the render can go on from a checkpoint of its film: the
-  // in-process mean_sample integrator renders sample passes from any first
-  // sample with the same per-sample seeds, so a resumed render gives the
-  // image an uninterrupted one gives. Other integrators start anew.
+  // Whether the render can go on from a checkpoint of its film: its
+  // integrator renders sample passes from any first sample with the same
+  // per-sample seeds (JobSplits.sample_ranges), so a resumed render gives
+  // the image an uninterrupted one gives. Others start anew.
   bool resumable = false;
   // RenderOptions.aovs: an `aov` transport for each, in its order, and the
   // mean_sample integrator that renders them.

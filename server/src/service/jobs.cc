@@ -10,6 +10,7 @@
 #include "kernel/scene_builder.h"
 #include "service/class_checks.h"
 #include "service/job_files.h"
+#include "service/job_splits.h"
 #include "service/job_memory.h"
 #include "service/request_checks.h"
 #include "yarf/aov.h"
@@ -173,12 +174,6 @@ void JobManager::Restore() {
   }
 }
 
-std::vector<ComponentInfo> JobManager::KnownClasses() const {
-  std::vector<ComponentInfo> classes = resources_.registry.Classes();
-  for (ComponentInfo& info : resources_.remote_classes.Classes()) classes.push_back(std::move(info));
-  return classes;
-}
-
 std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
   {
     std::lock_guard lock(mutex_);
@@ -192,7 +187,9 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
   std::optional<UserAssets> assets;
   if (resources_.assets) assets.emplace(*resources_.assets, owner);
   auto accepted = std::make_shared<const v1::SubmitRequest>(AcceptSubmit(request, assets ? &*assets : nullptr));
-  CheckComponents(*accepted, KnownClasses());
+  const std::vector<ComponentInfo> known = KnownClasses(resources_);
+  CheckComponents(*accepted, known);
+  CheckShare(*accepted, SplitsOf(*accepted, known));
   if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root);
       bytes > options_.max_job_bytes)
     throw LimitReached("the job would need about " + std::to_string(bytes >> 20) + " MiB (its film, meshes and " +

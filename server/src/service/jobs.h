@@ -74,9 +74,6 @@ class JobManager {
   bool SetPriority(Job& job, uint32_t priority);
 
  private:
-  // The classes a job may name without an address: the plugins' and those
-  // of component processes registered now.
-  std::vector<ComponentInfo> KnownClasses() const;
   void Restore();
   // Ends the row of a job cancelled before a crash.
   void EndCancelled(JobRecord& row) const;

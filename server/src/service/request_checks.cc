@@ -15,6 +15,7 @@
 
 #include "kernel/scene_builder.h"
 #include "service/access.h"
+#include "service/job_splits.h"
 #include "yarf/aov.h"
 #include "yarf/error.h"
 
@@ -124,8 +125,8 @@ void CheckFields(const Message& message, const std::string& path) {
   }
 }
 
-// A share of a job (first_sample, crop) needs an integrator that renders
-// sample passes of its own: mean_sample.
+// A share of a job (first_sample, crop) within its samples and film; that
+// its integrator can render one is CheckShare's part, with the classes.
 void ValidateShare(const v1::SubmitRequest& request) {
   const v1::RenderOptions& options = request.options();
   if (options.first_sample() == 0 && !options.has_crop()) return;
@@ -140,10 +141,6 @@ void ValidateShare(const v1::SubmitRequest& request) {
                   std::to_string(c.y0()) + ", " + std::to_string(c.y1()) + ") is not a window of the " +
                   std::to_string(film.width()) + "x" + std::to_string(film.height()) + " film");
   }
-  std::string integrator = options.integrator().class_name();
-  if (integrator.empty()) integrator = request.scene().integrator().class_name();
-  if (!integrator.empty() && integrator != "mean_sample")
-    throw Error("first_sample and crop need the mean_sample integrator, not '" + integrator + "'");
 }
 
 // Each arbitrary output variable known, and asked for once.
@@ -189,7 +186,7 @@ v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSour
   return accepted;
 }
 
-int ServeRequestChecks(std::istream& in, std::ostream& out) {
+int ServeRequestChecks(std::istream& in, std::ostream& out, const std::vector<ComponentInfo>& known) {
   static_assert(std::endian::native == std::endian::little, "lengths are little-endian");
   // A request that does not parse is answered in its SubmitCheck; the
   // library's log line about it would only be noise on stderr.
@@ -209,7 +206,10 @@ int ServeRequestChecks(std::istream& in, std::ostream& out) {
       try {
         if (!request.ParseFromString(bytes)) throw Error("the request is not a SubmitRequest");
         check.set_names_address(NamesAddress(request));
-        *check.mutable_accepted() = AcceptSubmit(request, nullptr);
+        const v1::SubmitRequest accepted = AcceptSubmit(request, nullptr);
+        *check.mutable_splits() = SplitsOf(accepted, known);
+        CheckShare(accepted, check.splits());
+        *check.mutable_accepted() = accepted;
       } catch (const Error& e) {
         check.set_error(SafeText(e.what(), RequestLimits::kMaxErrorBytes));
       }

@@ -12,8 +12,10 @@
 #include <iosfwd>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "kernel/scene_builder.h"
+#include "yarf/component.h"
 #include "yarf/v1/render.pb.h"
 
 namespace yarf {
@@ -49,8 +51,10 @@ v1::SubmitRequest AcceptSubmit(const v1::SubmitRequest& request, const AssetSour
 
 // `yarfd --check-requests`: answers each length-prefixed SubmitRequest
 // read from `in` with a length-prefixed SubmitCheck on `out`, until `in`
-// ends; returns the process's exit status.
-int ServeRequestChecks(std::istream& in, std::ostream& out);
+// ends; returns the process's exit status. The classes in `known` tell
+// how each job may be divided (SubmitCheck.splits); a class not among
+// them is not refused, as it may be registered where the job runs.
+int ServeRequestChecks(std::istream& in, std::ostream& out, const std::vector<ComponentInfo>& known);
 
 // Throws Error naming the field path (e.g. "scene.camera.origin.x") of the
 // first number or text that breaks the limits above.

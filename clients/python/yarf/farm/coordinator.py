@@ -215,7 +215,8 @@ class Coordinator:
     async def submit(self, request: render_pb2.SubmitRequest, owner: str, *, admin: bool) -> str:
         """Stores and queues a job of ``owner``; raises InvalidRequest or AddressNotAllowed."""
         # yarfd's checks, which also fill in its defaults (spp, priority).
-        accepted = await asyncio.to_thread(self._checker.check, request, admin=admin)
+        checked = await asyncio.to_thread(self._checker.check, request, admin=admin)
+        accepted = checked.accepted
         # As yarfd's Submit: every asset named is here already (nodes copy it from here).
         for digest in await self.assets.missing(scene_asset_hashes(request.scene)):
             raise InvalidRequest(
@@ -223,7 +224,7 @@ class Coordinator:
                 "before submitting"
             )
         options = accepted.options
-        tasks = split(accepted, self._policy)
+        tasks = split(accepted, checked.splits, self._policy)
         scene_bytes = request.scene.SerializeToString(deterministic=True)
         scene_hash = hashlib.sha256(scene_bytes).hexdigest()
         await self._store_scene(scene_hash, scene_bytes)

@@ -11,11 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from yarf.v1 import render_pb2, scene_pb2
+from yarf.v1 import render_pb2
 
-# Transports that start paths at the lights splat onto any pixel of the
-# film: a crop window would miss their contributions from other tiles.
-SPLATTING_TRANSPORTS = frozenset({"light_tracer", "bdpt"})
 # The first share's size relative to the others' (see _share_bounds).
 PREVIEW_SHARE_WEIGHT = 0.25
 
@@ -72,34 +69,6 @@ class SplitPolicy:
     tile_size: int = 256
 
 
-def _transport(request: render_pb2.SubmitRequest) -> str:
-    return request.options.transport.class_name or request.scene.transport.class_name or "path"
-
-
-def _integrator(request: render_pb2.SubmitRequest) -> str:
-    return (
-        request.options.integrator.class_name
-        or request.scene.integrator.class_name
-        or "mean_sample"
-    )
-
-
-def can_share_samples(request: render_pb2.SubmitRequest) -> bool:
-    """Only mean_sample renders a range of sample passes (RenderOptions.first_sample)."""
-    return _integrator(request) == "mean_sample"
-
-
-def can_tile(request: render_pb2.SubmitRequest) -> bool:
-    """Tiles need a transport that writes only its own pixel and a filter no wider than a pixel.
-
-    A wider reconstruction filter spreads samples across a tile's border:
-    the border pixels of a tile would lack their neighbours' samples.
-    """
-    film_filter = request.scene.film.filter
-    narrow = film_filter.kind == scene_pb2.ReconstructionFilter.BOX and film_filter.radius <= 0.5
-    return narrow and _transport(request) not in SPLATTING_TRANSPORTS and can_share_samples(request)
-
-
 def _tiles(window: Window, size: int) -> list[Window]:
     return [
         Window(x, y, min(x + size, window.x1), min(y + size, window.y1))
@@ -125,19 +94,28 @@ def _share_bounds(first: int, end: int, shares: int) -> list[int]:
     return bounds
 
 
-def split(request: render_pb2.SubmitRequest, policy: SplitPolicy) -> list[Task]:
-    """The tasks of a job (``request.options.spp`` already defaulted)."""
+def split(
+    request: render_pb2.SubmitRequest, splits: render_pb2.JobSplits, policy: SplitPolicy
+) -> list[Task]:
+    """The tasks of a job (``request.options.spp`` already defaulted).
+
+    ``splits`` says how the job may be divided, as yarfd reads it from the
+    capabilities of its classes (SubmitCheck.splits): into sample shares
+    when its integrator renders any range of sample passes, and into tiles
+    as well when its transport's samples land only in their own pixels and
+    the film's filter is no wider than a pixel.
+    """
     options = request.options
     film = Window(0, 0, request.scene.film.width, request.scene.film.height)
     window = film
     if options.HasField("crop"):
         window = Window(options.crop.x0, options.crop.y0, options.crop.x1, options.crop.y1)
     first, end = options.first_sample, options.spp
-    if not can_share_samples(request):
+    if not splits.sample_ranges:
         # Other integrators render the job in one piece.
         return [Task(0, first, end, window, options.HasField("crop"))]
     tiles = [window]
-    if window.pixels > policy.tile_pixels and can_tile(request):
+    if window.pixels > policy.tile_pixels and splits.tiles:
         tiles = _tiles(window, policy.tile_size)
     tasks: list[Task] = []
     for tile in tiles:

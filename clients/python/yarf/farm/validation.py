@@ -4,7 +4,8 @@ The farm's coordinator stores jobs itself, but the rules of what a job may
 say (finite numbers, sound transforms, bounded text, spp and film limits,
 who may name a component address) are yarfd's, defined once in C++. A
 ``yarfd --check-requests`` child process answers each request with a
-``SubmitCheck``: the request as its job would run, or why it is refused.
+``SubmitCheck``: the request as its job would run, or why it is refused,
+and how the job may be divided (read from its classes' capabilities).
 """
 
 from __future__ import annotations
@@ -41,11 +42,12 @@ class SubmitChecker:
         self._lock = threading.Lock()
         self._process: subprocess.Popen[bytes] | None = None
 
-    def check(self, request: render_pb2.SubmitRequest, *, admin: bool) -> render_pb2.SubmitRequest:
-        """The request as its job would run; raises InvalidRequest or AddressNotAllowed."""
+    def check(self, request: render_pb2.SubmitRequest, *, admin: bool) -> render_pb2.SubmitCheck:
+        """The request as its job would run (``accepted``) and how it may be divided
+        (``splits``); raises InvalidRequest or AddressNotAllowed."""
         return self.check_wire(request.SerializeToString(), admin=admin)
 
-    def check_wire(self, wire: bytes, *, admin: bool = True) -> render_pb2.SubmitRequest:
+    def check_wire(self, wire: bytes, *, admin: bool = True) -> render_pb2.SubmitCheck:
         """``check`` of a request's wire bytes, as a client may send any bytes."""
         with self._lock:
             try:
@@ -61,7 +63,7 @@ class SubmitChecker:
             )
         if reply.error:
             raise InvalidRequest(reply.error)
-        return reply.accepted
+        return reply
 
     def close(self) -> None:
         with self._lock:
