@@ -14,6 +14,7 @@ type Class struct {
 	create                 func(*Properties) (any, error)
 	declaresParameters     bool
 	parameters             []Parameter
+	capabilities           []string
 }
 
 // NewClass describes a class: its name (unique on a host,
@@ -54,6 +55,9 @@ func (c Class) check() error {
 	case c.create == nil:
 		return fmt.Errorf("class %s has no constructor", c.name)
 	}
+	if err := c.checkCapabilities(); err != nil {
+		return err
+	}
 	return c.checkParameters()
 }
 
@@ -68,5 +72,6 @@ func (c Class) info(origin string) *yarfv1.ComponentInfo {
 
 		DeclaresParameters: c.declaresParameters,
 		Parameters:         c.parameterInfos(),
+		Capabilities:       c.capabilities,
 	}
 }

@@ -296,6 +296,8 @@ func TestListenRejectsBadClasses(t *testing.T) {
 		{"parameter bounds", []component.Class{echo.WithParameters(
 			component.Parameter{Name: "gain", Type: "float", Min: component.Bound(1), Max: component.Bound(0)})},
 			"least value is above its most"},
+		{"capability", []component.Class{echo.WithCapabilities("pixel_locale")},
+			`declares an unknown capability "pixel_locale"`},
 	}
 	for _, test := range tests {
 		t.Run(test.name, func(t *testing.T) {
