@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include "yarf/error.h"
 
@@ -49,17 +50,31 @@ float ReconstructionFilter::Weight1(float d) const {
 Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
     : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {}
 
-template <typename Visit>
-void Film::ForEachPixelInFilter(float x, float y, Visit&& visit) const {
+PixelWindow Film::Footprint(float x, float y) const {
+  if (!(std::isfinite(x) && std::isfinite(y))) return {0, 0, 0, 0};
   const float r = filter_.radius();
-  // Pixel (i, j) has its centre at (i + 0.5, j + 0.5).
-  const int x0 = std::max(0, int(std::ceil(x - r - 0.5f)));
-  const int x1 = std::min(int(width_) - 1, int(std::floor(x + r - 0.5f)));
-  const int y0 = std::max(0, int(std::ceil(y - r - 0.5f)));
-  const int y1 = std::min(int(height_) - 1, int(std::floor(y + r - 0.5f)));
-  for (int j = y0; j <= y1; ++j)
-    for (int i = x0; i <= x1; ++i) {
-      const double w = filter_.Weight(i + 0.5f - x, j + 0.5f - y);
+  // Pixel i has its centre at i + 0.5. Clamped as floats: a position far
+  // off the film does not fit an int.
+  const auto span = [r](float at, uint32_t size) -> std::pair<uint32_t, uint32_t> {
+    const float first = std::max(0.0f, std::ceil(at - r - 0.5f));
+    const float last = std::min(float(size) - 1, std::floor(at + r - 0.5f));
+    if (!(first <= last)) return {0, 0};
+    return {uint32_t(first), uint32_t(last) + 1};
+  };
+  const auto [x0, x1] = span(x, width_);
+  const auto [y0, y1] = span(y, height_);
+  if (x0 == x1 || y0 == y1) return {0, 0, 0, 0};
+  return {x0, y0, x1, y1};
+}
+
+template <typename Visit>
+void Film::ForEachPixelInFilter(float x, float y, const PixelWindow& window, Visit&& visit) const {
+  const PixelWindow reach = Footprint(x, y);
+  const uint32_t x0 = std::max(reach.x0, window.x0), x1 = std::min(reach.x1, window.x1);
+  const uint32_t y0 = std::max(reach.y0, window.y0), y1 = std::min(reach.y1, window.y1);
+  for (uint32_t j = y0; j < y1; ++j)
+    for (uint32_t i = x0; i < x1; ++i) {
+      const double w = filter_.Weight(float(i) + 0.5f - x, float(j) + 0.5f - y);
       if (w > 0) visit(size_t(j) * width_ + i, w);
     }
 }
@@ -68,9 +83,9 @@ namespace {
 bool Finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 }  // namespace
 
-void Film::Add(float x, float y, Vec3 value) {
+void Film::Add(float x, float y, Vec3 value, const PixelWindow& window) {
   if (!Finite(value)) return;
-  ForEachPixelInFilter(x, y, [&](size_t k, double w) {
+  ForEachPixelInFilter(x, y, window, [&](size_t k, double w) {
     Pixel& p = pixels_[k];
     p.weight += w;
     p.weight_sq += w * w;
@@ -83,8 +98,7 @@ void Film::Add(float x, float y, Vec3 value) {
   });
 }
 
-void Film::Splat(float x, float y, Vec3 value) {
-  if (!Finite(value) || !(std::isfinite(x) && std::isfinite(y))) return;
+void Film::PrepareSplats() {
   if (splats_.pass.empty()) {
     splats_.pass.assign(pixels_.size() * 3, 0.0);
     splats_.sum.assign(pixels_.size() * 3, 0.0);
@@ -103,7 +117,18 @@ void Film::Splat(float x, float y, Vec3 value) {
     column_mass_ = masses(width_);
     row_mass_ = masses(height_);
   }
-  ForEachPixelInFilter(x, y, [&](size_t k, double w) {
+}
+
+void Film::Splat(float x, float y, Vec3 value) {
+  // A film that never had a splat that counts has no splat images to save.
+  if (!Finite(value) || !(std::isfinite(x) && std::isfinite(y))) return;
+  PrepareSplats();
+  Splat(x, y, value, Whole());
+}
+
+void Film::Splat(float x, float y, Vec3 value, const PixelWindow& window) {
+  if (!Finite(value)) return;
+  ForEachPixelInFilter(x, y, window, [&](size_t k, double w) {
     const double scale = 1.0 / (double(column_mass_[k % width_]) * row_mass_[k / width_]);
     for (int c = 0; c < 3; ++c) splats_.pass[3 * k + c] += w * scale * value[c];
   });

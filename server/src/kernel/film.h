@@ -2,6 +2,10 @@
 // reconstruction filter, with the variance of each estimate; plus, for
 // methods that start paths at the lights, a splat image: contributions
 // summed under the normalised filter, divided by the number of passes.
+//
+// Threads may add camera samples and splats at once as long as each writes
+// its own window of pixels (the windowed Add and Splat, after
+// PrepareSplats); everything else wants the film to itself.
 #pragma once
 
 #include <cstdint>
@@ -9,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "yarf/transport.h"
 #include "yarf/vecmath.h"
 #include "yarf/v1/scene.pb.h"
 
@@ -41,9 +46,21 @@ class Film {
   uint32_t width() const { return width_; }
   uint32_t height() const { return height_; }
   // A camera sample of radiance `value` at raster position (x, y) in pixels.
-  void Add(float x, float y, Vec3 value);
+  void Add(float x, float y, Vec3 value) { Add(x, y, value, Whole()); }
   // A contribution to the current pass's splat image.
   void Splat(float x, float y, Vec3 value);
+  // The same, to the pixels of `window` alone: a sample whose filter
+  // reaches several windows is added to each of them in turn, by writers
+  // that each hold the lock of one window.
+  void Add(float x, float y, Vec3 value, const PixelWindow& window);
+  // Needs PrepareSplats() first.
+  void Splat(float x, float y, Vec3 value, const PixelWindow& window);
+  // Makes the splat images and the border masses (once; later calls do
+  // nothing), so that windowed splats from many threads only write pixels.
+  void PrepareSplats();
+  // The pixels a sample at raster position (x, y) may add to under the
+  // filter (empty for a position that is not finite).
+  PixelWindow Footprint(float x, float y) const;
   // Closes a sample pass of `samples` samples per pixel (passes of W×H
   // points each): its splat image over `samples` becomes one more
   // independent estimate of the pixels' splat values.
@@ -72,8 +89,11 @@ class Film {
     uint32_t passes = 0;
   };
 
+  PixelWindow Whole() const { return {0, 0, width_, height_}; }
+  // Calls visit(pixel index, weight) for the pixels of `window` under the
+  // filter around (x, y).
   template <typename Visit>
-  void ForEachPixelInFilter(float x, float y, Visit&& visit) const;
+  void ForEachPixelInFilter(float x, float y, const PixelWindow& window, Visit&& visit) const;
 
   uint32_t width_, height_;
   v1::ReconstructionFilter filter_spec_;  // kept for Save

@@ -1,16 +1,45 @@
-// The kernel's RenderTarget: a job's film behind its lock, progress and
-// the cancellation flag.
+// The kernel's RenderTarget: a job's film, progress and the cancellation
+// flag.
+//
+// Render threads add to the film without waiting for each other: the film
+// is cut into blocks of kBlockSide × kBlockSide pixels with a mutex each,
+// and a batch takes, once, the lock of each block its samples' filters
+// reach (a sample near a block's edge goes to each block it reaches, its
+// pixels there alone). Whoever reads the whole film meanwhile (progress
+// images, checkpoints, results) and the end of a pass hold the film's
+// FilmLock alone; batches hold it shared.
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
+#include <shared_mutex>
 
 #include "kernel/film.h"
 #include "yarf/transport.h"
 
 namespace yarf {
+
+// A film's lock: shared by the threads that add samples, held alone by the
+// readers of the whole film. std::shared_mutex (glibc's) lets new shared
+// holders in while an exclusive one waits, so with many render threads a
+// reader might wait as long as the render; here a waiting reader keeps new
+// writers out until it has had its turn.
+class FilmLock {
+ public:
+  void lock();
+  void unlock() { mutex_.unlock(); }
+  void lock_shared();
+  void unlock_shared() { mutex_.unlock_shared(); }
+
+ private:
+  std::shared_mutex mutex_;
+  // Only a hint of whom to let in first: the mutex is what excludes.
+  std::atomic<uint32_t> readers_waiting_{0};
+};
 
 class FilmTarget final : public RenderTarget {
  public:
@@ -22,11 +51,13 @@ class FilmTarget final : public RenderTarget {
     std::optional<PixelWindow> crop;
   };
 
-  // `mutex` guards `film` for everyone who reads it while it renders.
-  FilmTarget(Film& film, std::mutex& mutex, uint32_t spp, uint64_t seed, Share share,
-             const std::atomic<bool>& cancel, PassCallback on_pass)
-      : film_(film), mutex_(mutex), spp_(spp), seed_(seed), share_(share), cancel_(cancel),
-        on_pass_(std::move(on_pass)), samples_done_(share.first_sample) {}
+  // Side in pixels of the blocks written under one lock: tiles side by side
+  // share only the blocks along their edges, and a tile's batch takes a few.
+  static constexpr uint32_t kBlockSide = 16;
+
+  // `lock` guards `film` for everyone who reads it while it renders.
+  FilmTarget(Film& film, FilmLock& lock, uint32_t spp, uint64_t seed, Share share, const std::atomic<bool>& cancel,
+             PassCallback on_pass);
 
   // What each camera sample's radiance counts for (π for an irradiance
   // meter: KernelScene::CameraRayWeight); 1 unless set.
@@ -41,8 +72,14 @@ class FilmTarget final : public RenderTarget {
   void PassDone(uint32_t samples_done) override;
 
  private:
+  // One cache line each: threads locking neighbouring blocks do not
+  // contend for the line.
+  struct alignas(64) BlockMutex {
+    std::mutex mutex;
+  };
+
   Film& film_;
-  std::mutex& mutex_;
+  FilmLock& lock_;
   uint32_t spp_;
   uint64_t seed_;
   Share share_;
@@ -50,6 +87,9 @@ class FilmTarget final : public RenderTarget {
   PassCallback on_pass_;
   uint32_t samples_done_;
   float camera_weight_ = 1;
+  uint32_t block_columns_;
+  std::unique_ptr<BlockMutex[]> block_mutexes_;
+  std::once_flag splats_prepared_;
 };
 
 }  // namespace yarf

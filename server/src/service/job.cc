@@ -449,7 +449,7 @@ void Job::RenderAovs(JobComponents& parts, const KernelScene& kernel, const Film
   std::vector<std::pair<std::string, std::unique_ptr<Film>>> films;
   for (auto& [name, transport] : parts.aovs) {
     auto aov_film = std::make_unique<Film>(film.width(), film.height(), film.filter());
-    std::mutex unshared;  // nobody reads it before it is done
+    FilmLock unshared;  // nobody reads it before it is done
     FilmTarget target(*aov_film, unshared, spp, options.seed(), {0, share.crop}, halt_, [](uint32_t) {});
     parts.aov_integrator->Render(*transport, kernel, *parts.sampler, target);
     if (halt_) return;

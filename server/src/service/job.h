@@ -16,6 +16,7 @@
 
 #include "components/remote_instance.h"
 #include "kernel/film.h"
+#include "kernel/film_target.h"
 #include "kernel/image_io.h"
 #include "service/job_components.h"
 #include "service/job_events.h"
@@ -175,7 +176,9 @@ class Job {
   std::unique_ptr<Film> film_;
   // The aovs' films, from the end of the image's render to the job's.
   std::vector<std::pair<std::string, std::unique_ptr<Film>>> aov_films_;
-  mutable std::mutex film_mutex_;
+  // Shared by the render's threads as they add samples; held alone by
+  // readers of the films and by whoever replaces them.
+  mutable FilmLock film_mutex_;
   bool checkpoint_failed_ = false;
 };
 
