@@ -12,6 +12,7 @@
 #include "components/properties_proto.h"
 #include "components/registry.h"
 #include "components/remote_classes.h"
+#include "components/remote_emitter.h"
 #include "components/remote_function.h"
 #include "components/remote_medium.h"
 #include "components/remote_sampler.h"
@@ -50,9 +51,9 @@ struct ResolvedProperties {
 
 // The interfaces with a Remote<I>.
 template <typename I>
-constexpr bool kHasRemote = std::is_same_v<I, SurfaceModel> || std::is_same_v<I, Sampler> ||
-                            std::is_same_v<I, Transport> || std::is_same_v<I, Function> ||
-                            std::is_same_v<I, Texture> || std::is_same_v<I, Medium>;
+constexpr bool kHasRemote = std::is_same_v<I, SurfaceModel> || std::is_same_v<I, Emitter> ||
+                            std::is_same_v<I, Sampler> || std::is_same_v<I, Transport> ||
+                            std::is_same_v<I, Function> || std::is_same_v<I, Texture> || std::is_same_v<I, Medium>;
 
 // `address` empty: the registry's class, or a registered remote class.
 template <typename I>
