@@ -78,6 +78,11 @@ class Registrar {
 
 // The interfaces (proto service names) a C++ class implements, found from
 // its bases: each interface class names its service in kInterface.
+// An interface's virtual methods mirror its service's rpcs: each serves the
+// rpc of its own name, unless the comment above it has a line
+// `rpc: Name[, Name]` (the rpcs it serves) or `in-process only: why`; and
+// every rpc is served by some method. tests/test_interface_mirror.py reads
+// both declarations and checks.
 template <typename T, typename... Interfaces>
 std::vector<std::string> InterfacesOf() {
   std::vector<std::string> names;

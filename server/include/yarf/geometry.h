@@ -57,10 +57,11 @@ struct Hit {
 class Intersector {
  public:
   static constexpr const char* kInterface = "yarf.v1.Intersect";
-  static constexpr const char* kMethods[] = {"Intersect", "Occluded", "CrossSection"};
 
   virtual ~Intersector() = default;
-  // Closest hit of each ray.
+  // Closest hit of each ray. The server answers CrossSection (every hit
+  // along each ray) by intersecting again from just past each hit.
+  // rpc: Intersect, CrossSection
   virtual void Intersect(std::span<const Ray> rays, std::span<Hit> hits) const = 0;
   // occluded[i] = 1 when something lies on ray i within its interval.
   virtual void Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const = 0;

@@ -1,5 +1,6 @@
-// Numerical interfaces, mirroring proto/yarf/v1/math.proto method for
-// method. Batches are row-major float arrays, as on the wire.
+// Numerical interfaces, mirroring proto/yarf/v1/math.proto (component.h
+// says how a method names its rpc). Batches are row-major float arrays, as
+// on the wire.
 #pragma once
 
 #include <cstdint>
@@ -16,11 +17,16 @@ namespace yarf {
 class Function : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Function";
-  static constexpr const char* kMethods[] = {"Signature", "Evaluate", "EvaluateStream"};
 
+  // d, which the Signature rpc answers together with k.
+  // rpc: Signature
   virtual uint32_t InputDimensions() const = 0;
+  // k.
+  // rpc: Signature
   virtual uint32_t OutputDimensions() const = 0;
-  // points: [N, d]; values: [N, k].
+  // points: [N, d]; values: [N, k]. EvaluateStream is the same calls on
+  // one stream.
+  // rpc: Evaluate, EvaluateStream
   virtual void Evaluate(std::span<const float> points, std::span<float> values) = 0;
 };
 
@@ -46,7 +52,6 @@ class RenderTarget;
 class Integrator : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Integrator";
-  static constexpr const char* kMethods[] = {"Integrate"};
 
   // ∫ f over the box [lower, upper] with about `evaluations` points.
   virtual IntegrationResult Integrate(Function& f, std::span<const double> lower,
@@ -55,6 +60,8 @@ class Integrator : public virtual Component {
   // The image mode: integrates a transport algorithm's Function over each
   // pixel's footprint, feeding the target's film pass after pass. An
   // integrator without one says so when a job names it.
+  // in-process only: a render runs in yarfd, on the job's scene and film,
+  // and is asked for through RenderService.Submit.
   virtual void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
                       RenderTarget& target) {
     throw Error("integrator '" + Describe().class_name + "' does not render images");
@@ -67,9 +74,10 @@ class Integrator : public virtual Component {
 class Sampler : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Sampler";
-  static constexpr const char* kMethods[] = {"Generate"};
 
   // Coordinate `dimension` of point `index` of the sequence for `seed`.
+  // in-process only: the wire carries whole points (Generate), from which
+  // Remote<Sampler> answers it.
   virtual float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const = 0;
   // Where sample `sample` of pixel (x, y) of a width × height film, of
   // samples_per_pixel in all, lies among the sampler's points: the index
@@ -80,6 +88,8 @@ class Sampler : public virtual Component {
   struct FilmPoint {
     uint64_t index, seed;
   };
+  // in-process only: yarfd's render loop places the film's samples; a
+  // remote sampler keeps the default.
   virtual FilmPoint AtPixel(uint32_t x, uint32_t y, uint32_t width, uint32_t height, uint64_t sample,
                             uint32_t samples_per_pixel, uint64_t seed) const {
     return {sample, Hash(seed, uint64_t(y) * width + x)};
@@ -88,6 +98,8 @@ class Sampler : public virtual Component {
   // for seeds[k], as out[2k] and out[2k + 1]: Sample's values, for many
   // points in one call (a wavefront asks for one dimension of every live
   // path at once). A sampler that makes a pair faster together overrides it.
+  // in-process only: Sample's batched form for the wavefront; a remote
+  // sampler keeps the default, which calls Sample.
   virtual void SamplePairs(std::span<const uint64_t> indices, std::span<const uint64_t> seeds, uint32_t pair,
                            std::span<float> out) const {
     for (size_t k = 0; k < indices.size(); ++k) {
@@ -107,7 +119,6 @@ class Sampler : public virtual Component {
 class Generator : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Generator";
-  static constexpr const char* kMethods[] = {"Next"};
 
   // out.size() uniform numbers of stream `stream` after skipping `offset`.
   virtual void Next(uint64_t seed, uint64_t stream, uint64_t offset, std::span<float> out) = 0;
@@ -121,7 +132,6 @@ struct RootResult {
 class RootFinder : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.RootFinder";
-  static constexpr const char* kMethods[] = {"FindRoot"};
 
   // Throws Error when [lower, upper] brackets no root or it does not converge.
   virtual RootResult FindRoot(Function& f, double lower, double upper, double tolerance,
@@ -131,9 +141,12 @@ class RootFinder : public virtual Component {
 class Warp : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Warp";
-  static constexpr const char* kMethods[] = {"Signature", "Forward", "Inverse", "Pdf"};
 
+  // m, which the Signature rpc answers together with n.
+  // rpc: Signature
   virtual uint32_t DomainDimensions() const = 0;
+  // n.
+  // rpc: Signature
   virtual uint32_t ImageDimensions() const = 0;
   // uniform [N, m] -> points [N, n], pdf [N].
   virtual void Forward(std::span<const float> uniform, std::span<float> points,

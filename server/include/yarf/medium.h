@@ -60,7 +60,6 @@ struct MajorantSegments {
 class Medium : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Medium";
-  static constexpr const char* kMethods[] = {"Majorants", "Coefficients", "Emits", "EvaluatePhase", "SamplePhase"};
 
   // origin, direction: [N,3] (direction unit); tmax: [N]. Replaces `out`
   // with the majorant segments of each ray over [0, tmax[i]).

@@ -29,7 +29,6 @@ struct SurfaceSample {
 class Shape {
  public:
   static constexpr const char* kInterface = "yarf.v1.Shape";
-  static constexpr const char* kMethods[] = {"Bounds", "Area"};
 
   virtual ~Shape() = default;
   // Axis-aligned box around the shape.
@@ -42,7 +41,6 @@ class Shape {
 class SurfaceAreaSampler {
  public:
   static constexpr const char* kInterface = "yarf.v1.SampleSurfaceArea";
-  static constexpr const char* kMethods[] = {"Sample"};
 
   virtual ~SurfaceAreaSampler() = default;
   // uniform: [N,3], the primitive's choice (in proportion to its area)
@@ -56,7 +54,6 @@ class SurfaceAreaSampler {
 class SurfaceDirectionSampler {
  public:
   static constexpr const char* kInterface = "yarf.v1.SampleSurfaceDirection";
-  static constexpr const char* kMethods[] = {"Sample", "Pdf"};
 
   virtual ~SurfaceDirectionSampler() = default;
   // uniform: [N,3] as SurfaceAreaSampler's; from: [N] reference points.

@@ -43,7 +43,6 @@ inline bool LobeAllowed(uint32_t lobe, uint32_t allowed) {
 class SurfaceModel : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.SurfaceModel";
-  static constexpr const char* kMethods[] = {"Evaluate", "Sample", "Pdf", "Lobes"};
 
   // wi, wo: [N,3] at N points; value: [N,3] = f(wi, wo) in 1/sr, no cosine.
   virtual void Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo,
@@ -80,7 +79,6 @@ class DeltaSurfaceModel : public SurfaceModel {
 class Emitter : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Emitter";
-  static constexpr const char* kMethods[] = {"Radiance", "SampleDirection", "PdfDirection"};
 
   // w: [N,3] local direction of travel away from the emitter at N points;
   // radiance: [N,3] in W·m⁻²·sr⁻¹ (a point light: intensity, W·sr⁻¹).

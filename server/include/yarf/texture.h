@@ -23,7 +23,6 @@ namespace yarf {
 class Texture : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Texture";
-  static constexpr const char* kMethods[] = {"Channels", "Evaluate", "Mean"};
 
   // 1 (a float texture) or 3 (RGB).
   virtual uint32_t Channels() const = 0;

@@ -238,7 +238,6 @@ class SceneView : public Intersector, public SurfaceAttributes {
 class Transport : public virtual Component {
  public:
   static constexpr const char* kInterface = "yarf.v1.Transport";
-  static constexpr const char* kMethods[] = {"Prepare", "Dimensions", "Evaluate"};
 
   // Once per job before any Evaluate (photon shooting, cache building...).
   virtual void Prepare(const SceneView&) {}
