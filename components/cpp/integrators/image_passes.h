@@ -49,34 +49,47 @@ class TilePoints : public PrimarySamples {
   size_t Count() const override { return indices_.size(); }
   uint64_t SampleIndex(size_t i) const override { return first_index_ + i % samples_; }
   float Get(size_t i, uint32_t dimension) const override {
-    const float u = Uniform(i, dimension);
-    if (dimension >= 2) return Warp(i, dimension, u);
-    // Only the film position needs the point's pixel (a division).
-    const Pixel& pixel = pixels_[i / samples_];
-    return dimension == 0 ? (pixel.x + u) * inv_width_ : (pixel.y + u) * inv_height_;
+    std::vector<float>& values = Pair(dimension / 2);
+    if (values[2 * i] == kUnmade) MakeBlock(values, dimension / 2, i);
+    return Place(i, dimension, values[2 * i + dimension % 2]);
+  }
+  void Gather(std::span<const uint32_t> points, uint32_t dimension, std::span<float> out) const override {
+    std::vector<float>& values = Pair(dimension / 2);
+    for (size_t k = 0; k < points.size(); ++k) {
+      const uint32_t i = points[k];
+      if (values[2 * i] == kUnmade) MakeBlock(values, dimension / 2, i);
+      out[k] = Place(i, dimension, values[2 * i + dimension % 2]);
+    }
   }
 
  protected:
   virtual float Warp(size_t i, uint32_t dimension, float u) const { return u; }
 
  private:
-  // The sampler's coordinate `dimension` of point i, made with its pair
-  // (2k, 2k + 1) at the first use of either and kept: the two share the
+  // The sampler's coordinates (2k, 2k + 1) of every point, made at the
+  // first use of either and kept (kUnmade until then): the two share the
   // sampler's work on the index, and a coordinate asked for twice (the
-  // film position) is made once. Pairs are made for an aligned block of
-  // points at once, one call the sampler can vectorise; a block whose
-  // paths have all ended never pays.
-  float Uniform(size_t i, uint32_t dimension) const {
-    const uint32_t pair = dimension / 2;
+  // film position) is made once.
+  std::vector<float>& Pair(uint32_t pair) const {
     if (pair >= pairs_.size()) pairs_.resize(pair + 1);
     std::vector<float>& values = pairs_[pair];
     if (values.empty()) values.assign(2 * indices_.size(), kUnmade);
-    if (values[2 * i] == kUnmade) {
-      const size_t first = i - i % kBlock, count = std::min(kBlock, indices_.size() - first);
-      sampler_.SamplePairs({&indices_[first], count}, {&seeds_[first], count}, pair,
-                           {&values[2 * first], 2 * count});
-    }
-    return values[2 * i + dimension % 2];
+    return values;
+  }
+  // Makes pair `pair` of the aligned block of points around point i at
+  // once, one call the sampler can vectorise; a block whose paths have all
+  // ended never pays.
+  void MakeBlock(std::vector<float>& values, uint32_t pair, size_t i) const {
+    const size_t first = i - i % kBlock, count = std::min(kBlock, indices_.size() - first);
+    sampler_.SamplePairs({&indices_[first], count}, {&seeds_[first], count}, pair, {&values[2 * first], 2 * count});
+  }
+  // Uniform coordinate u of point i where it lands: the film position in
+  // its pixel, the rest through Warp.
+  float Place(size_t i, uint32_t dimension, float u) const {
+    if (dimension >= 2) return Warp(i, dimension, u);
+    // Only the film position needs the point's pixel (a division).
+    const Pixel& pixel = pixels_[i / samples_];
+    return dimension == 0 ? (pixel.x + u) * inv_width_ : (pixel.y + u) * inv_height_;
   }
   // Marks a pair not made yet: samplers give values in [0, 1).
   static constexpr float kUnmade = -1;

@@ -242,17 +242,22 @@ class PathTracer final : public Transport {
                    const std::vector<Vertex>& vertices, const std::vector<uint32_t>& members,
                    uint32_t base, int depth, bool sampled_lights, std::vector<uint32_t>& next) const {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m);
-    std::vector<uint32_t> flags(m);
+    std::vector<float> wi(3 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m), roulette(m);
+    std::vector<uint32_t> flags(m), owners(m);
     SurfaceRows rows(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
       v.at.wi.Store(&wi[3 * j]);
       rows.Add(v.at.site);
-      u[3 * j] = points.Get(v.path, base + kBsdfLobe);
-      u[3 * j + 1] = points.Get(v.path, base + kBsdfDirection);
-      u[3 * j + 2] = points.Get(v.path, base + kBsdfDirection + 1);
+      owners[j] = v.path;
     }
+    // The lobe choice and the direction, interleaved per vertex.
+    std::vector<float> coordinate(m);
+    for (uint32_t j = 0; j < 3; ++j) {
+      points.Gather(owners, base + (j == 0 ? kBsdfLobe : kBsdfDirection + j - 1), coordinate);
+      for (size_t q = 0; q < m; ++q) u[3 * q + j] = coordinate[q];
+    }
+    if (depth >= length_.rr_depth) points.Gather(owners, base + kRoulette, roulette);
     model.Sample(TransportMode::kRadiance, wi, rows.Points(), u, 0, wo, weight, pdf, flags);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
@@ -266,7 +271,7 @@ class PathTracer final : public Transport {
       p.last = !diffuse_indirect_ && (flags[j] & kScatterDiffuse);
       const Vec3 dir = Normalize(v.at.frame.ToWorld(out));
       Redirect(p.ray, v.at.position, v.at.ng, dir);
-      if (depth >= length_.rr_depth && !Survives(p.throughput, points.Get(v.path, base + kRoulette))) continue;
+      if (depth >= length_.rr_depth && !Survives(p.throughput, roulette[j])) continue;
       next.push_back(v.path);
     }
   }

@@ -532,12 +532,13 @@ inline std::vector<LightDirection> SampleLightsFrom(const SceneView& scene, cons
                                                     const std::vector<Vec3>& from,
                                                     const std::vector<uint32_t>& owners, uint32_t choice,
                                                     uint32_t direction) {
-  std::vector<float> u(3 * from.size());
-  for (size_t k = 0; k < from.size(); ++k) {
-    u[3 * k] = points.Get(owners[k], choice);
-    u[3 * k + 1] = points.Get(owners[k], direction);
-    u[3 * k + 2] = points.Get(owners[k], direction + 1);
-  }
+  const size_t n = from.size();
+  std::vector<float> coordinates(3 * n), u(3 * n);
+  points.Gather(owners, choice, std::span(coordinates).first(n));
+  points.Gather(owners, direction, std::span(coordinates).subspan(n, n));
+  points.Gather(owners, direction + 1, std::span(coordinates).subspan(2 * n, n));
+  for (size_t k = 0; k < n; ++k)
+    for (size_t j = 0; j < 3; ++j) u[3 * k + j] = coordinates[j * n + k];
   std::vector<LightDirection> out(from.size());
   scene.SampleLightsFrom(from, u, out);
   return out;

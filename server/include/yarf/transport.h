@@ -33,6 +33,12 @@ class PrimarySamples {
   virtual ~PrimarySamples() = default;
   virtual size_t Count() const = 0;
   virtual float Get(size_t i, uint32_t dimension) const = 0;
+  // Coordinate `dimension` of each of `points`, into out (as long): what a
+  // wavefront transport asks for a whole batch at once; by default, Get
+  // per point.
+  virtual void Gather(std::span<const uint32_t> points, uint32_t dimension, std::span<float> out) const {
+    for (size_t k = 0; k < points.size(); ++k) out[k] = Get(points[k], dimension);
+  }
   // Which sample of its pixel point i is (0, 1, 2... in the order of the
   // sample passes), for progressive methods whose estimate changes from
   // pass to pass; 0 when the points are not in passes.
