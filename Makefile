@@ -22,8 +22,8 @@ APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
   libgtest-dev libtinyobjloader-dev libpugixml-dev zlib1g-dev clang-14 libclang-rt-14-dev \
   curl ca-certificates libnanoflann-dev libsqlite3-dev libssl-dev openssl nats-server chromium \
   libopenvdb-dev libboost-dev
-# Mitsuba's LLVM variant, for the benchmark only.
-BENCH_APT_PACKAGES := libllvm19
+# Mitsuba's LLVM variant and perf (bench/profile.py), for the benchmarks only.
+BENCH_APT_PACKAGES := libllvm19 linux-perf
 
 .PHONY: all deps venv build stubs lint render test fuzz bench clean
 
@@ -111,6 +111,7 @@ fuzz: build
 bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
 	$(PY) bench/cornell_box.py
+	$(PY) bench/profile.py
 	$(BUILD)/bin/integrator_throughput
 	$(BUILD)/bin/texture_lookups
 	$(PY) bench/integrators.py

@@ -9,11 +9,14 @@ JIT made at run time, which perf can only name as anonymous addresses; its
 share is reported as "JIT code".
 
 Written to out/bench/profile.txt (the CPU model first);
-bench/profiles/ keeps committed copies.
+bench/profiles/ keeps committed copies. ``--yarfd PATH`` profiles another
+build's yarfd (an older commit's, for a before-and-after pair), with the
+commit of the tree that binary was built in.
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import re
 import signal
@@ -76,9 +79,9 @@ def counters(stat_output: str) -> list[str]:
     return lines
 
 
-def profile_yarf(folder: Path) -> list[str]:
+def profile_yarf(folder: Path, yarfd: Path | None) -> list[str]:
     data = folder / "yarf.data"
-    with LocalServer() as server:
+    with LocalServer(binary=yarfd) as server:
         client = Client(server.address)
         scene = load_scene(SCENE)
         client.wait(client.submit(scene, spp=4, seed=1))  # plugins loaded, scene built
@@ -150,9 +153,13 @@ def profile_mitsuba(folder: Path) -> list[str]:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--yarfd", type=Path, help="the yarfd to profile (default: this build's)")
+    args = parser.parse_args()
+    tree = args.yarfd.resolve().parent if args.yarfd else ROOT
     commit = subprocess.run(
         ["git", "rev-parse", "--short", "HEAD"],
-        cwd=ROOT,
+        cwd=tree,
         capture_output=True,
         text=True,
         check=False,
@@ -162,7 +169,7 @@ def main() -> None:
             f"# Cornell box profile — CPU: {cpu_model()}, {os.cpu_count()} threads, "
             f"commit {commit}",
             "",
-            *profile_yarf(Path(folder)),
+            *profile_yarf(Path(folder), args.yarfd),
             "",
             *profile_mitsuba(Path(folder)),
         ]
