@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from statistics import NormalDist
+from typing import Protocol
 
 import numpy as np
 
@@ -49,6 +50,28 @@ class ZTest:
             f"z = {self.z[row, column, channel]:+.1f}"
             for row, column, channel in failing[:worst]
         )
+
+
+class Render(Protocol):
+    """A render's pixels and the variance of each one's estimate (yarf.RenderResult)."""
+
+    pixels: np.ndarray
+    variance: np.ndarray
+
+
+def assert_renders_agree(
+    render: Render, reference: Render, label: str, *, block: int = 4, family_alpha: float = 1e-3
+) -> None:
+    """Every block of ``render`` agrees with ``reference`` within Monte Carlo noise."""
+    test = block_z_test(
+        render.pixels,
+        render.variance,
+        reference.pixels,
+        reference.variance,
+        block=block,
+        family_alpha=family_alpha,
+    )
+    assert not test.failing.size, f"{label}:\n{test.report()}"
 
 
 def block_z_test(
