@@ -1,18 +1,9 @@
 #include "components/remote_emitter.h"
 
-#include <string>
-
 namespace yarf {
 
 Remote<Emitter>::Remote(std::unique_ptr<RemoteInstance> instance)
     : instance_(std::move(instance)), stub_(v1::Emitter::NewStub(instance_->channel())) {}
-
-void Remote<Emitter>::RequireNonNegative(const char* method, const char* field, std::span<const float> values) const {
-  for (size_t i = 0; i < values.size(); ++i)
-    if (values[i] < 0)
-      throw instance_->BadReply(method, "a negative " + std::string(field) + " (" + std::to_string(values[i]) +
-                                            ") at value " + std::to_string(i));
-}
 
 void Remote<Emitter>::Radiance(std::span<const float> w, const SurfacePoints& at, std::span<float> radiance) const {
   const uint32_t n = uint32_t(w.size() / 3);
@@ -26,7 +17,7 @@ void Remote<Emitter>::Radiance(std::span<const float> w, const SurfacePoints& at
     return stub_->Radiance(&context, request, &reply);
   });
   instance_->CopyFloats("Radiance", "radiance", reply.radiance(), n, {3}, radiance.first(3 * n));
-  RequireNonNegative("Radiance", "radiance", radiance.first(3 * n));
+  instance_->RequireNonNegative("Radiance", "radiance", radiance.first(3 * n));
 }
 
 void Remote<Emitter>::SampleDirection(std::span<const float> uniform, std::span<float> w,
@@ -42,7 +33,7 @@ void Remote<Emitter>::SampleDirection(std::span<const float> uniform, std::span<
   });
   instance_->CopyFloats("SampleDirection", "w", reply.w(), n, {3}, w.first(3 * n));
   instance_->CopyFloats("SampleDirection", "pdf", reply.pdf(), n, {}, pdf.first(n));
-  RequireNonNegative("SampleDirection", "pdf", pdf.first(n));
+  instance_->RequireNonNegative("SampleDirection", "pdf", pdf.first(n));
 }
 
 void Remote<Emitter>::PdfDirection(std::span<const float> w, std::span<float> pdf) const {
@@ -56,7 +47,7 @@ void Remote<Emitter>::PdfDirection(std::span<const float> w, std::span<float> pd
     return stub_->PdfDirection(&context, request, &reply);
   });
   instance_->CopyFloats("PdfDirection", "pdf", reply.pdf(), n, {}, pdf.first(n));
-  RequireNonNegative("PdfDirection", "pdf", pdf.first(n));
+  instance_->RequireNonNegative("PdfDirection", "pdf", pdf.first(n));
 }
 
 }  // namespace yarf

@@ -20,8 +20,6 @@ class Remote<Emitter> final : public Emitter {
   void PdfDirection(std::span<const float> w, std::span<float> pdf) const override;
 
  private:
-  void RequireNonNegative(const char* method, const char* field, std::span<const float> values) const;
-
   std::unique_ptr<RemoteInstance> instance_;
   std::unique_ptr<v1::Emitter::Stub> stub_;
 };

@@ -203,6 +203,13 @@ void RemoteInstance::CopyFloats(const char* method, const char* field, const v1:
                                  std::to_string(i / std::max<size_t>(1, n / std::max<size_t>(rows, 1))));
 }
 
+void RemoteInstance::RequireNonNegative(const char* method, const char* field, std::span<const float> values) const {
+  for (size_t i = 0; i < values.size(); ++i)
+    if (values[i] < 0)
+      throw BadReply(method, "a negative " + std::string(field) + " (" + std::to_string(values[i]) + ") at value " +
+                                 std::to_string(i));
+}
+
 void RemoteInstance::CopyUints(const char* method, const char* field, const v1::Array& array, size_t rows,
                                std::span<uint32_t> out) const {
   CheckShape(method, field, array, v1::Array::UINT32, rows, {});

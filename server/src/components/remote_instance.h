@@ -91,6 +91,9 @@ class RemoteInstance {
                   std::initializer_list<uint32_t> trailing, std::span<float> out) const;
   void CopyUints(const char* method, const char* field, const v1::Array& array, size_t rows,
                  std::span<uint32_t> out) const;
+  // Reply check: no value of `field` (a radiance, a pdf, a coefficient) is
+  // negative.
+  void RequireNonNegative(const char* method, const char* field, std::span<const float> values) const;
 
   // "component 'py_lambertian' at unix:/tmp/c.sock".
   std::string Name() const;

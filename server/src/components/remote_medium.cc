@@ -25,13 +25,6 @@ Remote<Medium>::Remote(std::unique_ptr<RemoteInstance> instance)
   emits_ = reply.emits();
 }
 
-void Remote<Medium>::RequireNonNegative(const char* method, const char* field, std::span<const float> values) const {
-  for (size_t i = 0; i < values.size(); ++i)
-    if (values[i] < 0)
-      throw instance_->BadReply(method, "a negative " + std::string(field) + " (" + Number(values[i]) +
-                                            ") at value " + std::to_string(i));
-}
-
 void Remote<Medium>::Majorants(std::span<const float> origin, std::span<const float> direction,
                                std::span<const float> tmax, MajorantSegments& out) const {
   out.Clear();
@@ -112,9 +105,9 @@ void Remote<Medium>::Coefficients(std::span<const float> position, std::span<flo
   instance_->CopyFloats("Coefficients", "sigma_a", reply.sigma_a(), n, {3}, sigma_a.first(3 * size_t(n)));
   instance_->CopyFloats("Coefficients", "sigma_s", reply.sigma_s(), n, {3}, sigma_s.first(3 * size_t(n)));
   instance_->CopyFloats("Coefficients", "emission", reply.emission(), n, {3}, emission.first(3 * size_t(n)));
-  RequireNonNegative("Coefficients", "sigma_a", sigma_a.first(3 * size_t(n)));
-  RequireNonNegative("Coefficients", "sigma_s", sigma_s.first(3 * size_t(n)));
-  RequireNonNegative("Coefficients", "emission", emission.first(3 * size_t(n)));
+  instance_->RequireNonNegative("Coefficients", "sigma_a", sigma_a.first(3 * size_t(n)));
+  instance_->RequireNonNegative("Coefficients", "sigma_s", sigma_s.first(3 * size_t(n)));
+  instance_->RequireNonNegative("Coefficients", "emission", emission.first(3 * size_t(n)));
 }
 
 void Remote<Medium>::EvaluatePhase(std::span<const float> wi, std::span<const float> wo,
@@ -133,8 +126,8 @@ void Remote<Medium>::EvaluatePhase(std::span<const float> wi, std::span<const fl
   });
   instance_->CopyFloats("EvaluatePhase", "value", reply.value(), n, {}, value.first(n));
   instance_->CopyFloats("EvaluatePhase", "pdf", reply.pdf(), n, {}, pdf.first(n));
-  RequireNonNegative("EvaluatePhase", "value", value.first(n));
-  RequireNonNegative("EvaluatePhase", "pdf", pdf.first(n));
+  instance_->RequireNonNegative("EvaluatePhase", "value", value.first(n));
+  instance_->RequireNonNegative("EvaluatePhase", "pdf", pdf.first(n));
 }
 
 void Remote<Medium>::SamplePhase(std::span<const float> wi, std::span<const float> position,
@@ -154,8 +147,8 @@ void Remote<Medium>::SamplePhase(std::span<const float> wi, std::span<const floa
   instance_->CopyFloats("SamplePhase", "wo", reply.wo(), n, {3}, wo.first(3 * size_t(n)));
   instance_->CopyFloats("SamplePhase", "weight", reply.weight(), n, {}, weight.first(n));
   instance_->CopyFloats("SamplePhase", "pdf", reply.pdf(), n, {}, pdf.first(n));
-  RequireNonNegative("SamplePhase", "weight", weight.first(n));
-  RequireNonNegative("SamplePhase", "pdf", pdf.first(n));
+  instance_->RequireNonNegative("SamplePhase", "weight", weight.first(n));
+  instance_->RequireNonNegative("SamplePhase", "pdf", pdf.first(n));
   // A drawn direction continues the path: it must be a direction.
   for (uint32_t i = 0; i < n; ++i) {
     if (!(pdf[i] > 0 && weight[i] > 0)) continue;

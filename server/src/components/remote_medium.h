@@ -31,8 +31,6 @@ class Remote<Medium> final : public Medium {
                    std::span<float> wo, std::span<float> weight, std::span<float> pdf) const override;
 
  private:
-  void RequireNonNegative(const char* method, const char* field, std::span<const float> values) const;
-
   std::unique_ptr<RemoteInstance> instance_;
   std::unique_ptr<v1::Medium::Stub> stub_;
   // Fixed for an instance: asked once.

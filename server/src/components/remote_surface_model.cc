@@ -34,14 +34,6 @@ Remote<SurfaceModel>::Remote(std::unique_ptr<RemoteInstance> instance)
   lobes_ = reply.flags();
 }
 
-void Remote<SurfaceModel>::RequireNonNegative(const char* method, const char* field,
-                                              std::span<const float> values) const {
-  for (size_t i = 0; i < values.size(); ++i)
-    if (values[i] < 0)
-      throw instance_->BadReply(method, "a negative " + std::string(field) + " (" + std::to_string(values[i]) +
-                                            ") at value " + std::to_string(i));
-}
-
 void Remote<SurfaceModel>::Evaluate(TransportMode mode, std::span<const float> wi, std::span<const float> wo,
                                     const SurfacePoints& at, std::span<float> value) const {
   const uint32_t n = uint32_t(wi.size() / 3);
@@ -54,7 +46,7 @@ void Remote<SurfaceModel>::Evaluate(TransportMode mode, std::span<const float> w
     return stub_->Evaluate(&context, request, &reply);
   });
   instance_->CopyFloats("Evaluate", "value", reply.value(), n, {3}, value.first(3 * n));
-  RequireNonNegative("Evaluate", "value", value.first(3 * n));
+  instance_->RequireNonNegative("Evaluate", "value", value.first(3 * n));
 }
 
 void Remote<SurfaceModel>::Sample(TransportMode mode, std::span<const float> wi, const SurfacePoints& at,
@@ -78,8 +70,8 @@ void Remote<SurfaceModel>::Sample(TransportMode mode, std::span<const float> wi,
   instance_->CopyFloats("Sample", "weight", reply.weight(), n, {3}, weight.first(3 * n));
   instance_->CopyFloats("Sample", "pdf", reply.pdf(), n, {}, pdf.first(n));
   instance_->CopyUints("Sample", "flags", reply.flags(), n, flags.first(n));
-  RequireNonNegative("Sample", "weight", weight.first(3 * n));
-  RequireNonNegative("Sample", "pdf", pdf.first(n));
+  instance_->RequireNonNegative("Sample", "weight", weight.first(3 * n));
+  instance_->RequireNonNegative("Sample", "pdf", pdf.first(n));
   for (uint32_t i = 0; i < n; ++i)
     if (flags[i] & ~kKnownFlags)
       throw instance_->BadReply("Sample", "unknown flags " + std::to_string(flags[i]) + " at query " + std::to_string(i));
@@ -96,7 +88,7 @@ void Remote<SurfaceModel>::Pdf(std::span<const float> wi, std::span<const float>
     return stub_->Pdf(&context, request, &reply);
   });
   instance_->CopyFloats("Pdf", "pdf", reply.pdf(), n, {}, pdf.first(n));
-  RequireNonNegative("Pdf", "pdf", pdf.first(n));
+  instance_->RequireNonNegative("Pdf", "pdf", pdf.first(n));
 }
 
 }  // namespace yarf

@@ -25,8 +25,6 @@ class Remote<SurfaceModel> final : public SurfaceModel {
   uint32_t Lobes() const override { return lobes_; }
 
  private:
-  void RequireNonNegative(const char* method, const char* field, std::span<const float> values) const;
-
   std::unique_ptr<RemoteInstance> instance_;
   std::unique_ptr<v1::SurfaceModel::Stub> stub_;
   // Fixed for an instance: asked once.
