@@ -25,6 +25,9 @@ PAGES = sorted(p for p in (ROOT / "docs").glob("*.md") if p.name != "plugins.md"
 BLOCK = re.compile(r"^```(bash|python)\n(.*?)^```", re.M | re.S)
 # How long what a page left running has to stop after SIGTERM.
 STOP_SECONDS = 10.0
+# A page's time, under pytest's own timeout so that a page that hangs
+# reports the block it hung in and what it printed.
+PAGE_SECONDS = 480.0
 
 # Runs a page's blocks, given as (language, code) pairs on stdin.
 DRIVER = """
@@ -95,8 +98,11 @@ def test_every_block_of_the_page_runs(page: Path, tmp_path: Path) -> None:
             text=True,
             start_new_session=True,
         )
+        timed_out = False
         try:
-            driver.communicate(json.dumps(blocks(page)), timeout=600)
+            driver.communicate(json.dumps(blocks(page)), timeout=PAGE_SECONDS)
+        except subprocess.TimeoutExpired:
+            timed_out = True
         finally:
             if driver.poll() is None:
                 driver.kill()
@@ -106,4 +112,7 @@ def test_every_block_of_the_page_runs(page: Path, tmp_path: Path) -> None:
         out.seek(0)
         err.seek(0)
         stdout, stderr = out.read(), err.read()
-    assert driver.returncode == 0, f"{page.name}:\n{stdout[-4000:]}\n{stderr[-4000:]}"
+    verdict = f"ran over {PAGE_SECONDS:.0f} s" if timed_out else f"exit {driver.returncode}"
+    assert not timed_out and driver.returncode == 0, (
+        f"{page.name} ({verdict}):\n{stdout[-4000:]}\n{stderr[-4000:]}"
+    )
