@@ -14,11 +14,13 @@
 #include "components/remote_classes.h"
 #include "components/remote_emitter.h"
 #include "components/remote_function.h"
+#include "components/remote_generator.h"
 #include "components/remote_medium.h"
 #include "components/remote_sampler.h"
 #include "components/remote_surface_model.h"
 #include "components/remote_texture.h"
 #include "components/remote_transport.h"
+#include "components/remote_warp.h"
 #include "yarf/texture.h"
 
 namespace yarf {
@@ -53,7 +55,8 @@ struct ResolvedProperties {
 template <typename I>
 constexpr bool kHasRemote = std::is_same_v<I, SurfaceModel> || std::is_same_v<I, Emitter> ||
                             std::is_same_v<I, Sampler> || std::is_same_v<I, Transport> ||
-                            std::is_same_v<I, Function> || std::is_same_v<I, Texture> || std::is_same_v<I, Medium>;
+                            std::is_same_v<I, Function> || std::is_same_v<I, Texture> || std::is_same_v<I, Medium> ||
+                            std::is_same_v<I, Warp> || std::is_same_v<I, Generator>;
 
 // `address` empty: the registry's class, or a registered remote class.
 template <typename I>
