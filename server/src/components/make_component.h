@@ -15,7 +15,9 @@
 #include "components/remote_emitter.h"
 #include "components/remote_function.h"
 #include "components/remote_generator.h"
+#include "components/remote_integrator.h"
 #include "components/remote_medium.h"
+#include "components/remote_root_finder.h"
 #include "components/remote_sampler.h"
 #include "components/remote_surface_model.h"
 #include "components/remote_texture.h"
@@ -56,7 +58,8 @@ template <typename I>
 constexpr bool kHasRemote = std::is_same_v<I, SurfaceModel> || std::is_same_v<I, Emitter> ||
                             std::is_same_v<I, Sampler> || std::is_same_v<I, Transport> ||
                             std::is_same_v<I, Function> || std::is_same_v<I, Texture> || std::is_same_v<I, Medium> ||
-                            std::is_same_v<I, Warp> || std::is_same_v<I, Generator>;
+                            std::is_same_v<I, Warp> || std::is_same_v<I, RootFinder> ||
+                            std::is_same_v<I, Generator> || std::is_same_v<I, Integrator>;
 
 // `address` empty: the registry's class, or a registered remote class.
 template <typename I>

@@ -73,6 +73,13 @@ class RemoteInstance {
   RemoteInstance& operator=(const RemoteInstance&) = delete;
 
   const std::shared_ptr<grpc::Channel>& channel() const { return channel_; }
+  const std::string& address() const { return address_; }
+  const std::string& class_name() const { return class_name_; }
+  // The instance's handle at the component (a retry may make it anew).
+  uint64_t handle() const {
+    std::lock_guard lock(mutex_);
+    return handle_;
+  }
 
   // Runs one call: `call(context, handle)` with the deadline set. A
   // failure throws Error naming the component and "Interface.method";

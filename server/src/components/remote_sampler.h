@@ -17,6 +17,9 @@ class Remote<Sampler> final : public Sampler {
   float Sample(uint64_t index, uint32_t dimension, uint64_t seed) const override;
   void Generate(uint64_t first, uint32_t count, uint32_t dimensions, uint64_t seed,
                 std::span<float> out) const override;
+  // Where the sampler lives: a Remote<Integrator> of the same process
+  // names it by its handle there.
+  const RemoteInstance& instance() const { return *instance_; }
 
  private:
   std::unique_ptr<RemoteInstance> instance_;
