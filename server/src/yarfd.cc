@@ -110,7 +110,9 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   yarf::RegistryServiceImpl registry_service(registry, remote_classes,
                                              {options.allow_load_plugin, options.plugin_paths});
   yarf::ComponentServiceImpl component(registry, remote_classes, instances);
-  yarf::FactoryServiceImpl factory(registry, remote_classes, instances);
+  yarf::FactoryServiceImpl factory(
+      registry, remote_classes, instances,
+      {.deadline = std::chrono::milliseconds(int64_t(options.component_timeout_seconds * 1000))});
   yarf::IntersectServiceImpl intersect(job_scenes);
   yarf::JobSceneServiceImpl job_scene(job_scenes);
   yarf::ShapeServiceImpl shape(job_scenes);

@@ -2,6 +2,7 @@
 
 #include <random>
 
+#include "components/make_remote_instance.h"
 #include "components/parameter_checks.h"
 #include "components/properties_proto.h"
 
@@ -147,8 +148,7 @@ grpc::Status FactoryServiceImpl::Create(grpc::ServerContext* context, const v1::
                                         v1::CreateReply* reply) {
   if (!registry_.Has(request->class_name()))
     if (const auto address = remote_.AddressOf(request->class_name()))
-      return {grpc::StatusCode::FAILED_PRECONDITION, "class '" + request->class_name() + "' lives in the component at " +
-                                                         *address + ": create its instances there"};
+      return CreateRemote(*context, *request, *address, reply);
   try {
     if (const auto info = registry_.Info(request->class_name()))
       CheckProperties(*info, request->properties(), "properties");
@@ -161,6 +161,24 @@ grpc::Status FactoryServiceImpl::Create(grpc::ServerContext* context, const v1::
   } catch (const Error& e) {
     const bool unknown = !registry_.Has(request->class_name());
     return {unknown ? grpc::StatusCode::NOT_FOUND : grpc::StatusCode::INVALID_ARGUMENT, e.what()};
+  }
+}
+
+grpc::Status FactoryServiceImpl::CreateRemote(grpc::ServerContext& context, const v1::CreateRequest& request,
+                                              const std::string& address, v1::CreateReply* reply) {
+  try {
+    for (const ComponentInfo& info : remote_.Classes()) {
+      if (info.class_name != request.class_name()) continue;
+      std::unique_ptr<Component> instance = MakeRemoteInstance(info, address, request.properties(), remote_options_);
+      *reply->mutable_info() = ToProto(instance->Describe());
+      reply->set_handle(instances_.Add(std::move(instance), CallerOf(context).user));
+      return grpc::Status::OK;
+    }
+    return {grpc::StatusCode::NOT_FOUND, "unknown component class '" + request.class_name() + "'"};
+  } catch (const LimitReached& e) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
+  } catch (const Error& e) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
   }
 }
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "components/remote_classes.h"
+#include "components/remote_instance.h"
 #include "service/access.h"
 #include "service/limits.h"
 #include "yarf/v1/component.grpc.pb.h"
@@ -99,15 +100,23 @@ class ComponentServiceImpl final : public v1::Component::Service {
 
 class FactoryServiceImpl final : public v1::Factory::Service {
  public:
-  FactoryServiceImpl(const Registry& registry, const RemoteClasses& remote, InstanceTable& instances)
-      : registry_(registry), remote_(remote), instances_(instances) {}
+  // `remote_options`: the deadline of the calls made to the instances of
+  // component processes' classes this factory makes.
+  FactoryServiceImpl(const Registry& registry, const RemoteClasses& remote, InstanceTable& instances,
+                     RemoteOptions remote_options = {})
+      : registry_(registry), remote_(remote), instances_(instances), remote_options_(std::move(remote_options)) {}
   grpc::Status Create(grpc::ServerContext*, const v1::CreateRequest*, v1::CreateReply*) override;
   grpc::Status Release(grpc::ServerContext*, const v1::ReleaseRequest*, v1::ReleaseReply*) override;
 
  private:
+  // A class of a component process: made there, called through Remote<I>.
+  grpc::Status CreateRemote(grpc::ServerContext& context, const v1::CreateRequest& request,
+                            const std::string& address, v1::CreateReply* reply);
+
   const Registry& registry_;
   const RemoteClasses& remote_;
   InstanceTable& instances_;
+  const RemoteOptions remote_options_;
 };
 
 }  // namespace yarf

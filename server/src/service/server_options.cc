@@ -38,6 +38,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
   static const char* kUsage =
       "usage: yarfd [--listen HOST:PORT|unix:PATH] [--port-file FILE] [--plugin-path DIR]...\n"
       "             [--asset-root DIR] [--state-dir DIR] [--threads N] [--component ADDRESS]...\n"
+      "             [--component-timeout S]\n"
       "             [--max-running-jobs N] [--checkpoint-seconds S] [--keep-finished-hours H]\n"
       "             [--max-finished-jobs N] [--max-queued-jobs-per-user N]\n"
       "             [--max-instances-per-user N] [--instance-idle-seconds S] [--max-watches-per-user N] [--max-job-memory BYTES[K|M|G]]\n"
@@ -85,6 +86,7 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
     else if (flag == "--asset-grace-hours") options.asset_grace_hours = std::atof(value.c_str());
     else if (flag == "--threads") options.threads = std::atoi(value.c_str());
     else if (flag == "--component") options.components.push_back(value);
+    else if (flag == "--component-timeout") options.component_timeout_seconds = std::atof(value.c_str());
     else if (flag == "--tls-cert") options.tls_cert = value;
     else if (flag == "--tls-key") options.tls_key = value;
     else if (flag == "--tokens") options.tokens_file = value;
@@ -102,6 +104,8 @@ ServerOptions ParseServerOptions(int argc, char** argv) {
   if (const char* env = std::getenv("YARF_ALLOW_ROOT"); env && std::string(env) == "1") options.allow_root = true;
   if (options.max_running_jobs < 1) throw Error("--max-running-jobs must be at least 1");
   if (options.parent_pid < 0) throw Error("--parent-pid must be a process id");
+  if (!(options.component_timeout_seconds > 0 && options.component_timeout_seconds <= 86400))
+    throw Error("--component-timeout must lie in (0, 86400] seconds");
   if (!(options.checkpoint_seconds >= 0)) throw Error("--checkpoint-seconds must be 0 or more");
   if (!(options.keep_finished_hours >= 0)) throw Error("--keep-finished-hours must be 0 or more");
   if (!(options.asset_grace_hours >= 0)) throw Error("--asset-grace-hours must be 0 or more");

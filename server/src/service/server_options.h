@@ -29,6 +29,9 @@ struct ServerOptions {
   int threads = 0;  // 0: all cores
   // Component processes whose classes are made for good (no lease).
   std::vector<std::string> components;
+  // Deadline, in seconds, of each call to an instance Factory.Create made
+  // in a component process (a job's calls take its component_timeout_seconds).
+  double component_timeout_seconds = 60;
   // TLS certificate chain and private key (PEM), and the bearer-token file:
   // required when --listen is reachable from other machines.
   std::filesystem::path tls_cert;
