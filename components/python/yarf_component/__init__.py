@@ -31,7 +31,17 @@ from yarf_component.medium import (
     sample_henyey_greenstein,
 )
 from yarf_component.mis import power_heuristic, samples_lights
-from yarf_component.numerical import Function, Integrand, Integrator, PointSource, Sampler, Warp
+from yarf_component.numerical import (
+    Function,
+    Generator,
+    Integrand,
+    Integrator,
+    NoRoot,
+    PointSource,
+    RootFinder,
+    Sampler,
+    Warp,
+)
 from yarf_component.properties import PropertyError, Rgb, Transform, Vec3
 from yarf_component.server import Running, serve
 from yarf_component.surface import (
@@ -50,6 +60,7 @@ __all__ = [
     "Emitter",
     "Frame",
     "Function",
+    "Generator",
     "HenyeyGreensteinMedium",
     "Hits",
     "Integrand",
@@ -58,11 +69,13 @@ __all__ = [
     "JobSceneError",
     "LightSamples",
     "Medium",
+    "NoRoot",
     "Pending",
     "PointSource",
     "PropertyError",
     "Rays",
     "Rgb",
+    "RootFinder",
     "Running",
     "Sampler",
     "ScatterFlags",

@@ -16,10 +16,12 @@ from yarf.v1 import (
 from yarf_component.host import Host
 from yarf_component.medium import Medium
 from yarf_component.medium_service import MediumService
-from yarf_component.numerical import Function, Integrator, Sampler, Warp
+from yarf_component.numerical import Function, Generator, Integrator, RootFinder, Sampler, Warp
 from yarf_component.numerical_services import (
     FunctionService,
+    GeneratorService,
     IntegratorService,
+    RootFinderService,
     SamplerService,
     WarpService,
 )
@@ -39,7 +41,12 @@ SERVICES: dict[str, tuple[Callable[[object, grpc.Server], None], Callable[[Host]
     Emitter.interface_name: (surface_pb2_grpc.add_EmitterServicer_to_server, EmitterService),
     Function.interface_name: (math_pb2_grpc.add_FunctionServicer_to_server, FunctionService),
     Sampler.interface_name: (math_pb2_grpc.add_SamplerServicer_to_server, SamplerService),
+    Generator.interface_name: (math_pb2_grpc.add_GeneratorServicer_to_server, GeneratorService),
     Warp.interface_name: (math_pb2_grpc.add_WarpServicer_to_server, WarpService),
+    RootFinder.interface_name: (
+        math_pb2_grpc.add_RootFinderServicer_to_server,
+        RootFinderService,
+    ),
     Integrator.interface_name: (math_pb2_grpc.add_IntegratorServicer_to_server, IntegratorService),
     Transport.interface_name: (
         transport_pb2_grpc.add_TransportServicer_to_server,

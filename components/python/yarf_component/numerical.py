@@ -1,4 +1,4 @@
-"""Numerical interfaces (math.proto): Function, Sampler, Warp and Integrator.
+"""Numerical interfaces (math.proto): Function, Sampler, Generator, Warp, RootFinder, Integrator.
 
 Points travel as float32 arrays [N, d], one row per point.
 """
@@ -48,6 +48,16 @@ class Sampler(Component):
         """[count, dimensions]: points first_index .. first_index+count-1 of seed's sequence."""
 
 
+class Generator(Component):
+    """Streams of uniform numbers in [0,1), addressed by (seed, stream, offset): stateless."""
+
+    interface_name = "yarf.v1.Generator"
+
+    @abc.abstractmethod
+    def next(self, seed: int, stream: int, offset: int, count: int) -> np.ndarray:
+        """[count]: numbers offset .. offset+count-1 of stream ``stream`` of ``seed``."""
+
+
 class Warp(Component):
     """A map from uniform points of [0,1)^m to an image in R^n, with its density.
 
@@ -72,6 +82,28 @@ class Warp(Component):
     @abc.abstractmethod
     def pdf(self, points: np.ndarray) -> np.ndarray:
         """[N]: the density at points of the image [N, n]; 0 outside the image."""
+
+
+class NoRoot(Exception):
+    """What find_root raises when the bracket holds no sign change or the iteration
+    does not converge: the caller gets INVALID_ARGUMENT with the message."""
+
+
+class RootFinder(Component):
+    """Roots of a scalar function of one variable."""
+
+    interface_name = "yarf.v1.RootFinder"
+
+    @abc.abstractmethod
+    def find_root(
+        self, f: Integrand, lower: float, upper: float, tolerance: float, max_iterations: int
+    ) -> tuple[float, int]:
+        """x in [lower, upper] with f(x) = 0 to within ``tolerance``, and the iterations spent.
+
+        ``f`` maps points [N, 1] to float64 values [N, k], each call one batch
+        to the function's host; column 0 is f (Newton's method reads f' in
+        column 1). Raise NoRoot when there is none to find.
+        """
 
 
 class Integrator(Component):

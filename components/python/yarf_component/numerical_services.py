@@ -1,8 +1,10 @@
-"""The Function, Sampler, Warp and Integrator services (math.proto) over a Host's instances.
+"""The services of math.proto (Function, Sampler, Generator, Warp, RootFinder,
+Integrator) over a Host's instances.
 
 Replies carry what the instance returned, converted to float32 and
 unchecked (the caller validates them); an Integrator's integrand and
-sampler are checked, as the SDK is their caller (integrand.py).
+sampler, and a RootFinder's function, are checked, as the SDK is their
+caller (integrand.py).
 """
 
 from __future__ import annotations
@@ -17,7 +19,15 @@ from yarf_component.arrays import MAX_VALUES, Batch, float32
 from yarf_component.calls import RpcFailure, invalid, rpc, user_code
 from yarf_component.host import Host
 from yarf_component.integrand import resolve_integrand, resolve_sampler
-from yarf_component.numerical import Function, Integrator, Sampler, Warp
+from yarf_component.numerical import (
+    Function,
+    Generator,
+    Integrator,
+    NoRoot,
+    RootFinder,
+    Sampler,
+    Warp,
+)
 
 
 def _dimensions(instance: object, *names: str) -> list[int]:
@@ -82,6 +92,22 @@ class SamplerService(math_pb2_grpc.SamplerServicer):
             return math_pb2.GenerateSamplesReply(points=float32(points))
 
 
+class GeneratorService(math_pb2_grpc.GeneratorServicer):
+    def __init__(self, host: Host) -> None:
+        self._host = host
+
+    @rpc
+    def Next(
+        self, request: math_pb2.GeneratorRequest, context: grpc.ServicerContext
+    ) -> math_pb2.GeneratorReply:
+        generator = self._host.instance(request.handle, Generator)
+        if request.count > MAX_VALUES:
+            raise invalid(f"batch of {request.count} values exceeds {MAX_VALUES}")
+        with user_code(generator, "next"):
+            values = generator.next(request.seed, request.stream, request.offset, request.count)
+            return math_pb2.GeneratorReply(values=float32(values))
+
+
 class WarpService(math_pb2_grpc.WarpServicer):
     def __init__(self, host: Host) -> None:
         self._host = host
@@ -128,6 +154,32 @@ class WarpService(math_pb2_grpc.WarpServicer):
 
 def _doubles(values: object) -> list[float]:
     return np.atleast_1d(np.asarray(values, dtype=np.float64)).tolist()
+
+
+class RootFinderService(math_pb2_grpc.RootFinderServicer):
+    def __init__(self, host: Host) -> None:
+        self._host = host
+
+    @rpc
+    def FindRoot(
+        self, request: math_pb2.FindRootRequest, context: grpc.ServicerContext
+    ) -> math_pb2.FindRootReply:
+        finder = self._host.instance(request.handle, RootFinder)
+        f = resolve_integrand(self._host, request.function_address, request.function_handle)
+        if f.input_dimensions != 1:
+            raise invalid(f"{f.name} takes {f.input_dimensions} inputs; a root finder's takes 1")
+        if not request.lower < request.upper:
+            raise invalid(f"the bracket [{request.lower}, {request.upper}] is empty")
+        if not request.tolerance > 0:
+            raise invalid(f"tolerance must be positive, not {request.tolerance}")
+        with user_code(finder, "find_root"):
+            try:
+                root, iterations = finder.find_root(
+                    f, request.lower, request.upper, request.tolerance, request.max_iterations
+                )
+            except NoRoot as error:
+                raise invalid(f"{type(finder).__name__}.find_root: {error}") from None
+            return math_pb2.FindRootReply(root=float(root), iterations=int(iterations))
 
 
 class IntegratorService(math_pb2_grpc.IntegratorServicer):
