@@ -31,6 +31,7 @@ TARGETS = [
     f"{EXAMPLES / 'pcg32.py'}:Pcg32",
     f"{EXAMPLES / 'bisection.py'}:Bisection",
     f"{EXAMPLES / 'vegas.py'}:Vegas",
+    f"{EXAMPLES / 'halton.py'}:Halton",
     f"{FAULTY}:FaultyWarp",
     f"{FAULTY}:FaultyGenerator",
     f"{FAULTY}:FaultyRootFinder",
@@ -175,6 +176,30 @@ def test_the_python_vegas_on_yarfd_integrates_within_its_error(
     assert abs(python.estimate[0] - cpp.estimate[0]) < 4 * joint
     assert 0 < python.evaluations <= 60_000
     assert python.q.shape == (1,) and 0 <= python.q[0] <= 1
+
+
+def test_the_python_vegas_draws_from_a_sampler_of_its_own_process(
+    client: Client, registered: str
+) -> None:
+    # py_halton made on yarfd lives in the integrator's process: the request
+    # names it there by its handle, and the estimate stays within its error.
+    result = integrate(
+        peak,
+        [0, 0],
+        [1, 1],
+        method="py_vegas",
+        sampler="py_halton",
+        evaluations=40_000,
+        seed=5,
+        server=client,
+    )
+    assert 0 < result.standard_error[0] < 0.02 * PEAK_INTEGRAL
+    assert abs(result.estimate[0] - PEAK_INTEGRAL) < 4 * result.standard_error[0]
+    # Its own independent points for the same seed give another estimate.
+    own = integrate(
+        peak, [0, 0], [1, 1], method="py_vegas", evaluations=40_000, seed=5, server=client
+    )
+    assert own.estimate[0] != result.estimate[0]
 
 
 def test_a_remote_integrator_cannot_take_a_sampler_of_yarfd(
