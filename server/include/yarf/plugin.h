@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 
+#include "yarf/aggregate.h"
 #include "yarf/component.h"
 #include "yarf/math.h"
 #include "yarf/medium.h"
@@ -20,7 +21,7 @@ void Register(Registrar& registrar, std::string name, std::string version, std::
   info.class_name = std::move(name);
   info.version = std::move(version);
   info.interfaces = InterfacesOf<T, Function, Integrator, Sampler, Generator, RootFinder, Warp, SurfaceModel,
-                                 Emitter, Transport, Texture, Medium>();
+                                 Emitter, Transport, Texture, Medium, Aggregate>();
   info.summary = std::move(summary);
   if constexpr (DeclaresParameters<T>) {
     info.declares_parameters = true;

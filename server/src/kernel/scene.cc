@@ -66,8 +66,7 @@ uint32_t KernelScene::NewGroup() {
   return uint32_t(groups_.size() - 1);
 }
 
-uint32_t KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look) {
-  DropFaceNormals(mesh);
+void KernelScene::AttachMesh(RTCScene scene, uint32_t id, const TriangleMesh& mesh, const ShapeLook& look) {
   RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
       geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
@@ -85,8 +84,24 @@ uint32_t KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook
     alpha_cuts_.back()->Attach(geom);
   }
   rtcCommitGeometry(geom);
-  rtcAttachGeometry(groups_[group].scene, geom);
+  rtcAttachGeometryByID(scene, geom, id);
   rtcReleaseGeometry(geom);
+}
+
+void KernelScene::SetAggregate(uint32_t group, std::shared_ptr<Aggregate> aggregate) {
+  if (!groups_[group].shapes.empty()) throw Error("an aggregate is set before the shapes it holds");
+  groups_[group].aggregate = std::move(aggregate);
+}
+
+uint32_t KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look) {
+  DropFaceNormals(mesh);
+  // Shapes are Embree geometries numbered as in their group, so that a hit
+  // names its shape whichever aggregate found it.
+  const uint32_t id = uint32_t(groups_[group].shapes.size());
+  if (groups_[group].aggregate && !look.alpha)
+    groups_[group].aggregated.push_back(id);
+  else
+    AttachMesh(groups_[group].scene, id, mesh, look);
 
   ShapeRecord record;
   record.kind = Kind::kTriangles;
@@ -121,7 +136,7 @@ uint32_t KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const
   point[2] = center.z;
   point[3] = radius;
   rtcCommitGeometry(geom);
-  rtcAttachGeometry(groups_[group].scene, geom);
+  rtcAttachGeometryByID(groups_[group].scene, geom, uint32_t(groups_[group].shapes.size()));
   rtcReleaseGeometry(geom);
 
   ShapeRecord record;
@@ -168,6 +183,19 @@ void KernelScene::Build(RTCScene scene) const {
   device_.Check("scene build");
 }
 
+void KernelScene::AttachAggregate(Group& group, uint32_t id) {
+  if (!group.aggregate || group.aggregated.empty()) return;
+  for (uint32_t shape : group.aggregated) {
+    const TriangleMesh& mesh = meshes_[group.shapes[shape].mesh];
+    group.aggregate->Add(mesh.positions, mesh.indices);
+  }
+  group.aggregate->Commit();
+  ThrowIfStopped();
+  aggregate_geometries_.push_back(std::make_unique<AggregateGeometry>(group.aggregate, group.aggregated));
+  aggregate_geometries_.back()->Attach(device_.get(), group.scene, id);
+  device_.Check("aggregate");
+}
+
 void KernelScene::AddLight(const Emitter* emitter, const Transform& to_world) {
   Light light;
   light.emitter = emitter;
@@ -184,6 +212,10 @@ void KernelScene::Commit() {
     geometry_base_.push_back(uint32_t(shapes_.size()));
     shapes_.push_back(s);
   }
+  // Each group's aggregate follows its shapes; in the world its number
+  // leads to no shape of its own, since its hits name theirs.
+  for (Group& group : groups_) AttachAggregate(group, uint32_t(group.shapes.size()));
+  if (groups_[kWorld].aggregate && !groups_[kWorld].aggregated.empty()) geometry_base_.push_back(0);
   if (camera_.IsIrradianceMeter()) {
     if (!meter_shape_ || *meter_shape_ >= shapes_.size())
       throw Error("camera: the irradiance meter's shape is not a shape of the world");
@@ -208,7 +240,7 @@ void KernelScene::Commit() {
     }
     set_transform(0, placement.to_world);
     rtcCommitGeometry(geom);
-    rtcAttachGeometry(groups_[kWorld].scene, geom);
+    rtcAttachGeometryByID(groups_[kWorld].scene, geom, uint32_t(geometry_base_.size()));
     rtcReleaseGeometry(geom);
     geometry_base_.push_back(uint32_t(shapes_.size()));
     for (ShapeRecord s : groups_[placement.group].shapes) {

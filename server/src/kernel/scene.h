@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "kernel/aggregate_geometry.h"
 #include "kernel/alpha_cut.h"
 #include "kernel/camera.h"
 #include "kernel/embree_device.h"
@@ -52,6 +53,9 @@ class KernelScene final : public SceneView {
   uint32_t AddMedium(std::unique_ptr<Medium> medium);
   void SetCameraMedium(uint32_t medium) { camera_medium_ = medium; }
   uint32_t NewGroup();
+  // The group's opaque triangle meshes go into `aggregate` rather than
+  // Embree's BVH; set before the group's first shape.
+  void SetAggregate(uint32_t group, std::shared_ptr<Aggregate> aggregate);
   // Geometry in the group's own space; returns the shape's number in its
   // group, which for kWorld is its shape id once committed.
   uint32_t AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look);
@@ -159,6 +163,8 @@ class KernelScene final : public SceneView {
  private:
   // Commits `scene`, stopping early when the job stops.
   void Build(RTCScene scene) const;
+  // A mesh as Embree triangles, geometry `id` of `scene`.
+  void AttachMesh(RTCScene scene, uint32_t id, const TriangleMesh& mesh, const ShapeLook& look);
 
   enum class Kind { kTriangles, kSphere };
   struct ShapeRecord {
@@ -183,7 +189,13 @@ class KernelScene final : public SceneView {
   struct Group {
     RTCScene scene = nullptr;
     std::vector<ShapeRecord> shapes;
+    // A custom aggregate, and the shapes (by number in the group) it holds.
+    std::shared_ptr<Aggregate> aggregate;
+    std::vector<uint32_t> aggregated;
   };
+  // Fills the group's aggregate with its meshes and attaches it to the
+  // group's scene as geometry `id`, if it holds any.
+  void AttachAggregate(Group& group, uint32_t id);
 
   // A placed shape's to_world at shutter time `time` (moving ones interpolated).
   static Transform PlacementAt(const ShapeRecord& shape, float time);
@@ -229,6 +241,7 @@ class KernelScene final : public SceneView {
   // The cut-outs of meshes with an alpha texture, Embree's filter data.
   std::vector<std::unique_ptr<AlphaCut>> alpha_cuts_;
   std::vector<Group> groups_;
+  std::vector<std::unique_ptr<AggregateGeometry>> aggregate_geometries_;
   std::vector<Placement> placements_;
   // Unit normals of each mesh's triangles in the mesh's own space.
   std::vector<std::vector<Vec3>> face_normals_;

@@ -244,10 +244,13 @@ class Builder {
           kernel_->AddLight(emitter, to_world);
       }
     }
-    AddShapes(KernelScene::kWorld, scene_.shapes(), "");
+    UseAggregate(KernelScene::kWorld, scene_.aggregate(), "scene aggregate");
+    AddShapes(KernelScene::kWorld, scene_.shapes(), "", scene_.aggregate());
     for (const v1::Group& g : scene_.groups()) {
       groups_[g.name()] = {&g, kernel_->NewGroup()};
-      AddShapes(groups_[g.name()].second, g.shapes(), "group '" + g.name() + "' ");
+      const v1::ComponentSpec& aggregate = g.has_aggregate() ? g.aggregate() : scene_.aggregate();
+      UseAggregate(groups_[g.name()].second, aggregate, "group '" + g.name() + "' aggregate");
+      AddShapes(groups_[g.name()].second, g.shapes(), "group '" + g.name() + "' ", aggregate);
     }
     for (const v1::Instance& instance : scene_.instances()) Place(instance, Transform{}, 1);
     kernel_->Commit();
@@ -291,6 +294,13 @@ class Builder {
     return props;
   }
 
+  // A group's own instance of the aggregate class `spec` names, if any.
+  void UseAggregate(uint32_t group, const v1::ComponentSpec& spec, const std::string& what) {
+    if (spec.class_name().empty()) return;
+    kernel_->SetAggregate(group, Create<Aggregate>(spec.class_name(), spec.properties(), spec.address(),
+                                                   what + " (" + spec.class_name() + ")"));
+  }
+
   // A texture of the scene, its file found for it.
   std::shared_ptr<const Texture> MakeTexture(const v1::SceneTexture& t) {
     const std::string what = TextureName(t);
@@ -299,8 +309,9 @@ class Builder {
     return Create<Texture>(t.texture().class_name(), props, t.texture().address(), what, &own);
   }
 
+  // `aggregate`: the group's, which a moving shape's group of its own takes too.
   void AddShapes(uint32_t group, const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes,
-                 const std::string& where) {
+                 const std::string& where, const v1::ComponentSpec& aggregate) {
     for (int i = 0; i < shapes.size(); ++i) {
       kernel_->ThrowIfStopped();  // between meshes, which may take a while to parse
       const v1::SceneShape& s = shapes[i];
@@ -324,6 +335,7 @@ class Builder {
       if (s.has_to_world_end()) {
         // Embree moves instances: a moving shape is one in a group of its own.
         const uint32_t own = kernel_->NewGroup();
+        UseAggregate(own, aggregate, what + " aggregate");
         kernel_->AddPlacement(own, to_world, FromProto(s.to_world_end(), what + " to_world_end"));
         AddShape(own, s, look, Transform{}, what);
         continue;
