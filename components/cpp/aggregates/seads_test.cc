@@ -43,6 +43,26 @@ v1::Transform Matrix(std::initializer_list<double> rows) {
   return t;
 }
 
+v1::Camera SmallCamera() {
+  v1::Camera camera;
+  camera.mutable_target()->set_z(1);
+  camera.mutable_up()->set_y(1);
+  camera.set_fov(45);
+  return camera;
+}
+
+// A camera, a small film and one lambertian material named "m".
+v1::Scene SmallScene() {
+  v1::Scene scene;
+  scene.mutable_film()->set_width(4);
+  scene.mutable_film()->set_height(4);
+  *scene.mutable_camera() = SmallCamera();
+  v1::Material* m = scene.add_materials();
+  m->set_name("m");
+  m->set_class_name("lambertian");
+  return scene;
+}
+
 // A bumpy sphere of about 2·rings·segments triangles, and a soup of random
 // triangles around it: an even part and an uneven one for the grid.
 void AddBumpySphere(v1::Mesh* mesh, int rings, int segments, std::mt19937& random) {
@@ -166,15 +186,7 @@ TEST_F(SeadsTest, CornellBoxHitsAreEmbreesOnRandomRays) {
 // hold, a group with its own density, and a dense uneven soup.
 TEST_F(SeadsTest, InstancedMovingAndMixedScenesHitAsEmbree) {
   std::mt19937 random(7);
-  v1::Scene scene;
-  scene.mutable_film()->set_width(4);
-  scene.mutable_film()->set_height(4);
-  scene.mutable_camera()->mutable_target()->set_z(1);
-  scene.mutable_camera()->mutable_up()->set_y(1);
-  scene.mutable_camera()->set_fov(45);
-  v1::Material* m = scene.add_materials();
-  m->set_name("m");
-  m->set_class_name("lambertian");
+  v1::Scene scene = SmallScene();
   v1::Group* group = scene.add_groups();
   group->set_name("bumpy");
   v1::SceneShape* bumpy = group->add_shapes();
@@ -215,15 +227,7 @@ TEST_F(SeadsTest, InstancedMovingAndMixedScenesHitAsEmbree) {
 TEST_F(SeadsTest, FlatScenesAndExtremeDensitiesHitAsEmbree) {
   for (double density : {0.01, 2.0, 64.0}) {
     SCOPED_TRACE("density " + std::to_string(density));
-    v1::Scene scene;
-    scene.mutable_film()->set_width(4);
-    scene.mutable_film()->set_height(4);
-    scene.mutable_camera()->mutable_target()->set_z(1);
-    scene.mutable_camera()->mutable_up()->set_y(1);
-    scene.mutable_camera()->set_fov(45);
-    v1::Material* m = scene.add_materials();
-    m->set_name("m");
-    m->set_class_name("lambertian");
+    v1::Scene scene = SmallScene();
     v1::SceneShape* quad = scene.add_shapes();
     quad->set_material("m");
     for (float v : {-1.f, 0.f, -1.f, 1.f, 0.f, -1.f, 1.f, 0.f, 1.f, -1.f, 0.f, 1.f}) quad->mutable_mesh()->add_positions(v);
@@ -239,15 +243,7 @@ TEST_F(SeadsTest, FlatScenesAndExtremeDensitiesHitAsEmbree) {
 // sides and corners, from far away and with empty intervals: the cases of
 // the walk's set-up, against Embree.
 TEST_F(SeadsTest, AxisRaysFromTheGridsSidesHitAsEmbree) {
-  v1::Scene scene;
-  scene.mutable_film()->set_width(4);
-  scene.mutable_film()->set_height(4);
-  scene.mutable_camera()->mutable_target()->set_z(1);
-  scene.mutable_camera()->mutable_up()->set_y(1);
-  scene.mutable_camera()->set_fov(45);
-  v1::Material* m = scene.add_materials();
-  m->set_name("m");
-  m->set_class_name("lambertian");
+  v1::Scene scene = SmallScene();
   std::mt19937 random(3);
   v1::SceneShape* soup = scene.add_shapes();
   soup->set_material("m");
@@ -304,11 +300,7 @@ TEST_F(SeadsTest, AMeshWithAnIndexPastItsVerticesIsRefused) {
 }
 
 TEST_F(SeadsTest, AnAggregateIsSetBeforeItsShapes) {
-  v1::Camera camera;
-  camera.mutable_target()->set_z(1);
-  camera.mutable_up()->set_y(1);
-  camera.set_fov(45);
-  KernelScene scene(device_, Camera(camera, 4, 4), 4, 4);
+  KernelScene scene(device_, Camera(SmallCamera(), 4, 4), 4, 4);
   TriangleMesh mesh;
   mesh.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   mesh.indices = {0, 1, 2};
