@@ -274,7 +274,7 @@ def test_a_submitter_may_not_read_or_write_running_jobs_scenes(
     )
     with grpc.secure_channel(secured.address, credentials) as channel:
         for service, method in (
-            ("JobScene", "Layout"),
+            ("SceneView", "Layout"),
             ("Intersect", "Intersect"),
             ("Shape", "Area"),
             ("SampleSurfaceArea", "Sample"),

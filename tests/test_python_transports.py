@@ -1,5 +1,5 @@
 """Light transport written in Python, rendering through yarfd's kernel
-services (the job's Intersect, light sampling, emission and film splat):
+services (the job's SceneView and Intersect):
 ambient occlusion against its analytic value, a Python path tracer against
 the C++ one, and splats that land where and as much as they should."""
 
@@ -134,7 +134,7 @@ def test_direct_light_through_the_surface_samplers_matches_the_path_tracer(
     assert np.allclose(python.pixels.mean(), cpp.pixels.mean(), rtol=0.03)
 
 
-def test_the_film_splat_call_adds_light_where_it_is_asked(client: Client, transports: str) -> None:
+def test_splats_add_light_where_they_land(client: Client, transports: str) -> None:
     scene = floor_and_wall(size=8)
     status = render(client, scene, 3, 1, at(transports, "centre_splatter"))
     image = client.image(status.job_id)
@@ -143,8 +143,8 @@ def test_the_film_splat_call_adds_light_where_it_is_asked(client: Client, transp
     assert np.allclose(image.sum(axis=(0, 1)), 1.0, rtol=1e-5)
 
 
-def test_the_job_scene_of_no_running_job_is_not_found(client: Client) -> None:
-    stub = transport_pb2_grpc.JobSceneStub(client.channel)
+def test_the_scene_view_of_no_running_job_is_not_found(client: Client) -> None:
+    stub = transport_pb2_grpc.SceneViewStub(client.channel)
     with pytest.raises(grpc.RpcError) as missing:
-        stub.Layout(transport_pb2.JobSceneRequest(handle=987654), timeout=10)
+        stub.Layout(transport_pb2.SceneViewRequest(handle=987654), timeout=10)
     assert missing.value.code() == grpc.StatusCode.NOT_FOUND

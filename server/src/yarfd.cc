@@ -114,7 +114,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
       registry, remote_classes, instances,
       {.deadline = std::chrono::milliseconds(int64_t(options.component_timeout_seconds * 1000))});
   yarf::IntersectServiceImpl intersect(job_scenes);
-  yarf::JobSceneServiceImpl job_scene(job_scenes);
+  yarf::SceneViewServiceImpl scene_view(job_scenes);
   yarf::ShapeServiceImpl shape(job_scenes);
   yarf::SampleSurfaceAreaServiceImpl sample_surface_area(job_scenes);
   yarf::SampleSurfaceDirectionServiceImpl sample_surface_direction(job_scenes);
@@ -125,6 +125,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   yarf::WarpServiceImpl warp(instances);
   yarf::SurfaceModelServiceImpl surface_model(instances);
   yarf::EmitterServiceImpl emitter(instances);
+  yarf::MediumServiceImpl medium(instances);
 
   grpc::EnableDefaultHealthCheckService(true);
   // gRPC serves the health service without putting its descriptor in the
@@ -148,7 +149,7 @@ int Serve(const yarf::ServerOptions& options, const sigset_t& signals) {
   }
   for (grpc::Service* service : std::initializer_list<grpc::Service*>{
            &render, &registry_service, &component, &factory, &integrator, &root_finder, &sampler, &generator, &warp,
-           &surface_model, &emitter, &intersect, &job_scene, &shape, &sample_surface_area,
+           &surface_model, &emitter, &medium, &intersect, &scene_view, &shape, &sample_surface_area,
            &sample_surface_direction, &asset_service})
     builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from yarf_component import Frame, JobScene, Transport, normalize
+from yarf_component import Frame, SceneView, Transport, normalize
 from yarf_component.rays import offset_origins
 from yarf_component.transport import FIRST_FREE
 from yarf_component.warps import cosine_hemisphere
@@ -39,7 +39,7 @@ class AmbientOcclusion(Transport):
     def dimensions(self) -> int:
         return DIRECTION + 2
 
-    def evaluate(self, scene: JobScene, points: np.ndarray) -> tuple[np.ndarray, bool]:
+    def evaluate(self, scene: SceneView, points: np.ndarray) -> tuple[np.ndarray, bool]:
         rays = scene.camera_rays(points[:, :5])
         hits = scene.intersect(rays.origins, rays.directions, times=rays.times)
         visible = np.zeros(len(points), np.float32)

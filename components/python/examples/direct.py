@@ -30,9 +30,9 @@ import numpy as np
 from yarf_component import (
     Frame,
     Hits,
-    JobScene,
     Rays,
     ScatterFlags,
+    SceneView,
     SurfaceClient,
     Transport,
     normalize,
@@ -54,7 +54,7 @@ class DirectLighting(Transport):
     def dimensions(self) -> int:
         return BSDF_LOBE + 1
 
-    def evaluate(self, scene: JobScene, points: np.ndarray) -> tuple[np.ndarray, bool]:
+    def evaluate(self, scene: SceneView, points: np.ndarray) -> tuple[np.ndarray, bool]:
         layout = scene.layout
         rays = scene.camera_rays(points[:, :5])
         hits = scene.intersect(rays.origins, rays.directions, times=rays.times)
@@ -67,7 +67,7 @@ class DirectLighting(Transport):
         return np.concatenate([film, radiance], axis=1), False
 
     def _direct(
-        self, scene: JobScene, u: np.ndarray, rays: Rays, hits: Hits, rows: np.ndarray
+        self, scene: SceneView, u: np.ndarray, rays: Rays, hits: Hits, rows: np.ndarray
     ) -> np.ndarray:
         """The light the hits (rows of the camera batch) receive from the emitting shapes."""
         directions = rays.directions[rows]
@@ -102,7 +102,7 @@ class _Vertices:
     u: np.ndarray
 
 
-def _chosen_lights(scene: JobScene, u_choice: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _chosen_lights(scene: SceneView, u_choice: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The emitting shape each u picks uniformly, and u rescaled within its share."""
     lights = np.flatnonzero(scene.layout.emits)
     scaled = u_choice * len(lights)
@@ -112,7 +112,7 @@ def _chosen_lights(scene: JobScene, u_choice: np.ndarray) -> tuple[np.ndarray, n
 
 
 def _light_pdf(
-    scene: JobScene,
+    scene: SceneView,
     shapes: np.ndarray,
     origins: np.ndarray,
     positions: np.ndarray,
@@ -130,7 +130,7 @@ def _light_pdf(
 
 
 def _emitted(
-    scene: JobScene,
+    scene: SceneView,
     origins: np.ndarray,
     targets: np.ndarray,
     normals: np.ndarray,
@@ -153,7 +153,7 @@ def _emitted(
 
 
 def _light_sample(
-    scene: JobScene, surface: SurfaceClient, at: _Vertices, times: np.ndarray | None
+    scene: SceneView, surface: SurfaceClient, at: _Vertices, times: np.ndarray | None
 ) -> np.ndarray:
     """One point of a light by SampleSurfaceDirection, weighed against BSDF sampling."""
     shapes, rest = _chosen_lights(scene, at.u[:, LIGHT_CHOICE])
@@ -193,7 +193,7 @@ def _light_sample(
 
 
 def _bsdf_sample(
-    scene: JobScene, surface: SurfaceClient, at: _Vertices, times: np.ndarray | None
+    scene: SceneView, surface: SurfaceClient, at: _Vertices, times: np.ndarray | None
 ) -> np.ndarray:
     """One BSDF sample; the emitting shape its ray meets, weighed against light sampling."""
     uniform = np.stack(

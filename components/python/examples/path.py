@@ -40,9 +40,9 @@ import numpy as np
 from yarf_component import (
     Frame,
     Hits,
-    JobScene,
     Rays,
     ScatterFlags,
+    SceneView,
     SurfaceClient,
     Transport,
     normalize,
@@ -110,7 +110,7 @@ class PathTracer(Transport):
     def dimensions(self) -> int:
         return FIRST_FREE + PER_BOUNCE * (self.max_depth - 1)
 
-    def evaluate(self, scene: JobScene, points: np.ndarray) -> tuple[np.ndarray, bool]:
+    def evaluate(self, scene: SceneView, points: np.ndarray) -> tuple[np.ndarray, bool]:
         layout = scene.layout
         state = Paths.start(len(points))
         alive = np.arange(len(points))
@@ -132,7 +132,7 @@ class PathTracer(Transport):
 
     @staticmethod
     def _start_emission(
-        scene: JobScene, state: Paths, alive: np.ndarray, rays: Rays, hits: Hits
+        scene: SceneView, state: Paths, alive: np.ndarray, rays: Rays, hits: Hits
     ) -> Callable[[], None]:
         """Asks for the light of the emitters this bounce's rays hit; the function returned
         adds it, weighted against light sampling as the paths stood when asked."""
@@ -160,7 +160,7 @@ class PathTracer(Transport):
 
     @staticmethod
     def _vertices(
-        scene: JobScene, points: np.ndarray, base: int, alive: np.ndarray, rays: Rays, hits: Hits
+        scene: SceneView, points: np.ndarray, base: int, alive: np.ndarray, rays: Rays, hits: Hits
     ) -> tuple[Vertices, list[SurfaceClient]]:
         """The hits as vertices in their local frames, and the bounce's materials."""
         v = np.flatnonzero(hits.found)
@@ -182,7 +182,7 @@ class PathTracer(Transport):
         return vertices, [scene.surface(int(h)) for h in unique]
 
     def _scatter(
-        self, scene: JobScene, state: Paths, vertices: Vertices, surfaces: list[SurfaceClient]
+        self, scene: SceneView, state: Paths, vertices: Vertices, surfaces: list[SurfaceClient]
     ) -> tuple[Rays, np.ndarray]:
         """Light and BSDF samples at the vertices; the rays of the paths that go on."""
         u = vertices.u
@@ -218,7 +218,7 @@ class PathTracer(Transport):
 
     @staticmethod
     def _direct_light(
-        scene: JobScene, state: Paths, vertices: Vertices, surfaces: list[SurfaceClient]
+        scene: SceneView, state: Paths, vertices: Vertices, surfaces: list[SurfaceClient]
     ) -> None:
         """Next-event estimation: one light sample per vertex, MIS-weighted, if unoccluded."""
         u = vertices.u

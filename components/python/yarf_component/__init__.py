@@ -13,16 +13,8 @@ from __future__ import annotations
 
 from yarf_component.component import Component
 from yarf_component.frames import Frame, normalize, reflect
-from yarf_component.job_calls import JobSceneError, Pending
-from yarf_component.job_scene import (
-    MISS,
-    Hits,
-    JobScene,
-    LightSamples,
-    Rays,
-    SceneLayout,
-    SurfaceSamples,
-)
+from yarf_component.job_calls import Pending, SceneViewError
+from yarf_component.job_emitter import EmitterClient
 from yarf_component.job_surface import SurfaceClient
 from yarf_component.medium import (
     HenyeyGreensteinMedium,
@@ -43,6 +35,21 @@ from yarf_component.numerical import (
     Warp,
 )
 from yarf_component.properties import PropertyError, Rgb, Transform, Vec3
+from yarf_component.scene_view import (
+    AT_INFINITY,
+    DELTA_DIRECTION,
+    DELTA_POSITION,
+    MISS,
+    NONE,
+    CameraConnections,
+    Hits,
+    LightPoints,
+    LightSamples,
+    Rays,
+    SceneLayout,
+    SceneView,
+    SurfaceSamples,
+)
 from yarf_component.server import Running, serve
 from yarf_component.surface import (
     Emitter,
@@ -55,9 +62,15 @@ from yarf_component.texture import SurfacePoints, Texture
 from yarf_component.transport import Transport
 
 __all__ = [
+    "AT_INFINITY",
+    "DELTA_DIRECTION",
+    "DELTA_POSITION",
     "MISS",
+    "NONE",
+    "CameraConnections",
     "Component",
     "Emitter",
+    "EmitterClient",
     "Frame",
     "Function",
     "Generator",
@@ -65,8 +78,7 @@ __all__ = [
     "Hits",
     "Integrand",
     "Integrator",
-    "JobScene",
-    "JobSceneError",
+    "LightPoints",
     "LightSamples",
     "Medium",
     "NoRoot",
@@ -80,6 +92,8 @@ __all__ = [
     "Sampler",
     "ScatterFlags",
     "SceneLayout",
+    "SceneView",
+    "SceneViewError",
     "SurfaceClient",
     "SurfaceModel",
     "SurfacePoints",

@@ -18,13 +18,13 @@ Reply = TypeVar("Reply", bound=Message)
 Result = TypeVar("Result")
 
 
-class JobSceneError(RuntimeError):
+class SceneViewError(RuntimeError):
     """A call to the job's scene failed (the job ended, yarfd went away...)."""
 
 
-def _error(name: str, address: str, error: grpc.RpcError) -> JobSceneError:
+def _error(name: str, address: str, error: grpc.RpcError) -> SceneViewError:
     call = typing.cast(grpc.Call, error)
-    return JobSceneError(f"{name} at {address}: {call.code().name}: {call.details()}")
+    return SceneViewError(f"{name} at {address}: {call.code().name}: {call.details()}")
 
 
 class Pending(Generic[Result]):
@@ -47,7 +47,7 @@ class Pending(Generic[Result]):
 
 
 class Caller:
-    """Unary calls to one address with a deadline; failures become JobSceneError."""
+    """Unary calls to one address with a deadline; failures become SceneViewError."""
 
     def __init__(self, address: str, timeout: float) -> None:
         self.address = address

@@ -7,7 +7,7 @@ import abc
 import numpy as np
 
 from yarf_component.component import Component
-from yarf_component.job_scene import JobScene
+from yarf_component.scene_view import SceneView
 
 # Coordinates of a point of primary sample space the camera reads: film x,
 # y, lens u, v, shutter; 5 is unused; a transport's own start at 6.
@@ -19,7 +19,7 @@ TransportResult = tuple[np.ndarray, bool] | tuple[np.ndarray, bool, np.ndarray]
 class Transport(Component):
     """A light transport algorithm: points of [0,1)^d to film contributions.
 
-    ``scene`` is the job's scene on the yarfd that called (see JobScene).
+    ``scene`` is the job's scene on the yarfd that called (see SceneView).
     """
 
     interface_name = "yarf.v1.Transport"
@@ -28,11 +28,11 @@ class Transport(Component):
     def dimensions(self) -> int:
         """d: coordinates per point, at least 6; fixed for an instance."""
 
-    def prepare(self, scene: JobScene) -> None:
+    def prepare(self, scene: SceneView) -> None:
         """Once per job, before any ``evaluate``: caches, photon maps..."""
 
     @abc.abstractmethod
-    def evaluate(self, scene: JobScene, points: np.ndarray) -> TransportResult:
+    def evaluate(self, scene: SceneView, points: np.ndarray) -> TransportResult:
         """Film contributions of points [N, d].
 
         Returns contributions [M, 5] (raster x, y in pixels, then RGB) and

@@ -12,21 +12,21 @@ from yarf.v1 import transport_pb2, transport_pb2_grpc
 from yarf_component.arrays import Batch, float32, uint32
 from yarf_component.calls import RpcFailure, rpc, user_code
 from yarf_component.host import Host
-from yarf_component.job_scene import JobScene
+from yarf_component.scene_view import SceneView
 from yarf_component.transport import Transport
 
 
 class JobScenes:
-    """The JobScene of each scene handle of the yarfd that calls; Prepare starts afresh."""
+    """The SceneView of each scene handle of the yarfd that calls; Prepare starts afresh."""
 
     KEPT = 64
 
     def __init__(self, address: str | None) -> None:
         self._address = address
-        self._scenes: OrderedDict[int, JobScene] = OrderedDict()
+        self._scenes: OrderedDict[int, SceneView] = OrderedDict()
         self._lock = Lock()
 
-    def get(self, handle: int, *, fresh: bool = False) -> JobScene:
+    def get(self, handle: int, *, fresh: bool = False) -> SceneView:
         if not self._address:
             raise RpcFailure(
                 grpc.StatusCode.FAILED_PRECONDITION,
@@ -36,7 +36,7 @@ class JobScenes:
         with self._lock:
             scene = None if fresh else self._scenes.get(handle)
             if scene is None:
-                scene = JobScene(self._address, handle)
+                scene = SceneView(self._address, handle)
             self._scenes[handle] = scene
             self._scenes.move_to_end(handle)
             while len(self._scenes) > self.KEPT:

@@ -27,6 +27,7 @@ class SurfaceAttributes {
   // rgb: [N,3], attribute `name` at each location: a vertex attribute
   // interpolated, a face attribute its face's value, a one-channel one in
   // all three; 0 where the shape has no such attribute.
+  // in-process only: textures read the meshes of the process they run in.
   virtual void Attribute(std::string_view name, std::span<const SurfaceLocation> at,
                          std::span<float> rgb) const = 0;
 };

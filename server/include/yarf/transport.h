@@ -142,45 +142,60 @@ struct CameraConnection {
 };
 
 // What a transport algorithm may ask of the scene of its job; its meshes'
-// attributes answer the textures that read them.
+// attributes answer the textures that read them. yarfd serves it, with
+// Intersect, to transports in other processes: the small questions about
+// the scene as a whole travel in Layout, the rest in batches.
 class SceneView : public Intersector, public SurfaceAttributes {
  public:
+  static constexpr const char* kInterface = "yarf.v1.SceneView";
+
   // Materials are numbered 0..MaterialCount()-1 so that a wavefront can
   // group queries by material and call each SurfaceModel once per batch.
+  // rpc: Layout
   virtual uint32_t MaterialCount() const = 0;
+  // rpc: Layout
   virtual const SurfaceModel& Material(uint32_t material) const = 0;
+  // rpc: Layout
   virtual uint32_t MaterialOf(uint32_t shape) const = 0;
   // nullptr when the shape does not emit.
+  // rpc: Layout
   virtual const Emitter* EmitterOf(uint32_t shape) const = 0;
   // Lights are the emitting shapes, the point and spot lights and the
   // lights at infinity (directional, and at most one environment:
   // constant or envmap). Each is chosen with a probability: by power, or
   // uniformly (Scene.light_sampler).
+  // rpc: Layout
   virtual bool HasLights() const = 0;
   // A light chosen by u_choice, then a point on it uniform in area (u0,
   // u1), for paths that start at the lights. Lights at infinity leave
   // their point to InfiniteLightOrigin.
+  // rpc: SampleLightPoints
   virtual LightSample SampleLight(float u_choice, float u0, float u1) const = 0;
   // The area density SampleLight has at any point of the emitting `shape`.
   virtual float LightPdfArea(uint32_t shape) const = 0;
   // Where a light path from a light at infinity travelling along world
   // direction d starts: a point (u0, u1) of the disk of the scene's
   // bounding sphere facing d, and the disk's area density.
+  // rpc: InfiniteLightOrigins
   virtual Vec3 InfiniteLightOrigin(Vec3 d, float u0, float u1, float& pdf_area) const = 0;
   // For each point p: a light chosen by uniform[3k] and a direction
   // toward it from p (uniform[3k+1], uniform[3k+2]): spheres by the solid
   // angle they subtend, triangles by area, an environment by its own
   // SampleDirection. Batched, as an environment's emitter is called once
   // for the whole batch.
+  // rpc: SampleLights
   virtual void SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
                                 std::span<LightDirection> out) const = 0;
   // The solid-angle density SampleLightsFrom has, at the origin of `ray`,
   // for the emitting surface point `hit` the ray meets.
+  // rpc: Emission
   virtual float LightPdfFrom(const Ray& ray, const Hit& hit) const = 0;
   // Rays that leave the scene along `directions` (world, unit): the
   // environment's radiance arriving back along each, and the density
   // SampleLightsFrom has for the direction; zero without an environment.
+  // rpc: Layout
   virtual bool HasEnvironment() const = 0;
+  // rpc: Emission
   virtual void Escaped(std::span<const Vec3> directions, std::span<Vec3> radiance,
                        std::span<float> pdf) const = 0;
   // Light `light` of LightCount() gathered into one point as seen from p,
@@ -190,12 +205,16 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // as if its cross-section πr² emitted there; point, spot and
   // directional lights as they are. An environment is not gathered: it
   // answers no emitter.
+  // rpc: Layout
   virtual uint32_t LightCount() const = 0;
+  // rpc: LightPoints
   virtual LightDirection LightPoint(uint32_t light, Vec3 seen_from) const = 0;
   // The time in the shutter interval for primary coordinate u.
+  // rpc: ShutterTimes
   virtual float ShutterTime(float u) const = 0;
   // The camera ray through film position (x, y) ∈ [0,1)² and lens (u, v)
   // at `time`.
+  // rpc: CameraRays
   virtual Ray CameraRay(float film_x, float film_y, float lens_u, float lens_v, float time) const = 0;
   // The camera seen from p through lens position (u, v): false when p is
   // off the film, behind the camera or outside its clip range.
@@ -207,35 +226,48 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // pixel). Zero when unknown or the plane is seen edge-on.
   virtual void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const { dpdx = dpdy = Vec3(); }
   // Whether the lens has area (thin lens) or is a point (pinhole).
+  // rpc: Layout
   virtual bool CameraHasLens() const = 0;
   // Why light paths cannot reach the camera (an orthographic camera's
   // rays are parallel; a radiance or irradiance meter has no lens and film
   // to land on), empty when they can: ConnectToCamera never succeeds then,
   // and methods that connect light paths to the camera cannot render.
+  // rpc: Layout
   virtual std::string_view CameraUnreachableReason() const = 0;
   // Density per solid angle of camera ray directions over the whole
   // film, 1/(A cos³θ) (CameraConnection::importance), 0 off the film.
   virtual float CameraDirectionPdf(Vec3 direction) const = 0;
+  // rpc: Layout
   virtual uint32_t FilmWidth() const = 0;
+  // rpc: Layout
   virtual uint32_t FilmHeight() const = 0;
   // The scene's surfaces as triangles, for methods that mesh them
   // (radiosity): shapes 0..ShapeCount()-1 (Hit::shape numbers them), each
   // of PrimitiveCount(shape) primitives; Triangle gives a primitive's
   // corners in world space (at shutter open), false for a sphere.
+  // rpc: Layout
   virtual uint32_t ShapeCount() const = 0;
+  // rpc: Layout
   virtual uint32_t PrimitiveCount(uint32_t shape) const = 0;
+  // rpc: Triangles
   virtual bool Triangle(uint32_t shape, uint32_t primitive, Vec3 corners[3]) const = 0;
   // Participating media (Scene.media), numbered 0..MediumCount()-1;
   // kNoMedium is vacuum. Methods that know media follow a ray from the
   // camera's medium through the boundaries it crosses (MediaOf).
+  // rpc: Layout
   virtual uint32_t MediumCount() const { return 0; }
+  // rpc: Layout
   virtual const Medium& MediumAt(uint32_t medium) const = 0;
+  // rpc: Layout
   virtual MediumInterface MediaOf(uint32_t shape) const { return {}; }
+  // rpc: Layout
   virtual uint32_t CameraMedium() const { return kNoMedium; }
-  // The handle under which the server's JobScene and Intersect services
+  // The handle under which the server's SceneView and Intersect services
   // serve this scene to out-of-process transports; 0 when not served.
+  // in-process only: on the wire it is the handle every call names.
   virtual uint64_t ServiceHandle() const { return 0; }
   // SurfaceAttributes: none, unless the scene keeps them.
+  // in-process only: the materials Layout names read them in yarfd.
   void Attribute(std::string_view, std::span<const SurfaceLocation>, std::span<float> rgb) const override {
     std::fill(rgb.begin(), rgb.end(), 0.0f);
   }

@@ -1,5 +1,5 @@
 // Remote<Transport>: a light transport algorithm served by another
-// process. It traces its paths through the server's JobScene and
+// process. It traces its paths through the server's SceneView and
 // Intersect services, naming the job's scene by its service handle.
 #pragma once
 

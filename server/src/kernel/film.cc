@@ -98,12 +98,32 @@ void Film::Add(float x, float y, Vec3 value, const PixelWindow& window) {
   });
 }
 
+void Film::AddEstimate(uint32_t px, uint32_t py, Vec3 value, Vec3 variance, uint32_t samples) {
+  if (!Finite(value) || !Finite(variance) || samples == 0 || px >= width_ || py >= height_) return;
+  // n samples L_i of mean v whose mean has variance s²: Σ L_i = n v and
+  // Σ (L_i − v)² = (n − 1) · n s², so Σ L_i² = n v² + n (n − 1) s².
+  const double n = samples;
+  Pixel& p = pixels_[size_t(py) * width_ + px];
+  p.weight += n;
+  p.weight_sq += n;
+  for (int c = 0; c < 3; ++c) {
+    const double v = value[c], s2 = std::max(0.0f, variance[c]);
+    p.sum[c] += n * v;
+    p.sum_wsq[c] += n * v;
+    p.sum_sq[c] += n * v * v + n * (n - 1) * s2;
+  }
+}
+
 void Film::PrepareSplats() {
   if (splats_.pass.empty()) {
     splats_.pass.assign(pixels_.size() * 3, 0.0);
     splats_.sum.assign(pixels_.size() * 3, 0.0);
     splats_.sum_sq.assign(pixels_.size() * 3, 0.0);
   }
+  PrepareMasses();
+}
+
+void Film::PrepareMasses() {
   if (column_mass_.empty()) {
     // Made at the first splat (a resumed film's too): within a radius of the
     // border a pixel's filter is cut; elsewhere whole.

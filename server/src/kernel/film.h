@@ -58,6 +58,27 @@ class Film {
   // Makes the splat images and the border masses (once; later calls do
   // nothing), so that windowed splats from many threads only write pixels.
   void PrepareSplats();
+  // Makes the border masses alone (once), for PixelWeight.
+  void PrepareMasses();
+  // The filter's reach in pixels from a pixel's centre, along each axis.
+  float FilterRadius() const { return filter_.radius(); }
+  // The weight radiance at raster position (x, y) has in the value of
+  // pixel (px, py): the filter around the pixel's centre over the
+  // filter's mass on the film (as a splat is spread), so that a pixel's
+  // weights integrate to 1 over the film and its camera samples converge
+  // to ∫ L·weight. Needs PrepareMasses() first.
+  float PixelWeight(uint32_t px, uint32_t py, float x, float y) const {
+    return filter_.Weight(float(px) + 0.5f - x, float(py) + 0.5f - y) / (column_mass_[px] * row_mass_[py]);
+  }
+  // An estimate of pixel (px, py)'s value from `samples` samples and the
+  // variance of that estimate, from an integrator that estimates whole
+  // pixels itself: it counts as `samples` camera samples of weight 1 with
+  // that mean and that variance of their mean, so that the pixel shows
+  // it, estimates of the same pixel average by their samples, and a
+  // checkpoint saves it as it saves samples. A variance needs at least 2
+  // samples (a pixel of one sample has none, as with camera samples); a
+  // value or variance that is not finite is left out.
+  void AddEstimate(uint32_t px, uint32_t py, Vec3 value, Vec3 variance, uint32_t samples);
   // The pixels a sample at raster position (x, y) may add to under the
   // filter (empty for a position that is not finite).
   PixelWindow Footprint(float x, float y) const;

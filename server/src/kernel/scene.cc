@@ -61,6 +61,12 @@ const Emitter* KernelScene::AddEmitter(std::unique_ptr<Emitter> emitter) {
   return emitters_.back().get();
 }
 
+std::vector<const Emitter*> KernelScene::Emitters() const {
+  std::vector<const Emitter*> emitters;
+  for (const auto& emitter : emitters_) emitters.push_back(emitter.get());
+  return emitters;
+}
+
 uint32_t KernelScene::NewGroup() {
   groups_.push_back({rtcNewScene(device_.get()), {}});
   return uint32_t(groups_.size() - 1);

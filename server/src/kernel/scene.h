@@ -49,6 +49,8 @@ class KernelScene final : public SceneView {
   // kWorld is the world itself), then placements of groups, then Commit.
   uint32_t AddMaterial(std::shared_ptr<const SurfaceModel> material);
   const Emitter* AddEmitter(std::unique_ptr<Emitter> emitter);
+  // Every emitter added, in order: the lights' and the emitting shapes'.
+  std::vector<const Emitter*> Emitters() const;
   // A participating medium; returns its number.
   uint32_t AddMedium(std::unique_ptr<Medium> medium);
   void SetCameraMedium(uint32_t medium) { camera_medium_ = medium; }

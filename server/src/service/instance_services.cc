@@ -3,6 +3,7 @@
 #include "components/remote_function.h"
 #include "components/array_codec.h"
 #include "yarf/math.h"
+#include "yarf/medium.h"
 #include "yarf/surface.h"
 
 namespace yarf {
@@ -49,6 +50,19 @@ void WarpCall(const Warp& warp, const v1::WarpRequest& request, bool forward, bo
   else warp.Pdf(in, pdf);
   if (forward || inverse) *reply->mutable_points() = FloatArray(out, {n, out_dims});
   *reply->mutable_pdf() = FloatArray(pdf, {n});
+}
+
+// Rows of world-space positions or directions, each finite (a medium's
+// walk must not start from NaN); directions are made unit.
+std::vector<float> Finite(std::vector<float> xyz, const char* what, bool unit) {
+  for (size_t k = 0; k + 2 < xyz.size(); k += 3) {
+    const Vec3 v = Vec3::Load(&xyz[k]);
+    const float length = Length(v);
+    if (!std::isfinite(length) || (unit && !(length > 0)))
+      throw Error(std::string(what) + " " + std::to_string(k / 3) + (unit ? " has no direction" : " is not finite"));
+    if (unit) (v / length).Store(&xyz[k]);
+  }
+  return xyz;
 }
 
 // A call's integrand: an instance on this host, or a Remote<Function>.
@@ -285,6 +299,84 @@ grpc::Status EmitterServiceImpl::PdfDirection(grpc::ServerContext* context, cons
     const uint32_t n = batch.rows();
     std::vector<float> pdf(n);
     emitter.PdfDirection(w, pdf);
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+  });
+}
+
+grpc::Status MediumServiceImpl::Majorants(grpc::ServerContext* context, const v1::MajorantsRequest* request,
+                                          v1::MajorantsReply* reply) {
+  return WithInstance<Medium>(instances_, CallerOf(*context), request->handle(), [&](const Medium& medium) {
+    BatchDecoder batch;
+    const auto origin = Finite(batch.Floats(request->origin(), {3}, "origin"), "origin", false);
+    const auto direction = Finite(batch.Floats(request->direction(), {3}, "direction"), "direction", true);
+    const auto tmax = batch.Floats(request->tmax(), {}, "tmax");
+    CheckSize(uint64_t(batch.rows()) * 3);
+    for (size_t i = 0; i < tmax.size(); ++i)
+      if (!(tmax[i] >= 0)) throw Error("tmax " + std::to_string(i) + " is negative or NaN");
+    MajorantSegments segments;
+    segments.Clear();
+    medium.Majorants(origin, direction, tmax, segments);
+    std::vector<float> rows;
+    rows.reserve(5 * segments.segments.size());
+    for (const MajorantSegment& s : segments.segments)
+      for (float value : {s.t0, s.t1, s.sigma_maj.x, s.sigma_maj.y, s.sigma_maj.z}) rows.push_back(value);
+    *reply->mutable_segments() = FloatArray(rows, {uint32_t(segments.segments.size()), 5});
+    *reply->mutable_offsets() = Uint32Array(segments.offsets, {uint32_t(segments.offsets.size())});
+  });
+}
+
+grpc::Status MediumServiceImpl::Coefficients(grpc::ServerContext* context, const v1::CoefficientsRequest* request,
+                                             v1::CoefficientsReply* reply) {
+  return WithInstance<Medium>(instances_, CallerOf(*context), request->handle(), [&](const Medium& medium) {
+    BatchDecoder batch;
+    const auto position = Finite(batch.Floats(request->position(), {3}, "position"), "position", false);
+    const uint32_t n = batch.rows();
+    CheckSize(uint64_t(n) * 9);
+    std::vector<float> sigma_a(3 * n), sigma_s(3 * n), emission(3 * n);
+    medium.Coefficients(position, sigma_a, sigma_s, emission);
+    *reply->mutable_sigma_a() = FloatArray(sigma_a, {n, 3});
+    *reply->mutable_sigma_s() = FloatArray(sigma_s, {n, 3});
+    *reply->mutable_emission() = FloatArray(emission, {n, 3});
+  });
+}
+
+grpc::Status MediumServiceImpl::Emits(grpc::ServerContext* context, const v1::EmitsRequest* request,
+                                      v1::EmitsReply* reply) {
+  return WithInstance<Medium>(instances_, CallerOf(*context), request->handle(),
+                              [&](const Medium& medium) { reply->set_emits(medium.Emits()); });
+}
+
+grpc::Status MediumServiceImpl::EvaluatePhase(grpc::ServerContext* context, const v1::PhaseQuery* request,
+                                              v1::EvaluatePhaseReply* reply) {
+  return WithInstance<Medium>(instances_, CallerOf(*context), request->handle(), [&](const Medium& medium) {
+    BatchDecoder batch;
+    const auto wi = Finite(batch.Floats(request->wi(), {3}, "wi"), "wi", true);
+    const auto wo = Finite(batch.Floats(request->wo(), {3}, "wo"), "wo", true);
+    const auto position = Finite(batch.Floats(request->position(), {3}, "position"), "position", false);
+    const uint32_t n = batch.rows();
+    CheckSize(uint64_t(n) * 2);
+    std::vector<float> value(n), pdf(n);
+    medium.EvaluatePhase(wi, wo, position, value, pdf);
+    *reply->mutable_value() = FloatArray(value, {n});
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+  });
+}
+
+grpc::Status MediumServiceImpl::SamplePhase(grpc::ServerContext* context, const v1::SamplePhaseRequest* request,
+                                            v1::SamplePhaseReply* reply) {
+  return WithInstance<Medium>(instances_, CallerOf(*context), request->handle(), [&](const Medium& medium) {
+    BatchDecoder batch;
+    const auto wi = Finite(batch.Floats(request->wi(), {3}, "wi"), "wi", true);
+    const auto position = Finite(batch.Floats(request->position(), {3}, "position"), "position", false);
+    const auto u = batch.Floats(request->uniform(), {2}, "uniform");
+    const uint32_t n = batch.rows();
+    CheckSize(uint64_t(n) * 5);
+    for (size_t i = 0; i < u.size(); ++i)
+      if (!(u[i] >= 0 && u[i] < 1)) throw Error("uniform " + std::to_string(i / 2) + " is not in [0, 1)");
+    std::vector<float> wo(3 * n), weight(n), pdf(n);
+    medium.SamplePhase(wi, position, u, wo, weight, pdf);
+    *reply->mutable_wo() = FloatArray(wo, {n, 3});
+    *reply->mutable_weight() = FloatArray(weight, {n});
     *reply->mutable_pdf() = FloatArray(pdf, {n});
   });
 }

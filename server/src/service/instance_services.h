@@ -4,6 +4,7 @@
 
 #include "service/component_service.h"
 #include "yarf/v1/math.grpc.pb.h"
+#include "yarf/v1/medium.grpc.pb.h"
 #include "yarf/v1/surface.grpc.pb.h"
 
 namespace yarf {
@@ -79,6 +80,21 @@ class EmitterServiceImpl final : public v1::Emitter::Service {
                                v1::SampleDirectionReply*) override;
   grpc::Status PdfDirection(grpc::ServerContext*, const v1::PdfDirectionRequest*,
                             v1::PdfDirectionReply*) override;
+
+ private:
+  const InstanceTable& instances_;
+};
+
+// Media made by Factory.Create, and those of running jobs' scenes
+// (SceneView's Layout names them).
+class MediumServiceImpl final : public v1::Medium::Service {
+ public:
+  explicit MediumServiceImpl(const InstanceTable& instances) : instances_(instances) {}
+  grpc::Status Majorants(grpc::ServerContext*, const v1::MajorantsRequest*, v1::MajorantsReply*) override;
+  grpc::Status Coefficients(grpc::ServerContext*, const v1::CoefficientsRequest*, v1::CoefficientsReply*) override;
+  grpc::Status Emits(grpc::ServerContext*, const v1::EmitsRequest*, v1::EmitsReply*) override;
+  grpc::Status EvaluatePhase(grpc::ServerContext*, const v1::PhaseQuery*, v1::EvaluatePhaseReply*) override;
+  grpc::Status SamplePhase(grpc::ServerContext*, const v1::SamplePhaseRequest*, v1::SamplePhaseReply*) override;
 
  private:
   const InstanceTable& instances_;

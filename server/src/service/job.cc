@@ -431,7 +431,7 @@ void Job::RenderRun(const JobResources& resources, const RunSettings& settings) 
   });
   target.WeighCameraSamples(kernel->CameraRayWeight());
   // Served while it renders, for transports in other processes.
-  const auto served = resources.scenes.Serve(kernel, target);
+  const auto served = resources.scenes.Serve(kernel);
   parts.transport->Prepare(*kernel);
   parts.integrator->Render(*parts.transport, *kernel, *parts.sampler, target);
   RenderAovs(parts, *kernel, share);

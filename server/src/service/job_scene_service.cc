@@ -80,10 +80,10 @@ void FillHits(const std::vector<Hit>& hits, v1::IntersectReply* reply) {
   *reply->mutable_primitive_ids() = Uint32Array(primitives, {n});
 }
 
-// Points in [0,1)³, as a sampler's uniform numbers must be.
-void CheckUniform(const std::vector<float>& u) {
+// Rows of `columns` numbers in [0,1), as a sampler's uniform numbers must be.
+void CheckUniform(const std::vector<float>& u, size_t columns, const std::string& what) {
   for (size_t i = 0; i < u.size(); ++i)
-    if (!(u[i] >= 0 && u[i] < 1)) throw Error("uniform " + std::to_string(i / 3) + " is not in [0, 1)");
+    if (!(u[i] >= 0 && u[i] < 1)) throw Error(what + " " + std::to_string(i / columns) + " is not in [0, 1)");
 }
 
 std::vector<Vec3> PointsOf(const std::vector<float>& xyz, const std::string& what) {
@@ -94,6 +94,25 @@ std::vector<Vec3> PointsOf(const std::vector<float>& xyz, const std::string& wha
       throw Error(what + " " + std::to_string(k) + " is not finite");
   }
   return points;
+}
+
+// Directions, made unit; a zero or non-finite one is refused.
+std::vector<Vec3> UnitVectorsOf(const std::vector<float>& xyz, const std::string& what) {
+  std::vector<Vec3> vectors = PointsOf(xyz, what);
+  for (size_t k = 0; k < vectors.size(); ++k) {
+    const float length = Length(vectors[k]);
+    if (!(length > 0) || !std::isfinite(length)) throw Error(what + " " + std::to_string(k) + " has no direction");
+    vectors[k] = vectors[k] / length;
+  }
+  return vectors;
+}
+
+// `shape` (of request row `row`), when the scene has it.
+uint32_t CheckedShape(const ServedScene& served, uint32_t shape, uint32_t row) {
+  if (shape >= served.scene().ShapeCount())
+    throw Error("shape " + std::to_string(shape) + " (row " + std::to_string(row) + ") is not one of the scene's " +
+                std::to_string(served.scene().ShapeCount()) + " shapes");
+  return shape;
 }
 
 // The surface a sampling request names; a shape without area has no
@@ -139,6 +158,54 @@ void EmitterRadiance(const std::vector<const Emitter*>& emitters, const std::vec
     emitter->Radiance(gw, SurfacePoints{.uv = guv}, le);
     for (size_t j = 0; j < m; ++j) std::copy_n(&le[3 * j], 3, &radiance[3 * members[j]]);
   }
+}
+
+// Lights seen from points (SampleLightsFrom, LightPoint) as the wire has
+// them: the radiance arriving unoccluded and, for a point light, the
+// choice's probability as the pdf and the irradiance it gives as the
+// radiance.
+void FillLightDirections(const ServedScene& served, const std::vector<LightDirection>& lights,
+                         v1::SampleLightsReply* reply) {
+  const uint32_t n = uint32_t(lights.size());
+  std::vector<float> directions(3 * n), distances(n), radiance(3 * n), pdf(n), w(3 * n), uv(2 * n),
+      positions(3 * n), normals(3 * n);
+  std::vector<uint32_t> delta(n), emitter_indices(n, kNoEmitter), shapes(n, kNoShape);
+  std::vector<const Emitter*> emitters(n, nullptr);
+  for (uint32_t i = 0; i < n; ++i) {
+    const LightDirection& s = lights[i];
+    if (!s.emitter || !(s.pdf > 0) || !std::isfinite(s.pdf)) continue;
+    s.direction.Store(&directions[3 * i]);
+    distances[i] = s.distance;
+    pdf[i] = s.pdf;
+    delta[i] = s.delta;
+    emitters[i] = s.emitter;
+    emitter_indices[i] = served.EmitterIndex(s.emitter);
+    s.w.Store(&w[3 * i]);
+    uv[2 * i] = s.u;
+    uv[2 * i + 1] = s.v;
+    shapes[i] = s.shape;
+    if (!s.AtInfinity()) {
+      s.position.Store(&positions[3 * i]);
+      s.normal.Store(&normals[3 * i]);
+    }
+  }
+  EmitterRadiance(emitters, w, uv, radiance);
+  for (uint32_t i = 0; i < n; ++i)
+    if (delta[i] && !lights[i].AtInfinity()) {
+      const float d2 = distances[i] * distances[i];
+      for (int c = 0; c < 3; ++c) radiance[3 * i + c] /= d2;
+      pdf[i] /= d2;
+    }
+  *reply->mutable_directions() = FloatArray(directions, {n, 3});
+  *reply->mutable_distances() = FloatArray(distances, {n});
+  *reply->mutable_radiance() = FloatArray(radiance, {n, 3});
+  *reply->mutable_pdf() = FloatArray(pdf, {n});
+  *reply->mutable_delta() = Uint32Array(delta, {n});
+  *reply->mutable_emitters() = Uint32Array(emitter_indices, {n});
+  *reply->mutable_positions() = FloatArray(positions, {n, 3});
+  *reply->mutable_normals() = FloatArray(normals, {n, 3});
+  *reply->mutable_shape_ids() = Uint32Array(shapes, {n});
+  *reply->mutable_uv() = FloatArray(uv, {n, 2});
 }
 
 }  // namespace
@@ -230,7 +297,7 @@ grpc::Status SampleSurfaceAreaServiceImpl::Sample(grpc::ServerContext*, const v1
     BatchDecoder batch;
     const auto u = batch.Floats(request->uniform(), {3}, "uniform");
     CheckRows(batch.rows());
-    CheckUniform(u);
+    CheckUniform(u, 3, "uniform");
     std::vector<SurfaceSample> samples(batch.rows());
     SampledSurface(served, request->shape()).Sample(u, samples);
     FillSurfaceSamples(samples, reply);
@@ -244,7 +311,7 @@ grpc::Status SampleSurfaceDirectionServiceImpl::Sample(grpc::ServerContext*, con
     const auto u = batch.Floats(request->uniform(), {3}, "uniform");
     const auto from = PointsOf(batch.Floats(request->reference_points(), {3}, "reference_points"), "reference point");
     CheckRows(batch.rows());
-    CheckUniform(u);
+    CheckUniform(u, 3, "uniform");
     std::vector<SurfaceSample> samples(batch.rows());
     SampledSurface(served, request->shape()).Sample(from, u, samples);
     FillSurfaceSamples(samples, reply);
@@ -275,27 +342,42 @@ grpc::Status SampleSurfaceDirectionServiceImpl::Pdf(grpc::ServerContext*, const 
   });
 }
 
-grpc::Status JobSceneServiceImpl::Layout(grpc::ServerContext*, const v1::JobSceneRequest* request,
-                                         v1::SceneLayout* reply) {
+grpc::Status SceneViewServiceImpl::Layout(grpc::ServerContext*, const v1::SceneViewRequest* request,
+                                          v1::SceneLayout* reply) {
   return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
     const KernelScene& scene = served.scene();
+    const ServedScene::Handles& handles = served.handles();
     reply->set_width(scene.FilmWidth());
     reply->set_height(scene.FilmHeight());
     for (uint32_t shape = 0; shape < scene.ShapeCount(); ++shape) {
-      reply->add_material_handles(served.material_handles()[scene.MaterialOf(shape)]);
+      reply->add_material_handles(handles.materials[scene.MaterialOf(shape)]);
       reply->add_emits(scene.EmitterOf(shape) != nullptr);
+      reply->add_shape_emitters(served.EmitterIndex(scene.EmitterOf(shape)));
+      reply->add_primitive_counts(scene.PrimitiveCount(shape));
+      const MediumInterface media = scene.MediaOf(shape);
+      reply->add_media_boundaries(media.boundary);
+      reply->add_interior_media(media.interior);
+      reply->add_exterior_media(media.exterior);
     }
     reply->set_has_lights(scene.HasLights());
+    reply->set_has_environment(scene.HasEnvironment());
+    reply->set_light_count(scene.LightCount());
+    for (uint64_t emitter : handles.emitters) reply->add_emitter_handles(emitter);
+    reply->set_camera_has_lens(scene.CameraHasLens());
+    reply->set_camera_unreachable_reason(std::string(scene.CameraUnreachableReason()));
+    for (uint64_t medium : handles.media) reply->add_medium_handles(medium);
+    reply->set_camera_medium(scene.CameraMedium());
   });
 }
 
-grpc::Status JobSceneServiceImpl::CameraRays(grpc::ServerContext*, const v1::CameraRaysRequest* request,
-                                             v1::RayBatch* reply) {
+grpc::Status SceneViewServiceImpl::CameraRays(grpc::ServerContext*, const v1::CameraRaysRequest* request,
+                                              v1::RayBatch* reply) {
   return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
     size_t rows = 0;
     const auto points = FloatsOf(request->points(), {5}, "points", rows);
     const uint32_t n = uint32_t(rows);
     CheckRows(n);
+    CheckUniform(points, 5, "points");
     const KernelScene& scene = served.scene();
     std::vector<float> origins(3 * n), directions(3 * n), times(n);
     for (uint32_t i = 0; i < n; ++i) {
@@ -312,53 +394,127 @@ grpc::Status JobSceneServiceImpl::CameraRays(grpc::ServerContext*, const v1::Cam
   });
 }
 
-grpc::Status JobSceneServiceImpl::SampleLights(grpc::ServerContext*, const v1::SampleLightsRequest* request,
-                                               v1::SampleLightsReply* reply) {
+grpc::Status SceneViewServiceImpl::ShutterTimes(grpc::ServerContext*, const v1::ShutterTimesRequest* request,
+                                                v1::ShutterTimesReply* reply) {
   return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
-    BatchDecoder batch;
-    const auto u = batch.Floats(request->uniform(), {3}, "uniform");
-    const auto points = batch.Floats(request->points(), {3}, "points");
-    const uint32_t n = batch.rows();
+    size_t rows = 0;
+    const auto u = FloatsOf(request->uniform(), {}, "uniform", rows);
+    const uint32_t n = uint32_t(rows);
     CheckRows(n);
-    const KernelScene& scene = served.scene();
-    std::vector<float> directions(3 * n), distances(n), radiance(3 * n), pdf(n), w(3 * n), uv(2 * n);
-    std::vector<uint32_t> delta(n);
-    std::vector<const Emitter*> emitters(n, nullptr);
-    std::vector<Vec3> from(n);
-    for (uint32_t i = 0; i < n; ++i) from[i] = Vec3::Load(&points[3 * i]);
-    std::vector<LightDirection> lights(n);
-    if (scene.HasLights()) scene.SampleLightsFrom(from, u, lights);
-    for (uint32_t i = 0; i < n; ++i) {
-      const LightDirection& s = lights[i];
-      if (!s.emitter || !(s.pdf > 0)) continue;
-      s.direction.Store(&directions[3 * i]);
-      distances[i] = s.distance;
-      pdf[i] = s.pdf;
-      delta[i] = s.delta;
-      emitters[i] = s.emitter;
-      s.w.Store(&w[3 * i]);
-      uv[2 * i] = s.u;
-      uv[2 * i + 1] = s.v;
-    }
-    EmitterRadiance(emitters, w, uv, radiance);
-    // On the wire a point light's pdf is the choice's probability and its
-    // radiance the irradiance it gives at the point.
-    for (uint32_t i = 0; i < n; ++i)
-      if (delta[i] && !lights[i].AtInfinity()) {
-        const float d2 = distances[i] * distances[i];
-        for (int c = 0; c < 3; ++c) radiance[3 * i + c] /= d2;
-        pdf[i] /= d2;
-      }
-    *reply->mutable_directions() = FloatArray(directions, {n, 3});
-    *reply->mutable_distances() = FloatArray(distances, {n});
-    *reply->mutable_radiance() = FloatArray(radiance, {n, 3});
-    *reply->mutable_pdf() = FloatArray(pdf, {n});
-    *reply->mutable_delta() = Uint32Array(delta, {n});
+    CheckUniform(u, 1, "uniform");
+    std::vector<float> times(n);
+    for (uint32_t i = 0; i < n; ++i) times[i] = served.scene().ShutterTime(u[i]);
+    *reply->mutable_times() = FloatArray(times, {n});
   });
 }
 
-grpc::Status JobSceneServiceImpl::Emission(grpc::ServerContext*, const v1::EmissionRequest* request,
-                                           v1::EmissionReply* reply) {
+grpc::Status SceneViewServiceImpl::SampleLights(grpc::ServerContext*, const v1::SampleLightsRequest* request,
+                                                v1::SampleLightsReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto u = batch.Floats(request->uniform(), {3}, "uniform");
+    const auto from = PointsOf(batch.Floats(request->points(), {3}, "points"), "point");
+    CheckRows(batch.rows());
+    CheckUniform(u, 3, "uniform");
+    std::vector<LightDirection> lights(batch.rows());
+    if (served.scene().HasLights()) served.scene().SampleLightsFrom(from, u, lights);
+    FillLightDirections(served, lights, reply);
+  });
+}
+
+grpc::Status SceneViewServiceImpl::LightPoints(grpc::ServerContext*, const v1::LightPointsRequest* request,
+                                               v1::SampleLightsReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto lights = batch.Uint32s(request->lights(), "lights");
+    const auto from = PointsOf(batch.Floats(request->points(), {3}, "points"), "point");
+    CheckRows(batch.rows());
+    const KernelScene& scene = served.scene();
+    std::vector<LightDirection> gathered(batch.rows());
+    for (uint32_t i = 0; i < gathered.size(); ++i) {
+      if (lights[i] >= scene.LightCount())
+        throw Error("light " + std::to_string(lights[i]) + " (row " + std::to_string(i) + ") is not one of the scene's " +
+                    std::to_string(scene.LightCount()) + " lights");
+      gathered[i] = scene.LightPoint(lights[i], from[i]);
+    }
+    FillLightDirections(served, gathered, reply);
+  });
+}
+
+grpc::Status SceneViewServiceImpl::SampleLightPoints(grpc::ServerContext*, const v1::SampleLightPointsRequest* request,
+                                                     v1::LightPointsReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    size_t rows = 0;
+    const auto u = FloatsOf(request->uniform(), {3}, "uniform", rows);
+    const uint32_t n = uint32_t(rows);
+    CheckRows(n);
+    CheckUniform(u, 3, "uniform");
+    const KernelScene& scene = served.scene();
+    std::vector<float> positions(3 * n), normals(3 * n), pdf(n), frames(9 * n), uv(2 * n);
+    std::vector<uint32_t> flags(n), emitters(n, kNoEmitter), shapes(n, kNoShape);
+    for (uint32_t i = 0; i < n; ++i) {
+      if (!scene.HasLights()) break;
+      const LightSample l = scene.SampleLight(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
+      if (!l.emitter || !(l.pdf > 0) || !std::isfinite(l.pdf)) continue;
+      if (!l.infinite) {
+        l.position.Store(&positions[3 * i]);
+        l.normal.Store(&normals[3 * i]);
+      }
+      pdf[i] = l.pdf;
+      flags[i] = (l.delta_position ? 1u : 0u) | (l.infinite ? 2u : 0u) | (l.delta_direction ? 4u : 0u);
+      const Frame frame = l.infinite ? l.frame : Frame(l.normal);
+      frame.s.Store(&frames[9 * i]);
+      frame.t.Store(&frames[9 * i + 3]);
+      frame.n.Store(&frames[9 * i + 6]);
+      emitters[i] = served.EmitterIndex(l.emitter);
+      shapes[i] = l.shape;
+      uv[2 * i] = l.u;
+      uv[2 * i + 1] = l.v;
+    }
+    *reply->mutable_positions() = FloatArray(positions, {n, 3});
+    *reply->mutable_normals() = FloatArray(normals, {n, 3});
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+    *reply->mutable_flags() = Uint32Array(flags, {n});
+    *reply->mutable_frames() = FloatArray(frames, {n, 3, 3});
+    *reply->mutable_emitters() = Uint32Array(emitters, {n});
+    *reply->mutable_shape_ids() = Uint32Array(shapes, {n});
+    *reply->mutable_uv() = FloatArray(uv, {n, 2});
+  });
+}
+
+grpc::Status SceneViewServiceImpl::LightPdfArea(grpc::ServerContext*, const v1::LightPdfAreaRequest* request,
+                                                v1::LightPdfAreaReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto shapes = batch.Uint32s(request->shape_ids(), "shape_ids");
+    const uint32_t n = batch.rows();
+    CheckRows(n);
+    std::vector<float> pdf(n);
+    for (uint32_t i = 0; i < n; ++i) pdf[i] = served.scene().LightPdfArea(CheckedShape(served, shapes[i], i));
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+  });
+}
+
+grpc::Status SceneViewServiceImpl::InfiniteLightOrigins(grpc::ServerContext*,
+                                                        const v1::InfiniteLightOriginsRequest* request,
+                                                        v1::InfiniteLightOriginsReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto directions = UnitVectorsOf(batch.Floats(request->directions(), {3}, "directions"), "direction");
+    const auto u = batch.Floats(request->uniform(), {2}, "uniform");
+    const uint32_t n = batch.rows();
+    CheckRows(n);
+    CheckUniform(u, 2, "uniform");
+    std::vector<float> origins(3 * n), pdf(n);
+    for (uint32_t i = 0; i < n; ++i)
+      served.scene().InfiniteLightOrigin(directions[i], u[2 * i], u[2 * i + 1], pdf[i]).Store(&origins[3 * i]);
+    *reply->mutable_origins() = FloatArray(origins, {n, 3});
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+  });
+}
+
+grpc::Status SceneViewServiceImpl::Emission(grpc::ServerContext*, const v1::EmissionRequest* request,
+                                            v1::EmissionReply* reply) {
   return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
     const std::vector<Ray> rays = RaysOf(request->rays());
     const uint32_t n = uint32_t(rays.size());
@@ -385,7 +541,7 @@ grpc::Status JobSceneServiceImpl::Emission(grpc::ServerContext*, const v1::Emiss
         escaped_rays.push_back(i);
         continue;
       }
-      if (shape >= scene.ShapeCount()) throw Error("hit " + std::to_string(i) + " names no shape of the scene");
+      CheckedShape(served, shape, i);
       emitters[i] = scene.EmitterOf(shape);
       if (!emitters[i]) continue;
       Hit hit;
@@ -409,23 +565,88 @@ grpc::Status JobSceneServiceImpl::Emission(grpc::ServerContext*, const v1::Emiss
   });
 }
 
-grpc::Status JobSceneServiceImpl::Splat(grpc::ServerContext*, const v1::SplatRequest* request, v1::SplatReply*) {
+grpc::Status SceneViewServiceImpl::ConnectToCamera(grpc::ServerContext*, const v1::ConnectToCameraRequest* request,
+                                                   v1::ConnectToCameraReply* reply) {
   return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
-    size_t rows = 0;
-    const auto values = FloatsOf(request->contributions(), {5}, "contributions", rows);
-    FilmSamples samples;
-    samples.splats = true;
-    const float width = float(served.scene().FilmWidth()), height = float(served.scene().FilmHeight());
-    for (size_t k = 0; k < rows; ++k) {
-      const float* row = &values[5 * k];
-      for (int c = 0; c < 5; ++c)
-        if (!std::isfinite(row[c])) throw Error("contribution " + std::to_string(k) + " is not finite");
-      if (row[0] < 0 || row[0] > width || row[1] < 0 || row[1] > height)
-        throw Error("contribution " + std::to_string(k) + " lies off the film");
-      if (row[2] < 0 || row[3] < 0 || row[4] < 0) throw Error("contribution " + std::to_string(k) + " is negative");
-      samples.Add(0, row[0], row[1], Vec3(row[2], row[3], row[4]));
+    BatchDecoder batch;
+    const auto points = PointsOf(batch.Floats(request->points(), {3}, "points"), "point");
+    const auto lens = batch.Floats(request->lens(), {2}, "lens");
+    const uint32_t n = batch.rows();
+    CheckRows(n);
+    CheckUniform(lens, 2, "lens");
+    std::vector<uint32_t> connected(n);
+    std::vector<float> lens_points(3 * n), raster(2 * n), importance(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      CameraConnection c;
+      if (!served.scene().ConnectToCamera(points[i], lens[2 * i], lens[2 * i + 1], c)) continue;
+      connected[i] = 1;
+      c.lens_point.Store(&lens_points[3 * i]);
+      raster[2 * i] = c.raster_x;
+      raster[2 * i + 1] = c.raster_y;
+      importance[i] = c.importance;
     }
-    if (!served.Splat(samples)) throw Error("the job has ended");
+    *reply->mutable_connected() = Uint32Array(connected, {n});
+    *reply->mutable_lens_points() = FloatArray(lens_points, {n, 3});
+    *reply->mutable_raster() = FloatArray(raster, {n, 2});
+    *reply->mutable_importance() = FloatArray(importance, {n});
+  });
+}
+
+grpc::Status SceneViewServiceImpl::CameraDirectionPdf(grpc::ServerContext*,
+                                                      const v1::CameraDirectionPdfRequest* request,
+                                                      v1::CameraDirectionPdfReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto directions = UnitVectorsOf(batch.Floats(request->directions(), {3}, "directions"), "direction");
+    const uint32_t n = batch.rows();
+    CheckRows(n);
+    std::vector<float> pdf(n);
+    for (uint32_t i = 0; i < n; ++i) pdf[i] = served.scene().CameraDirectionPdf(directions[i]);
+    *reply->mutable_pdf() = FloatArray(pdf, {n});
+  });
+}
+
+grpc::Status SceneViewServiceImpl::SampleSpacing(grpc::ServerContext*, const v1::SampleSpacingRequest* request,
+                                                 v1::SampleSpacingReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    BatchDecoder batch;
+    const auto points = PointsOf(batch.Floats(request->points(), {3}, "points"), "point");
+    const auto normals = UnitVectorsOf(batch.Floats(request->normals(), {3}, "normals"), "normal");
+    const uint32_t n = batch.rows();
+    CheckRows(n);
+    std::vector<float> dpdx(3 * n), dpdy(3 * n);
+    for (uint32_t i = 0; i < n; ++i) {
+      Vec3 dx, dy;
+      served.scene().SampleSpacing(points[i], normals[i], dx, dy);
+      dx.Store(&dpdx[3 * i]);
+      dy.Store(&dpdy[3 * i]);
+    }
+    *reply->mutable_dpdx() = FloatArray(dpdx, {n, 3});
+    *reply->mutable_dpdy() = FloatArray(dpdy, {n, 3});
+  });
+}
+
+grpc::Status SceneViewServiceImpl::Triangles(grpc::ServerContext*, const v1::TrianglesRequest* request,
+                                             v1::TrianglesReply* reply) {
+  return WithScene(scenes_, request->handle(), [&](const ServedScene& served) {
+    const KernelScene& scene = served.scene();
+    const uint32_t shape = CheckedShape(served, request->shape(), 0);
+    const uint32_t count = scene.PrimitiveCount(shape);
+    CheckRows(count);
+    std::vector<float> corners;
+    Vec3 triangle[3];
+    for (uint32_t p = 0; p < count; ++p) {
+      if (!scene.Triangle(shape, p, triangle)) {
+        corners.clear();
+        break;
+      }
+      for (const Vec3& corner : triangle) {
+        corners.push_back(corner.x);
+        corners.push_back(corner.y);
+        corners.push_back(corner.z);
+      }
+    }
+    *reply->mutable_corners() = FloatArray(corners, {uint32_t(corners.size() / 9), 3, 3});
   });
 }
 

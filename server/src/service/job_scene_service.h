@@ -1,4 +1,4 @@
-// yarf.v1.JobScene and yarf.v1.Intersect for the scenes of running jobs:
+// yarf.v1.SceneView, Intersect and the Shape services for the scenes of running jobs:
 // what a transport algorithm in another process traces and shades with.
 #pragma once
 
@@ -50,14 +50,27 @@ class SampleSurfaceDirectionServiceImpl final : public v1::SampleSurfaceDirectio
   const JobScenes& scenes_;
 };
 
-class JobSceneServiceImpl final : public v1::JobScene::Service {
+class SceneViewServiceImpl final : public v1::SceneView::Service {
  public:
-  explicit JobSceneServiceImpl(const JobScenes& scenes) : scenes_(scenes) {}
-  grpc::Status Layout(grpc::ServerContext*, const v1::JobSceneRequest*, v1::SceneLayout*) override;
+  explicit SceneViewServiceImpl(const JobScenes& scenes) : scenes_(scenes) {}
+  grpc::Status Layout(grpc::ServerContext*, const v1::SceneViewRequest*, v1::SceneLayout*) override;
   grpc::Status CameraRays(grpc::ServerContext*, const v1::CameraRaysRequest*, v1::RayBatch*) override;
+  grpc::Status ShutterTimes(grpc::ServerContext*, const v1::ShutterTimesRequest*, v1::ShutterTimesReply*) override;
   grpc::Status SampleLights(grpc::ServerContext*, const v1::SampleLightsRequest*, v1::SampleLightsReply*) override;
+  grpc::Status LightPoints(grpc::ServerContext*, const v1::LightPointsRequest*, v1::SampleLightsReply*) override;
+  grpc::Status SampleLightPoints(grpc::ServerContext*, const v1::SampleLightPointsRequest*,
+                                 v1::LightPointsReply*) override;
+  grpc::Status LightPdfArea(grpc::ServerContext*, const v1::LightPdfAreaRequest*, v1::LightPdfAreaReply*) override;
+  grpc::Status InfiniteLightOrigins(grpc::ServerContext*, const v1::InfiniteLightOriginsRequest*,
+                                    v1::InfiniteLightOriginsReply*) override;
   grpc::Status Emission(grpc::ServerContext*, const v1::EmissionRequest*, v1::EmissionReply*) override;
-  grpc::Status Splat(grpc::ServerContext*, const v1::SplatRequest*, v1::SplatReply*) override;
+  grpc::Status ConnectToCamera(grpc::ServerContext*, const v1::ConnectToCameraRequest*,
+                               v1::ConnectToCameraReply*) override;
+  grpc::Status CameraDirectionPdf(grpc::ServerContext*, const v1::CameraDirectionPdfRequest*,
+                                  v1::CameraDirectionPdfReply*) override;
+  grpc::Status SampleSpacing(grpc::ServerContext*, const v1::SampleSpacingRequest*,
+                             v1::SampleSpacingReply*) override;
+  grpc::Status Triangles(grpc::ServerContext*, const v1::TrianglesRequest*, v1::TrianglesReply*) override;
 
  private:
   const JobScenes& scenes_;

@@ -15,26 +15,32 @@
 
 namespace yarf {
 
+// The index of an emitter the scene does not have (a shape that does not
+// emit, nothing sampled): 0xFFFFFFFF, as a missed ray's shape.
+inline constexpr uint32_t kNoEmitter = 0xFFFFFFFFu;
+
 class ServedScene {
  public:
-  ServedScene(std::shared_ptr<const KernelScene> scene, RenderTarget& target, std::vector<uint64_t> materials)
-      : scene_(std::move(scene)), target_(&target), material_handles_(std::move(materials)) {}
+  // The instances of the scene's materials, emitters (KernelScene's
+  // Emitters() order) and media, in the table.
+  struct Handles {
+    std::vector<uint64_t> materials, emitters, media;
+  };
+  ServedScene(std::shared_ptr<const KernelScene> scene, Handles handles);
 
   const KernelScene& scene() const { return *scene_; }
-  // The instance handle of material m of the scene.
-  const std::vector<uint64_t>& material_handles() const { return material_handles_; }
-  // Adds splats to the job's film; false once the job has ended.
-  bool Splat(const FilmSamples& samples) const;
+  const Handles& handles() const { return handles_; }
+  // The index of `emitter` among the scene's emitters; kNoEmitter for
+  // nullptr.
+  uint32_t EmitterIndex(const Emitter* emitter) const;
   // Shape `shape`'s surface (Shape and its samplers), made at the first
   // call; throws Error for a shape the scene does not have.
   const ShapeSurface& Surface(uint32_t shape) const;
-  void End();
 
  private:
   std::shared_ptr<const KernelScene> scene_;
-  mutable std::mutex mutex_;
-  RenderTarget* target_;
-  std::vector<uint64_t> material_handles_;
+  Handles handles_;
+  std::map<const Emitter*, uint32_t> emitter_index_;
   mutable std::mutex surfaces_mutex_;
   mutable std::map<uint32_t, std::unique_ptr<ShapeSurface>> surfaces_;
 };
@@ -57,7 +63,7 @@ class JobScenes {
   };
 
   // Serves `scene` (whose ServiceHandle is set) while the lease lives.
-  std::unique_ptr<Lease> Serve(const std::shared_ptr<KernelScene>& scene, RenderTarget& target);
+  std::unique_ptr<Lease> Serve(const std::shared_ptr<KernelScene>& scene);
   // nullptr for an unknown or withdrawn handle.
   std::shared_ptr<const ServedScene> Find(uint64_t handle) const;
 

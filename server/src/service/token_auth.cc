@@ -26,9 +26,9 @@ constexpr std::array<std::string_view, 3> kAdminMethods = {
 };
 // The running jobs' scenes, served to transports in component processes
 // (which an admin registers, with an admin token): their handles name any
-// user's job, and Splat writes into its film.
+// user's job.
 constexpr std::array<std::string_view, 5> kAdminServices = {
-    "/yarf.v1.JobScene/",          "/yarf.v1.Intersect/", "/yarf.v1.Shape/", "/yarf.v1.SampleSurfaceArea/",
+    "/yarf.v1.SceneView/",           "/yarf.v1.Intersect/", "/yarf.v1.Shape/", "/yarf.v1.SampleSurfaceArea/",
     "/yarf.v1.SampleSurfaceDirection/",
 };
 
