@@ -18,7 +18,7 @@
 #include <sstream>
 
 #include "components/registry.h"
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 #include "yarf/hash.h"
 #include "yarf/warps.h"
 

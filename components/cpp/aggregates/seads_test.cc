@@ -11,7 +11,7 @@
 
 #include "components/registry.h"
 #include "kernel/scene.h"
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 #include "yarf/error.h"
 
 namespace yarf {

@@ -21,7 +21,7 @@
 #include <string>
 #include <string_view>
 
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 
 struct evp_md_ctx_st;
 

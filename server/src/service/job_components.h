@@ -12,7 +12,7 @@
 #include "components/remote_instance.h"
 #include "kernel/embree_device.h"
 #include "kernel/film_target.h"
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 #include "service/asset_store.h"
 #include "service/job_scenes.h"
 #include "yarf/transport.h"

@@ -7,7 +7,7 @@
 #include <optional>
 #include <set>
 
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 #include "service/class_checks.h"
 #include "service/job_files.h"
 #include "service/job_splits.h"

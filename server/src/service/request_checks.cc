@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 #include "service/access.h"
 #include "service/job_splits.h"
 #include "yarf/aov.h"

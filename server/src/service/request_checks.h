@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 #include "yarf/component.h"
 #include "yarf/v1/render.pb.h"
 

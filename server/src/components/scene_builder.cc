@@ -1,4 +1,4 @@
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 
 #include <algorithm>
 #include <array>

@@ -10,7 +10,7 @@
 #include <atomic>
 
 #include "components/registry.h"
-#include "kernel/scene_builder.h"
+#include "components/scene_builder.h"
 #include "yarf/error.h"
 #include "yarf/shading.h"
 
