@@ -19,8 +19,8 @@
 
 #include "components/registry.h"
 #include "components/scene_builder.h"
-#include "yarf/hash.h"
-#include "yarf/warps.h"
+#include "yarf/support/hash.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

@@ -1,8 +1,10 @@
 """A C++ plugin built outside yarf's tree, against an installed yarf.
 
-`cmake --install` puts the interface headers and the CMake package
-(find_package(yarf): the target yarf::interfaces and yarf_add_plugin) in a
-prefix; a project of its own builds a diffuse reflector against them, and
+`cmake --install` puts the interface headers, the helpers of
+yarf/support/ and the CMake package (find_package(yarf): the target
+yarf::interfaces and yarf_add_plugin) in a prefix; a project of its own
+compiles every installed header on its own, builds a diffuse reflector
+against them, and
 yarfd loads it from --plugin-path and renders with it exactly what its
 own lambertian renders. Plugins built against other interface headers are
 refused at load, with a message, and yarfd serves on.

@@ -1,4 +1,4 @@
-"""Writes server/include/yarf/named_metals.h: the complex indices of
+"""Writes server/include/yarf/support/named_metals.h: the complex indices of
 refraction of the metals Mitsuba 3 names (its data/ior spectra, measured by
 Palik and others), as Mitsuba's RGB variants see them.
 
@@ -14,7 +14,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-OUT = Path(__file__).resolve().parent.parent / "server" / "include" / "yarf" / "named_metals.h"
+REPO = Path(__file__).resolve().parent.parent
+OUT = REPO / "server" / "include" / "yarf" / "support" / "named_metals.h"
 # A channel with η = κ = 0 (an out-of-gamut colour clamped) has no
 # Fresnel factor: its κ is raised to this.
 SMALLEST_K = 1e-4
@@ -50,6 +51,7 @@ def main() -> None:
         "// the spectra it ships (data/ior). Written by tools/named_metals.py from\n"
         f"// Mitsuba {mi.__version__}; do not edit by hand.\n"
         "#pragma once\n\n"
+        "#include <string_view>\n\n"
         '#include "yarf/vecmath.h"\n\n'
         "namespace yarf::metals {\n\n"
         "struct ComplexIor {\n  Vec3 eta, k;\n};\n\n"

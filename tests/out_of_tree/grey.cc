@@ -3,7 +3,7 @@
 #include <cmath>
 #include <span>
 #include "yarf/plugin.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 constexpr uint32_t kLobe = yarf::kScatterReflect | yarf::kScatterDiffuse;

@@ -23,7 +23,7 @@
 #include <span>
 #include <vector>
 
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
 

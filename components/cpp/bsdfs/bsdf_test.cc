@@ -16,7 +16,7 @@
 
 #include "surface_test_support.h"
 #include "yarf/surface.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

@@ -21,7 +21,7 @@
 // reflection and the paths bouncing between coat and metal.
 //
 // Differences from pbrt-v4: those of coateddiffuse.cc; the default copper
-// is yarf/named_metals.h's RGB.
+// is yarf/support/named_metals.h's RGB.
 //
 // Parameters: CoatedConductor::Parameters() below, pbrt-v4's names and
 // defaults. A texture's values are clamped into the ranges given.
@@ -39,9 +39,9 @@
 #include <utility>
 
 #include "layered.h"
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "surface_properties.h"
-#include "yarf/named_metals.h"
+#include "yarf/support/named_metals.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
 
@@ -50,7 +50,7 @@ namespace {
 using yarf::Vec3;
 namespace layered = yarf::layered;
 
-// pbrt's default metal, copper, in yarf/named_metals.h's RGB.
+// pbrt's default metal, copper, in yarf/support/named_metals.h's RGB.
 yarf::metals::ComplexIor Copper() {
   for (const yarf::metals::NamedMetal& metal : yarf::metals::kMetals)
     if (std::string(metal.name) == "Cu") return metal.ior;

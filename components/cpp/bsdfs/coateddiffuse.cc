@@ -61,7 +61,7 @@
 #include <utility>
 
 #include "layered.h"
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"

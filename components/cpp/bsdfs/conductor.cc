@@ -20,11 +20,11 @@
 
 #include "metals.h"
 #include "microfacet.h"
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

@@ -15,10 +15,10 @@
 #include <span>
 #include <string>
 
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

@@ -54,16 +54,16 @@
 #include <vector>
 
 #include "microfacet.h"
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "yarf/error.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/surface.h"
 #include "yarf/surface_points.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf::layered {
 

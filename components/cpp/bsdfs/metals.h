@@ -1,6 +1,6 @@
 // Named metals for the conductor models (conductor.cc, roughconductor.cc):
 // the reading of the 'material', 'eta' and 'k' properties Mitsuba's
-// conductors share. The metals are yarf/named_metals.h's: every one
+// conductors share. The metals are yarf/support/named_metals.h's: every one
 // Mitsuba 3 names, in the RGB Mitsuba's RGB variants convert its spectra
 // to. An RGB renderer can only approximate a spectral one.
 #pragma once
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "yarf/error.h"
-#include "yarf/named_metals.h"
+#include "yarf/support/named_metals.h"
 #include "yarf/parameters.h"
 #include "yarf/properties.h"
 #include "yarf/texture.h"

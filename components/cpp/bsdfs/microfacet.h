@@ -5,7 +5,7 @@
 // hemispherical averages the coated models need. Indices of refraction
 // are read in surface_properties.h.
 // Two distributions of microfacet normals: GGX (its D, G1 and sampling of
-// visible normals are in yarf/warps.h) and Beckmann (Mitsuba's default),
+// visible normals are in yarf/support/warps.h) and Beckmann (Mitsuba's default),
 // each anisotropic, with Smith's masking and sampling of visible normals.
 //
 // Microfacet normals m lie in the upper hemisphere (m.z > 0); +z is the
@@ -28,7 +28,7 @@
 #include "yarf/properties.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf::microfacet {
 

@@ -27,7 +27,7 @@
 #include "microfacet.h"
 #include "surface_test_support.h"
 #include "yarf/surface.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

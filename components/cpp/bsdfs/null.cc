@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <span>
 
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "yarf/plugin.h"
 
 namespace {

@@ -30,11 +30,11 @@
 #include <string>
 #include <utility>
 
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

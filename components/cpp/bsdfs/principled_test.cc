@@ -26,7 +26,7 @@
 #include "surface_test_support.h"
 #include "yarf/surface.h"
 #include "yarf/texture.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

@@ -18,10 +18,10 @@
 #include <vector>
 
 #include "components/registry.h"
-#include "testing/chi_square.h"
-#include "yarf/hash.h"
+#include "yarf/support/chi_square.h"
+#include "yarf/support/hash.h"
 #include "yarf/surface.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf::surface_testing {
 

@@ -26,10 +26,10 @@
 #include <span>
 #include <string>
 
-#include "scatter_rows.h"
+#include "yarf/support/scatter_rows.h"
 #include "surface_properties.h"
 #include "yarf/plugin.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

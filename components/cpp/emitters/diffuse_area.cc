@@ -16,7 +16,7 @@
 #include "intensity.h"
 #include "yarf/plugin.h"
 #include "yarf/texture.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

@@ -14,10 +14,10 @@
 
 #include "../textures/temporary_folder.h"
 #include "components/registry.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/surface.h"
 #include "yarf/texture.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

@@ -32,7 +32,7 @@
 #include "../textures/linear_image.h"
 #include "piecewise_constant.h"
 #include "yarf/plugin.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

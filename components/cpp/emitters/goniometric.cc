@@ -29,7 +29,7 @@
 #include "light_frame.h"
 #include "piecewise_constant.h"
 #include "yarf/plugin.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

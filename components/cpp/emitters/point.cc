@@ -20,7 +20,7 @@
 
 #include "intensity.h"
 #include "yarf/plugin.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "components/registry.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/math.h"
 
 namespace yarf {

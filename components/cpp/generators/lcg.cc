@@ -23,7 +23,7 @@
 #include <cstdint>
 #include <span>
 
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/plugin.h"
 
 namespace {

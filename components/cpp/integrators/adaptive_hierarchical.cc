@@ -51,7 +51,7 @@
 
 #include "integration_box.h"
 #include "vegas_map.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/plugin.h"
 
 namespace yarf {

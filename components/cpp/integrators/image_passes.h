@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/math.h"
 #include "yarf/transport.h"
 

@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "integration_box.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/plugin.h"
 
 namespace yarf {

@@ -20,7 +20,7 @@
 #include "components/properties_proto.h"
 #include "components/registry.h"
 #include "yarf/geometry.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/medium.h"
 
 #ifdef YARF_HAVE_OPENVDB

@@ -11,7 +11,7 @@
 
 #include "components/registry.h"
 #include "phase.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 
 namespace yarf {
 namespace {

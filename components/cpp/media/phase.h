@@ -15,7 +15,7 @@
 #include "yarf/medium.h"
 #include "yarf/parameters.h"
 #include "yarf/properties.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 

@@ -26,8 +26,8 @@
 // Parameters: none (Halton::Parameters() below).
 #include <cstdint>
 
-#include "yarf/hash.h"
-#include "yarf/owen.h"
+#include "yarf/support/hash.h"
+#include "yarf/support/owen.h"
 #include "yarf/plugin.h"
 
 namespace {

@@ -9,7 +9,7 @@
 // Parameters: none (Independent::Parameters() below).
 #include <cstdint>
 
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/plugin.h"
 
 namespace {

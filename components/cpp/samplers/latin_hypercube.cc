@@ -19,8 +19,8 @@
 #include <cstdint>
 
 #include "sample_count.h"
-#include "yarf/hash.h"
-#include "yarf/owen.h"
+#include "yarf/support/hash.h"
+#include "yarf/support/owen.h"
 #include "yarf/plugin.h"
 
 namespace {

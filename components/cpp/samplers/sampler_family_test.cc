@@ -1,6 +1,6 @@
 // Tests of the stratified and low-discrepancy samplers (stratified,
 // latin_hypercube, hammersley, halton) and of the randomization helpers
-// they share (yarf/owen.h): determinism, range, the stratification each
+// they share (yarf/support/owen.h): determinism, range, the stratification each
 // one promises, uniformity over seeds, and integration error in the order
 // theory gives.
 #include <gtest/gtest.h>
@@ -17,9 +17,9 @@
 
 #include "components/registry.h"
 #include "sampler_test_support.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/math.h"
-#include "yarf/owen.h"
+#include "yarf/support/owen.h"
 
 namespace yarf {
 namespace {

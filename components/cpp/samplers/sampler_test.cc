@@ -15,7 +15,7 @@
 
 #include "components/registry.h"
 #include "sampler_test_support.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/math.h"
 
 namespace yarf {

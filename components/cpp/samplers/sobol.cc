@@ -36,8 +36,8 @@
 #include <span>
 
 #include "yarf/error.h"
-#include "yarf/hash.h"
-#include "yarf/owen.h"
+#include "yarf/support/hash.h"
+#include "yarf/support/owen.h"
 #include "yarf/plugin.h"
 
 namespace {

@@ -38,8 +38,8 @@
 #include <vector>
 
 #include "sobol_directions.h"
-#include "yarf/hash.h"
-#include "yarf/owen.h"
+#include "yarf/support/hash.h"
+#include "yarf/support/owen.h"
 #include "yarf/plugin.h"
 
 namespace {

@@ -26,9 +26,9 @@
 #include <vector>
 
 #include "medium_transport.h"
-#include "wavefront.h"
+#include "yarf/support/wavefront.h"
 #include "yarf/plugin.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

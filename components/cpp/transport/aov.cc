@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "medium_transport.h"
-#include "wavefront.h"
+#include "yarf/support/wavefront.h"
 #include "yarf/aov.h"
 #include "yarf/plugin.h"
 

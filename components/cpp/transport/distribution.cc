@@ -22,7 +22,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "wavefront.h"
+#include "yarf/support/wavefront.h"
 #include "yarf/plugin.h"
 
 namespace yarf {

@@ -58,8 +58,8 @@
 
 #include "irradiance_gather.h"
 #include "irradiance_records.h"
-#include "wavefront.h"
-#include "yarf/hash.h"
+#include "yarf/support/wavefront.h"
+#include "yarf/support/hash.h"
 #include "yarf/plugin.h"
 
 namespace yarf {

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "irradiance_records.h"
-#include "wavefront.h"
-#include "yarf/hash.h"
+#include "yarf/support/wavefront.h"
+#include "yarf/support/hash.h"
 
 namespace yarf {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "null_tracking.h"
-#include "wavefront.h"
+#include "yarf/support/wavefront.h"
 
 namespace yarf {
 

@@ -15,7 +15,7 @@
 
 #include "yarf/error.h"
 #include "yarf/geometry.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 #include "yarf/medium.h"
 
 namespace yarf {

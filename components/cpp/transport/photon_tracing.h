@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "medium_transport.h"
-#include "wavefront.h"
-#include "yarf/hash.h"
+#include "yarf/support/wavefront.h"
+#include "yarf/support/hash.h"
 
 namespace yarf {
 

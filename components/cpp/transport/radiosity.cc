@@ -41,7 +41,7 @@
 #include "radiosity_mesh.h"
 #include "radiosity_shading.h"
 #include "radiosity_solver.h"
-#include "wavefront.h"
+#include "yarf/support/wavefront.h"
 #include "yarf/plugin.h"
 
 namespace yarf {

@@ -19,7 +19,7 @@
 
 #include <vector>
 
-#include "wavefront.h"
+#include "yarf/support/wavefront.h"
 #include "yarf/plugin.h"
 
 namespace yarf {

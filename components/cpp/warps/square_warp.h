@@ -23,7 +23,7 @@
 #include "yarf/math.h"
 #include "yarf/parameters.h"
 #include "yarf/vecmath.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 

@@ -12,7 +12,7 @@
 
 #include "square_warp.h"
 #include "yarf/plugin.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace {
 

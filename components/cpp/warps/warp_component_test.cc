@@ -20,10 +20,10 @@
 #include <vector>
 
 #include "components/registry.h"
-#include "testing/chi_square.h"
-#include "yarf/hash.h"
+#include "yarf/support/chi_square.h"
+#include "yarf/support/hash.h"
 #include "yarf/math.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

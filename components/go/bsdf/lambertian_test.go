@@ -286,7 +286,7 @@ func TestTransportModeMakesNoDifference(t *testing.T) {
 
 func TestSampledDirectionsMatchTheCppWarp(t *testing.T) {
 	l := startLambertian(t)
-	// SampleCosineHemisphere of server/include/yarf/warps.h at these numbers.
+	// SampleCosineHemisphere of server/include/yarf/support/warps.h at these numbers.
 	want := []float32{
 		0, 0, 1,
 		-0x1.7a6bccp-1, 0x1.397e88p-2, 0x1.333332p-1,

@@ -1,7 +1,7 @@
 package sampler
 
 // Deterministic integer hashing for stateless samplers, bit for bit as
-// yarfd's (server/include/yarf/hash.h), so that a Go sampler and a C++
+// yarfd's (server/include/yarf/support/hash.h), so that a Go sampler and a C++
 // one agree on the same request.
 
 // mixBits is the finaliser of splitmix64 (Steele, Lea & Flood 2014): a

@@ -8,7 +8,7 @@ import (
 )
 
 func TestCosineHemisphereMatchesTheCppWarp(t *testing.T) {
-	// SampleCosineHemisphere of server/include/yarf/warps.h at these numbers.
+	// SampleCosineHemisphere of server/include/yarf/support/warps.h at these numbers.
 	tests := []struct {
 		u0, u1 float32
 		want   [3]float32

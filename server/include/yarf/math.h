@@ -9,7 +9,7 @@
 
 #include "yarf/component.h"
 #include "yarf/error.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 
 namespace yarf {
 
@@ -61,7 +61,9 @@ class Integrator : public virtual Component {
   // pixel's footprint, feeding the target's film pass after pass. An
   // integrator without one says so when a job names it.
   // in-process only: a render runs in yarfd, on the job's scene and film,
-  // and is asked for through RenderService.Submit.
+  // and is asked for through RenderService.Submit; an integrator in
+  // another process renders through Integrate, tile by tile
+  // (Remote<Integrator>::Render).
   virtual void Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
                       RenderTarget& target) {
     throw Error("integrator '" + Describe().class_name + "' does not render images");

@@ -12,7 +12,7 @@
 #include "components/registry.h"
 #include "components/scene_builder.h"
 #include "yarf/error.h"
-#include "yarf/shading.h"
+#include "yarf/support/shading.h"
 
 namespace yarf {
 namespace {

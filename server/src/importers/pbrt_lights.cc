@@ -7,7 +7,7 @@
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
 #include "importers/texture_mean.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf::importers {
 namespace {

@@ -11,7 +11,7 @@
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
 #include "importers/recursion_guard.h"
-#include "yarf/named_metals.h"
+#include "yarf/support/named_metals.h"
 
 namespace yarf::importers {
 namespace {
@@ -116,7 +116,7 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
       std::string metal = MetalName(eta_param).value_or(MetalName(k_param).value_or("Cu"));
       if ((eta_param && MetalName(eta_param) != metal) || (k_param && MetalName(k_param) != metal))
         Warn(where, "conductor-mixed", what + ": eta and k of different metals: '" + metal + "' used");
-      // The metals yarf's conductors know (yarf/named_metals.h).
+      // The metals yarf's conductors know (yarf/support/named_metals.h).
       if (!metals::IsNamed(metal)) {
         Warn(where, "metal:" + metal, "metal '" + metal + "' is not among yarf's named metals: a perfect mirror used");
         metal = "none";
@@ -170,7 +170,7 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
         Fail(where, what + ": give the conductor by \"reflectance\" or by \"conductor.eta\" and \"conductor.k\", not both");
       reflectance("reflectance", "reflectance", 1);
     } else {
-      // A named metal's spectra become yarf's RGB of it (yarf/named_metals.h).
+      // A named metal's spectra become yarf's RGB of it (yarf/support/named_metals.h).
       for (const char* key : {"conductor.eta", "conductor.k"}) {
         const PbrtParam* p = params.Find(key);
         if (!p) continue;

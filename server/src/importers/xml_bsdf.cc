@@ -4,7 +4,7 @@
 #include "importers/colour_checks.h"
 #include "importers/properties_util.h"
 #include "importers/xml_importer.h"
-#include "yarf/named_metals.h"
+#include "yarf/support/named_metals.h"
 
 namespace yarf::importers {
 namespace {

@@ -3,7 +3,7 @@
 #include <bit>
 
 #include "kernel/mesh_io.h"
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 
 namespace yarf {
 

@@ -6,9 +6,9 @@
 #include <random>
 #include <utility>
 
-#include "testing/chi_square.h"
+#include "yarf/support/chi_square.h"
 #include "yarf/error.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 
 namespace yarf {
 namespace {

@@ -1,6 +1,6 @@
-// The shading-normal rules of yarf/shading.h: the frame's orientation,
+// The shading-normal rules of yarf/support/shading.h: the frame's orientation,
 // side agreement and the importance correction.
-#include "yarf/shading.h"
+#include "yarf/support/shading.h"
 
 #include <gtest/gtest.h>
 

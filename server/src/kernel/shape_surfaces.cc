@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "yarf/error.h"
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "yarf/warps.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

@@ -1,4 +1,4 @@
-// Tests of yarf/warps.h: every pdf integrates to 1 over its domain, the
+// Tests of yarf/support/warps.h: every pdf integrates to 1 over its domain, the
 // samples of every warp follow its pdf (Pearson's χ² goodness-of-fit test,
 // as Mitsuba 3 tests its warps), and the Fresnel and refraction helpers
 // obey their physical limits.
@@ -11,9 +11,9 @@
 #include <random>
 #include <vector>
 
-#include "testing/chi_square.h"
-#include "yarf/hash.h"
-#include "yarf/warps.h"
+#include "yarf/support/chi_square.h"
+#include "yarf/support/hash.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {

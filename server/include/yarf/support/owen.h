@@ -11,7 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "yarf/hash.h"
+#include "yarf/support/hash.h"
 
 namespace yarf {
 

@@ -4,6 +4,8 @@
 // Mitsuba 3.9.1; do not edit by hand.
 #pragma once
 
+#include <string_view>
+
 #include "yarf/vecmath.h"
 
 namespace yarf::metals {

@@ -15,7 +15,7 @@
 #include "yarf/error.h"
 #include "yarf/parameters.h"
 #include "yarf/properties.h"
-#include "yarf/shading.h"
+#include "yarf/support/shading.h"
 #include "yarf/transport.h"
 
 namespace yarf {
