@@ -306,6 +306,24 @@ class RenderTarget {
   virtual void Accumulate(const FilmSamples& samples) = 0;
   // Every pixel has `samples_done` samples now.
   virtual void PassDone(uint32_t samples_done) = 0;
+
+  // For integrators that estimate whole pixels themselves instead of
+  // adding camera samples (a numerical integrator in another process,
+  // tile by tile). How far the film's reconstruction filter reaches from
+  // a pixel's centre, in pixels along each axis...
+  virtual float FilterRadius() const = 0;
+  // ...and the weight radiance at raster position (x, y) has in pixel
+  // (px, py)'s value: the filter around the pixel's centre over its mass
+  // on the film, so that a pixel's weights integrate to 1 over the film
+  // and ∫ L·weight is the value its camera samples converge to. Safe to
+  // call from many threads.
+  virtual float PixelWeight(uint32_t px, uint32_t py, float x, float y) const = 0;
+  // Estimates of the pixels of `window`, row by row, each from `samples`
+  // samples per pixel, with the variance of each estimate: the film shows
+  // them as they are (estimates of a pixel average by their samples).
+  // Safe to call from many threads.
+  virtual void AddPixelEstimates(const PixelWindow& window, uint32_t samples, std::span<const Vec3> values,
+                                 std::span<const Vec3> variances) = 0;
 };
 
 }  // namespace yarf

@@ -125,8 +125,8 @@ void Film::PrepareSplats() {
 
 void Film::PrepareMasses() {
   if (column_mass_.empty()) {
-    // Made at the first splat (a resumed film's too): within a radius of the
-    // border a pixel's filter is cut; elsewhere whole.
+    // Made at the first splat or pixel weight (a resumed film's too):
+    // within a radius of the border a pixel's filter is cut; elsewhere whole.
     const float r = filter_.radius(), whole = filter_.Mass1(0, -r, r);
     const auto masses = [&](uint32_t count) {
       std::vector<float> mass(count, whole);

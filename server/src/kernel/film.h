@@ -122,7 +122,7 @@ class Film {
   // Per column and per row, the mass of a pixel's filter on the film:
   // splats there are divided by it, as camera samples are by their
   // weights, so that a pixel at the border estimates its own average too
-  // (made at the first splat: films without splats need none).
+  // (made at the first splat or pixel weight: other films need none).
   std::vector<float> column_mass_, row_mass_;
   std::vector<Pixel> pixels_;
   Splats splats_;

@@ -100,6 +100,31 @@ void FilmTarget::Accumulate(const FilmSamples& samples) {
     }
 }
 
+float FilmTarget::PixelWeight(uint32_t px, uint32_t py, float x, float y) const {
+  // The masses are made once and only read after: no film lock needed.
+  std::call_once(masses_prepared_, [&] { film_.PrepareMasses(); });
+  return film_.PixelWeight(px, py, x, y);
+}
+
+void FilmTarget::AddPixelEstimates(const PixelWindow& window, uint32_t samples, std::span<const Vec3> values,
+                                   std::span<const Vec3> variances) {
+  const uint32_t width = window.x1 - window.x0;
+  if (window.x1 > film_.width() || window.y1 > film_.height() || window.x0 >= window.x1 || window.y0 >= window.y1 ||
+      values.size() != size_t(width) * (window.y1 - window.y0) || variances.size() != values.size())
+    throw Error("pixel estimates of a window not on the film, or not one per pixel");
+  const float weight_sq = camera_weight_ * camera_weight_;
+  std::shared_lock adding(lock_);
+  for (uint32_t by = window.y0 / kBlockSide; by <= (window.y1 - 1) / kBlockSide; ++by)
+    for (uint32_t bx = window.x0 / kBlockSide; bx <= (window.x1 - 1) / kBlockSide; ++bx) {
+      std::lock_guard block(block_mutexes_[size_t(by) * block_columns_ + bx].mutex);
+      for (uint32_t y = std::max(window.y0, by * kBlockSide); y < std::min(window.y1, (by + 1) * kBlockSide); ++y)
+        for (uint32_t x = std::max(window.x0, bx * kBlockSide); x < std::min(window.x1, (bx + 1) * kBlockSide); ++x) {
+          const size_t i = size_t(y - window.y0) * width + (x - window.x0);
+          film_.AddEstimate(x, y, values[i] * camera_weight_, variances[i] * weight_sq, samples);
+        }
+    }
+}
+
 void FilmTarget::PassDone(uint32_t samples_done) {
   {
     std::lock_guard alone(lock_);

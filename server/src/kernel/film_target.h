@@ -70,6 +70,11 @@ class FilmTarget final : public RenderTarget {
   bool Cancelled() const override { return cancel_.load(std::memory_order_relaxed); }
   void Accumulate(const FilmSamples& samples) override;
   void PassDone(uint32_t samples_done) override;
+  float FilterRadius() const override { return film_.FilterRadius(); }
+  float PixelWeight(uint32_t px, uint32_t py, float x, float y) const override;
+  // Camera-sample weighted (WeighCameraSamples), as camera samples are.
+  void AddPixelEstimates(const PixelWindow& window, uint32_t samples, std::span<const Vec3> values,
+                         std::span<const Vec3> variances) override;
 
  private:
   // One cache line each: threads locking neighbouring blocks do not
@@ -90,6 +95,7 @@ class FilmTarget final : public RenderTarget {
   uint32_t block_columns_;
   std::unique_ptr<BlockMutex[]> block_mutexes_;
   std::once_flag splats_prepared_;
+  mutable std::once_flag masses_prepared_;
 };
 
 }  // namespace yarf

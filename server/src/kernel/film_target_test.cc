@@ -169,5 +169,33 @@ TEST(FilmTarget, AReaderHoldingTheLockSeesNoSampleHalfAdded) {
   }
 }
 
+TEST(FilmTarget, PixelEstimatesAreWeighedAsCameraSamples) {
+  Film film(kWidth, kHeight, Filter(v1::ReconstructionFilter::BOX, 0));
+  FilmLock lock;
+  const std::atomic<bool> cancel{false};
+  FilmTarget target(film, lock, 8, 1, {}, cancel, [](uint32_t) {});
+  target.WeighCameraSamples(kCameraWeight);
+  // A window across four locking blocks, row by row.
+  const PixelWindow window{14, 14, 18, 17};
+  std::vector<Vec3> values, variances;
+  for (uint32_t y = window.y0; y < window.y1; ++y)
+    for (uint32_t x = window.x0; x < window.x1; ++x) {
+      values.emplace_back(float(x), float(y), 1);
+      variances.emplace_back(0.5f, 0.25f, 0);
+    }
+  target.AddPixelEstimates(window, 8, values, variances);
+  const std::vector<float> pixels = film.Pixels(), variance = film.Variances();
+  for (uint32_t y = 0; y < kHeight; ++y)
+    for (uint32_t x = 0; x < kWidth; ++x) {
+      const size_t k = 3 * (size_t(y) * kWidth + x);
+      const bool inside = x >= window.x0 && x < window.x1 && y >= window.y0 && y < window.y1;
+      EXPECT_FLOAT_EQ(pixels[k], inside ? x * kCameraWeight : 0) << x << ", " << y;
+      EXPECT_FLOAT_EQ(pixels[k + 1], inside ? y * kCameraWeight : 0) << x << ", " << y;
+      EXPECT_NEAR(variance[k], inside ? 0.5f * kCameraWeight * kCameraWeight : 0, 1e-5f) << x << ", " << y;
+    }
+  // A window that leaves the film (x1 > 75), of as many values.
+  EXPECT_THROW(target.AddPixelEstimates({70, 40, 76, 42}, 8, values, variances), Error);
+}
+
 }  // namespace
 }  // namespace yarf

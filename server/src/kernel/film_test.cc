@@ -105,5 +105,44 @@ TEST(Film, IgnoresNonFiniteSamples) {
   EXPECT_FLOAT_EQ(film.Pixels()[0], 1.0f);
 }
 
+TEST(Film, APixelEstimateShowsItsValueAndVarianceAndEstimatesAverageBySamples) {
+  Film film(2, 1, Filter(v1::ReconstructionFilter::GAUSSIAN));
+  film.AddEstimate(1, 0, {0.5f, 1, 2}, {0.01f, 0.04f, 0}, 16);
+  std::vector<float> pixels = film.Pixels(), variances = film.Variances();
+  EXPECT_FLOAT_EQ(pixels[3], 0.5f);
+  EXPECT_FLOAT_EQ(pixels[5], 2.0f);
+  EXPECT_FLOAT_EQ(variances[3], 0.01f);
+  EXPECT_FLOAT_EQ(variances[4], 0.04f);
+  EXPECT_NEAR(variances[5], 0.0f, 1e-6f);
+  // The filter spreads nothing: the other pixel has no estimate.
+  EXPECT_EQ(pixels[0], 0.0f);
+  // Another estimate of 48 samples: the mean by samples, 0.5·¼ + 1.5·¾.
+  film.AddEstimate(1, 0, {1.5f, 1, 2}, {0.01f, 0.04f, 0}, 48);
+  pixels = film.Pixels();
+  EXPECT_FLOAT_EQ(pixels[3], 1.25f);
+  EXPECT_FLOAT_EQ(pixels[4], 1.0f);
+  // Not finite, or off the film: left out.
+  film.AddEstimate(0, 0, {NAN, 1, 1}, {0, 0, 0}, 4);
+  film.AddEstimate(2, 0, {1, 1, 1}, {0, 0, 0}, 4);
+  EXPECT_EQ(film.Pixels()[0], 0.0f);
+}
+
+TEST(Film, PixelWeightsIntegrateToOneOverTheFilmUnderEveryFilter) {
+  for (auto kind : {v1::ReconstructionFilter::BOX, v1::ReconstructionFilter::TENT,
+                    v1::ReconstructionFilter::GAUSSIAN}) {
+    Film film(6, 5, Filter(kind));
+    film.PrepareMasses();
+    // A corner pixel, whose filter the film cuts, and an inner one.
+    for (auto [px, py] : {std::pair{0u, 0u}, std::pair{3u, 2u}}) {
+      constexpr int kSteps = 600;
+      double sum = 0;
+      for (int j = 0; j < kSteps; ++j)
+        for (int i = 0; i < kSteps; ++i)
+          sum += film.PixelWeight(px, py, (i + 0.5f) * 6 / kSteps, (j + 0.5f) * 5 / kSteps);
+      EXPECT_NEAR(sum * 6 * 5 / (double(kSteps) * kSteps), 1.0, 2e-3) << kind << " pixel " << px << ", " << py;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace yarf
