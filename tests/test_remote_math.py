@@ -17,12 +17,12 @@ import grpc
 import numpy as np
 import pytest
 from component_process import ComponentProcess
-from conftest import REPO, small_scene
+from conftest import REPO
 
 from yarf import Client, LocalServer, integrate
 from yarf.client import array_to_numpy, numpy_to_array
 from yarf.integrate import serve_function
-from yarf.v1 import component_pb2, math_pb2, math_pb2_grpc, render_pb2, scene_pb2
+from yarf.v1 import component_pb2, math_pb2, math_pb2_grpc
 
 EXAMPLES = REPO / "components" / "python" / "examples"
 FAULTY = Path(__file__).resolve().parent / "components" / "faulty_math.py"
@@ -219,16 +219,6 @@ def test_a_remote_integrator_cannot_take_a_sampler_of_yarfd(
         )
     assert "component 'py_vegas'" in refused.value.details()
     assert "cannot draw its points from sampler 'sobol'" in refused.value.details()
-
-
-def test_a_job_naming_a_python_integrator_fails_saying_it_renders_no_images(
-    client: Client, registered: str
-) -> None:
-    # Remote<Integrator> integrates functions; a render runs in yarfd.
-    spec = scene_pb2.ComponentSpec(class_name="py_vegas")
-    status = client.wait(client.submit(small_scene(), 4, 1, integrator=spec), timeout=60)
-    assert status.state == render_pb2.FAILED
-    assert "integrator 'py_vegas' does not render images" in status.error
 
 
 # (class, fault, what the error must say besides the class and the call).

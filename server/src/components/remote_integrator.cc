@@ -5,12 +5,14 @@
 
 #include "components/remote_sampler.h"
 #include "components/served_function.h"
+#include "components/tile_integrand.h"
+#include "yarf/transport.h"
 
 namespace yarf {
 
 Remote<Integrator>::Remote(std::unique_ptr<RemoteInstance> instance)
     : instance_(std::move(instance)), stub_(v1::Integrator::NewStub(instance_->channel())) {
-  // Integrator::Render's message names the class.
+  // Errors name the class.
   ComponentInfo info;
   info.class_name = instance_->class_name();
   info.interfaces = {kInterface};
@@ -45,10 +47,70 @@ std::vector<double> Remote<Integrator>::Checked(const char* field,
 IntegrationResult Remote<Integrator>::Integrate(Function& f, std::span<const double> lower,
                                                 std::span<const double> upper, uint64_t evaluations,
                                                 uint64_t seed, const Sampler& sampler) {
-  v1::IntegrateRequest request;
-  request.set_sampler_handle(SamplerHandle(sampler));
+  const uint64_t sampler_handle = SamplerHandle(sampler);
   const ServedFunction served(f, instance_->address());
-  request.set_function_address(served.address());
+  return IntegrateServed(served.address(), f.OutputDimensions(), lower, upper, evaluations, seed, sampler_handle);
+}
+
+void Remote<Integrator>::Render(Transport& transport, const SceneView& scene, const Sampler& sampler,
+                                RenderTarget& target) {
+  const uint64_t sampler_handle = SamplerHandle(sampler);
+  const uint32_t first = target.FirstSample(), spp = target.SamplesPerPixel();
+  if (first >= spp) return;
+  const uint32_t samples = spp - first;
+  const PixelWindow window = target.Crop().value_or(PixelWindow{0, 0, scene.FilmWidth(), scene.FilmHeight()});
+  TileIntegrand integrand(
+      transport.Describe().class_name, transport.Dimensions(),
+      [&](const PrimarySamples& points, FilmSamples& out) { transport.Evaluate(scene, points, out); },
+      scene.FilmWidth(), scene.FilmHeight(), target, kTileSide);
+  // One endpoint for the whole render: the component keeps a channel per
+  // address it is lent.
+  const ServedFunction served(integrand, instance_->address());
+  const std::vector<double> lower(integrand.InputDimensions(), 0.0), upper(integrand.InputDimensions(), 1.0);
+  std::vector<Vec3> values, variances;
+  for (uint32_t y0 = window.y0; y0 < window.y1; y0 += kTileSide)
+    for (uint32_t x0 = window.x0; x0 < window.x1; x0 += kTileSide) {
+      if (target.Cancelled()) return;
+      const PixelWindow tile{x0, y0, std::min(window.x1, x0 + kTileSide), std::min(window.y1, y0 + kTileSide)};
+      const uint64_t pixels = uint64_t(tile.x1 - tile.x0) * (tile.y1 - tile.y0);
+      integrand.SetTile(tile);
+      IntegrationResult result;
+      try {
+        result = IntegrateServed(served.address(), integrand.OutputDimensions(), lower, upper, samples * pixels,
+                                 Hash(target.Seed(), first, x0, y0), sampler_handle);
+        // A component may carry on past a failed evaluation: its estimate
+        // would not be of the integrand.
+        if (!integrand.Failure().empty()) throw Error(integrand.Failure());
+      } catch (const std::exception& e) {
+        if (target.Cancelled()) return;
+        // The integrand's own error is the cause; the component reports it
+        // only second-hand.
+        const std::string cause = integrand.Failure().empty() ? e.what() : integrand.Failure();
+        throw Error(instance_->Name() + ": Integrator.Integrate of pixels [" + std::to_string(tile.x0) + ", " +
+                    std::to_string(tile.x1) + ") x [" + std::to_string(tile.y0) + ", " + std::to_string(tile.y1) +
+                    "): " + cause);
+      }
+      values.clear();
+      variances.clear();
+      for (uint32_t y = tile.y0; y < tile.y1; ++y)
+        for (uint32_t x = tile.x0; x < tile.x1; ++x) {
+          const size_t slot = integrand.Slot(x, y);
+          const auto squared = [&](size_t i) { return float(result.standard_error[i] * result.standard_error[i]); };
+          values.emplace_back(float(result.estimate[slot]), float(result.estimate[slot + 1]),
+                              float(result.estimate[slot + 2]));
+          variances.emplace_back(squared(slot), squared(slot + 1), squared(slot + 2));
+        }
+      target.AddPixelEstimates(tile, samples, values, variances);
+    }
+  target.PassDone(spp);
+}
+
+IntegrationResult Remote<Integrator>::IntegrateServed(const std::string& function_address, size_t outputs,
+                                                      std::span<const double> lower, std::span<const double> upper,
+                                                      uint64_t evaluations, uint64_t seed, uint64_t sampler_handle) {
+  v1::IntegrateRequest request;
+  request.set_sampler_handle(sampler_handle);
+  request.set_function_address(function_address);
   request.set_function_handle(0);
   for (double l : lower) request.add_lower(l);
   for (double u : upper) request.add_upper(u);
@@ -59,7 +121,7 @@ IntegrationResult Remote<Integrator>::Integrate(Function& f, std::span<const dou
     request.set_handle(handle);
     return stub_->Integrate(&context, request, &reply);
   });
-  const size_t k = f.OutputDimensions();
+  const size_t k = outputs;
   IntegrationResult result;
   result.estimate = Checked("estimate", reply.estimate(), k, false);
   result.standard_error = Checked("standard_error", reply.standard_error(), k, false);
