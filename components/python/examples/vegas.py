@@ -11,14 +11,18 @@ smoothed with its neighbours (1:6:1), normalised to r_i and damped to
 ((1 - r_i) / ln(1/r_i))^alpha, and the edges move so that every bin holds
 an equal share. Bins shrink where |f| is large.
 
-Iterations are combined weighted by their inverse variances (each output
-apart), with Lepage's χ²/dof of the iterations about their weighted mean
-and Q, the chance of a χ² that large if their errors are right (Q < 0.05:
-the errors are not to be trusted); the first ``discard`` only train the
-grid. Each iteration spends an
-equal part of the budget, at least 4096 points (fewer iterations run when
-the budget is small), and f is called with batches of 4096 to 16384
-points. Points come from the caller's sampler, else from numpy's PCG64
+Iterations are combined weighted by the inverse variance of the first
+output, the one the grid follows, every output with the same weights (a
+single output as Lepage does): an output weighted by its own variance
+estimate would weigh each iteration by how low it happened to come out,
+as the two rise together, and its mean comes out low when it has few
+points per iteration, as one pixel of a tile has when yarfd renders
+through this integrator. Each output gets Lepage's χ²/dof of the
+iterations about its mean and Q, the chance of a χ² that large if their
+errors are right (Q < 0.05: the errors are not to be trusted); the first
+``discard`` only train the grid. Each iteration spends an equal part of
+the budget, at least 4096 points (fewer iterations run when the budget is
+small), and f is called with batches of 4096 to 16384 points. Points come from the caller's sampler, else from numpy's PCG64
 seeded with the request's seed, so a result is a function of the seed.
 
 Properties:
@@ -97,25 +101,29 @@ class AdaptiveMap:
 def combine(
     estimates: list[np.ndarray], variances: list[np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The iterations' inverse-variance weighted mean, its error, χ²/dof and Q, per output."""
+    """The iterations' weighted mean, its error, χ²/dof and Q, per output, every
+    output weighted as the first (see the module's docstring)."""
     estimate = np.stack(estimates)
     variance = np.stack(variances)
-    exact = variance <= 0
-    with np.errstate(divide="ignore"):
-        weight = np.where(exact, 0.0, 1 / np.where(exact, 1.0, variance))
-    weighted = (weight * estimate).sum(axis=0) / np.maximum(weight.sum(axis=0), 1e-300)
-    error = np.where(weight.sum(axis=0) > 0, 1 / np.sqrt(np.maximum(weight.sum(axis=0), 1e-300)), 0)
-    # An iteration without variance (f constant along the map) is exact.
-    any_exact = exact.any(axis=0)
-    exact_mean = np.where(exact, estimate, 0).sum(axis=0) / np.maximum(exact.sum(axis=0), 1)
-    mean = np.where(any_exact, exact_mean, weighted)
+    guide = variance[:, 0]
+    # An iteration whose first output has no variance (f constant along the
+    # map) is exact: then the exact iterations alone count, equally.
+    exact = guide <= 0
+    weight = exact.astype(np.float64) if exact.any() else 1 / guide
+    total = weight.sum()
+    mean = (weight[:, None] * estimate).sum(axis=0) / total
+    error = np.sqrt((weight[:, None] ** 2 * variance).sum(axis=0)) / total
     dof = len(estimates) - 1
-    chi2 = (weight * (estimate - mean) ** 2).sum(axis=0)
     if dof < 1:
         nan = np.full_like(mean, np.nan)
-        return mean, np.where(any_exact, 0.0, error), nan, nan
+        return mean, error, nan, nan
+    # Each output's χ² about its mean by its own errors; an iteration
+    # without error says nothing.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        terms = np.where(variance > 0, (estimate - mean) ** 2 / variance, 0.0)
+    chi2 = terms.sum(axis=0)
     q = np.array([chi_square_q(float(c), dof) for c in chi2])
-    return mean, np.where(any_exact, 0.0, error), chi2 / dof, q
+    return mean, error, chi2 / dof, q
 
 
 def chi_square_q(chi2: float, dof: int) -> float:
