@@ -4,13 +4,14 @@ each answers in the one wrong way its ``fault`` property names."""
 
 from __future__ import annotations
 
+import os
 import time
 from typing import Literal
 
 import numpy as np
 from yarf_component import Generator, Integrand, Integrator, PointSource, RootFinder, Warp
 
-Fault = Literal["shape", "nan", "range", "hang"]
+Fault = Literal["shape", "nan", "range", "hang", "exit"]
 # Well past the tests' one-second deadline, short enough not to hold the
 # process's few worker threads for the next test.
 HANG_SECONDS = 3.0
@@ -80,12 +81,15 @@ class FaultyRootFinder(RootFinder):
 
 class FaultyIntegrator(Integrator):
     """Averages f, then answers wrong: "shape" one estimate too many, "nan" a
-    NaN estimate, "range" a negative standard error."""
+    NaN estimate, "range" a negative standard error; "exit" answers its
+    first call right and ends the whole process in the second (a component
+    that dies in the middle of a render)."""
 
     class_name = "faulty_integrator"
 
     def __init__(self, fault: Fault = "shape") -> None:
         self.fault = fault
+        self.calls = 0
 
     def integrate(
         self,
@@ -96,9 +100,14 @@ class FaultyIntegrator(Integrator):
         seed: int,
         sampler: PointSource | None,
     ) -> tuple[list[float], list[float], int]:
+        self.calls += 1
+        if self.fault == "exit" and self.calls > 1:
+            os._exit(3)
         points = lower + (upper - lower) * np.random.default_rng(seed).random((64, len(lower)))
         mean = f(points).mean(axis=0).tolist()
         error = [0.1] * len(mean)
+        if self.fault == "exit":
+            return mean, error, 64
         if self.fault == "shape":
             return [*mean, 0.0], error, 64
         if self.fault == "nan":
