@@ -3,7 +3,7 @@ it the job's transport over each tile of the film as a Function (one
 output per pixel and channel) and writes each pixel's estimate and its
 error to the film. The Python VEGAS renders the Cornell box as yarfd's
 mean_sample does; light paths, which splat, are refused; a component that
-dies in the middle of a render fails the job, and yarfd goes on."""
+dies or hangs in the middle of a render fails the job, and yarfd goes on."""
 
 from __future__ import annotations
 
@@ -100,12 +100,20 @@ def test_a_remote_integrator_renders_only_with_samplers_it_can_name(
     assert "cannot draw its points from sampler 'sobol'" in status.error, status.error
 
 
-def test_a_component_that_dies_mid_render_fails_the_job_and_yarfd_goes_on(
-    client: Client, cornell_box: scene_pb2.Scene, tmp_path: Path
+# faulty_integrator "exit" answers the first tile and exits in the second;
+# "hang" outlasts the job's one-second deadline in the first.
+FAULTS = [
+    ("exit", "Integrator.Integrate of pixels [16, 32) x [0, 16) failed: UNAVAILABLE"),
+    ("hang", "Integrator.Integrate of pixels [0, 16) x [0, 16) failed: DEADLINE_EXCEEDED"),
+]
+
+
+@pytest.mark.parametrize(("fault", "words"), FAULTS)
+def test_a_component_that_dies_or_hangs_mid_render_fails_the_job_and_yarfd_goes_on(
+    client: Client, cornell_box: scene_pb2.Scene, tmp_path: Path, fault: str, words: str
 ) -> None:
-    # faulty_integrator "exit" answers its first tile and exits in the second.
     with ComponentProcess.python(
-        [f"{FAULTY}:FaultyIntegrator"], f"unix:{tmp_path / 'dying.sock'}"
+        [f"{FAULTY}:FaultyIntegrator"], f"unix:{tmp_path / 'faulty.sock'}"
     ) as process:
         request = component_pb2.RegisterRequest(address=process.address, lease_seconds=3600)
         client.registry.Register(request)
@@ -115,15 +123,17 @@ def test_a_component_that_dies_mid_render_fails_the_job_and_yarfd_goes_on(
                 2,
                 1,
                 sampler=INDEPENDENT,
-                integrator=component("faulty_integrator", fault="exit"),
+                integrator=component("faulty_integrator", fault=fault),
+                component_timeout=1.0,
             )
             status = client.wait(job, timeout=60)
-            assert not process.is_running()
+            assert process.is_running() == (fault == "hang")
         finally:
             client.registry.Unregister(component_pb2.UnregisterRequest(address=process.address))
+            process.kill()  # a hanging call would hold up a gentle stop
     assert status.state == render_pb2.FAILED
-    assert f"component 'faulty_integrator' at {process.address}" in status.error, status.error
-    assert "Integrator.Integrate of pixels [16, 32) x [0, 16)" in status.error, status.error
-    assert "UNAVAILABLE" in status.error, status.error
+    assert f"component 'faulty_integrator' at {process.address}: {words}" in status.error, (
+        status.error
+    )
     again = client.render(small_scene(), spp=2, seed=1)
     assert again.status.state == render_pb2.SUCCEEDED and again.pixels.mean() > 0

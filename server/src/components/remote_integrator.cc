@@ -84,11 +84,13 @@ void Remote<Integrator>::Render(Transport& transport, const SceneView& scene, co
       } catch (const std::exception& e) {
         if (target.Cancelled()) return;
         // The integrand's own error is the cause; the component reports it
-        // only second-hand.
-        const std::string cause = integrand.Failure().empty() ? e.what() : integrand.Failure();
-        throw Error(instance_->Name() + ": Integrator.Integrate of pixels [" + std::to_string(tile.x0) + ", " +
-                    std::to_string(tile.x1) + ") x [" + std::to_string(tile.y0) + ", " + std::to_string(tile.y1) +
-                    "): " + cause);
+        // only second-hand. The call's own error names the component and
+        // the call already: the tile goes in between.
+        const std::string call = instance_->Name() + ": Integrator.Integrate";
+        std::string cause = integrand.Failure().empty() ? e.what() : ": " + integrand.Failure();
+        if (cause.rfind(call, 0) == 0) cause.erase(0, call.size());
+        throw Error(call + " of pixels [" + std::to_string(tile.x0) + ", " + std::to_string(tile.x1) + ") x [" +
+                    std::to_string(tile.y0) + ", " + std::to_string(tile.y1) + ")" + cause);
       }
       values.clear();
       variances.clear();
