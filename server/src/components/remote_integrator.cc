@@ -87,8 +87,8 @@ void Remote<Integrator>::Render(Transport& transport, const SceneView& scene, co
         // only second-hand. The call's own error names the component and
         // the call already: the tile goes in between.
         const std::string call = instance_->Name() + ": Integrator.Integrate";
-        std::string cause = integrand.Failure().empty() ? e.what() : ": " + integrand.Failure();
-        if (cause.rfind(call, 0) == 0) cause.erase(0, call.size());
+        std::string cause = integrand.Failure().empty() ? e.what() : integrand.Failure();
+        cause = cause.rfind(call, 0) == 0 ? cause.substr(call.size()) : ": " + cause;
         throw Error(call + " of pixels [" + std::to_string(tile.x0) + ", " + std::to_string(tile.x1) + ") x [" +
                     std::to_string(tile.y0) + ", " + std::to_string(tile.y1) + ")" + cause);
       }
