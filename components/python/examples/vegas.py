@@ -22,8 +22,9 @@ iterations about its mean and Q, the chance of a χ² that large if their
 errors are right (Q < 0.05: the errors are not to be trusted); the first
 ``discard`` only train the grid. Each iteration spends an equal part of
 the budget, at least 4096 points (fewer iterations run when the budget is
-small), and f is called with batches of 4096 to 16384 points. Points come from the caller's sampler, else from numpy's PCG64
-seeded with the request's seed, so a result is a function of the seed.
+small), and f is called with batches of 4096 to 16384 points. Points come
+from the caller's sampler, else from numpy's PCG64 seeded with the
+request's seed, so a result is a function of the seed.
 
 Properties:
     iterations   int, default 10    adaptation iterations, ≥ 1
