@@ -117,7 +117,8 @@ class Aov final : public Transport {
       q.site = at.site;
       for (uint32_t j = 0; j < 3; ++j) q.uniform[j] = points.Get(first.point, kModelSample + j);
     }
-    const std::vector<ScatterAnswer> answers = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
+    const std::vector<ScatterAnswer> answers =
+        SampleSurfaces(scene, TransportMode::kRadiance, 0, queries, Densities::kForward);
     for (size_t k = 0; k < hits.size(); ++k)
       if (answers[k].flags != kScatterNone) value[hits[k].point] = answers[k].weight;
   }

@@ -131,7 +131,7 @@ class LightTracer final : public Transport {
       connections.push_back(c);
       owners.push_back(i);
     }
-    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, queries);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, queries, Densities::kNone);
     std::vector<CameraLink> links;
     for (size_t k = 0; k < owners.size(); ++k) {
       const uint32_t i = owners[k];
@@ -231,7 +231,8 @@ class LightTracer final : public Transport {
       vertices.push_back(v);
     }
     // Connect to the camera.
-    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kImportance, to_camera);
+    const std::vector<SurfaceAnswer> f =
+        EvaluateSurfaces(scene, TransportMode::kImportance, to_camera, Densities::kNone);
     for (size_t q = 0; q < connected.size(); ++q) {
       const Vertex& v = vertices[connected[q]];
       const LightPath& p = paths[v.path];
@@ -260,7 +261,8 @@ class LightTracer final : public Transport {
       queries.push_back(q);
       scattering.push_back(j);
     }
-    const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kImportance, 0, queries);
+    const std::vector<ScatterAnswer> sampled =
+        SampleSurfaces(scene, TransportMode::kImportance, 0, queries, Densities::kForward);
     for (size_t q = 0; q < queries.size(); ++q) {
       const Vertex& v = vertices[scattering[q]];
       LightPath& p = paths[v.path];

@@ -148,7 +148,8 @@ class PhotonMapper final : public Transport {
       queries[k].uniform[1] = points.Get(s.owner, GatherSample());
       queries[k].uniform[2] = points.Get(s.owner, GatherSample() + 1);
     }
-    const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kRadiance, 0, queries);
+    const std::vector<ScatterAnswer> sampled =
+        SampleSurfaces(scene, TransportMode::kRadiance, 0, queries, Densities::kForward);
     std::vector<CameraWalk> walks;
     for (size_t k = 0; k < visible.size(); ++k) {
       const SurfacePoint& s = visible[k];

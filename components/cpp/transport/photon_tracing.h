@@ -241,7 +241,8 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
         if (diffuse) p.history = PhotonHistory::kIndirect;
         else if (p.history == PhotonHistory::kDirect) p.history = PhotonHistory::kCaustic;
       }
-      const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, TransportMode::kImportance, 0, queries);
+      const std::vector<ScatterAnswer> sampled =
+          SampleSurfaces(scene, TransportMode::kImportance, 0, queries, Densities::kForward);
       for (size_t q = 0; q < queries.size(); ++q) {
         Live& p = paths[owners[q]];
         const ShadingPoint& at = shading[q];
@@ -443,7 +444,7 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
           lit.push_back(uint32_t(k));
         }
       }
-      const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
+      const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights, Densities::kNone);
       for (size_t q = 0; q < lit.size(); ++q) {
         const CameraWalk& w = walks[active[lit[q]]];
         (*emitted)[w.owner] += w.Throughput() * le[q].radiance;
@@ -516,7 +517,7 @@ inline std::vector<Vec3> UnshadowedDirectLight(const SceneView& scene,
     lights[k] = {c.light.emitter, c.light.w, SurfaceSite::Uv(c.light.u, c.light.v)};
   }
   const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
-  const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
+  const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights, Densities::kNone);
   std::vector<Vec3> out(n);
   for (size_t k = 0; k < n; ++k) {
     const LightConnection& c = connections[k];

@@ -207,7 +207,7 @@ class Radiosity final : public Transport {
       const Vec3 normal(0, 0, k % 2 ? -1.0f : 1.0f);
       queries[k] = {scene.MaterialOf(mesh.triangles()[e.triangle].shape), normal, normal, SurfaceSite::Uv(e.u, e.v)};
     }
-    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, queries);
+    const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, queries, Densities::kNone);
     std::vector<Vec3> rho(queries.size());
     for (size_t k = 0; k < rho.size(); ++k) {
       const Vec3 r = f[k].f * kPi;
@@ -225,7 +225,7 @@ class Radiosity final : public Transport {
       queries[k] = {scene.EmitterOf(mesh.triangles()[e.triangle].shape), Vec3(0, 0, k % 2 ? -1.0f : 1.0f),
                     SurfaceSite::Uv(e.u, e.v)};
     }
-    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries);
+    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries, Densities::kNone);
     std::vector<Vec3> exitance(queries.size());
     for (size_t k = 0; k < exitance.size(); ++k) exitance[k] = le[k].radiance * kPi;
     return exitance;
@@ -293,7 +293,7 @@ class Radiosity final : public Transport {
         owners.push_back(i);
       }
     }
-    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries);
+    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries, Densities::kNone);
     for (size_t q = 0; q < owners.size(); ++q) radiance[owners[q]] += le[q].radiance;
   }
 
@@ -339,7 +339,8 @@ class Radiosity final : public Transport {
     const std::vector<Vec3> direct = DirectLight(scene, lit);
     for (size_t k = 0; k < lit.size(); ++k) radiance[lit_owners[k]] += direct[k];
 
-    const std::vector<ScatterAnswer> answers = SampleSurfaces(scene, TransportMode::kRadiance, 0, scatters);
+    const std::vector<ScatterAnswer> answers =
+        SampleSurfaces(scene, TransportMode::kRadiance, 0, scatters, Densities::kForward);
     std::vector<Ray> gather;
     std::vector<Vec3> weights;
     std::vector<uint32_t> gather_owners;

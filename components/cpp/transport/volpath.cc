@@ -366,7 +366,7 @@ class VolPathTracer final : public Transport {
     std::vector<EmitterQuery> queries(lights.size());
     for (size_t k = 0; k < lights.size(); ++k)
       queries[k] = {lights[k].emitter, lights[k].w, SurfaceSite::Uv(lights[k].u, lights[k].v)};
-    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries);
+    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries, Densities::kNone);
     std::vector<Vec3> out(lights.size());
     for (size_t k = 0; k < lights.size(); ++k) out[k] = answers[k].radiance;
     return out;
@@ -383,7 +383,7 @@ class VolPathTracer final : public Transport {
       queries[j] = {scene.EmitterOf(hit.shape), Frame(hit.normal).ToLocal(-rays[emitted[j]].direction),
                     SurfaceSite::Of(hit)};
     }
-    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries);
+    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries, Densities::kNone);
     for (size_t j = 0; j < emitted.size(); ++j) {
       const uint32_t k = emitted[j];
       VolPath& p = paths[active[k]];

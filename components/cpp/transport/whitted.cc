@@ -89,7 +89,7 @@ class Whitted final : public Transport {
       }
       vertices.push_back({uint32_t(k), ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
     }
-    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen);
+    const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen, Densities::kNone);
     for (size_t q = 0; q < seen.size(); ++q) {
       const Branch& b = level[seen_by[q]];
       radiance[b.point] += b.weight * emitted[q].radiance;
@@ -139,7 +139,7 @@ class Whitted final : public Transport {
     std::vector<Branch> next;
     for (const uint32_t side : {kScatterReflect, kScatterRefract}) {
       const std::vector<ScatterAnswer> sampled =
-          SampleSurfaces(scene, TransportMode::kRadiance, side | kScatterDelta, queries);
+          SampleSurfaces(scene, TransportMode::kRadiance, side | kScatterDelta, queries, Densities::kForward);
       for (size_t q = 0; q < queries.size(); ++q) {
         if (!(sampled[q].pdf > 0) || !(MaxComponent(sampled[q].weight) > 0)) continue;
         const Vertex& v = vertices[owners[q]];

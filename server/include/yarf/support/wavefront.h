@@ -231,6 +231,11 @@ std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key
 }
 
 
+// The densities a batch of surface or emitter queries asks for besides
+// its values: each costs a call per material (or emitter), and only
+// bidirectional weights need the reverse one (wi given wo).
+enum class Densities { kNone, kForward, kBoth };
+
 // A SurfaceModel query at a vertex, directions in its local frame: wi
 // toward where the path came from, wo toward where it goes.
 struct SurfaceQuery {
@@ -244,9 +249,11 @@ struct SurfaceAnswer {
   float pdf = 0, pdf_reverse = 0;
 };
 
-// f and both densities of every query: one call each per material.
+// f and the densities asked for of every query: one call each per
+// material.
 inline std::vector<SurfaceAnswer> EvaluateSurfaces(const SceneView& scene, TransportMode mode,
-                                                   const std::vector<SurfaceQuery>& queries) {
+                                                   const std::vector<SurfaceQuery>& queries,
+                                                   Densities densities = Densities::kBoth) {
   std::vector<SurfaceAnswer> answers(queries.size());
   std::vector<uint32_t> keys(queries.size());
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
@@ -263,8 +270,8 @@ inline std::vector<SurfaceAnswer> EvaluateSurfaces(const SceneView& scene, Trans
     const SurfacePoints at = rows.Points();
     const SurfaceModel& model = scene.Material(material);
     model.Evaluate(mode, wi, wo, at, f);
-    model.Pdf(wi, wo, at, pdf);
-    model.Pdf(wo, wi, at, reverse);
+    if (densities != Densities::kNone) model.Pdf(wi, wo, at, pdf);
+    if (densities == Densities::kBoth) model.Pdf(wo, wi, at, reverse);
     for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&f[3 * j]), pdf[j], reverse[j]};
   }
   return answers;
@@ -284,10 +291,11 @@ struct ScatterAnswer {
   uint32_t flags = kScatterNone;
 };
 
-// Samples every query, with the reverse density (wi given wo) that
-// bidirectional weights need: one call each per material.
+// Samples every query, with the reverse density (wi given wo) when asked
+// for both: one call each per material.
 inline std::vector<ScatterAnswer> SampleSurfaces(const SceneView& scene, TransportMode mode, uint32_t allowed,
-                                                 const std::vector<ScatterQuery>& queries) {
+                                                 const std::vector<ScatterQuery>& queries,
+                                                 Densities densities = Densities::kBoth) {
   std::vector<ScatterAnswer> answers(queries.size());
   std::vector<uint32_t> keys(queries.size());
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
@@ -305,7 +313,7 @@ inline std::vector<ScatterAnswer> SampleSurfaces(const SceneView& scene, Transpo
     const SurfacePoints at = rows.Points();
     const SurfaceModel& model = scene.Material(material);
     model.Sample(mode, wi, at, u, allowed, wo, weight, pdf, flags);
-    model.Pdf(wo, wi, at, reverse);
+    if (densities == Densities::kBoth) model.Pdf(wo, wi, at, reverse);
     for (size_t j = 0; j < m; ++j)
       answers[members[j]] = {Vec3::Load(&wo[3 * j]), Vec3::Load(&weight[3 * j]), pdf[j], reverse[j], flags[j]};
   }
@@ -324,8 +332,10 @@ struct EmitterAnswer {
   float pdf_direction = 0;
 };
 
-// Radiance (and direction density) of every query: one call each per emitter.
-inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const std::vector<EmitterQuery>& queries) {
+// Radiance (and, unless kNone, the direction density) of every query:
+// one call each per emitter.
+inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const std::vector<EmitterQuery>& queries,
+                                                   Densities densities = Densities::kForward) {
   std::vector<EmitterAnswer> answers(queries.size());
   std::vector<const Emitter*> keys(queries.size());
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].emitter;
@@ -340,7 +350,7 @@ inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const
       rows.Add(q.site);
     }
     emitter->Radiance(w, rows.Points(), radiance);
-    emitter->PdfDirection(w, pdf);
+    if (densities != Densities::kNone) emitter->PdfDirection(w, pdf);
     for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&radiance[3 * j]), pdf[j]};
   }
   return answers;
@@ -489,29 +499,35 @@ struct LightConnection {
 };
 
 // f·L·|cos|/pdf of each connection whose shadow ray is clear, zero
-// otherwise: one call per material and per emitter, one ray batch.
+// otherwise: one call per material and per emitter, one ray batch of the
+// connections that would contribute.
 inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<LightConnection>& connections) {
   const size_t n = connections.size();
   std::vector<SurfaceQuery> surfaces(n);
   std::vector<EmitterQuery> lights(n);
-  std::vector<Ray> shadow(n);
   for (size_t k = 0; k < n; ++k) {
     const LightConnection& c = connections[k];
     surfaces[k] = {c.material, c.wi, c.frame.ToLocal(c.light.direction), c.site};
     lights[k] = {c.light.emitter, c.light.w, SurfaceSite::Uv(c.light.u, c.light.v)};
-    shadow[k] = ShadowRayToLight(c.position, c.ng, c.light, c.time);
   }
-  const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
-  const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights);
-  std::vector<uint8_t> occluded(n);
-  scene.Occluded(shadow, occluded);
+  const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces, Densities::kNone);
+  const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights, Densities::kNone);
   std::vector<Vec3> out(n);
+  std::vector<Ray> shadow;
+  std::vector<uint32_t> shadowed;
   for (size_t k = 0; k < n; ++k) {
     const LightConnection& c = connections[k];
-    if (occluded[k] || !c.light.emitter || !(c.light.pdf > 0)) continue;
+    if (!c.light.emitter || !(c.light.pdf > 0)) continue;
     const float shading = ShadingWeight(c.frame, c.ng, c.wi, surfaces[k].wo, TransportMode::kRadiance);
     out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * shading / c.light.pdf);
+    if (!(MaxComponent(out[k]) > 0)) continue;
+    shadow.push_back(ShadowRayToLight(c.position, c.ng, c.light, c.time));
+    shadowed.push_back(uint32_t(k));
   }
+  std::vector<uint8_t> occluded(shadow.size());
+  scene.Occluded(shadow, occluded);
+  for (size_t q = 0; q < shadow.size(); ++q)
+    if (occluded[q]) out[shadowed[q]] = Vec3();
   return out;
 }
 
