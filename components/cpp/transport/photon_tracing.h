@@ -505,29 +505,6 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
   return reached;
 }
 
-// f·L·|cos|/pdf of each connection, its shadow ray not traced.
-inline std::vector<Vec3> UnshadowedDirectLight(const SceneView& scene,
-                                               const std::vector<LightConnection>& connections) {
-  const size_t n = connections.size();
-  std::vector<SurfaceQuery> surfaces(n);
-  std::vector<EmitterQuery> lights(n);
-  for (size_t k = 0; k < n; ++k) {
-    const LightConnection& c = connections[k];
-    surfaces[k] = {c.material, c.wi, c.frame.ToLocal(c.light.direction), c.site};
-    lights[k] = {c.light.emitter, c.light.w, SurfaceSite::Uv(c.light.u, c.light.v)};
-  }
-  const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces);
-  const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights, Densities::kNone);
-  std::vector<Vec3> out(n);
-  for (size_t k = 0; k < n; ++k) {
-    const LightConnection& c = connections[k];
-    if (!c.light.emitter || !(c.light.pdf > 0)) continue;
-    const float shading = ShadingWeight(c.frame, c.ng, c.wi, surfaces[k].wo, TransportMode::kRadiance);
-    out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * shading / c.light.pdf);
-  }
-  return out;
-}
-
 // Next-event estimation at each point: one light sample, chosen from
 // coordinates (position pair at `first`, choice at first + 2). In scenes
 // with media or null boundaries the shadow ray is ratio-tracked through

@@ -498,10 +498,11 @@ struct LightConnection {
   LightDirection light;
 };
 
-// f·L·|cos|/pdf of each connection whose shadow ray is clear, zero
-// otherwise: one call per material and per emitter, one ray batch of the
-// connections that would contribute.
-inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<LightConnection>& connections) {
+// f·L·|cos|/pdf of each connection, its shadow ray not traced (a method
+// that crosses media tracks it itself): one call per material and per
+// emitter.
+inline std::vector<Vec3> UnshadowedDirectLight(const SceneView& scene,
+                                               const std::vector<LightConnection>& connections) {
   const size_t n = connections.size();
   std::vector<SurfaceQuery> surfaces(n);
   std::vector<EmitterQuery> lights(n);
@@ -513,14 +514,24 @@ inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<L
   const std::vector<SurfaceAnswer> f = EvaluateSurfaces(scene, TransportMode::kRadiance, surfaces, Densities::kNone);
   const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, lights, Densities::kNone);
   std::vector<Vec3> out(n);
-  std::vector<Ray> shadow;
-  std::vector<uint32_t> shadowed;
   for (size_t k = 0; k < n; ++k) {
     const LightConnection& c = connections[k];
     if (!c.light.emitter || !(c.light.pdf > 0)) continue;
     const float shading = ShadingWeight(c.frame, c.ng, c.wi, surfaces[k].wo, TransportMode::kRadiance);
     out[k] = f[k].f * le[k].radiance * (std::abs(surfaces[k].wo.z) * shading / c.light.pdf);
+  }
+  return out;
+}
+
+// The same, zero where the shadow ray is blocked: one ray batch, of the
+// connections that would contribute.
+inline std::vector<Vec3> DirectLight(const SceneView& scene, const std::vector<LightConnection>& connections) {
+  std::vector<Vec3> out = UnshadowedDirectLight(scene, connections);
+  std::vector<Ray> shadow;
+  std::vector<uint32_t> shadowed;
+  for (size_t k = 0; k < out.size(); ++k) {
     if (!(MaxComponent(out[k]) > 0)) continue;
+    const LightConnection& c = connections[k];
     shadow.push_back(ShadowRayToLight(c.position, c.ng, c.light, c.time));
     shadowed.push_back(uint32_t(k));
   }
