@@ -14,9 +14,10 @@ from __future__ import annotations
 import functools
 import threading
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar
 
 import numpy as np
+from google.protobuf.message import Message
 
 from yarf.client import array_to_numpy, numpy_to_array
 from yarf.v1 import geometry_pb2, geometry_pb2_grpc, transport_pb2, transport_pb2_grpc
@@ -33,6 +34,19 @@ NONE = MISS
 DELTA_POSITION, AT_INFINITY, DELTA_DIRECTION = 1, 2, 4
 # Deadline of each call, seconds.
 DEFAULT_TIMEOUT = 60.0
+
+
+Decoded = TypeVar("Decoded", bound=tuple)
+
+
+def _decoded(cls: type[Decoded], reply: Message) -> Decoded:
+    """The NamedTuple ``cls`` of the reply's arrays of the same names."""
+    return cls(*(array_to_numpy(getattr(reply, name)) for name in cls._fields))  # type: ignore[attr-defined]
+
+
+def _light_samples(reply: transport_pb2.SampleLightsReply) -> LightSamples:
+    samples = _decoded(LightSamples, reply)
+    return samples._replace(delta=samples.delta != 0)
 
 
 class Rays(NamedTuple):
@@ -83,21 +97,6 @@ class LightSamples(NamedTuple):
     uv: np.ndarray
 
 
-def _light_samples(reply: transport_pb2.SampleLightsReply) -> LightSamples:
-    return LightSamples(
-        directions=array_to_numpy(reply.directions),
-        distances=array_to_numpy(reply.distances),
-        radiance=array_to_numpy(reply.radiance),
-        pdf=array_to_numpy(reply.pdf),
-        delta=array_to_numpy(reply.delta) != 0,
-        emitters=array_to_numpy(reply.emitters),
-        positions=array_to_numpy(reply.positions),
-        normals=array_to_numpy(reply.normals),
-        shape_ids=array_to_numpy(reply.shape_ids),
-        uv=array_to_numpy(reply.uv),
-    )
-
-
 class LightPoints(NamedTuple):
     """Points on the lights, for paths that start there: positions and normals [N,3]
     (zero at infinity: see ``infinite_light_origins``), pdf [N] (per unit area on a
@@ -137,16 +136,6 @@ class SurfaceSamples(NamedTuple):
     pdf: np.ndarray
     uv: np.ndarray
     primitive_ids: np.ndarray
-
-
-def _surface_samples(reply: geometry_pb2.SurfaceSampleReply) -> SurfaceSamples:
-    return SurfaceSamples(
-        positions=array_to_numpy(reply.positions),
-        normals=array_to_numpy(reply.normals),
-        pdf=array_to_numpy(reply.pdf),
-        uv=array_to_numpy(reply.uv),
-        primitive_ids=array_to_numpy(reply.primitive_ids),
-    )
 
 
 @dataclass(frozen=True)
@@ -297,16 +286,7 @@ class SceneView:
             handle=self.handle, uniform=float_array(uniform, len(uniform), 3)
         )
         reply = self._call("SceneView.SampleLightPoints", self._scene.SampleLightPoints, request)
-        return LightPoints(
-            positions=array_to_numpy(reply.positions),
-            normals=array_to_numpy(reply.normals),
-            pdf=array_to_numpy(reply.pdf),
-            flags=array_to_numpy(reply.flags),
-            frames=array_to_numpy(reply.frames),
-            emitters=array_to_numpy(reply.emitters),
-            shape_ids=array_to_numpy(reply.shape_ids),
-            uv=array_to_numpy(reply.uv),
-        )
+        return _decoded(LightPoints, reply)
 
     def light_pdf_area(self, shape_ids: np.ndarray) -> np.ndarray:
         """[N]: the area density ``sample_light_points`` has on each shape."""
@@ -351,12 +331,8 @@ class SceneView:
             handle=self.handle, points=float_array(points, n, 3), lens=float_array(lens, n, 2)
         )
         reply = self._call("SceneView.ConnectToCamera", self._scene.ConnectToCamera, request)
-        return CameraConnections(
-            connected=array_to_numpy(reply.connected) != 0,
-            lens_points=array_to_numpy(reply.lens_points),
-            raster=array_to_numpy(reply.raster),
-            importance=array_to_numpy(reply.importance),
-        )
+        connections = _decoded(CameraConnections, reply)
+        return connections._replace(connected=connections.connected != 0)
 
     def camera_direction_pdf(self, directions: np.ndarray) -> np.ndarray:
         """[N]: the density per solid angle of camera rays along directions [N,3]."""
@@ -429,7 +405,7 @@ class SceneView:
             handle=self.handle, shape=shape, uniform=float_array(uniform, len(uniform), 3)
         )
         reply = self._call("SampleSurfaceArea.Sample", self._by_area.Sample, request)
-        return _surface_samples(reply)
+        return _decoded(SurfaceSamples, reply)
 
     def sample_surface_direction(
         self, shape: int, uniform: np.ndarray, points: np.ndarray
@@ -445,7 +421,7 @@ class SceneView:
             reference_points=float_array(points, n, 3),
         )
         reply = self._call("SampleSurfaceDirection.Sample", self._by_direction.Sample, request)
-        return _surface_samples(reply)
+        return _decoded(SurfaceSamples, reply)
 
     def surface_direction_pdf(
         self, shape: int, points: np.ndarray, positions: np.ndarray, primitive_ids: np.ndarray
