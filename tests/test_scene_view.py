@@ -114,6 +114,22 @@ def test_camera_connections_land_where_the_camera_rays_left(cornell: dict) -> No
     assert all(0 <= t <= 1 for t in times) and times == sorted(times)
 
 
+def test_cross_sections_list_every_hit_in_order(cornell: dict) -> None:
+    cross = cornell["cross_section"]
+    for k, (t, shapes) in enumerate(cross["rays"][:64]):
+        assert t == sorted(t)
+        if cross["closest_shape"][k] == NONE:
+            assert not t
+        else:
+            assert t[0] == pytest.approx(cross["closest_t"][k], rel=1e-5)
+            assert shapes[0] == cross["closest_shape"][k]
+    # Straight down through the middle of the box from y = 5000: the ceiling
+    # (y = 548.8), the luminaire hanging under it (y = 548.3), the floor (y = 0).
+    t, shapes = cross["rays"][64]
+    assert shapes == [2, 0, 1], shapes
+    np.testing.assert_allclose(t, [5000 - 548.8, 5000 - 548.3, 5000], atol=0.01)
+
+
 def test_every_ray_from_infinity_starts_on_a_disk_of_one_density(cornell: dict) -> None:
     pdf = np.array(cornell["infinite"]["pdf"])
     assert np.all(pdf > 0) and np.ptp(pdf) <= 1e-6 * pdf.max()

@@ -106,6 +106,19 @@ class SceneProbe(Transport):
             "spacing": listed(np.linalg.norm(dpdx, axis=1) + np.linalg.norm(dpdy, axis=1)),
             "shutter": listed(scene.shutter_times(np.array([0.0, 0.5, 0.99], np.float32))),
         }
+        # Every hit along the camera rays, and along one ray straight down
+        # through the whole scene from far above it.
+        down = np.array([[278, 5000, 279.5]], np.float32), np.array([[0, -1, 0]], np.float32)
+        crossings = scene.cross_section(
+            np.concatenate([rays.origins[:64], down[0]]),
+            np.concatenate([rays.directions[:64], down[1]]),
+            times=np.concatenate([rays.times[:64], [0]]),
+        )
+        answers["cross_section"] = {
+            "rays": [listed(np.stack(crossings.of(k))) for k in range(65)],
+            "closest_t": listed(hits.t[:64]),
+            "closest_shape": listed(hits.shape_ids[:64]),
+        }
         directions = np.array([[0, 0, -1], [0, 1, 0], [1, 0, 0]], np.float32)
         origins, pdf = scene.infinite_light_origins(directions, np.full((3, 2), 0.5, np.float32))
         answers["infinite"] = {"origins": listed(origins), "pdf": listed(pdf)}

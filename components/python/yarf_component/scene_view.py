@@ -77,6 +77,20 @@ class Hits(NamedTuple):
         return Hits(*(a[rows] for a in self))
 
 
+class Crossings(NamedTuple):
+    """Every hit along N rays: ray i owns rows offsets[i]..offsets[i+1]-1 (offsets [N+1])
+    of the distances t [M], increasing, and shape_ids [M]."""
+
+    offsets: np.ndarray
+    t: np.ndarray
+    shape_ids: np.ndarray
+
+    def of(self, ray: int) -> tuple[np.ndarray, np.ndarray]:
+        """The distances and shapes of ray ``ray``'s hits."""
+        rows = slice(int(self.offsets[ray]), int(self.offsets[ray + 1]))
+        return self.t[rows], self.shape_ids[rows]
+
+
 class LightSamples(NamedTuple):
     """Lights seen from points: unit directions [N,3] toward the light samples, their
     distances [N] (inf at infinity), the unoccluded radiance arriving [N,3], the
@@ -245,6 +259,22 @@ class SceneView:
         )
         reply = self._call("Intersect.Occluded", self._intersect.Occluded, request)
         return array_to_numpy(reply.occluded) != 0
+
+    def cross_section(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        tnear: np.ndarray | float | None = None,
+        tfar: np.ndarray | float | None = None,
+        times: np.ndarray | float | None = None,
+    ) -> Crossings:
+        """Every hit along each ray within its interval, nearest first."""
+        request = geometry_pb2.IntersectRequest(
+            handle=self.handle, rays=ray_batch(origins, directions, tnear, tfar, times)
+        )
+        return _decoded(
+            Crossings, self._call("Intersect.CrossSection", self._intersect.CrossSection, request)
+        )
 
     def camera_rays(self, points: np.ndarray) -> Rays:
         """The camera's rays for points [N,5]: film x, y in [0,1), lens u, v, shutter u."""
