@@ -155,6 +155,14 @@ def test_media_and_an_unreachable_camera_are_described(
     assert layout["interior_media"][boundary] == 0 and layout["exterior_media"][boundary] == NONE
     np.testing.assert_allclose(answers["medium"]["sigma_a"], SIGMA_A, rtol=1e-6)
     np.testing.assert_allclose(answers["medium"]["sigma_s"], SIGMA_S, rtol=1e-6)
+    # Homogeneous: one segment per ray, σ_t itself, over the ray's whole length;
+    # isotropic: 1/4π both ways.
+    fog = answers["medium"]
+    assert not fog["emits"] and fog["offsets"] == [0, 1]
+    np.testing.assert_allclose(
+        fog["segments"][0], [0, 10, *np.add(SIGMA_A, SIGMA_S)], rtol=1e-6, atol=1e-6
+    )
+    np.testing.assert_allclose(fog["phase"] + fog["phase_pdf"], [1 / (4 * np.pi)] * 2, rtol=1e-5)
     assert not any(answers["camera"]["connected"])
 
 

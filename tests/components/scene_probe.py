@@ -11,11 +11,7 @@ from pathlib import Path
 
 import numpy as np
 from yarf_component import SceneView, SceneViewError, Transport
-from yarf_component.channels import channel
 from yarf_component.transport import FIRST_FREE
-
-from yarf.client import array_to_numpy, numpy_to_array
-from yarf.v1 import medium_pb2, medium_pb2_grpc
 
 SAMPLES = 512
 
@@ -123,17 +119,20 @@ class SceneProbe(Transport):
         origins, pdf = scene.infinite_light_origins(directions, np.full((3, 2), 0.5, np.float32))
         answers["infinite"] = {"origins": listed(origins), "pdf": listed(pdf)}
         if len(layout.medium_handles):
-            stub = medium_pb2_grpc.MediumStub(channel(scene.address))
-            reply = stub.Coefficients(
-                medium_pb2.CoefficientsRequest(
-                    handle=int(layout.medium_handles[0]),
-                    position=numpy_to_array(np.zeros((1, 3), np.float32)),
-                ),
-                timeout=30,
-            )
+            fog = scene.medium(0)
+            origin = np.zeros((1, 3), np.float32)
+            sigma_a, sigma_s, _ = fog.coefficients(origin)
+            segments, offsets = fog.majorants(origin, np.array([[0, 0, 1]], np.float32), 10.0)
+            up, down = np.array([[0, 0, 1]], np.float32), np.array([[0, 0, -1]], np.float32)
+            phase, phase_pdf = fog.evaluate_phase(up, down, origin)
             answers["medium"] = {
-                "sigma_a": listed(array_to_numpy(reply.sigma_a)[0]),
-                "sigma_s": listed(array_to_numpy(reply.sigma_s)[0]),
+                "sigma_a": listed(sigma_a[0]),
+                "sigma_s": listed(sigma_s[0]),
+                "emits": fog.emits,
+                "segments": listed(segments),
+                "offsets": listed(offsets),
+                "phase": listed(phase),
+                "phase_pdf": listed(phase_pdf),
             }
         answers["errors"] = {
             "shape": refusal(lambda: scene.light_pdf_area(np.array([10**6], np.uint32))),

@@ -15,6 +15,7 @@ from yarf_component.component import Component
 from yarf_component.frames import Frame, normalize, reflect
 from yarf_component.job_calls import Pending, SceneViewError
 from yarf_component.job_emitter import EmitterClient
+from yarf_component.job_medium import MediumClient
 from yarf_component.job_surface import SurfaceClient
 from yarf_component.medium import (
     HenyeyGreensteinMedium,
@@ -83,6 +84,7 @@ __all__ = [
     "LightPoints",
     "LightSamples",
     "Medium",
+    "MediumClient",
     "NoRoot",
     "Pending",
     "PointSource",

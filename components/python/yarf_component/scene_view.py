@@ -1,12 +1,12 @@
 """The scene of a running job, for transports: yarfd's SceneView, Intersect,
-Shape, SampleSurfaceArea, SampleSurfaceDirection, SurfaceModel and Emitter
-services as numpy calls: what the kernel's own transports ask of their scene.
+Shape, SampleSurfaceArea, SampleSurfaceDirection, SurfaceModel, Emitter and
+Medium services as numpy calls: what the kernel's own transports ask of their scene.
 
 A Transport's ``prepare`` and ``evaluate`` receive a SceneView bound to the
 yarfd that called them and to the job's scene handle. Arrays are float32,
 one row per ray or point, world space; failures raise SceneViewError naming
 the call. Materials are SurfaceClients (job_surface.py), lights'
-emitters EmitterClients (job_emitter.py).
+emitters EmitterClients (job_emitter.py), media MediumClients (job_medium.py).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from yarf.v1 import geometry_pb2, geometry_pb2_grpc, transport_pb2, transport_pb
 from yarf_component.channels import channel
 from yarf_component.job_calls import Caller, Pending, float_array, ray_batch
 from yarf_component.job_emitter import EmitterClient
+from yarf_component.job_medium import MediumClient
 from yarf_component.job_surface import SurfaceClient
 
 # shape_ids of a ray that hit nothing; also "none" in the emitter, shape and medium
@@ -197,6 +198,7 @@ class SceneView:
         self._by_direction = geometry_pb2_grpc.SampleSurfaceDirectionStub(rpc_channel)
         self._surfaces: dict[int, SurfaceClient] = {}
         self._emitters: dict[int, EmitterClient] = {}
+        self._media: dict[int, MediumClient] = {}
         self._lock = threading.Lock()
 
     @functools.cached_property
@@ -485,4 +487,14 @@ class SceneView:
             found = self._emitters.get(handle)
             if found is None:
                 found = self._emitters[handle] = EmitterClient(self._call, handle)
+            return found
+
+    def medium(self, index: int) -> MediumClient:
+        """The Medium of ``layout``'s medium index ``index`` (interior_media,
+        exterior_media, camera_medium)."""
+        handle = int(self.layout.medium_handles[int(index)])
+        with self._lock:
+            found = self._media.get(handle)
+            if found is None:
+                found = self._media[handle] = MediumClient(self._call, handle)
             return found
