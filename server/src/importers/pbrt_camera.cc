@@ -138,6 +138,30 @@ void PbrtImporter::Sampler(const std::string& type, PbrtParams& params, const So
   params.WarnUnused(diagnostics_, "sampler '" + type + "'");
 }
 
+void PbrtImporter::Accelerator(const std::string& type, PbrtParams& params, const SourceLocation& where) {
+  // pbrt's own two make the image Embree's BVH makes; any other name is a
+  // yarf Aggregate class (Scene.aggregate), its parameters its properties,
+  // checked at Submit as every class is.
+  if (type == "bvh" || type == "kdtree") {
+    params.Accept({"maxnodeprims", "splitmethod", "intersectcost", "traversalcost", "emptybonus", "maxprims",
+                   "maxdepth"});
+    params.WarnUnused(diagnostics_, "accelerator '" + type + "'");
+    return;
+  }
+  v1::Properties props;
+  for (const PbrtParam& p : params.TakeUnread()) {
+    const size_t count = p.numbers.size() + p.strings.size() + p.bools.size();
+    if (count != 1) Fail(p.where, "accelerator '" + type + "': parameter '" + p.name + "' needs one value");
+    if (p.type == "float") SetFloat(props, p.name, p.numbers[0]);
+    else if (p.type == "integer") SetInt(props, p.name, int64_t(p.numbers[0]));
+    else if (p.type == "bool") SetBool(props, p.name, p.bools[0]);
+    else if (p.type == "string") SetString(props, p.name, p.strings[0]);
+    else Fail(p.where, "accelerator '" + type + "': parameter '" + p.name + "' is a " + p.type +
+                           ", not a float, integer, bool or string");
+  }
+  *assembly_.scene().mutable_aggregate() = Spec(type, std::move(props));
+}
+
 void PbrtImporter::PixelFilter(const std::string& type, PbrtParams& params, const SourceLocation& where) {
   if (has_filter_) Fail(where, "a second PixelFilter");
   has_filter_ = true;

@@ -67,6 +67,7 @@ class PbrtImporter {
   void Sampler(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void PixelFilter(const std::string& type, PbrtParams& params, const SourceLocation& where);
   void Integrator(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  void Accelerator(const std::string& type, PbrtParams& params, const SourceLocation& where);
 
   // pbrt_materials.cc
   std::string MakeMaterial(const std::string& type, PbrtParams& params, const SourceLocation& where,

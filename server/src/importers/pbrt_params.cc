@@ -147,6 +147,16 @@ void PbrtParams::Accept(std::initializer_list<const char*> names) {
   for (const char* name : names) Find(name);
 }
 
+std::vector<PbrtParam> PbrtParams::TakeUnread() {
+  std::vector<PbrtParam> unread;
+  for (PbrtParam& p : params_)
+    if (!p.used) {
+      p.used = true;
+      unread.push_back(p);
+    }
+  return unread;
+}
+
 void PbrtParams::WarnUnused(Diagnostics& diagnostics, const std::string& what) const {
   const std::vector<std::string> asked(asked_.begin(), asked_.end());
   for (const PbrtParam& p : params_)

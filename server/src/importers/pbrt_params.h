@@ -41,6 +41,9 @@ class PbrtParams {
   std::vector<double> Numbers(const std::string& name, std::initializer_list<const char*> types);
   // Marks parameters as read without using them (accepted, no effect).
   void Accept(std::initializer_list<const char*> names);
+  // Every parameter not read yet, now marked read: what a yarf class named
+  // where pbrt names one of its own takes as its properties.
+  std::vector<PbrtParam> TakeUnread();
 
   // One warning per (what, name) never read.
   void WarnUnused(Diagnostics& diagnostics, const std::string& what) const;

@@ -187,11 +187,14 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
       for (std::optional<PbrtToken> t = tokens.Next(); !t || t->kind != PbrtToken::kClose; t = tokens.Next())
         if (!t) Fail(where, "unclosed '[' in Option");
     Warn(where, "Option:" + option, "Option \"" + option + "\" ignored");
-  } else if (name == "Accelerator" || name == "ColorSpace") {
-    // A quoted argument and parameters; neither changes the image yarf can make.
+  } else if (name == "Accelerator") {
+    const std::string type = Quoted(tokens, where);
+    PbrtParams params = PbrtParams::Parse(tokens);
+    Accelerator(type, params, where);
+  } else if (name == "ColorSpace") {
     Quoted(tokens, where);
     PbrtParams params = PbrtParams::Parse(tokens);
-    if (name == "ColorSpace") Warn(where, name, "ColorSpace is not supported: ignored (colours are read as sRGB)");
+    Warn(where, name, "ColorSpace is not supported: ignored (colours are read as sRGB)");
   } else if (name == "MakeNamedMedium") {
     const std::string medium = Quoted(tokens, where);
     PbrtParams params = PbrtParams::Parse(tokens);

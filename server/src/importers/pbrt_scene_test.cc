@@ -460,6 +460,26 @@ TEST(PbrtImport, AmbientOcclusionMapsToItsTransportWithItsParameters) {
   EXPECT_THROW(PbrtWithIntegrator("\"ambientocclusion\" \"float maxdistance\" 0"), ImportError);
 }
 
+TEST(PbrtImport, AnAcceleratorOtherThanPbrtsNamesTheScenesAggregateClass) {
+  const auto with = [](const std::string& accelerator) {
+    return ImportPbrt("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nAccelerator " + accelerator +
+                          "\nWorldBegin\nShape \"sphere\"\n",
+                      "accelerator.pbrt");
+  };
+  // pbrt's own: Embree's BVH, their parameters accepted.
+  for (const char* own : {"\"bvh\" \"integer maxnodeprims\" 4", "\"kdtree\" \"integer maxprims\" 2"}) {
+    const ImportResult result = with(own);
+    EXPECT_FALSE(result.scene.has_aggregate()) << own;
+    EXPECT_TRUE(result.warnings.empty()) << own;
+  }
+  const ImportResult grid = with("\"seads\" \"float density\" 3 \"integer max_resolution\" 64");
+  EXPECT_EQ(grid.scene.aggregate().class_name(), "seads");
+  EXPECT_DOUBLE_EQ(FloatProperty(grid.scene.aggregate().properties(), "density"), 3);
+  EXPECT_EQ(IntProperty(grid.scene.aggregate().properties(), "max_resolution"), 64);
+  EXPECT_THROW(with("\"seads\" \"float density\" [1 2]"), ImportError);
+  EXPECT_THROW(with("\"seads\" \"rgb density\" [1 2 3]"), ImportError);
+}
+
 TEST(PbrtImport, AnOrthographicCameraSpansTwoUnitsOfItsSpaceOverTheShorterAxis) {
   // The CTM's Scale 0.5 makes camera space twice as large in the world.
   const ImportResult result = ImportPbrt(
