@@ -3,7 +3,9 @@ bdpt, and photon mapping, stochastic progressive photon mapping,
 irradiance caching and radiosity.
 
 For the glossy Cornell box (caustics under a glass sphere), the diffuse
-Cornell box and the Veach-style MIS scene (small lights on sharp plates),
+Cornell box, the Veach-style MIS scene (small lights on sharp plates) and,
+from ../shared, Bitterli's veach-bidir (a lamp facing the wall) and water
+caustic,
 each method renders at 1, 2, 4... spp until it has spent TIME_LIMIT
 seconds (a method that refuses a scene, e.g. radiosity with non-diffuse
 materials, is left out of it); its RMSE against a high-spp reference (the mean of a path-traced
@@ -12,6 +14,9 @@ reported as a ratio to the path tracer's measured in the same run, over
 the whole image and over its hardest pixels: the 5% where the path
 tracer's own variance is largest (the caustic, the small lights'
 reflections).
+On the two Bitterli scenes the default reference (4096 + 1024 spp at 64
+px) is itself too noisy to rank the methods: their errors come out nearly
+equal; set YARF_BENCH_REFERENCE_SPP far higher for figures worth quoting.
 Convergence curves go to out/bench/light_transport.png, beside the
 images each method reached (out/bench/light_transport/*.exr), and the
 numbers to out/bench/light_transport.json.
@@ -28,6 +33,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from bench_report import cpu_model
 
 from yarf import Client, LocalServer, component, load_scene
 from yarf.v1 import render_pb2, scene_pb2
@@ -39,10 +45,15 @@ MAX_DEPTH = 6
 METHODS = ("path", "light", "bdpt", "photon_map", "sppm", "irradiance_cache", "radiosity")
 # Radiosity has no paths to bound.
 WITHOUT_DEPTH = {"radiosity"}
+BITTERLI = ROOT.parent / "shared" / "scenes" / "bitterli"
 SCENES = {
     "glossy box (caustics)": ROOT / "scenes" / "cornell-box" / "glossy.json",
     "cornell box (diffuse)": ROOT / "scenes" / "cornell-box" / "scene.json",
     "veach mis (small lights)": ROOT / "scenes" / "veach-mis" / "scene.json",
+    # Bitterli's: a room lit by a lamp facing the wall (light reaches the
+    # camera's view only after bounces), and light through a water surface.
+    "veach bidir (lamp)": BITTERLI / "veach-bidir" / "scene-v4.pbrt",
+    "water caustic": BITTERLI / "water-caustic" / "scene-v4.pbrt",
 }
 REFERENCE_SPP = {
     "path": int(os.environ.get("YARF_BENCH_REFERENCE_SPP", "4096")),
@@ -126,6 +137,7 @@ def main() -> None:
                     row[key + "_vs_path"] = float(row[key]) / baseline
             report[name] = rows
 
+    print(f"cpu: {cpu_model()}")
     print(f"RMSE at {EQUAL_TIME:.1f} s against a high-spp reference, {SIZE} px wide")
     print(f"{'scene':<26}{'method':<18}{'rmse':>10}{'vs path':>9}{'hard 5%':>10}{'vs path':>9}")
     for name, rows in report.items():
