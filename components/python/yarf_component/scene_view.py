@@ -226,6 +226,19 @@ class SceneView:
             camera_unreachable_reason=reply.camera_unreachable_reason,
         )
 
+    def _rays(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        tnear: np.ndarray | float | None,
+        tfar: np.ndarray | float | None,
+        times: np.ndarray | float | None,
+    ) -> geometry_pb2.IntersectRequest:
+        """The Intersect request of a ray query on this scene."""
+        return geometry_pb2.IntersectRequest(
+            handle=self.handle, rays=ray_batch(origins, directions, tnear, tfar, times)
+        )
+
     def intersect(
         self,
         origins: np.ndarray,
@@ -235,17 +248,9 @@ class SceneView:
         times: np.ndarray | float | None = None,
     ) -> Hits:
         """The closest hit of each ray within [tnear, tfar] (default [0, inf))."""
-        request = geometry_pb2.IntersectRequest(
-            handle=self.handle, rays=ray_batch(origins, directions, tnear, tfar, times)
-        )
+        request = self._rays(origins, directions, tnear, tfar, times)
         reply = self._call("Intersect.Intersect", self._intersect.Intersect, request)
-        return Hits(
-            t=array_to_numpy(reply.t),
-            normals=array_to_numpy(reply.normals),
-            uv=array_to_numpy(reply.uv),
-            shape_ids=array_to_numpy(reply.shape_ids),
-            primitive_ids=array_to_numpy(reply.primitive_ids),
-        )
+        return _decoded(Hits, reply)
 
     def occluded(
         self,
@@ -256,9 +261,7 @@ class SceneView:
         times: np.ndarray | float | None = None,
     ) -> np.ndarray:
         """[N] bool: whether anything lies on each ray within its interval."""
-        request = geometry_pb2.IntersectRequest(
-            handle=self.handle, rays=ray_batch(origins, directions, tnear, tfar, times)
-        )
+        request = self._rays(origins, directions, tnear, tfar, times)
         reply = self._call("Intersect.Occluded", self._intersect.Occluded, request)
         return array_to_numpy(reply.occluded) != 0
 
@@ -271,9 +274,7 @@ class SceneView:
         times: np.ndarray | float | None = None,
     ) -> Crossings:
         """Every hit along each ray within its interval, nearest first."""
-        request = geometry_pb2.IntersectRequest(
-            handle=self.handle, rays=ray_batch(origins, directions, tnear, tfar, times)
-        )
+        request = self._rays(origins, directions, tnear, tfar, times)
         return _decoded(
             Crossings, self._call("Intersect.CrossSection", self._intersect.CrossSection, request)
         )
