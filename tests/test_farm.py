@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import asyncio
 import os
+import signal
+import subprocess
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -28,6 +30,7 @@ from yarf import Client, LocalServer, RenderResult, load_scene
 from yarf.assets import upload_scene_assets
 from yarf.farm import streams
 from yarf.farm.cache import SceneCache
+from yarf.farm.loops import Loops
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.tasks import SplitPolicy, Task, Window, split
 from yarf.farm.validation import SubmitChecker
@@ -41,6 +44,8 @@ SEED = 7
 # Cancel must reach every node's render within this many seconds.
 CANCEL_SECONDS = 1.0
 CONCURRENT_CLIENTS = 200
+# A hang, not a speed: the loops wait up to 5 s, a node its yarfd up to 10 s.
+STOP_SECONDS = 30.0
 
 
 def cornell(width: int, height: int | None = None) -> scene_pb2.Scene:
@@ -500,6 +505,52 @@ def test_a_task_whose_deliveries_run_out_without_a_coordinator_is_retried(
         status = client.wait(job_id, timeout=60)
     assert status.state == render_pb2.SUCCEEDED, status
     assert stored_advisories(own_farm.nats_url) == 0
+
+
+def test_loops_end_a_loop_whose_client_turns_the_cancel_into_a_timeout() -> None:
+    async def scenario() -> bool:
+        loops = Loops()
+
+        cancels = 0
+
+        async def retrying() -> None:
+            nonlocal cancels
+            # The bound lets asyncio.run's own cancel end the loop should stop fail.
+            while loops.running and cancels < 2:
+                try:
+                    try:
+                        await asyncio.sleep(60)
+                    except asyncio.CancelledError:
+                        cancels += 1
+                        raise TimeoutError from None  # as nats-py's fetch now and then does
+                except TimeoutError:
+                    continue
+
+        task = loops.start(retrying(), name="retrying")
+        await asyncio.sleep(0)
+        await loops.stop(timeout=5.0)
+        return task.done()
+
+    assert asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("after", [0.0, 0.5, 1.5], ids=["at once", "0.5 s", "1.5 s"])
+def test_farm_processes_stop_on_sigterm_after_nats_is_gone(after: float) -> None:
+    """A coordinator and a node whose NATS died a moment before still exit on SIGTERM."""
+    with Farm(coordinator_args=COORDINATOR_ARGS) as farm:
+        processes = {"coordinator": farm.start_coordinator(), "node": farm.start_node()}
+        assert farm.nats is not None
+        farm.nats.kill()
+        time.sleep(after)
+        for process in processes.values():
+            process.process.send_signal(signal.SIGTERM)
+        for what, process in processes.items():
+            try:
+                process.process.wait(STOP_SECONDS)
+            except subprocess.TimeoutExpired:
+                pytest.fail(
+                    f"the {what} did not stop within {STOP_SECONDS} s:\n{process.log[-3000:]}"
+                )
 
 
 def test_a_task_past_the_node_timeout_fails_and_the_node_serves_on(own_farm: Farm) -> None:

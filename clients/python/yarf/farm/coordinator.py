@@ -28,6 +28,7 @@ from nats.js.kv import KeyValue
 from yarf.assets import scene_asset_hashes
 from yarf.farm import job_log, streams
 from yarf.farm.assets import FarmAssets
+from yarf.farm.loops import Loops
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
 from yarf.farm.scene_summary import summarize_scene
@@ -131,7 +132,7 @@ class Coordinator:
         self._scene_uploads: dict[str, asyncio.Task[None]] = {}
         self._finished_merges: OrderedDict[str, None] = OrderedDict()
         self._scene_summaries: OrderedDict[str, render_pb2.SceneSummary] = OrderedDict()
-        self._background: list[asyncio.Task[None]] = []
+        self._loops = Loops()
 
     # Start and stop.
 
@@ -148,23 +149,19 @@ class Coordinator:
             self._jobs[record.id] = job
         self._apply_retention()
         await self._resume()
-        self._background = [
-            asyncio.create_task(
-                self._consume(streams.RESULTS_STREAM, streams.RESULTS_DURABLE, self._handle_result),
-                name="results",
+        self._loops.start(
+            self._consume(streams.RESULTS_STREAM, streams.RESULTS_DURABLE, self._handle_result),
+            name="results",
+        )
+        # A durable consumer, not a subscription: advisories sent while
+        # no coordinator ran are handled now (see streams.ADVISORIES_STREAM).
+        self._loops.start(
+            self._consume(
+                streams.ADVISORIES_STREAM, streams.ADVISORIES_DURABLE, self._on_max_deliveries
             ),
-            # A durable consumer, not a subscription: advisories sent while
-            # no coordinator ran are handled now (see streams.ADVISORIES_STREAM).
-            asyncio.create_task(
-                self._consume(
-                    streams.ADVISORIES_STREAM,
-                    streams.ADVISORIES_DURABLE,
-                    self._on_max_deliveries,
-                ),
-                name="advisories",
-            ),
-            asyncio.create_task(self._watch_progress(), name="progress"),
-        ]
+            name="advisories",
+        )
+        self._loops.start(self._watch_progress(), name="progress")
 
     async def _resume(self) -> None:
         """Brings the streams in line with the job table after a restart.
@@ -203,11 +200,7 @@ class Coordinator:
         return True
 
     async def stop(self) -> None:
-        for task in self._background:
-            task.cancel()
-        for task in self._background:
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+        await self._loops.stop()
         self._checker.close()
 
     # RenderService.
@@ -261,7 +254,7 @@ class Coordinator:
         except Exception as error:
             # The job is stored: it is queued once NATS answers again.
             log.warning("job %s: tasks not published yet: %s", record.id, error)
-            self._background.append(asyncio.create_task(self._publish_until_done(job)))
+            self._loops.start(self._publish_until_done(job), name=f"publish {record.id}")
         return record.id
 
     def job(self, job_id: str) -> Job:
@@ -457,7 +450,7 @@ class Coordinator:
             )
 
     async def _publish_until_done(self, job: Job) -> None:
-        while not job.final:
+        while not job.final and self._loops.running:
             await asyncio.sleep(1.0)
             try:
                 # Tasks published before the failure are dropped as duplicates.
@@ -551,7 +544,7 @@ class Coordinator:
         self, stream: str, durable: str, handle: Callable[[Msg], Awaitable[None]]
     ) -> None:
         subscription = await self._js.pull_subscribe_bind(durable, stream=stream)
-        while True:
+        while self._loops.running:
             try:
                 messages = await subscription.fetch(32, timeout=1.0)
             except TimeoutError:
@@ -644,7 +637,7 @@ class Coordinator:
 
     async def _watch_progress(self) -> None:
         """Follows the nodes' heartbeats: a job runs once a node reports a task of it."""
-        while True:
+        while self._loops.running:
             try:
                 watcher = await self._kv.watch("progress.>")
                 async for entry in watcher:

@@ -30,6 +30,7 @@ from yarf.credentials import open_aio_channel
 from yarf.farm import streams
 from yarf.farm.assets import FarmAssets
 from yarf.farm.cache import DEFAULT_CACHE_BYTES, SceneCache
+from yarf.farm.loops import Loops
 from yarf.farm.merge import TaskImage
 from yarf.farm.messages import ResultMessage, TaskMessage
 from yarf.v1 import asset_pb2_grpc, render_pb2, render_pb2_grpc, scene_pb2
@@ -160,7 +161,7 @@ class Node:
         self._running: RunningTask | None = None
         self._stopping = False
         self._scene: tuple[str, scene_pb2.Scene] | None = None
-        self._watcher: asyncio.Task[None] | None = None
+        self._loops = Loops()
 
     async def check_yarfd(self) -> None:
         """Fails at start, not task by task, when yarfd refuses the node's token or TLS.
@@ -181,8 +182,8 @@ class Node:
         await self._puller.start()
         # Any task published wakes an idle node at once.
         await self._nc.subscribe("yarf.tasks.>", cb=self._on_task_published)
-        self._watcher = asyncio.create_task(self._watch_cancels(), name="cancels")
-        stopper = asyncio.create_task(self._stop_when(stop))
+        self._loops.start(self._watch_cancels(), name="cancel flags")
+        self._loops.start(self._stop_when(stop), name="stop")
         _event("node ready", node=self.name)
         try:
             while not stop.is_set():
@@ -198,8 +199,7 @@ class Node:
                     # Not acked: redelivered after the ack wait.
                     log.exception("a task")
         finally:
-            stopper.cancel()
-            self._watcher.cancel()
+            await self._loops.stop()
             await self._channel.close()
 
     async def _stop_when(self, stop: asyncio.Event) -> None:
@@ -216,7 +216,7 @@ class Node:
 
     async def _watch_cancels(self) -> None:
         """Follows the jobs bucket's cancel flags (a push stream, not polling)."""
-        while True:
+        while self._loops.running:
             try:
                 watcher = await self._buckets.jobs.watch("cancel.*")
                 async for entry in watcher:
@@ -302,7 +302,8 @@ class Node:
     async def _heartbeat(self, running: RunningTask) -> None:
         """In-progress acks (the lease) and the progress the coordinator shows."""
         key = streams.progress_key(running.task.job_id, running.task.task)
-        while True:
+        # Ends with its task even if nats-py turns the cancel into an error.
+        while self._running is running:
             try:
                 await running.message.in_progress()
                 progress = {"node": self.name, "samples": running.samples}
