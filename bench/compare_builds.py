@@ -2,6 +2,7 @@
 
 For "before and after" figures of a change: build the older commit in a
 worktree (``git worktree add ../before COMMIT`` and a CMake build there),
+or copy a build's ``bin`` and ``plugins`` folders aside before rebuilding,
 then
 
     .venv/bin/python bench/compare_builds.py before=../before/build/bin/yarfd \
@@ -26,6 +27,13 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "cornell-box" / "scene.json"
 
 
+def server_of(binary: Path) -> LocalServer:
+    """A yarfd and the plugins beside it (bin/../plugins, as a build tree has them):
+    a copied build keeps its own plugins, not those its binary was built to find."""
+    plugins = binary.resolve().parent.parent / "plugins"
+    return LocalServer(binary=binary, plugin_paths=[plugins] if plugins.is_dir() else [])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -38,7 +46,7 @@ def main() -> None:
     scene = load_scene(SCENE)
     samples = scene.film.width * scene.film.height * args.spp
     rates: dict[str, list[float]] = {name: [] for name in builds}
-    servers = {name: LocalServer(binary=Path(path)) for name, path in builds.items()}
+    servers = {name: server_of(Path(path)) for name, path in builds.items()}
     for server in servers.values():
         server.__enter__()
     try:
