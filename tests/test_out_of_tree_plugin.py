@@ -68,3 +68,19 @@ def test_an_out_of_tree_plugin_renders_as_the_builtin_it_copies(plugins: Path) -
     )
     assert "rebuild it" in failures["libyarf_stale.so"]
     assert "exports no yarf_interface_version" in failures["libyarf_unversioned.so"]
+
+
+def test_plugins_refused_after_registering_leave_yarfd_serving(plugins: Path) -> None:
+    """yarfd unloads a plugin it refuses only once nothing of the plugin's is left:
+    the factories it registered and the exception it threw."""
+    with (
+        LocalServer(plugin_paths=[BUILD / "plugins", plugins]) as server,
+        Client(server.address) as client,
+    ):
+        classes = client.list_classes()
+        names = {c.class_name for c in classes.classes}
+        failures = {Path(f.path).name: f.message for f in classes.plugin_errors}
+        assert client.render(small_scene(8), spp=2, seed=1).pixels.shape == (8, 8, 3)
+    assert "oot_unnamed" not in names and "oot_thrower" not in names
+    assert "declares a parameter without a name" in failures["libyarf_oot_unnamed.so"]
+    assert "the entry point gave up" in failures["libyarf_oot_thrower.so"]

@@ -78,12 +78,21 @@ std::vector<ComponentInfo> Registry::LoadPlugin(const std::filesystem::path& fil
     throw Error("plugin '" + path + "' does not export " YARF_REGISTER_SYMBOL);
   }
   CollectingRegistrar collected;
+  std::string refusal;
   try {
     fn(collected);
     for (const auto& item : collected.items) CheckSchema(item.info);
   } catch (const std::exception& e) {
+    refusal = e.what();
+  } catch (...) {
+    refusal = "it threw something that is no std::exception";
+  }
+  if (!refusal.empty()) {
+    // The factories' code, and an exception's, is the plugin's: they go
+    // before the plugin does.
+    collected.items.clear();
     dlclose(lib);
-    throw Error("plugin '" + path + "' failed to register: " + e.what());
+    throw Error("plugin '" + path + "' failed to register: " + refusal);
   }
   std::vector<ComponentInfo> added;
   std::lock_guard lock(mutex_);
