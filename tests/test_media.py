@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+import grpc
 import numpy as np
 import pytest
 from imagestats import block_means
@@ -183,6 +184,31 @@ def test_a_grid_attenuates_by_its_optical_depth(client: Client, rays: str) -> No
         expected = 0.5 / math.pi * np.exp(-depth)
     result = client.render(scene, spp=4096, seed=9, transport=transport, timeout=300)
     assert_image_mean(result, expected, slack=1e-4 * expected)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "said"),
+    [
+        ("sigma_t", rgb(1.0), "'grid' has no parameter 'sigma_t'; did you mean 'sigma_a'?"),
+        ("density", "thick", "must be rgb or grid, not a string"),
+        ("albedo", rgb(0.5, 2.0, 0.5), "2 is above 1"),
+        ("sigma_s", -1.0, "-1 is below 0"),
+        ("edge", "wrap", "'wrap' is not one of 'clamp', 'zero'"),
+    ],
+)
+def test_a_grid_property_misspelt_or_out_of_range_is_refused_at_submit(
+    client: Client, key: str, value: object, said: str
+) -> None:
+    scene = lit_floor_scene()
+    spec = grid_slab(1, 1.5)
+    spec.properties.MergeFrom(properties(**{key: value}))
+    scene.media.add(name="fog", medium=spec)
+    with pytest.raises(grpc.RpcError) as error:
+        client.submit(scene, 1, transport=component("volpath"))
+    assert error.value.code() == grpc.StatusCode.INVALID_ARGUMENT  # type: ignore[attr-defined]
+    message = str(error.value.details())  # type: ignore[attr-defined]
+    assert message.startswith(f"scene.media[0] ('fog').medium.properties.{key}: "), message
+    assert said in message, message
 
 
 # bdpt in the furnace: a ball of radius 1 (optical radius at most 2) and

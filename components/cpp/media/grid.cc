@@ -26,23 +26,8 @@
 // `grid_name` (default "density"). At least one quantity must be a grid
 // (a medium with none is homogeneous).
 //
-// Properties:
-//   density        see above        default 1
-//   sigma_a        see above        default 0   absorption per unit length, ≥ 0
-//   sigma_s        see above        default 1   scattering per unit length, ≥ 0
-//   albedo         see above        absent      in [0, 1]; replaces the split of σ_t into σ_a, σ_s
-//   emission       see above        default 0   radiance, ≥ 0; not multiplied by scale
-//   scale          float            default 1   multiplies σ_a and σ_s, ≥ 0
-//   nx, ny, nz     int                          the resolution of the inline grids (all of them)
-//   to_world       transform        identity    places the unit cube of the grids
-//   use_grid_bbox  bool             false       place density's grid file where the file says
-//                                               (a .vol file's bounding box, an OpenVDB grid's
-//                                               own transform) before to_world (Mitsuba 3's
-//                                               use_grid_bbox)
-//   edge           string           "clamp"     past the outer voxel centres: "clamp" to the
-//                                               border voxels (Mitsuba 3) or "zero" (pbrt-v4:
-//                                               interpolate toward 0 beyond the border)
-//   g, g2, blend                                the phase function (phase.h)
+// Parameters: GridMedium::Parameters() below; g, g2 and blend give the
+// phase function (phase.h).
 //
 // Values are trilinearly interpolated between voxel centres (volume_grid.h).
 // Grid voxels must be finite; negative ones (a simulation's round-off)
@@ -128,6 +113,41 @@ GridEdge Edge(const Properties& props) {
 
 class GridMedium final : public UniformPhaseMedium {
  public:
+  static ParameterSchema Parameters() {
+    ParameterSchema schema;
+    // Each quantity: a value or an inline grid; or a grid file, and the
+    // name of its grid in an OpenVDB file. No declared defaults: a default
+    // would stand beside a file given instead.
+    const auto quantity = [&](const std::string& key, const std::string& file_key, const std::string& grid_name_key,
+                              const std::string& doc, double most) {
+      Parameter value = Parameter::RgbGrid(key).Min(0).Doc(
+          doc + "; the same everywhere, or an inline grid of nx·ny·nz values (grey) or 3·nx·ny·nz (rgb), x fastest");
+      if (most < kInfinity) value.max = most;
+      schema.push_back(std::move(value));
+      schema.push_back(Parameter::File(file_key).Doc(key + " as a grid file, .vol or .vdb"));
+      const std::string asset_key = file_key.substr(0, file_key.size() - std::string_view("filename").size()) + "asset";
+      schema.push_back(Parameter::String(asset_key).Doc("the SHA-256 of an uploaded grid file, in place of " + file_key));
+      schema.push_back(Parameter::String(grid_name_key).Doc("the OpenVDB grid of that file; default " + key));
+    };
+    quantity("density", "filename", "grid_name", "scales sigma_a and sigma_s; default 1", kInfinity);
+    quantity("sigma_a", "sigma_a_filename", "sigma_a_grid_name", "absorption per unit length; default 0", kInfinity);
+    quantity("sigma_s", "sigma_s_filename", "sigma_s_grid_name", "scattering per unit length; default 1", kInfinity);
+    quantity("albedo", "albedo_filename", "albedo_grid_name",
+             "when given, splits sigma_a + sigma_s into scattering and absorption", 1.0);
+    quantity("emission", "emission_filename", "emission_grid_name", "radiance where it absorbs, not scaled; default 0",
+             kInfinity);
+    schema.push_back(ScaleParameter());
+    for (const char* axis : {"nx", "ny", "nz"})
+      schema.push_back(Parameter::Int(axis).Min(1).Doc("the resolution of the inline grids"));
+    schema.push_back(Parameter::Matrix("to_world").Doc("places the unit cube of the grids; identity when left out"));
+    schema.push_back(Parameter::Bool("use_grid_bbox").Default(false).Doc(
+        "place density's grid file where the file says (a .vol box, an OpenVDB transform) before to_world"));
+    schema.push_back(Parameter::String("edge").Default("clamp").Choices({"clamp", "zero"}).Doc(
+        "past the outer voxel centres: clamp to the border voxels (Mitsuba 3), or fade to 0 (pbrt-v4)"));
+    for (Parameter& parameter : PhaseFunction::Parameters()) schema.push_back(std::move(parameter));
+    return schema;
+  }
+
   explicit GridMedium(const Properties& props)
       : UniformPhaseMedium(props),
         density_(ReadField(props, "density", "filename", "grid_name", Vec3(1, 1, 1), kInfinity)),

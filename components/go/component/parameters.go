@@ -14,7 +14,7 @@ type Parameter struct {
 	Name string
 	// Type is one of ParameterInfo's: "bool", "int", "float", "string",
 	// "rgb", "vector", "transform", "float array", "float or texture",
-	// "rgb or texture", "material", "file".
+	// "rgb or texture", "material", "rgb or grid", "file".
 	Type string
 	// Default is the value used when the key is absent, as text ("0.5",
 	// "ggx", "1, 1, 1"); "" for none. The getter's own default must be it.
@@ -29,7 +29,7 @@ type Parameter struct {
 var parameterTypes = map[string]bool{
 	"bool": true, "int": true, "float": true, "string": true, "rgb": true, "vector": true,
 	"transform": true, "float array": true, "float or texture": true, "rgb or texture": true,
-	"material": true, "file": true,
+	"material": true, "rgb or grid": true, "file": true,
 }
 
 // Bound is a pointer to v, for Parameter.Min and Parameter.Max.

@@ -37,6 +37,7 @@ enum class ParameterType {
   kFloatTexture,  // a float/int, or a reference to a scene texture
   kRgbTexture,    // an rgb or float/int, or a reference to a scene texture
   kMaterial,      // a reference to a material of the scene defined before
+  kRgbGrid,       // an rgb or float/int (a value everywhere), or a float array (a voxel grid)
   kFile,          // string_value: a file the server resolves for the class
 };
 
@@ -54,6 +55,7 @@ inline const char* ParameterTypeName(ParameterType type) {
     case ParameterType::kFloatTexture: return "float or texture";
     case ParameterType::kRgbTexture: return "rgb or texture";
     case ParameterType::kMaterial: return "material";
+    case ParameterType::kRgbGrid: return "rgb or grid";
     case ParameterType::kFile: return "file";
   }
   return "unknown";
@@ -89,6 +91,7 @@ struct Parameter {
   static Parameter FloatTexture(std::string name) { return Of(std::move(name), ParameterType::kFloatTexture); }
   static Parameter RgbTexture(std::string name) { return Of(std::move(name), ParameterType::kRgbTexture); }
   static Parameter Material(std::string name) { return Of(std::move(name), ParameterType::kMaterial); }
+  static Parameter RgbGrid(std::string name) { return Of(std::move(name), ParameterType::kRgbGrid); }
   static Parameter File(std::string name) { return Of(std::move(name), ParameterType::kFile); }
 
   Parameter&& Default(bool value) && { return WithDefault(value); }

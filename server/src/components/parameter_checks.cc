@@ -43,6 +43,7 @@ bool Accepts(ParameterType type, Kind kind) {
     case ParameterType::kFloatTexture: return number || kind == Kind::kReference;
     case ParameterType::kRgbTexture: return number || kind == Kind::kRgbValue || kind == Kind::kReference;
     case ParameterType::kMaterial: return kind == Kind::kReference;
+    case ParameterType::kRgbGrid: return number || kind == Kind::kRgbValue || kind == Kind::kFloatArrayValue;
   }
   return false;
 }

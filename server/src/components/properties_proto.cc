@@ -127,9 +127,11 @@ std::optional<Properties::Value> ParseDefault(ParameterType type, const std::str
     case ParameterType::kFloatTexture:
     case ParameterType::kRgb:
     case ParameterType::kRgbTexture:
+    case ParameterType::kRgbGrid:
     case ParameterType::kVector: {
       const auto numbers = Numbers(text);
-      const bool colour = type == ParameterType::kRgb || type == ParameterType::kRgbTexture;
+      const bool colour =
+          type == ParameterType::kRgb || type == ParameterType::kRgbTexture || type == ParameterType::kRgbGrid;
       if (numbers && numbers->size() == 1 && type != ParameterType::kVector) return Properties::Value((*numbers)[0]);
       if (numbers && numbers->size() == 3 && (colour || type == ParameterType::kVector)) {
         const std::vector<double>& n = *numbers;
