@@ -125,9 +125,12 @@ class PathTracer final : public Transport {
     std::vector<uint32_t> next;
     for (const auto& [material, members] : GroupBy(vertex_material)) {
       const SurfaceModel& model = scene.Material(material);
+      // The group's vertices as its model's calls take them, for both.
+      SurfaceBatch batch(&scene, members.size());
+      for (const uint32_t member : members) batch.Add(vertices[member].at.wi, vertices[member].at.site);
       const bool sample_lights = scene.HasLights() && SamplesLights(model.Lobes());
-      if (sample_lights) SampleLights(scene, points, model, paths, vertices, members, base);
-      ScatterBsdf(scene, points, model, paths, vertices, members, base, depth, sample_lights, next);
+      if (sample_lights) SampleLights(scene, points, model, batch, paths, vertices, members, base);
+      ScatterBsdf(points, model, batch, paths, vertices, members, base, depth, sample_lights, next);
     }
     return next;
   }
@@ -136,24 +139,18 @@ class PathTracer final : public Transport {
   void AddEmission(const SceneView& scene, std::vector<Path>& paths, const std::vector<uint32_t>& active,
                    const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                    const std::vector<uint32_t>& emitted) const {
-    std::vector<const Emitter*> keys;
-    for (uint32_t k : emitted) keys.push_back(scene.EmitterOf(hits[k].shape));
-    for (const auto& [emitter, members] : GroupBy(keys)) {
-      const size_t m = members.size();
-      std::vector<float> w(3 * m), le(3 * m);
-      SurfaceRows rows(&scene, m);
-      for (size_t j = 0; j < m; ++j) {
-        const uint32_t k = emitted[members[j]];
-        Frame(hits[k].normal).ToLocal(-rays[k].direction).Store(&w[3 * j]);
-        rows.Add(SurfaceSite::Of(hits[k]));
-      }
-      emitter->Radiance(w, rows.Points(), le);
-      for (size_t j = 0; j < m; ++j) {
-        const uint32_t k = emitted[members[j]];
-        Path& p = paths[active[k]];
-        const float weight = p.full_weight ? 1 : PowerHeuristic(p.bsdf_pdf, scene.LightPdfFrom(rays[k], hits[k]));
-        p.radiance += p.throughput * Vec3::Load(&le[3 * j]) * weight;
-      }
+    std::vector<EmitterQuery> queries(emitted.size());
+    for (size_t j = 0; j < emitted.size(); ++j) {
+      const uint32_t k = emitted[j];
+      queries[j] = {scene.EmitterOf(hits[k].shape), Frame(hits[k].normal).ToLocal(-rays[k].direction),
+                    SurfaceSite::Of(hits[k])};
+    }
+    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries, Densities::kNone);
+    for (size_t j = 0; j < emitted.size(); ++j) {
+      const uint32_t k = emitted[j];
+      Path& p = paths[active[k]];
+      const float weight = p.full_weight ? 1 : PowerHeuristic(p.bsdf_pdf, scene.LightPdfFrom(rays[k], hits[k]));
+      p.radiance += p.throughput * le[j].radiance * weight;
     }
   }
 
@@ -174,11 +171,9 @@ class PathTracer final : public Transport {
 
   // Next-event estimation: one emitter sample per vertex, MIS-weighted.
   void SampleLights(const SceneView& scene, const PrimarySamples& points, const SurfaceModel& model,
-                    std::vector<Path>& paths, const std::vector<Vertex>& vertices,
+                    const SurfaceBatch& batch, std::vector<Path>& paths, const std::vector<Vertex>& vertices,
                     const std::vector<uint32_t>& members, uint32_t base) const {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), wo(3 * m), f(3 * m), pdf(m), le(3 * m);
-    SurfaceRows rows(&scene, m);
     std::vector<Vec3> from(m);
     std::vector<uint32_t> owners(m);
     for (size_t j = 0; j < m; ++j) {
@@ -187,29 +182,10 @@ class PathTracer final : public Transport {
     }
     const std::vector<LightDirection> lights =
         SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition);
-    std::vector<const Emitter*> emitters(m);
-    for (size_t j = 0; j < m; ++j) {
-      const Vertex& v = vertices[members[j]];
-      emitters[j] = lights[j].emitter;
-      v.at.wi.Store(&wi[3 * j]);
-      v.at.frame.ToLocal(lights[j].direction).Store(&wo[3 * j]);
-      rows.Add(v.at.site);
-    }
-    const SurfacePoints at = rows.Points();
-    model.Evaluate(TransportMode::kRadiance, wi, wo, at, f);
-    model.Pdf(wi, wo, at, pdf);
-    for (const auto& [emitter, group] : GroupBy(emitters)) {
-      if (!emitter) continue;
-      const size_t g = group.size();
-      std::vector<float> w(3 * g), radiance(3 * g);
-      SurfaceRows light_rows(&scene, g);
-      for (size_t q = 0; q < g; ++q) {
-        lights[group[q]].w.Store(&w[3 * q]);
-        light_rows.Add(SurfaceSite::Uv(lights[group[q]].u, lights[group[q]].v));
-      }
-      emitter->Radiance(w, light_rows.Points(), radiance);
-      for (size_t q = 0; q < g; ++q) std::copy_n(&radiance[3 * q], 3, &le[3 * group[q]]);
-    }
+    std::vector<float> wo(3 * m);
+    for (size_t j = 0; j < m; ++j) vertices[members[j]].at.frame.ToLocal(lights[j].direction).Store(&wo[3 * j]);
+    const SurfaceBatch::Evaluation bsdf = batch.Evaluate(model, TransportMode::kRadiance, wo, Densities::kForward);
+    const std::vector<Vec3> le = LightRadiance(scene, lights);
     // Trace shadow rays only for samples that would contribute.
     std::vector<Ray> rays;
     std::vector<uint32_t> owner_of_ray;
@@ -220,11 +196,10 @@ class PathTracer final : public Transport {
       const Vertex& v = vertices[members[j]];
       const Path& p = paths[v.path];
       const float cos_surface = std::abs(wo[3 * j + 2]);
-      const float mis = light.delta ? 1.0f : PowerHeuristic(light.pdf, pdf[j]);
+      const float mis = light.delta ? 1.0f : PowerHeuristic(light.pdf, bsdf.pdf[j]);
       const float shading =
           ShadingWeight(v.at.frame, v.at.ng, v.at.wi, Vec3::Load(&wo[3 * j]), TransportMode::kRadiance);
-      const Vec3 c = p.throughput * Vec3::Load(&f[3 * j]) * Vec3::Load(&le[3 * j]) *
-                     (cos_surface * mis * shading / light.pdf);
+      const Vec3 c = p.throughput * bsdf.F(j) * le[j] * (cos_surface * mis * shading / light.pdf);
       if (!(MaxComponent(c) > 0)) continue;
       rays.push_back(ShadowRayToLight(v.at.position, v.at.ng, light, v.time));
       owner_of_ray.push_back(v.path);
@@ -237,20 +212,14 @@ class PathTracer final : public Transport {
   }
 
   // Samples the BSDF for each vertex, extends the path, applies roulette.
-  void ScatterBsdf(const SceneView& scene, const PrimarySamples& points, const SurfaceModel& model,
-                   std::vector<Path>& paths,
-                   const std::vector<Vertex>& vertices, const std::vector<uint32_t>& members,
-                   uint32_t base, int depth, bool sampled_lights, std::vector<uint32_t>& next) const {
+  void ScatterBsdf(const PrimarySamples& points, const SurfaceModel& model, const SurfaceBatch& batch,
+                   std::vector<Path>& paths, const std::vector<Vertex>& vertices,
+                   const std::vector<uint32_t>& members, uint32_t base, int depth, bool sampled_lights,
+                   std::vector<uint32_t>& next) const {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m), roulette(m);
-    std::vector<uint32_t> flags(m), owners(m);
-    SurfaceRows rows(&scene, m);
-    for (size_t j = 0; j < m; ++j) {
-      const Vertex& v = vertices[members[j]];
-      v.at.wi.Store(&wi[3 * j]);
-      rows.Add(v.at.site);
-      owners[j] = v.path;
-    }
+    std::vector<float> u(3 * m), roulette(m);
+    std::vector<uint32_t> owners(m);
+    for (size_t j = 0; j < m; ++j) owners[j] = vertices[members[j]].path;
     // The lobe choice and the direction, interleaved per vertex.
     std::vector<float> coordinate(m);
     for (uint32_t j = 0; j < 3; ++j) {
@@ -258,17 +227,17 @@ class PathTracer final : public Transport {
       for (size_t q = 0; q < m; ++q) u[3 * q + j] = coordinate[q];
     }
     if (depth >= length_.rr_depth) points.Gather(owners, base + kRoulette, roulette);
-    model.Sample(TransportMode::kRadiance, wi, rows.Points(), u, 0, wo, weight, pdf, flags);
+    const SurfaceBatch::Samples sampled = batch.Sample(model, TransportMode::kRadiance, 0, u, Densities::kForward);
     for (size_t j = 0; j < m; ++j) {
       const Vertex& v = vertices[members[j]];
       Path& p = paths[v.path];
-      const Vec3 out = Vec3::Load(&wo[3 * j]);
-      const Vec3 w = Vec3::Load(&weight[3 * j]) * ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
-      if (!(pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
+      const Vec3 out = sampled.Wo(j);
+      const Vec3 w = sampled.Weight(j) * ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
+      if (!(sampled.pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
       p.throughput *= w;
-      p.bsdf_pdf = pdf[j];
-      p.full_weight = !sampled_lights || (flags[j] & kScatterDelta);
-      p.last = !diffuse_indirect_ && (flags[j] & kScatterDiffuse);
+      p.bsdf_pdf = sampled.pdf[j];
+      p.full_weight = !sampled_lights || (sampled.flags[j] & kScatterDelta);
+      p.last = !diffuse_indirect_ && (sampled.flags[j] & kScatterDiffuse);
       const Vec3 dir = Normalize(v.at.frame.ToWorld(out));
       Redirect(p.ray, v.at.position, v.at.ng, dir);
       if (depth >= length_.rr_depth && !Survives(p.throughput, roulette[j])) continue;

@@ -277,15 +277,12 @@ class VolPathTracer final : public Transport {
     for (const auto& [material, members] : GroupBy(keys)) {
       const SurfaceModel& model = scene.Material(material);
       const size_t m = members.size();
-      std::vector<float> wi(3 * m);
-      SurfaceRows rows(&scene, m);
+      SurfaceBatch batch(&scene, m);
       for (size_t j = 0; j < m; ++j) {
         const SurfaceVertex& v = vertices[members[j]];
-        v.at.wi.Store(&wi[3 * j]);
-        rows.Add(v.at.site);
+        batch.Add(v.at.wi, v.at.site);
         paths[v.path].scatter_point = v.at.position;
       }
-      const SurfacePoints at = rows.Points();
       if (scene.HasLights() && SamplesLights(model.Lobes())) {
         std::vector<Vec3> from(m);
         std::vector<uint32_t> owners(m);
@@ -294,11 +291,11 @@ class VolPathTracer final : public Transport {
           owners[j] = vertices[members[j]].path;
         }
         const std::vector<LightDirection> lights = SampleLightsAt(scene, points, paths, from, owners);
-        std::vector<float> wo(3 * m), f(3 * m), pdf(m);
+        std::vector<float> wo(3 * m);
         for (size_t j = 0; j < m; ++j)
           vertices[members[j]].at.frame.ToLocal(lights[j].direction).Store(&wo[3 * j]);
-        model.Evaluate(TransportMode::kRadiance, wi, wo, at, f);
-        model.Pdf(wi, wo, at, pdf);
+        const SurfaceBatch::Evaluation bsdf =
+            batch.Evaluate(model, TransportMode::kRadiance, wo, Densities::kForward);
         const std::vector<Vec3> le = LightRadiance(scene, lights);
         for (size_t j = 0; j < m; ++j) {
           const SurfaceVertex& v = vertices[members[j]];
@@ -308,15 +305,14 @@ class VolPathTracer final : public Transport {
           const Vec3 out = Vec3::Load(&wo[3 * j]);
           const float cos = std::abs(out.z) *
                             ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
-          const Vec3 unweighted = p.beta * Vec3::Load(&f[3 * j]) * le[j] * cos;
+          const Vec3 unweighted = p.beta * bsdf.F(j) * le[j] * cos;
           if (!(MaxComponent(unweighted) > 0)) continue;
           const uint32_t medium = scene.MediaOf(v.shape).Beyond(light.direction, v.at.ng, p.medium);
           links.push_back({v.path, ShadowRayToLight(v.at.position, v.at.ng, light, p.ray.time), medium, unweighted,
-                           p.r_u, light.pdf, pdf[j], light.delta});
+                           p.r_u, light.pdf, bsdf.pdf[j], light.delta});
         }
       }
-      std::vector<float> u(3 * m), wo(3 * m), weight(3 * m), pdf(m);
-      std::vector<uint32_t> flags(m);
+      std::vector<float> u(3 * m);
       for (size_t j = 0; j < m; ++j) {
         const SurfaceVertex& v = vertices[members[j]];
         VolPath& p = paths[v.path];
@@ -324,17 +320,17 @@ class VolPathTracer final : public Transport {
         u[3 * j + 1] = Uniform(points, v.path, p, kScatterDirection);
         u[3 * j + 2] = Uniform(points, v.path, p, kScatterDirection + 1);
       }
-      model.Sample(TransportMode::kRadiance, wi, at, u, 0, wo, weight, pdf, flags);
+      const SurfaceBatch::Samples sampled =
+          batch.Sample(model, TransportMode::kRadiance, 0, u, Densities::kForward);
       for (size_t j = 0; j < m; ++j) {
         const SurfaceVertex& v = vertices[members[j]];
         VolPath& p = paths[v.path];
-        const Vec3 out = Vec3::Load(&wo[3 * j]);
-        const Vec3 w = Vec3::Load(&weight[3 * j]) *
-                       ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
-        if (!(pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
+        const Vec3 out = sampled.Wo(j);
+        const Vec3 w = sampled.Weight(j) * ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
+        if (!(sampled.pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
         p.beta *= w;
-        p.r_l = p.r_u / pdf[j];
-        p.specular = (flags[j] & kScatterDelta) != 0;
+        p.r_l = p.r_u / sampled.pdf[j];
+        p.specular = (sampled.flags[j] & kScatterDelta) != 0;
         const Vec3 direction = Normalize(v.at.frame.ToWorld(out));
         p.medium = scene.MediaOf(v.shape).Beyond(direction, v.at.ng, p.medium);
         Redirect(p.ray, v.at.position, v.at.ng, direction);
@@ -362,16 +358,6 @@ class VolPathTracer final : public Transport {
   }
 
   // The radiance each sampled light sends toward its point: one call per emitter.
-  static std::vector<Vec3> LightRadiance(const SceneView& scene, const std::vector<LightDirection>& lights) {
-    std::vector<EmitterQuery> queries(lights.size());
-    for (size_t k = 0; k < lights.size(); ++k)
-      queries[k] = {lights[k].emitter, lights[k].w, SurfaceSite::Uv(lights[k].u, lights[k].v)};
-    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries, Densities::kNone);
-    std::vector<Vec3> out(lights.size());
-    for (size_t k = 0; k < lights.size(); ++k) out[k] = answers[k].radiance;
-    return out;
-  }
-
   // Emitting surfaces the rays reached, weighted against light sampling
   // from the path's last scattering vertex.
   void AddEmission(const SceneView& scene, std::vector<VolPath>& paths, const std::vector<uint32_t>& active,

@@ -1,12 +1,15 @@
 // What the wavefront transports share: grouping a batch by material or
 // emitter so that each component is called once per group, batched
-// SurfaceModel and Emitter calls, light path starts, and the power
-// heuristic of multiple importance sampling.
+// SurfaceModel and Emitter calls (SurfaceBatch and EmitterBatch, the one
+// way a transport fills their arrays; the query helpers build them too),
+// light path starts, and the power heuristic of multiple importance
+// sampling.
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -236,6 +239,63 @@ std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key
 // bidirectional weights need the reverse one (wi given wo).
 enum class Densities { kNone, kForward, kBoth };
 
+// One material's batch of vertices, as its SurfaceModel calls take them:
+// wi (local, toward where the path came from) and the SurfacePoints row
+// of each, added once and shared by the calls made on it (light samples
+// evaluated, then the BSDF sampled). Answers come in arrays of their own.
+class SurfaceBatch {
+ public:
+  SurfaceBatch(const SurfaceAttributes* attributes, size_t capacity) : rows_(attributes, capacity) {
+    wi_.reserve(3 * capacity);
+  }
+  void Add(Vec3 wi, const SurfaceSite& site) {
+    wi_.insert(wi_.end(), {wi.x, wi.y, wi.z});
+    rows_.Add(site);
+  }
+  size_t Size() const { return wi_.size() / 3; }
+
+  // f toward wo (3 per row, local) and the densities asked for: of wo
+  // given wi, and of wi given wo.
+  struct Evaluation {
+    std::vector<float> f, pdf, pdf_reverse;
+    Vec3 F(size_t j) const { return Vec3::Load(&f[3 * j]); }
+  };
+  Evaluation Evaluate(const SurfaceModel& model, TransportMode mode, std::span<const float> wo,
+                      Densities densities) const {
+    const size_t n = Size();
+    Evaluation out{std::vector<float>(3 * n), std::vector<float>(n), std::vector<float>(n)};
+    const SurfacePoints at = rows_.Points();
+    model.Evaluate(mode, wi_, wo, at, out.f);
+    if (densities != Densities::kNone) model.Pdf(wi_, wo, at, out.pdf);
+    if (densities == Densities::kBoth) model.Pdf(wo, wi_, at, out.pdf_reverse);
+    return out;
+  }
+
+  // A direction per row from `uniform` (3 per row: the lobe choice, then
+  // the direction's two numbers), restricted to the `allowed` lobes (0:
+  // all), with its weight f·|cos|/pdf, densities and lobe flags.
+  struct Samples {
+    std::vector<float> wo, weight, pdf, pdf_reverse;
+    std::vector<uint32_t> flags;
+    Vec3 Wo(size_t j) const { return Vec3::Load(&wo[3 * j]); }
+    Vec3 Weight(size_t j) const { return Vec3::Load(&weight[3 * j]); }
+  };
+  Samples Sample(const SurfaceModel& model, TransportMode mode, uint32_t allowed, std::span<const float> uniform,
+                 Densities densities) const {
+    const size_t n = Size();
+    Samples out{std::vector<float>(3 * n), std::vector<float>(3 * n), std::vector<float>(n),
+                std::vector<float>(n), std::vector<uint32_t>(n)};
+    const SurfacePoints at = rows_.Points();
+    model.Sample(mode, wi_, at, uniform, allowed, out.wo, out.weight, out.pdf, out.flags);
+    if (densities == Densities::kBoth) model.Pdf(out.wo, wi_, at, out.pdf_reverse);
+    return out;
+  }
+
+ private:
+  std::vector<float> wi_;
+  SurfaceRows rows_;
+};
+
 // A SurfaceModel query at a vertex, directions in its local frame: wi
 // toward where the path came from, wo toward where it goes.
 struct SurfaceQuery {
@@ -259,20 +319,15 @@ inline std::vector<SurfaceAnswer> EvaluateSurfaces(const SceneView& scene, Trans
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
   for (const auto& [material, members] : GroupBy(keys)) {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), wo(3 * m), f(3 * m), pdf(m), reverse(m);
-    SurfaceRows rows(&scene, m);
+    std::vector<float> wo(3 * m);
+    SurfaceBatch batch(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const SurfaceQuery& q = queries[members[j]];
-      q.wi.Store(&wi[3 * j]);
+      batch.Add(q.wi, q.site);
       q.wo.Store(&wo[3 * j]);
-      rows.Add(q.site);
     }
-    const SurfacePoints at = rows.Points();
-    const SurfaceModel& model = scene.Material(material);
-    model.Evaluate(mode, wi, wo, at, f);
-    if (densities != Densities::kNone) model.Pdf(wi, wo, at, pdf);
-    if (densities == Densities::kBoth) model.Pdf(wo, wi, at, reverse);
-    for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&f[3 * j]), pdf[j], reverse[j]};
+    const SurfaceBatch::Evaluation e = batch.Evaluate(scene.Material(material), mode, wo, densities);
+    for (size_t j = 0; j < m; ++j) answers[members[j]] = {e.F(j), e.pdf[j], e.pdf_reverse[j]};
   }
   return answers;
 }
@@ -301,24 +356,46 @@ inline std::vector<ScatterAnswer> SampleSurfaces(const SceneView& scene, Transpo
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].material;
   for (const auto& [material, members] : GroupBy(keys)) {
     const size_t m = members.size();
-    std::vector<float> wi(3 * m), u(3 * m), wo(3 * m), weight(3 * m), pdf(m), reverse(m);
-    std::vector<uint32_t> flags(m);
-    SurfaceRows rows(&scene, m);
+    std::vector<float> u(3 * m);
+    SurfaceBatch batch(&scene, m);
     for (size_t j = 0; j < m; ++j) {
       const ScatterQuery& q = queries[members[j]];
-      q.wi.Store(&wi[3 * j]);
-      rows.Add(q.site);
+      batch.Add(q.wi, q.site);
       std::copy_n(q.uniform, 3, &u[3 * j]);
     }
-    const SurfacePoints at = rows.Points();
-    const SurfaceModel& model = scene.Material(material);
-    model.Sample(mode, wi, at, u, allowed, wo, weight, pdf, flags);
-    if (densities == Densities::kBoth) model.Pdf(wo, wi, at, reverse);
+    const SurfaceBatch::Samples s = batch.Sample(scene.Material(material), mode, allowed, u, densities);
     for (size_t j = 0; j < m; ++j)
-      answers[members[j]] = {Vec3::Load(&wo[3 * j]), Vec3::Load(&weight[3 * j]), pdf[j], reverse[j], flags[j]};
+      answers[members[j]] = {s.Wo(j), s.Weight(j), s.pdf[j], s.pdf_reverse[j], s.flags[j]};
   }
   return answers;
 }
+
+// One emitter's batch of directions leaving it (local frame) and the
+// SurfacePoints rows of the points they leave from.
+class EmitterBatch {
+ public:
+  EmitterBatch(const SurfaceAttributes* attributes, size_t capacity) : rows_(attributes, capacity) {
+    w_.reserve(3 * capacity);
+  }
+  void Add(Vec3 w, const SurfaceSite& site) {
+    w_.insert(w_.end(), {w.x, w.y, w.z});
+    rows_.Add(site);
+  }
+  size_t Size() const { return w_.size() / 3; }
+  // Radiance along each direction (3 per row), and unless kNone the
+  // density of SampleDirection for it.
+  void Radiance(const Emitter& emitter, Densities densities, std::vector<float>& radiance,
+                std::vector<float>& pdf) const {
+    radiance.assign(w_.size(), 0.0f);
+    pdf.assign(Size(), 0.0f);
+    emitter.Radiance(w_, rows_.Points(), radiance);
+    if (densities != Densities::kNone) emitter.PdfDirection(w_, pdf);
+  }
+
+ private:
+  std::vector<float> w_;
+  SurfaceRows rows_;
+};
 
 // An Emitter query: w in the emitter's local frame, leaving it.
 struct EmitterQuery {
@@ -339,21 +416,33 @@ inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const
   std::vector<EmitterAnswer> answers(queries.size());
   std::vector<const Emitter*> keys(queries.size());
   for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].emitter;
+  std::vector<float> radiance, pdf;
   for (const auto& [emitter, members] : GroupBy(keys)) {
     if (!emitter) continue;
-    const size_t m = members.size();
-    std::vector<float> w(3 * m), radiance(3 * m), pdf(m);
-    SurfaceRows rows(&scene, m);
-    for (size_t j = 0; j < m; ++j) {
-      const EmitterQuery& q = queries[members[j]];
-      q.w.Store(&w[3 * j]);
-      rows.Add(q.site);
-    }
-    emitter->Radiance(w, rows.Points(), radiance);
-    if (densities != Densities::kNone) emitter->PdfDirection(w, pdf);
-    for (size_t j = 0; j < m; ++j) answers[members[j]] = {Vec3::Load(&radiance[3 * j]), pdf[j]};
+    EmitterBatch batch(&scene, members.size());
+    for (const uint32_t member : members) batch.Add(queries[member].w, queries[member].site);
+    batch.Radiance(*emitter, densities, radiance, pdf);
+    for (size_t j = 0; j < members.size(); ++j) answers[members[j]] = {Vec3::Load(&radiance[3 * j]), pdf[j]};
   }
   return answers;
+}
+
+// The radiance each sampled light sends toward the point it was sampled
+// from (zero for a sample without an emitter): one call per emitter.
+inline std::vector<Vec3> LightRadiance(const SceneView& scene, const std::vector<LightDirection>& lights) {
+  std::vector<Vec3> out(lights.size());
+  std::vector<const Emitter*> keys(lights.size());
+  for (size_t k = 0; k < lights.size(); ++k) keys[k] = lights[k].emitter;
+  std::vector<float> radiance, pdf;
+  for (const auto& [emitter, members] : GroupBy(keys)) {
+    if (!emitter) continue;
+    EmitterBatch batch(&scene, members.size());
+    for (const uint32_t member : members)
+      batch.Add(lights[member].w, SurfaceSite::Uv(lights[member].u, lights[member].v));
+    batch.Radiance(*emitter, Densities::kNone, radiance, pdf);
+    for (size_t j = 0; j < members.size(); ++j) out[members[j]] = Vec3::Load(&radiance[3 * j]);
+  }
+  return out;
 }
 
 // Methods that connect light paths to the camera (light tracing, bdpt)
