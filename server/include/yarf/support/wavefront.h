@@ -239,20 +239,31 @@ std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key
 // bidirectional weights need the reverse one (wi given wo).
 enum class Densities { kNone, kForward, kBoth };
 
-// One material's batch of vertices, as its SurfaceModel calls take them:
-// wi (local, toward where the path came from) and the SurfacePoints row
-// of each, added once and shared by the calls made on it (light samples
-// evaluated, then the BSDF sampled). Answers come in arrays of their own.
-class SurfaceBatch {
+// The rows of a batched component call: a direction in the local frame
+// (3 floats) and a SurfacePoints row each.
+class DirectedRows {
  public:
-  SurfaceBatch(const SurfaceAttributes* attributes, size_t capacity) : rows_(attributes, capacity) {
-    wi_.reserve(3 * capacity);
+  DirectedRows(const SurfaceAttributes* attributes, size_t capacity) : rows_(attributes, capacity) {
+    directions_.reserve(3 * capacity);
   }
-  void Add(Vec3 wi, const SurfaceSite& site) {
-    wi_.insert(wi_.end(), {wi.x, wi.y, wi.z});
+  void Add(Vec3 direction, const SurfaceSite& site) {
+    directions_.insert(directions_.end(), {direction.x, direction.y, direction.z});
     rows_.Add(site);
   }
-  size_t Size() const { return wi_.size() / 3; }
+  size_t Size() const { return directions_.size() / 3; }
+
+ protected:
+  std::vector<float> directions_;
+  SurfaceRows rows_;
+};
+
+// One material's batch of vertices, as its SurfaceModel calls take them:
+// wi (toward where the path came from) and the SurfacePoints row of each,
+// added once and shared by the calls made on it (light samples evaluated,
+// then the BSDF sampled). Answers come in arrays of their own.
+class SurfaceBatch : public DirectedRows {
+ public:
+  using DirectedRows::DirectedRows;
 
   // f toward wo (3 per row, local) and the densities asked for: of wo
   // given wi, and of wi given wo.
@@ -265,9 +276,10 @@ class SurfaceBatch {
     const size_t n = Size();
     Evaluation out{std::vector<float>(3 * n), std::vector<float>(n), std::vector<float>(n)};
     const SurfacePoints at = rows_.Points();
-    model.Evaluate(mode, wi_, wo, at, out.f);
-    if (densities != Densities::kNone) model.Pdf(wi_, wo, at, out.pdf);
-    if (densities == Densities::kBoth) model.Pdf(wo, wi_, at, out.pdf_reverse);
+    const std::span<const float> wi = directions_;
+    model.Evaluate(mode, wi, wo, at, out.f);
+    if (densities != Densities::kNone) model.Pdf(wi, wo, at, out.pdf);
+    if (densities == Densities::kBoth) model.Pdf(wo, wi, at, out.pdf_reverse);
     return out;
   }
 
@@ -286,14 +298,11 @@ class SurfaceBatch {
     Samples out{std::vector<float>(3 * n), std::vector<float>(3 * n), std::vector<float>(n),
                 std::vector<float>(n), std::vector<uint32_t>(n)};
     const SurfacePoints at = rows_.Points();
-    model.Sample(mode, wi_, at, uniform, allowed, out.wo, out.weight, out.pdf, out.flags);
-    if (densities == Densities::kBoth) model.Pdf(out.wo, wi_, at, out.pdf_reverse);
+    const std::span<const float> wi = directions_;
+    model.Sample(mode, wi, at, uniform, allowed, out.wo, out.weight, out.pdf, out.flags);
+    if (densities == Densities::kBoth) model.Pdf(out.wo, wi, at, out.pdf_reverse);
     return out;
   }
-
- private:
-  std::vector<float> wi_;
-  SurfaceRows rows_;
 };
 
 // A SurfaceModel query at a vertex, directions in its local frame: wi
@@ -370,31 +379,20 @@ inline std::vector<ScatterAnswer> SampleSurfaces(const SceneView& scene, Transpo
   return answers;
 }
 
-// One emitter's batch of directions leaving it (local frame) and the
-// SurfacePoints rows of the points they leave from.
-class EmitterBatch {
+// One emitter's batch: directions leaving it and the SurfacePoints rows
+// of the points they leave from.
+class EmitterBatch : public DirectedRows {
  public:
-  EmitterBatch(const SurfaceAttributes* attributes, size_t capacity) : rows_(attributes, capacity) {
-    w_.reserve(3 * capacity);
-  }
-  void Add(Vec3 w, const SurfaceSite& site) {
-    w_.insert(w_.end(), {w.x, w.y, w.z});
-    rows_.Add(site);
-  }
-  size_t Size() const { return w_.size() / 3; }
+  using DirectedRows::DirectedRows;
   // Radiance along each direction (3 per row), and unless kNone the
   // density of SampleDirection for it.
   void Radiance(const Emitter& emitter, Densities densities, std::vector<float>& radiance,
                 std::vector<float>& pdf) const {
-    radiance.assign(w_.size(), 0.0f);
+    radiance.assign(directions_.size(), 0.0f);
     pdf.assign(Size(), 0.0f);
-    emitter.Radiance(w_, rows_.Points(), radiance);
-    if (densities != Densities::kNone) emitter.PdfDirection(w_, pdf);
+    emitter.Radiance(directions_, rows_.Points(), radiance);
+    if (densities != Densities::kNone) emitter.PdfDirection(directions_, pdf);
   }
-
- private:
-  std::vector<float> w_;
-  SurfaceRows rows_;
 };
 
 // An Emitter query: w in the emitter's local frame, leaving it.
@@ -409,21 +407,32 @@ struct EmitterAnswer {
   float pdf_direction = 0;
 };
 
+// Row k of a batch goes to emitters[k] (none: skipped): each emitter is
+// called once, with the rows add(batch, k) puts in its batch for each of
+// its k; take(k, radiance, pdf_direction) gets each row's answer.
+template <typename AddRow, typename TakeAnswer>
+void CallEmitters(const SceneView& scene, const std::vector<const Emitter*>& emitters, Densities densities,
+                  AddRow&& add, TakeAnswer&& take) {
+  std::vector<float> radiance, pdf;
+  for (const auto& [emitter, members] : GroupBy(emitters)) {
+    if (!emitter) continue;
+    EmitterBatch batch(&scene, members.size());
+    for (const uint32_t member : members) add(batch, member);
+    batch.Radiance(*emitter, densities, radiance, pdf);
+    for (size_t j = 0; j < members.size(); ++j) take(members[j], Vec3::Load(&radiance[3 * j]), pdf[j]);
+  }
+}
+
 // Radiance (and, unless kNone, the direction density) of every query:
 // one call each per emitter.
 inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const std::vector<EmitterQuery>& queries,
                                                    Densities densities = Densities::kForward) {
   std::vector<EmitterAnswer> answers(queries.size());
-  std::vector<const Emitter*> keys(queries.size());
-  for (size_t k = 0; k < queries.size(); ++k) keys[k] = queries[k].emitter;
-  std::vector<float> radiance, pdf;
-  for (const auto& [emitter, members] : GroupBy(keys)) {
-    if (!emitter) continue;
-    EmitterBatch batch(&scene, members.size());
-    for (const uint32_t member : members) batch.Add(queries[member].w, queries[member].site);
-    batch.Radiance(*emitter, densities, radiance, pdf);
-    for (size_t j = 0; j < members.size(); ++j) answers[members[j]] = {Vec3::Load(&radiance[3 * j]), pdf[j]};
-  }
+  std::vector<const Emitter*> emitters(queries.size());
+  for (size_t k = 0; k < queries.size(); ++k) emitters[k] = queries[k].emitter;
+  CallEmitters(
+      scene, emitters, densities, [&](EmitterBatch& batch, uint32_t k) { batch.Add(queries[k].w, queries[k].site); },
+      [&](uint32_t k, Vec3 radiance, float pdf) { answers[k] = {radiance, pdf}; });
   return answers;
 }
 
@@ -431,17 +440,12 @@ inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const
 // from (zero for a sample without an emitter): one call per emitter.
 inline std::vector<Vec3> LightRadiance(const SceneView& scene, const std::vector<LightDirection>& lights) {
   std::vector<Vec3> out(lights.size());
-  std::vector<const Emitter*> keys(lights.size());
-  for (size_t k = 0; k < lights.size(); ++k) keys[k] = lights[k].emitter;
-  std::vector<float> radiance, pdf;
-  for (const auto& [emitter, members] : GroupBy(keys)) {
-    if (!emitter) continue;
-    EmitterBatch batch(&scene, members.size());
-    for (const uint32_t member : members)
-      batch.Add(lights[member].w, SurfaceSite::Uv(lights[member].u, lights[member].v));
-    batch.Radiance(*emitter, Densities::kNone, radiance, pdf);
-    for (size_t j = 0; j < members.size(); ++j) out[members[j]] = Vec3::Load(&radiance[3 * j]);
-  }
+  std::vector<const Emitter*> emitters(lights.size());
+  for (size_t k = 0; k < lights.size(); ++k) emitters[k] = lights[k].emitter;
+  CallEmitters(
+      scene, emitters, Densities::kNone,
+      [&](EmitterBatch& batch, uint32_t k) { batch.Add(lights[k].w, SurfaceSite::Uv(lights[k].u, lights[k].v)); },
+      [&](uint32_t k, Vec3 radiance, float) { out[k] = radiance; });
   return out;
 }
 
