@@ -233,19 +233,19 @@ inline float SphericalTriangleArea(Vec3 a, Vec3 b, Vec3 c) {
 // False for a triangle seen edge-on or from a vertex.
 inline bool SampleSphericalTriangle(const Vec3 v[3], Vec3 p, float u0, float u1, std::array<float, 3>& barycentrics) {
   const Vec3 a = Normalize(v[0] - p), b = Normalize(v[1] - p), c = Normalize(v[2] - p);
-  Vec3 n_ab = Cross(a, b), n_bc = Cross(b, c), n_ca = Cross(c, a);
+  const Vec3 n_ab = Cross(a, b), n_bc = Cross(b, c), n_ca = Cross(c, a);
   if (!(Dot(n_ab, n_ab) > 0 && Dot(n_bc, n_bc) > 0 && Dot(n_ca, n_ca) > 0)) return false;
-  n_ab = Normalize(n_ab), n_bc = Normalize(n_bc), n_ca = Normalize(n_ca);
-  const auto angle = [](Vec3 x, Vec3 y) { return std::acos(std::clamp(Dot(x, y), -1.0f, 1.0f)); };
-  // The spherical triangle's angles at a, b and c; their excess over π is
-  // its area. A sub-triangle of area u0 times that is cut off along b c.
-  const float alpha = angle(n_ab, -n_ca), beta = angle(n_bc, -n_ab), gamma = angle(n_ca, -n_bc);
-  const float area_pi = alpha + beta + gamma;
-  if (!(area_pi - kPi > 0)) return false;
-  const float sub_area_pi = kPi + u0 * (area_pi - kPi);
-  const float cos_alpha = std::cos(alpha), sin_alpha = std::sin(alpha);
-  const float sin_phi = std::sin(sub_area_pi) * cos_alpha - std::cos(sub_area_pi) * sin_alpha;
-  const float cos_phi = std::cos(sub_area_pi) * cos_alpha + std::sin(sub_area_pi) * sin_alpha;
+  // The area (SphericalTriangleArea, as the density has it) and the angle
+  // at a; a sub-triangle of area u0 times the whole is cut off along b c.
+  // Its area beyond π, the angle's excess, enters only through sine and
+  // cosine: sin(π + x) = −sin x, cos(π + x) = −cos x.
+  const float area = SphericalTriangleArea(a, b, c);
+  if (!(area > 0)) return false;
+  const float cos_alpha = std::clamp(Dot(Normalize(n_ab), -Normalize(n_ca)), -1.0f, 1.0f);
+  const float sin_alpha = std::sqrt(1 - cos_alpha * cos_alpha);
+  const float sin_sub = -std::sin(u0 * area), cos_sub = -std::cos(u0 * area);
+  const float sin_phi = sin_sub * cos_alpha - cos_sub * sin_alpha;
+  const float cos_phi = cos_sub * cos_alpha + sin_sub * sin_alpha;
   const float k1 = cos_phi + cos_alpha, k2 = sin_phi - sin_alpha * Dot(a, b);
   float cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha) / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
   cos_bp = std::clamp(std::isfinite(cos_bp) ? cos_bp : 1.0f, -1.0f, 1.0f);
