@@ -82,6 +82,7 @@ def test_every_block_of_the_page_runs(page: Path, tmp_path: Path) -> None:
     (tmp_path / "components").symlink_to(ROOT / "components")
     (tmp_path / "build").symlink_to(ROOT / "build")
     (tmp_path / "tests").symlink_to(ROOT / "tests")
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
     env = dict(os.environ)
     env["PATH"] = os.pathsep.join(
         [str(Path(sys.executable).parent), str(ROOT / "build" / "bin"), env.get("PATH", "")]

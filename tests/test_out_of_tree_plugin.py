@@ -2,12 +2,12 @@
 
 `cmake --install` puts the interface headers, the helpers of
 yarf/support/ and the CMake package (find_package(yarf): the target
-yarf::interfaces and yarf_add_plugin) in a prefix; a project of its own
-compiles every installed header on its own, builds a diffuse reflector
-against them, and
-yarfd loads it from --plugin-path and renders with it exactly what its
-own lambertian renders. Plugins built against other interface headers are
-refused at load, with a message, and yarfd serves on.
+yarf::interfaces and yarf_add_plugin) in a prefix. The example project
+examples/grey_plugin builds a diffuse reflector against them, which yarfd
+loads from --plugin-path and renders with exactly what its own lambertian
+renders. A project of checks compiles every installed header on its own.
+Plugins built against other interface headers, or refused once they
+registered, are refused at load with a message, and yarfd serves on.
 """
 
 from __future__ import annotations
@@ -25,7 +25,8 @@ from yarf.server import LocalServer
 ROOT = Path(__file__).resolve().parent.parent
 BUILD = ROOT / "build"
 
-SOURCES = Path(__file__).resolve().parent / "out_of_tree"
+EXAMPLE = ROOT / "examples" / "grey_plugin"
+CHECKS = Path(__file__).resolve().parent / "out_of_tree"
 
 
 def run(*command: str | Path, cwd: Path | None = None) -> None:
@@ -34,23 +35,34 @@ def run(*command: str | Path, cwd: Path | None = None) -> None:
 
 
 @pytest.fixture(scope="module")
-def plugins(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A folder of plugins built outside the tree against an installed yarf."""
+def plugins(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
+    """Folders of plugins built outside the tree against an installed yarf: the
+    example project's, and the checks' (every header compiled, plugins to refuse)."""
     work = tmp_path_factory.mktemp("out-of-tree")
     prefix = work / "prefix"
     run("cmake", "--install", BUILD, "--prefix", prefix)
     assert (prefix / "include" / "yarf" / "interface_version.h").exists()
-    built = work / "build"
-    run("cmake", "-S", SOURCES, "-B", built, "-G", "Ninja", f"-DCMAKE_PREFIX_PATH={prefix}")
-    run("cmake", "--build", built)
+    folders = []
+    for name, sources in (("example", EXAMPLE), ("checks", CHECKS)):
+        built = work / name
+        run("cmake", "-S", sources, "-B", built, "-G", "Ninja", f"-DCMAKE_PREFIX_PATH={prefix}")
+        run("cmake", "--build", built)
+        folders.append(built)
     for name in ("stale", "unversioned"):
-        run("c++", "-shared", "-fPIC", "-o", built / f"libyarf_{name}.so", SOURCES / f"{name}.cc")
-    return built
+        run(
+            "c++",
+            "-shared",
+            "-fPIC",
+            "-o",
+            folders[1] / f"libyarf_{name}.so",
+            CHECKS / f"{name}.cc",
+        )
+    return folders
 
 
-def test_an_out_of_tree_plugin_renders_as_the_builtin_it_copies(plugins: Path) -> None:
+def test_an_out_of_tree_plugin_renders_as_the_builtin_it_copies(plugins: list[Path]) -> None:
     with (
-        LocalServer(plugin_paths=[BUILD / "plugins", plugins]) as server,
+        LocalServer(plugin_paths=[BUILD / "plugins", *plugins]) as server,
         Client(server.address) as client,
     ):
         classes = client.list_classes()
@@ -70,11 +82,11 @@ def test_an_out_of_tree_plugin_renders_as_the_builtin_it_copies(plugins: Path) -
     assert "exports no yarf_interface_version" in failures["libyarf_unversioned.so"]
 
 
-def test_plugins_refused_after_registering_leave_yarfd_serving(plugins: Path) -> None:
+def test_plugins_refused_after_registering_leave_yarfd_serving(plugins: list[Path]) -> None:
     """yarfd unloads a plugin it refuses only once nothing of the plugin's is left:
     the factories it registered and the exception it threw."""
     with (
-        LocalServer(plugin_paths=[BUILD / "plugins", plugins]) as server,
+        LocalServer(plugin_paths=[BUILD / "plugins", *plugins]) as server,
         Client(server.address) as client,
     ):
         classes = client.list_classes()
