@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <complex>
 #include <limits>
 #include <sstream>
 #include <span>
@@ -303,14 +302,24 @@ inline float VisibleNormalPdf(Vec3 wi, Vec3 m, const Roughness& r) {
 // complex index (Born & Wolf §14.2). κ = 0 gives FresnelDielectric; η = 0,
 // κ = 1 gives 1 at every angle (Mitsuba's perfect mirror).
 inline float FresnelConductor(float cos_i, float eta, float k) {
-  using Complex = std::complex<float>;
+  // The complex-index Fresnel equations in real arithmetic: with
+  // a² + b² = |n² − sin²θ| and a = Re √(n² − sin²θ) (n = eta + i·k),
+  //   R_s = (a² + b² + cos² − 2a·cos) / (a² + b² + cos² + 2a·cos),
+  //   R_p = R_s · (cos²·(a² + b²) + sin⁴ − 2a·cos·sin²) / (… + 2a·cos·sin²).
+  // The same values as complex arithmetic gives, without its slow library
+  // division (__divsc3).
   cos_i = std::clamp(cos_i, 0.0f, 1.0f);
-  const Complex n(eta, k);
-  const float sin2_i = 1.0f - cos_i * cos_i;
-  const Complex cos_t = std::sqrt(Complex(1.0f) - sin2_i / (n * n));
-  const Complex r_parallel = (n * cos_i - cos_t) / (n * cos_i + cos_t);
-  const Complex r_perpendicular = (cos_i - n * cos_t) / (cos_i + n * cos_t);
-  return std::min(1.0f, 0.5f * (std::norm(r_parallel) + std::norm(r_perpendicular)));
+  const float cos2 = cos_i * cos_i, sin2 = 1.0f - cos2;
+  const float eta2 = eta * eta, k2 = k * k;
+  const float t0 = eta2 - k2 - sin2;
+  const float a2_plus_b2 = std::sqrt(t0 * t0 + 4.0f * eta2 * k2);
+  const float a = std::sqrt(std::max(0.0f, 0.5f * (a2_plus_b2 + t0)));
+  const float t1 = a2_plus_b2 + cos2, t2 = 2.0f * cos_i * a;
+  const float t3 = cos2 * a2_plus_b2 + sin2 * sin2, t4 = t2 * sin2;
+  // A vanishing denominator is grazing incidence on n = 1: all reflected.
+  const float r_s = t1 + t2 > 0 ? (t1 - t2) / (t1 + t2) : 1.0f;
+  const float r_p = t3 + t4 > 0 ? r_s * (t3 - t4) / (t3 + t4) : r_s;
+  return std::clamp(0.5f * (r_s + r_p), 0.0f, 1.0f);
 }
 
 // Per RGB channel, each with its own complex index.

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <initializer_list>
 #include <string>
 #include <utility>
@@ -159,6 +160,25 @@ TEST_F(MicrofacetTest, FresnelConductorWithoutAbsorptionIsTheDielectricOne) {
       const float cos_i = i / 100.0f;
       EXPECT_NEAR(mf::FresnelConductor(cos_i, eta, 0.0f), FresnelDielectric(cos_i, eta), 2e-5f)
           << "eta " << eta << ", cos θi " << cos_i;
+    }
+}
+
+// The Fresnel equations with the complex index itself (Born & Wolf's
+// amplitudes), in double: the real-arithmetic form must agree at every
+// angle, for every named metal.
+TEST_F(MicrofacetTest, FresnelConductorIsTheComplexFresnelEquations) {
+  using Complex = std::complex<double>;
+  for (const metals::NamedMetal& metal : metals::kMetals)
+    for (int c = 0; c < 3; ++c) {
+      const Complex n(metal.ior.eta[c], metal.ior.k[c]);
+      for (int i = 1; i <= 200; ++i) {
+        const double cos_i = i / 200.0, sin2 = 1 - cos_i * cos_i;
+        const Complex cos_t = std::sqrt(1.0 - sin2 / (n * n));
+        const double r_p = std::norm((n * cos_i - cos_t) / (n * cos_i + cos_t));
+        const double r_s = std::norm((cos_i - n * cos_t) / (cos_i + n * cos_t));
+        EXPECT_NEAR(mf::FresnelConductor(float(cos_i), float(n.real()), float(n.imag())), 0.5 * (r_p + r_s), 2e-5)
+            << metal.name << ", cos θi " << cos_i;
+      }
     }
 }
 
