@@ -125,8 +125,8 @@ class GridMedium final : public UniformPhaseMedium {
       if (most < kInfinity) value.max = most;
       schema.push_back(std::move(value));
       schema.push_back(Parameter::File(file_key).Doc(key + " as a grid file, .vol or .vdb"));
-      const std::string asset_key = file_key.substr(0, file_key.size() - std::string_view("filename").size()) + "asset";
-      schema.push_back(Parameter::String(asset_key).Doc("the SHA-256 of an uploaded grid file, in place of " + file_key));
+      schema.push_back(
+          Parameter::String(AssetKeyOf(file_key)).Doc("the SHA-256 of an uploaded grid file, in place of " + file_key));
       schema.push_back(Parameter::String(grid_name_key).Doc("the OpenVDB grid of that file; default " + key));
     };
     quantity("density", "filename", "grid_name", "scales sigma_a and sigma_s; default 1", kInfinity);

@@ -95,7 +95,7 @@ class DistributionRayTracer final : public Transport {
       }
       const Emitter* emitter = scene.EmitterOf(hits[k].shape);
       if (emitter && paths[active[k]].sees_emitters) {
-        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
+        seen.push_back(EmitterQuery::Seen(emitter, rays[k], hits[k]));
         seen_by.push_back(active[k]);
       }
       vertices.push_back({active[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});

@@ -139,18 +139,12 @@ class PathTracer final : public Transport {
   void AddEmission(const SceneView& scene, std::vector<Path>& paths, const std::vector<uint32_t>& active,
                    const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                    const std::vector<uint32_t>& emitted) const {
-    std::vector<EmitterQuery> queries(emitted.size());
-    for (size_t j = 0; j < emitted.size(); ++j) {
-      const uint32_t k = emitted[j];
-      queries[j] = {scene.EmitterOf(hits[k].shape), Frame(hits[k].normal).ToLocal(-rays[k].direction),
-                    SurfaceSite::Of(hits[k])};
-    }
-    const std::vector<EmitterAnswer> le = EvaluateEmitters(scene, queries, Densities::kNone);
+    const std::vector<Vec3> le = EmissionSeen(scene, rays, hits, emitted);
     for (size_t j = 0; j < emitted.size(); ++j) {
       const uint32_t k = emitted[j];
       Path& p = paths[active[k]];
       const float weight = p.full_weight ? 1 : PowerHeuristic(p.bsdf_pdf, scene.LightPdfFrom(rays[k], hits[k]));
-      p.radiance += p.throughput * le[j].radiance * weight;
+      p.radiance += p.throughput * le[j] * weight;
     }
   }
 

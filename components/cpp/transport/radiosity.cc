@@ -289,7 +289,7 @@ class Radiosity final : public Transport {
     for (uint32_t i = 0; i < hits.size(); ++i) {
       if (!hits[i].Found()) continue;
       if (const Emitter* emitter = scene.EmitterOf(hits[i].shape)) {
-        queries.push_back({emitter, Frame(hits[i].normal).ToLocal(-rays[i].direction), SurfaceSite::Of(hits[i])});
+        queries.push_back(EmitterQuery::Seen(emitter, rays[i], hits[i]));
         owners.push_back(i);
       }
     }

@@ -363,17 +363,11 @@ class VolPathTracer final : public Transport {
   void AddEmission(const SceneView& scene, std::vector<VolPath>& paths, const std::vector<uint32_t>& active,
                    const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                    const std::vector<uint32_t>& emitted) const {
-    std::vector<EmitterQuery> queries(emitted.size());
-    for (size_t j = 0; j < emitted.size(); ++j) {
-      const Hit& hit = hits[emitted[j]];
-      queries[j] = {scene.EmitterOf(hit.shape), Frame(hit.normal).ToLocal(-rays[emitted[j]].direction),
-                    SurfaceSite::Of(hit)};
-    }
-    const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries, Densities::kNone);
+    const std::vector<Vec3> seen = EmissionSeen(scene, rays, hits, emitted);
     for (size_t j = 0; j < emitted.size(); ++j) {
       const uint32_t k = emitted[j];
       VolPath& p = paths[active[k]];
-      const Vec3 le = answers[j].radiance;
+      const Vec3 le = seen[j];
       if (p.specular) {
         p.radiance += p.beta * le / ChannelMean(p.r_u);
         continue;

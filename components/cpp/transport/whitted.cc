@@ -84,7 +84,7 @@ class Whitted final : public Transport {
         continue;
       }
       if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
-        seen.push_back({emitter, Frame(hits[k].normal).ToLocal(-rays[k].direction), SurfaceSite::Of(hits[k])});
+        seen.push_back(EmitterQuery::Seen(emitter, rays[k], hits[k]));
         seen_by.push_back(uint32_t(k));
       }
       vertices.push_back({uint32_t(k), ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -135,6 +136,15 @@ struct Parameter {
 };
 
 using ParameterSchema = std::vector<Parameter>;
+
+// A file parameter named ...filename may instead be given as the hash of
+// an uploaded asset, under ...asset ("filename" → "asset",
+// "albedo_filename" → "albedo_asset"); empty for any other name.
+inline std::string AssetKeyOf(std::string_view file_key) {
+  constexpr std::string_view kFile = "filename";
+  if (!file_key.ends_with(kFile)) return "";
+  return std::string(file_key.substr(0, file_key.size() - kFile.size())) + "asset";
+}
 
 // A class declares its parameters with `static ParameterSchema Parameters()`.
 template <typename T>

@@ -117,10 +117,8 @@ void CheckValue(const Parameter& parameter, const v1::Property& value, const std
 // the hash of an uploaded asset, `...asset`, which the server resolves.
 bool Given(const v1::Properties& properties, const Parameter& parameter) {
   if (properties.values().contains(parameter.name)) return true;
-  constexpr std::string_view kFile = "filename";
-  const std::string& name = parameter.name;
-  if (parameter.type != ParameterType::kFile || !name.ends_with(kFile)) return false;
-  return properties.values().contains(name.substr(0, name.size() - kFile.size()) + "asset");
+  const std::string asset = parameter.type == ParameterType::kFile ? AssetKeyOf(parameter.name) : "";
+  return !asset.empty() && properties.values().contains(asset);
 }
 
 std::vector<std::string> NamesOf(const std::vector<Parameter>& parameters) {

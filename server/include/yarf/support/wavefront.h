@@ -400,6 +400,11 @@ struct EmitterQuery {
   const Emitter* emitter;
   Vec3 w;
   SurfaceSite site;
+
+  // The emitter a ray hit, seen back along the ray.
+  static EmitterQuery Seen(const Emitter* emitter, const Ray& ray, const Hit& hit) {
+    return {emitter, Frame(hit.normal).ToLocal(-ray.direction), SurfaceSite::Of(hit)};
+  }
 };
 struct EmitterAnswer {
   Vec3 radiance;
@@ -434,6 +439,21 @@ inline std::vector<EmitterAnswer> EvaluateEmitters(const SceneView& scene, const
       scene, emitters, densities, [&](EmitterBatch& batch, uint32_t k) { batch.Add(queries[k].w, queries[k].site); },
       [&](uint32_t k, Vec3 radiance, float pdf) { answers[k] = {radiance, pdf}; });
   return answers;
+}
+
+// The radiance of the emitters rays[k] hit, seen back along them, for
+// each k of `which`: one call per emitter.
+inline std::vector<Vec3> EmissionSeen(const SceneView& scene, const std::vector<Ray>& rays,
+                                      const std::vector<Hit>& hits, const std::vector<uint32_t>& which) {
+  std::vector<EmitterQuery> queries(which.size());
+  for (size_t j = 0; j < which.size(); ++j) {
+    const uint32_t k = which[j];
+    queries[j] = EmitterQuery::Seen(scene.EmitterOf(hits[k].shape), rays[k], hits[k]);
+  }
+  const std::vector<EmitterAnswer> answers = EvaluateEmitters(scene, queries, Densities::kNone);
+  std::vector<Vec3> out(which.size());
+  for (size_t j = 0; j < which.size(); ++j) out[j] = answers[j].radiance;
+  return out;
 }
 
 // The radiance each sampled light sends toward the point it was sampled
