@@ -7,6 +7,7 @@ from pathlib import Path
 import grpc
 import pytest
 from conftest import grouped_scene, small_scene
+from thread_ticks import threads_that_worked
 
 from yarf import Client, LocalServer
 from yarf.v1 import render_pb2, scene_pb2
@@ -55,28 +56,10 @@ def test_an_unknown_job_is_not_found(client: Client) -> None:
     assert error.value.code() == grpc.StatusCode.NOT_FOUND  # type: ignore[attr-defined]
 
 
-def cpu_ticks_by_thread(pid: int) -> dict[int, int]:
-    """User and system clock ticks each thread of process ``pid`` has used."""
-    ticks = {}
-    for task in Path(f"/proc/{pid}/task").iterdir():
-        try:
-            # After the command's ")": state is field 3, utime 14, stime 15.
-            fields = (task / "stat").read_text().rpartition(")")[2].split()
-        except OSError:
-            continue  # the thread ended meanwhile
-        ticks[int(task.name)] = int(fields[11]) + int(fields[12])
-    return ticks
-
-
 def threads_that_rendered(server: LocalServer, client: Client, threads: int) -> int:
-    """Renders a job of a few CPU seconds with ``threads``; how many of yarfd's
-    threads each did at least a fifth of the work (gRPC's threads do next to none)."""
-    before = cpu_ticks_by_thread(server.pid)
+    """Renders a job of a few CPU seconds with ``threads``; how many of yarfd's threads did it."""
     job_id = client.submit(small_scene(128), 128, threads=threads)
-    assert client.wait(job_id, timeout=300).state == render_pb2.SUCCEEDED
-    after = cpu_ticks_by_thread(server.pid)
-    used = [after[thread] - before.get(thread, 0) for thread in after]
-    return sum(1 for ticks in used if ticks > 0.2 * sum(used))
+    return threads_that_worked(server.pid, client, job_id)
 
 
 def test_threads_bounds_the_render_threads_of_a_job(server: LocalServer, client: Client) -> None:

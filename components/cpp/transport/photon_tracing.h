@@ -13,6 +13,7 @@
 #pragma once
 
 #include <nanoflann.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <bit>
@@ -105,16 +106,19 @@ constexpr int kMaxBoundarySteps = 256;
 // scattering in a medium stores a photon there (of any history), and
 // scatters the photon on by the phase function, which makes its history
 // indirect. Null boundaries are stepped through without a bounce.
+// Chunks of paths are shot on the job's threads; each path's numbers
+// depend on its index alone and the chunks' photons join in chunk order,
+// so the maps are the same however many threads shot them.
 template <typename Keep>
 std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& shooting, Keep keep,
                                  std::vector<Photon>* volume = nullptr) {
   using namespace photon_dims;
-  std::vector<Photon> stored;
-  if (!scene.HasLights() || shooting.paths == 0 || shooting.max_depth == 0 || shooting.max_depth == 1)
-    return stored;
+  if (!scene.HasLights() || shooting.paths == 0 || shooting.max_depth == 0 || shooting.max_depth == 1) return {};
   const float scale = 1.0f / float(shooting.paths);
   const int last_bounce = shooting.max_depth < 0 ? kMaxBounces : shooting.max_depth - 1;
-  constexpr uint64_t kChunk = 1 << 15;
+  // Long enough for batched component calls, short enough to share
+  // 10^5 paths among many threads.
+  constexpr uint64_t kChunk = 1 << 12;
   struct Live : SpectralPath {
     Ray ray;
     // The light's flux along the path's start (the shooting's 1/N
@@ -136,7 +140,7 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
     p.beta = p.beta * (1.0f / survive);
     return true;
   };
-  for (uint64_t first = 0; first < shooting.paths; first += kChunk) {
+  const auto shoot_chunk = [&](uint64_t first, std::vector<Photon>& stored, std::vector<Photon>* in_media) {
     const size_t n = size_t(std::min(kChunk, shooting.paths - first));
     const HashedPoints points(shooting.seed, shooting.stream, first, n);
     const std::vector<LightStart> starts = StartLightPaths(scene, points, kLightChoice, kLightPosition, kEmission);
@@ -177,7 +181,7 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
         for (uint32_t j : members) {
           const auto& [i, at] = scattered[j];
           Live& p = paths[i];
-          if (volume) volume->push_back({at, Vec3(), -p.ray.direction, p.Power(), p.history});
+          if (in_media) in_media->push_back({at, Vec3(), -p.ray.direction, p.Power(), p.history});
           if (p.bounce >= last_bounce) continue;
           const uint32_t base = kFirstBounce + kPerBounce * uint32_t(p.bounce - 1);
           for (float v : {-p.ray.direction.x, -p.ray.direction.y, -p.ray.direction.z}) wi.push_back(v);
@@ -260,6 +264,23 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
       }
       active = std::move(next);
     }
+  };
+  struct ChunkPhotons {
+    std::vector<Photon> stored, in_media;
+  };
+  std::vector<ChunkPhotons> chunks(size_t((shooting.paths + kChunk - 1) / kChunk));
+  tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
+    shoot_chunk(c * kChunk, chunks[c].stored, volume ? &chunks[c].in_media : nullptr);
+  });
+  size_t total = 0, total_in_media = 0;
+  for (const ChunkPhotons& chunk : chunks) total += chunk.stored.size(), total_in_media += chunk.in_media.size();
+  std::vector<Photon> stored;
+  stored.reserve(total);
+  if (volume) volume->reserve(volume->size() + total_in_media);
+  for (ChunkPhotons& chunk : chunks) {
+    stored.insert(stored.end(), chunk.stored.begin(), chunk.stored.end());
+    if (volume) volume->insert(volume->end(), chunk.in_media.begin(), chunk.in_media.end());
+    chunk = {};  // freed as it is copied: the photons are held about once
   }
   return stored;
 }

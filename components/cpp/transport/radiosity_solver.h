@@ -23,10 +23,14 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <utility>
 #include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "radiosity_mesh.h"
 #include "radiosity_shading.h"
@@ -176,20 +180,24 @@ class ProgressiveSolver {
     for (const Vec3& c : shooter.corner) reach = std::max(reach, Length(c - shooter.centre));
     // Form factors of element sides at [0, 2E), of vertex sides after.
     form_factor_.assign(2 * elements.size() + 2 * vertices_.Count(), 0.0f);
-    std::vector<Ray> rays;
-    std::vector<uint32_t> receivers;
-    std::vector<float> shares;
-    auto flush = [&] {
-      std::vector<uint8_t> occluded(rays.size());
-      scene.Occluded(rays, occluded);
-      for (size_t q = 0; q < rays.size(); ++q)
-        if (!occluded[q]) form_factor_[receivers[q]] += shares[q];
-      totals_.rays += rays.size();
-      rays.clear(), receivers.clear(), shares.clear();
+    // Shadow rays toward the shooter, cast a batch at a time.
+    struct Rays {
+      std::vector<Ray> rays;
+      std::vector<uint32_t> receivers;
+      std::vector<float> shares;
+    };
+    std::atomic<uint64_t> rays_cast = 0;
+    auto flush = [&](Rays& batch) {
+      std::vector<uint8_t> occluded(batch.rays.size());
+      scene.Occluded(batch.rays, occluded);
+      for (size_t q = 0; q < batch.rays.size(); ++q)
+        if (!occluded[q]) form_factor_[batch.receivers[q]] += batch.shares[q];
+      rays_cast.fetch_add(batch.rays.size(), std::memory_order_relaxed);
+      batch.rays.clear(), batch.receivers.clear(), batch.shares.clear();
     };
     // Samples the shooter from point x (normal n, near the shooter within
     // `size`) into form_factor_[index] (front) and [index + 1] (back).
-    auto receive = [&](Vec3 x, Vec3 n, float size, uint32_t index) {
+    auto receive = [&](Vec3 x, Vec3 n, float size, uint32_t index, Rays& batch) {
       // Samples until each one's area is below kNearArea × the squared
       // distance to the shooter (its edge; at least the receiver's size).
       const float gap = std::max(Length(x - shooter.centre) - reach, size);
@@ -207,19 +215,33 @@ class ProgressiveSolver {
         const float cos_shooter = Dot(normal, d) / r;
         const float cos_receiver = -Dot(n, d) / r;
         if (cos_shooter <= 0 || cos_receiver == 0) continue;
-        rays.push_back(ShadowRay(x, n, y));
-        receivers.push_back(index + (cos_receiver > 0 ? 0 : 1));
-        shares.push_back(sample_area * cos_shooter * std::abs(cos_receiver) / (kPi * r2 + sample_area));
-        if (rays.size() >= kRayBatch) flush();
+        batch.rays.push_back(ShadowRay(x, n, y));
+        batch.receivers.push_back(index + (cos_receiver > 0 ? 0 : 1));
+        batch.shares.push_back(sample_area * cos_shooter * std::abs(cos_receiver) / (kPi * r2 + sample_area));
+        if (batch.rays.size() >= kRayBatch) flush(batch);
       }
     };
-    for (uint32_t e = 0; e < elements.size(); ++e)
-      if (elements[e].shooter != s)
-        receive(elements[e].centre, elements[e].normal, std::sqrt(elements[e].area), 2 * e);
+    // Receivers r < E are elements, the rest vertices. Each receiver's
+    // form factors are its own: ranges of receivers run on the job's
+    // threads, and each sums its samples in the same order on any.
     const uint32_t vertex_base = uint32_t(2 * elements.size());
-    for (uint32_t v = 0; v < vertices_.Count(); ++v)
-      receive(vertices_.position[v], vertices_.normal[v], vertices_.size[v], vertex_base + 2 * v);
-    flush();
+    const uint32_t receivers = uint32_t(elements.size() + vertices_.Count());
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, receivers, kReceiversPerTask),
+                      [&](const tbb::blocked_range<uint32_t>& range) {
+                        Rays batch;
+                        for (uint32_t r = range.begin(); r != range.end(); ++r) {
+                          if (r < elements.size()) {
+                            const Patch& e = elements[r];
+                            if (e.shooter != s) receive(e.centre, e.normal, std::sqrt(e.area), 2 * r, batch);
+                          } else {
+                            const uint32_t v = r - uint32_t(elements.size());
+                            receive(vertices_.position[v], vertices_.normal[v], vertices_.size[v],
+                                    vertex_base + 2 * v, batch);
+                          }
+                        }
+                        flush(batch);
+                      });
+    totals_.rays += rays_cast.load();
 
     double sum = 0;  // Σ F(s → x) over the receivers
     for (size_t k = 0; k < vertex_base; ++k)
@@ -245,6 +267,7 @@ class ProgressiveSolver {
   }
 
   static constexpr size_t kRayBatch = 1 << 16;
+  static constexpr uint32_t kReceiversPerTask = 256;
   static constexpr uint32_t kExtraSampleLevels = 3;
   static constexpr float kNearArea = 0.1f;
 

@@ -22,7 +22,7 @@
 // through; media that emit light are refused.
 //
 // Photon maps are built on demand, once per pass (threads that need the
-// same pass wait for one build), and the maps of passes before the last
+// same pass join its one build), and the maps of passes before the last
 // few are dropped.
 //
 // Parameters: StochasticProgressivePhotonMapper::Parameters() below.
@@ -34,11 +34,12 @@
 // at x (light position pair, light choice, unused).
 
 #include <cmath>
-#include <future>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <vector>
+
+#include <tbb/collaborative_call_once.h>
 
 #include "photon_tracing.h"
 #include "yarf/plugin.h"
@@ -59,7 +60,11 @@ struct PassMaps {
   PhotonTree surface, volume;
 };
 
-using PhotonMapOfPass = std::shared_future<std::shared_ptr<const PassMaps>>;
+// A pass's maps and whether they are built.
+struct PassSlot {
+  tbb::collaborative_once_flag built;
+  std::shared_ptr<const PassMaps> maps;
+};
 
 class StochasticProgressivePhotonMapper final : public Transport {
  public:
@@ -94,13 +99,11 @@ class StochasticProgressivePhotonMapper final : public Transport {
 
   void Prepare(const SceneView& scene) override {
     RefuseEmissiveMedia(scene, "sppm");
-    std::shared_ptr<const PassMaps> first = Shoot(scene, 0);
-    if (initial_radius_ == 0) initial_radius_ = DefaultRadius(*first);
-    std::promise<std::shared_ptr<const PassMaps>> ready;
-    ready.set_value(std::move(first));
-    std::lock_guard lock(mutex_);
-    maps_.clear();
-    maps_[0] = ready.get_future().share();
+    {
+      std::lock_guard lock(mutex_);
+      maps_.clear();
+    }
+    if (initial_radius_ == 0) initial_radius_ = DefaultRadius(*MapOfPass(scene, 0));
   }
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
@@ -175,27 +178,21 @@ class StochasticProgressivePhotonMapper final : public Transport {
     return diagonal > 0 ? kRadiusOfDiagonal * diagonal : 1;
   }
 
-  // The map of `pass`, built by the first thread to ask for it; maps of
-  // passes far behind are dropped (and rebuilt, identical, if asked again).
+  // The maps of `pass`, built once by the first thread to ask for them;
+  // threads that ask meanwhile help shoot its photons. Maps of passes far
+  // behind are dropped (and rebuilt, identical, if asked again).
   std::shared_ptr<const PassMaps> MapOfPass(const SceneView& scene, uint64_t pass) {
-    std::promise<std::shared_ptr<const PassMaps>> build;
-    PhotonMapOfPass map;
+    std::shared_ptr<PassSlot> slot;
     {
       std::lock_guard lock(mutex_);
-      if (auto it = maps_.find(pass); it != maps_.end()) return it->second.get();
-      map = build.get_future().share();
-      maps_[pass] = map;
-      if (pass > kKeptPasses) maps_.erase(maps_.begin(), maps_.lower_bound(pass - kKeptPasses));
+      auto [it, added] = maps_.try_emplace(pass);
+      if (added) it->second = std::make_shared<PassSlot>();
+      slot = it->second;
+      if (added && pass > kKeptPasses) maps_.erase(maps_.begin(), maps_.lower_bound(pass - kKeptPasses));
     }
-    try {
-      build.set_value(Shoot(scene, pass));
-    } catch (...) {
-      build.set_exception(std::current_exception());
-      std::lock_guard lock(mutex_);
-      maps_.erase(pass);
-      throw;
-    }
-    return map.get();
+    // A build that throws leaves the flag unset: the next caller retries.
+    tbb::collaborative_call_once(slot->built, [&] { slot->maps = Shoot(scene, pass); });
+    return slot->maps;
   }
 
   PathLength length_;
@@ -204,7 +201,7 @@ class StochasticProgressivePhotonMapper final : public Transport {
   float alpha_;
   int64_t seed_;
   std::mutex mutex_;
-  std::map<uint64_t, PhotonMapOfPass> maps_;
+  std::map<uint64_t, std::shared_ptr<PassSlot>> maps_;
 };
 
 }  // namespace
