@@ -111,6 +111,7 @@ fuzz: build
 bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
 	$(PY) bench/cornell_box.py
+	$(PY) bench/scene_ratios.py
 	$(PY) bench/aggregates.py
 	$(PY) bench/profile.py
 	$(BUILD)/bin/integrator_throughput

@@ -3,20 +3,35 @@ bdpt, and photon mapping, stochastic progressive photon mapping,
 irradiance caching and radiosity.
 
 For the glossy Cornell box (caustics under a glass sphere), the diffuse
-Cornell box, the Veach-style MIS scene (small lights on sharp plates) and,
-from ../shared, Bitterli's veach-bidir (a lamp facing the wall) and water
-caustic,
-each method renders at 1, 2, 4... spp until it has spent TIME_LIMIT
-seconds (a method that refuses a scene, e.g. radiosity with non-diffuse
-materials, is left out of it); its RMSE against a high-spp reference (the mean of a path-traced
-and a bidirectional render) is interpolated, log-log, at equal time, and
+Cornell box, the Veach-style MIS scene (small lights on sharp plates)
+and, from ../shared, Bitterli's veach-bidir (a lamp facing the wall) and
+water caustic, each method renders at 1, 2, 4... spp until it has spent
+TIME_LIMIT seconds (a method that refuses a scene, e.g. radiosity with
+non-diffuse materials, is left out of it); its RMSE against a long
+reference is read at equal time off a line fitted log-log (at_time), and
 reported as a ratio to the path tracer's measured in the same run, over
-the whole image and over its hardest pixels: the 5% where the path
-tracer's own variance is largest (the caustic, the small lights'
-reflections).
-On the two Bitterli scenes the default reference (4096 + 1024 spp at 64
-px) is itself too noisy to rank the methods: their errors come out nearly
-equal; set YARF_BENCH_REFERENCE_SPP far higher for figures worth quoting.
+three sets of pixels: the whole image; its hardest pixels, the 5% where
+the path tracer's own variance is largest (the caustic, the small
+lights' reflections); and the image off its lamps, without the pixels
+that see a lamp directly or in a mirror (above LAMP_LEVEL in the
+reference or in a short bidirectional render). A lamp much smaller than
+a pixel, as the water caustic's, is seen by camera paths only when one
+happens to hit it: its few pixels' error, the same for every method that
+starts at the camera, would hide the rest of the image's.
+Each scene's reference is rendered by the methods that converge fastest
+there, far longer than any method's run: on the boxes and the MIS scene
+the mean of a path-traced and a bidirectional render; on veach-bidir,
+whose room is lit through the wall, bidirectional alone (the path
+tracer's noise there would dominate a mean); on the water caustic, whose
+floor is seen and lit through the water (specular-diffuse-specular
+paths, which neither path nor bidirectional tracing samples well), SPPM,
+which converges to the same integral as its passes grow.
+The reference is rendered as two independent halves: their difference
+measures its own noise, which is taken off each method's squared error
+(rmse_beyond_reference). YARF_BENCH_REFERENCE_SCALE multiplies every
+reference's samples (1: about six minutes in all on two cores here). Photon mapping and SPPM
+shoot photons from their own seed, set to each render's: a render shares
+no photon map with the reference.
 Convergence curves go to out/bench/light_transport.png, beside the
 images each method reached (out/bench/light_transport/*.exr), and the
 numbers to out/bench/light_transport.json.
@@ -45,6 +60,8 @@ MAX_DEPTH = 6
 METHODS = ("path", "light", "bdpt", "photon_map", "sppm", "irradiance_cache", "radiosity")
 # Radiosity has no paths to bound.
 WITHOUT_DEPTH = {"radiosity"}
+# Photons come from the transport's own seed, not the job's.
+OWN_SEED = {"photon_map", "sppm"}
 BITTERLI = ROOT.parent / "shared" / "scenes" / "bitterli"
 SCENES = {
     "glossy box (caustics)": ROOT / "scenes" / "cornell-box" / "glossy.json",
@@ -55,9 +72,17 @@ SCENES = {
     "veach bidir (lamp)": BITTERLI / "veach-bidir" / "scene-v4.pbrt",
     "water caustic": BITTERLI / "water-caustic" / "scene-v4.pbrt",
 }
-REFERENCE_SPP = {
-    "path": int(os.environ.get("YARF_BENCH_REFERENCE_SPP", "4096")),
-    "bdpt": int(os.environ.get("YARF_BENCH_REFERENCE_SPP", "4096")) // 4,
+REFERENCE_SCALE = float(os.environ.get("YARF_BENCH_REFERENCE_SCALE", "1"))
+UNBIASED_REFERENCE = {"path": 4096, "bdpt": 1024}
+# A pixel above this (any channel) sees a lamp, directly or in a mirror:
+# light reflected off surfaces stays below 2 in these scenes.
+LAMP_LEVEL = 10.0
+REFERENCES: dict[str, dict[str, int]] = {
+    "glossy box (caustics)": UNBIASED_REFERENCE,
+    "cornell box (diffuse)": UNBIASED_REFERENCE,
+    "veach mis (small lights)": UNBIASED_REFERENCE,
+    "veach bidir (lamp)": {"bdpt": 8192},
+    "water caustic": {"sppm": 2048},
 }
 TIME_LIMIT = float(os.environ.get("YARF_BENCH_SECONDS", "4"))
 EQUAL_TIME = TIME_LIMIT / 2
@@ -78,7 +103,10 @@ def render(
     client: Client, scene: scene_pb2.Scene, method: str, spp: int, seed: int
 ) -> tuple[np.ndarray, float, str]:
     """The image, the render's own seconds and its job id."""
-    spec = component(method) if method in WITHOUT_DEPTH else component(method, max_depth=MAX_DEPTH)
+    properties: dict[str, int] = {} if method in WITHOUT_DEPTH else {"max_depth": MAX_DEPTH}
+    if method in OWN_SEED:
+        properties["seed"] = seed  # photons independent of the reference's
+    spec = component(method, **properties)
     job = client.submit(scene, spp=spp, seed=seed, transport=spec)
     status = client.wait(job)
     if status.state != render_pb2.SUCCEEDED:
@@ -86,15 +114,50 @@ def render(
     return client.image(job).astype(np.float64), status.elapsed_seconds, job
 
 
-def rmse(image: np.ndarray, reference: np.ndarray) -> float:
-    return float(np.sqrt(np.mean((image - reference) ** 2)))
+def reference_half(client: Client, scene: scene_pb2.Scene, name: str, seed: int) -> np.ndarray:
+    """One of two independent halves of a scene's reference: the mean of
+    its reference methods' renders, each at half its samples."""
+    images = [
+        render(client, scene, method, max(1, round(spp * REFERENCE_SCALE / 2)), seed)[0]
+        for method, spp in REFERENCES[name].items()
+    ]
+    return np.mean(images, axis=0)
+
+
+def reference_noise(first: np.ndarray, second: np.ndarray, region: np.ndarray) -> float:
+    """The RMSE of the halves' mean from its expectation over `region`:
+    E[(first − second)²] is twice a half's variance, four times the mean's."""
+    return float(np.sqrt(np.mean((first[region] - second[region]) ** 2) / 4))
+
+
+def rmse_beyond_reference(
+    image: np.ndarray, first: np.ndarray, second: np.ndarray, region: np.ndarray
+) -> float:
+    """The RMSE of `image` over `region` from the reference's expectation.
+
+    The squared error against the halves' mean is the image's own plus
+    the reference's noise (independent renders); the noise is taken off,
+    so that a reference with rare bright samples left (a caustic that only
+    some paths find) does not put a floor under every method's error. At
+    least a tenth of the measured squared error is kept.
+    """
+    measured = np.mean((image[region] - 0.5 * (first[region] + second[region])) ** 2)
+    noise = reference_noise(first, second, region) ** 2
+    return float(np.sqrt(max(measured - noise, 0.1 * measured)))
 
 
 def at_time(curve: list[tuple[float, float]], seconds: float) -> float:
-    """RMSE at `seconds`, interpolated on log-log axes."""
-    times = np.log([t for t, _ in curve])
-    errors = np.log([e for _, e in curve])
-    return float(np.exp(np.interp(np.log(seconds), times, errors)))
+    """RMSE at `seconds`: the least-squares line on log-log axes through
+    the renders from an eighth of `seconds` to four times it. One render's
+    error swings with the rare bright samples of a method that finds some
+    light only by chance; the line weighs the renders around `seconds`
+    alike rather than trusting the two nearest."""
+    near = [(t, e) for t, e in curve if seconds / 8 <= t <= 4 * seconds]
+    if len(near) < 2:
+        times, errors = np.log([t for t, _ in curve]), np.log([e for _, e in curve])
+        return float(np.exp(np.interp(np.log(seconds), times, errors)))
+    slope, intercept = np.polyfit(np.log([t for t, _ in near]), np.log([e for _, e in near]), 1)
+    return float(np.exp(intercept + slope * np.log(seconds)))
 
 
 def main() -> None:
@@ -104,20 +167,28 @@ def main() -> None:
     with LocalServer() as server, server.client() as client:
         for name, path in SCENES.items():
             scene = small(path)
-            references = [render(client, scene, m, spp, 99) for m, spp in REFERENCE_SPP.items()]
-            reference = np.mean([image for image, _, _ in references], axis=0)
-            path_variance = client.variance(references[0][2]).sum(axis=2)
-            hard = path_variance >= np.quantile(path_variance, 0.95)
+            first, second = (reference_half(client, scene, name, seed) for seed in (99, 100))
+            _, _, path_job = render(client, scene, "path", 256, 98)
+            path_variance = client.variance(path_job).sum(axis=2)
+            lamp_finder, _, _ = render(client, scene, "bdpt", 16, 97)
+            lamps = np.zeros(path_variance.shape, dtype=bool)
+            for image in (lamp_finder, first, second):
+                lamps |= image.max(axis=2) > LAMP_LEVEL
+            regions = {
+                "equal_time_rmse": np.ones(path_variance.shape, dtype=bool),
+                "hard_pixels_rmse": path_variance >= np.quantile(path_variance, 0.95),
+                "off_lamps_rmse": ~lamps,
+            }
             rows: dict[str, dict[str, object]] = {}
             for method in METHODS:
-                curve: list[tuple[float, float]] = []
-                hard_curve: list[tuple[float, float]] = []
+                curves: dict[str, list[tuple[float, float]]] = {key: [] for key in regions}
                 spp, spent, job = 1, 0.0, ""
                 try:
                     while spent < TIME_LIMIT:
                         image, seconds, job = render(client, scene, method, spp, spp)
-                        curve.append((max(seconds, 1e-3), rmse(image, reference)))
-                        hard_curve.append((max(seconds, 1e-3), rmse(image[hard], reference[hard])))
+                        for key, region in regions.items():
+                            error = rmse_beyond_reference(image, first, second, region)
+                            curves[key].append((max(seconds, 1e-3), error))
                         spent, spp = seconds, spp * 2
                 except Refused as refused:
                     print(f"{name}: {refused}")
@@ -127,11 +198,15 @@ def main() -> None:
                     client.encoded(job, render_pb2.GetResultRequest.EXR)
                 )
                 rows[method] = {
-                    "curve": curve,
-                    "equal_time_rmse": at_time(curve, EQUAL_TIME),
-                    "hard_pixels_rmse": at_time(hard_curve, EQUAL_TIME),
+                    "curves": curves,
+                    "lamp_pixels": int(lamps.sum()),
+                    "reference_noise_rmse": reference_noise(
+                        first, second, regions["equal_time_rmse"]
+                    ),
                 }
-            for key in ("equal_time_rmse", "hard_pixels_rmse"):
+                for key, curve in curves.items():
+                    rows[method][key] = at_time(curve, EQUAL_TIME)
+            for key in regions:
                 baseline = float(rows["path"][key])
                 for row in rows.values():
                     row[key + "_vs_path"] = float(row[key]) / baseline
@@ -139,18 +214,18 @@ def main() -> None:
 
     print(f"cpu: {cpu_model()}")
     print(f"RMSE at {EQUAL_TIME:.1f} s against a high-spp reference, {SIZE} px wide")
-    print(f"{'scene':<26}{'method':<18}{'rmse':>10}{'vs path':>9}{'hard 5%':>10}{'vs path':>9}")
+    print(f"{'scene':<26}{'method':<18}", end="")
+    print("".join(f"{title:>10}{'vs path':>9}" for title in ("rmse", "hard 5%", "off lamps")))
     for name, rows in report.items():
         for method, row in rows.items():
-            print(
-                f"{name:<26}{method:<18}{row['equal_time_rmse']:>10.5f}"
-                f"{row['equal_time_rmse_vs_path']:>9.2f}{row['hard_pixels_rmse']:>10.5f}"
-                f"{row['hard_pixels_rmse_vs_path']:>9.2f}"
-            )
+            print(f"{name:<26}{method:<18}", end="")
+            for key in ("equal_time_rmse", "hard_pixels_rmse", "off_lamps_rmse"):
+                print(f"{row[key]:>10.5f}{row[key + '_vs_path']:>9.2f}", end="")
+            print()
     figure, axes = plt.subplots(1, len(report), figsize=(5 * len(report), 4))
     for axis, (name, rows) in zip(axes, report.items(), strict=True):
         for method, row in rows.items():
-            times, errors = zip(*row["curve"], strict=True)
+            times, errors = zip(*row["curves"]["equal_time_rmse"], strict=True)
             axis.loglog(times, errors, marker="o", label=method)
         axis.set_title(name)
         axis.set_xlabel("seconds")
