@@ -89,11 +89,14 @@ def yarf_render(
     }
 
 
-def embree_ceiling(scene: scene_pb2.Scene, folder: Path) -> dict[str, dict[str, float]]:
-    """Embree's rates on the scene as loaded (its files named from `folder`)."""
-    path = folder / "ceiling-scene.json"
-    path.write_text(json_format.MessageToJson(scene))
-    result = subprocess.run([str(CEILING), str(path)], capture_output=True, text=True, check=False)
+def embree_ceiling(scene: scene_pb2.Scene) -> dict[str, dict[str, float]]:
+    """Embree's rates on the scene as loaded (meshes inline, as load_scene reads them)."""
+    with tempfile.TemporaryDirectory() as temporary:
+        path = Path(temporary) / "scene.json"
+        path.write_text(json_format.MessageToJson(scene))
+        result = subprocess.run(
+            [str(CEILING), str(path)], capture_output=True, text=True, check=False
+        )
     if result.returncode != 0:
         sys.exit(f"embree_ceiling failed:\n{result.stderr[-2000:]}")
     return json.loads(result.stdout)
@@ -102,7 +105,7 @@ def embree_ceiling(scene: scene_pb2.Scene, folder: Path) -> dict[str, dict[str, 
 def ratios(client: Client, path: Path) -> dict[str, object]:
     """The three ratios for the Mitsuba file `path`."""
     scene = load_scene(path)
-    ceiling = embree_ceiling(scene, path.parent)
+    ceiling = embree_ceiling(scene)
     upload_scene_assets(client, scene, path.parent)
     pixels = scene.film.width * scene.film.height
 
