@@ -119,6 +119,7 @@ bench: build
 	$(PY) bench/integrators.py
 	$(PY) bench/render_integrators.py
 	$(PY) bench/light_transport.py
+	$(PY) bench/prepare_threads.py
 	$(PY) bench/lights.py
 	$(PY) bench/media.py
 	$(PY) bench/denoise.py

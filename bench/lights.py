@@ -66,6 +66,22 @@ def write_pfm(path: Path, rgb: np.ndarray) -> None:
         out.write(np.ascontiguousarray(rgb[::-1], dtype="<f4").tobytes())
 
 
+def mitsuba_scene(camera_origin: str, width: int, height: int, shapes: str) -> str:
+    """A Mitsuba 3 scene file: path tracing to depth 6, a 40° camera at
+    `camera_origin` looking at the origin, independent samples, a box
+    filter, and `shapes` (lights and shapes, as XML)."""
+    return f"""<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="6"/></integrator>
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world">
+      <lookat origin="{camera_origin}" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"/>
+    <film type="hdrfilm"><integer name="width" value="{width}"/>
+      <integer name="height" value="{height}"/><rfilter type="box"/></film></sensor>
+{shapes}</scene>
+"""
+
+
 def environment_scene(folder: Path) -> Path:
     """A glossy and a diffuse sphere on a floor under a sky map with a sun."""
     rows, columns = np.mgrid[0:128, 0:256]
@@ -79,15 +95,11 @@ def environment_scene(folder: Path) -> Path:
     write_pfm(folder / "sky.pfm", image.astype(np.float32))
     path = folder / "scene.xml"
     path.write_text(
-        """<scene version="3.0.0">
-  <integrator type="path"><integer name="max_depth" value="6"/></integrator>
-  <sensor type="perspective"><float name="fov" value="40"/>
-    <transform name="to_world">
-      <lookat origin="0, 1.5, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
-    <sampler type="independent"/>
-    <film type="hdrfilm"><integer name="width" value="192"/><integer name="height" value="128"/>
-      <rfilter type="box"/></film></sensor>
-  <emitter type="envmap"><string name="filename" value="sky.pfm"/></emitter>
+        mitsuba_scene(
+            "0, 1.5, 5",
+            192,
+            128,
+            """  <emitter type="envmap"><string name="filename" value="sky.pfm"/></emitter>
   <shape type="sphere"><point name="center" x="-1" y="0" z="0"/><float name="radius" value="0.9"/>
     <bsdf type="roughconductor"><string name="material" value="Au"/>
       <string name="distribution" value="ggx"/>
@@ -97,8 +109,8 @@ def environment_scene(folder: Path) -> Path:
   <shape type="rectangle"><transform name="to_world"><scale value="6"/><rotate x="1" angle="-90"/>
     <translate y="-0.9"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></shape>
-</scene>
-"""
+""",
+        )
     )
     return path
 

@@ -30,6 +30,7 @@ from aggregates import bumpy_sphere_ply
 from bench_report import cpu_model
 from cornell_box import EQUAL_TIME_SEEDS, mean_rmse, mitsuba_render, spp_for
 from google.protobuf import json_format
+from lights import mitsuba_scene
 
 from yarf.assets import upload_scene_assets
 from yarf.client import Client
@@ -52,15 +53,11 @@ def million_triangles(folder: Path) -> Path:
     bumpy_sphere_ply(folder / "bumpy.ply", RINGS, SEGMENTS)
     path = folder / "scene.xml"
     path.write_text(
-        """<scene version="3.0.0">
-  <integrator type="path"><integer name="max_depth" value="6"/></integrator>
-  <sensor type="perspective"><float name="fov" value="40"/>
-    <transform name="to_world">
-      <lookat origin="0, 1.2, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
-    <sampler type="independent"/>
-    <film type="hdrfilm"><integer name="width" value="256"/><integer name="height" value="256"/>
-      <rfilter type="box"/></film></sensor>
-  <shape type="ply"><string name="filename" value="bumpy.ply"/>
+        mitsuba_scene(
+            "0, 1.2, -4",
+            256,
+            256,
+            """  <shape type="ply"><string name="filename" value="bumpy.ply"/>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.6"/></bsdf></shape>
   <shape type="rectangle"><transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/>
     <translate y="-1.05"/></transform>
@@ -69,8 +66,8 @@ def million_triangles(folder: Path) -> Path:
     <translate y="2.5"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
     <emitter type="area"><rgb name="radiance" value="12, 12, 12"/></emitter></shape>
-</scene>
-"""
+""",
+        )
     )
     return path
 
