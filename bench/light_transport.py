@@ -222,8 +222,8 @@ def main() -> None:
             for key in ("equal_time_rmse", "hard_pixels_rmse", "off_lamps_rmse"):
                 print(f"{row[key]:>10.5f}{row[key + '_vs_path']:>9.2f}", end="")
             print()
-    figure, axes = plt.subplots(1, len(report), figsize=(5 * len(report), 4))
-    for axis, (name, rows) in zip(axes, report.items(), strict=True):
+    figure, axes = plt.subplots(1, len(report), figsize=(5 * len(report), 4), squeeze=False)
+    for axis, (name, rows) in zip(axes[0], report.items(), strict=True):
         for method, row in rows.items():
             times, errors = zip(*row["curves"]["equal_time_rmse"], strict=True)
             axis.loglog(times, errors, marker="o", label=method)
