@@ -131,19 +131,19 @@ def reference_noise(first: np.ndarray, second: np.ndarray, region: np.ndarray) -
 
 
 def rmse_beyond_reference(
-    image: np.ndarray, first: np.ndarray, second: np.ndarray, region: np.ndarray
+    image: np.ndarray, reference: np.ndarray, noise: float, region: np.ndarray
 ) -> float:
-    """The RMSE of `image` over `region` from the reference's expectation.
+    """The RMSE of `image` over `region` from the reference's expectation,
+    given the reference's own noise there (reference_noise).
 
-    The squared error against the halves' mean is the image's own plus
-    the reference's noise (independent renders); the noise is taken off,
-    so that a reference with rare bright samples left (a caustic that only
+    The squared error against the reference is the image's own plus the
+    reference's noise (independent renders); the noise is taken off, so
+    that a reference with rare bright samples left (a caustic that only
     some paths find) does not put a floor under every method's error. At
     least a tenth of the measured squared error is kept.
     """
-    measured = np.mean((image[region] - 0.5 * (first[region] + second[region])) ** 2)
-    noise = reference_noise(first, second, region) ** 2
-    return float(np.sqrt(max(measured - noise, 0.1 * measured)))
+    measured = np.mean((image[region] - reference[region]) ** 2)
+    return float(np.sqrt(max(measured - noise**2, 0.1 * measured)))
 
 
 def at_time(curve: list[tuple[float, float]], seconds: float) -> float:
@@ -179,6 +179,8 @@ def main() -> None:
                 "hard_pixels_rmse": path_variance >= np.quantile(path_variance, 0.95),
                 "off_lamps_rmse": ~lamps,
             }
+            reference = 0.5 * (first + second)
+            noise = {key: reference_noise(first, second, region) for key, region in regions.items()}
             rows: dict[str, dict[str, object]] = {}
             for method in METHODS:
                 curves: dict[str, list[tuple[float, float]]] = {key: [] for key in regions}
@@ -187,7 +189,7 @@ def main() -> None:
                     while spent < TIME_LIMIT:
                         image, seconds, job = render(client, scene, method, spp, spp)
                         for key, region in regions.items():
-                            error = rmse_beyond_reference(image, first, second, region)
+                            error = rmse_beyond_reference(image, reference, noise[key], region)
                             curves[key].append((max(seconds, 1e-3), error))
                         spent, spp = seconds, spp * 2
                 except Refused as refused:
@@ -200,9 +202,7 @@ def main() -> None:
                 rows[method] = {
                     "curves": curves,
                     "lamp_pixels": int(lamps.sum()),
-                    "reference_noise_rmse": reference_noise(
-                        first, second, regions["equal_time_rmse"]
-                    ),
+                    "reference_noise_rmse": noise["equal_time_rmse"],
                 }
                 for key, curve in curves.items():
                     rows[method][key] = at_time(curve, EQUAL_TIME)

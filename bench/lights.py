@@ -55,6 +55,8 @@ def yarf_render(
         "spp": spp,
         "seconds": status.elapsed_seconds,
         "samples_per_second": pixels * spp / status.elapsed_seconds,
+        "closest_hit_rays": status.closest_hit_rays,
+        "shadow_rays": status.shadow_rays,
     }
     return result.pixels, result.variance, stats
 

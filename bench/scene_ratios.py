@@ -30,7 +30,7 @@ from aggregates import bumpy_sphere_ply
 from bench_report import cpu_model
 from cornell_box import EQUAL_TIME_SEEDS, mean_rmse, mitsuba_render, spp_for
 from google.protobuf import json_format
-from lights import mitsuba_scene
+from lights import mitsuba_scene, yarf_render
 
 from yarf.assets import upload_scene_assets
 from yarf.client import Client
@@ -72,20 +72,6 @@ def million_triangles(folder: Path) -> Path:
     return path
 
 
-def yarf_render(
-    client: Client, scene: scene_pb2.Scene, spp: int, seed: int
-) -> tuple[np.ndarray, dict]:
-    job = client.submit(scene, spp=spp, seed=seed, name=f"scene ratios {spp} spp")
-    status = client.wait(job)
-    if status.error:
-        sys.exit(f"yarf render failed: {status.error}")
-    return client.image(job), {
-        "seconds": status.elapsed_seconds,
-        "closest_hit_rays": status.closest_hit_rays,
-        "shadow_rays": status.shadow_rays,
-    }
-
-
 def embree_ceiling(scene: scene_pb2.Scene) -> dict[str, dict[str, float]]:
     """Embree's rates on the scene as loaded (meshes inline, as load_scene reads them)."""
     with tempfile.TemporaryDirectory() as temporary:
@@ -107,8 +93,8 @@ def ratios(client: Client, path: Path) -> dict[str, object]:
     pixels = scene.film.width * scene.film.height
 
     yarf_render(client, scene, 1, 99)  # warm-up: plugins, caches
-    _, low = yarf_render(client, scene, THROUGHPUT_SPP, 1)
-    _, high = yarf_render(client, scene, 4 * THROUGHPUT_SPP, 2)
+    _, _, low = yarf_render(client, scene, THROUGHPUT_SPP, 1)
+    _, _, high = yarf_render(client, scene, 4 * THROUGHPUT_SPP, 2)
     seconds = high["seconds"] - low["seconds"]
     samples_per_second = 3 * THROUGHPUT_SPP * pixels / seconds
     closest = high["closest_hit_rays"] - low["closest_hit_rays"]
@@ -118,7 +104,7 @@ def ratios(client: Client, path: Path) -> dict[str, object]:
     yarf_rate = (closest + shadow) / seconds
     _, mitsuba = mitsuba_render("llvm_ad_rgb", 4 * THROUGHPUT_SPP, 1, path)
 
-    yarf_reference, _ = yarf_render(client, scene, REFERENCE_SPP, 12345)
+    yarf_reference, _, _ = yarf_render(client, scene, REFERENCE_SPP, 12345)
     mitsuba_reference, _ = mitsuba_render("llvm_ad_rgb", REFERENCE_SPP, 12345, path)
     reference = 0.5 * (yarf_reference.astype(np.float64) + mitsuba_reference)
     y_spp = spp_for(EQUAL_TIME_SECONDS, samples_per_second, pixels)
