@@ -47,7 +47,9 @@ def bumpy_sphere_ply(path: Path, rings: int, segments: int, seed: int = 1) -> in
     a = r * segments + s
     b = r * segments + (s + 1) % segments
     c, d = a + segments, b + segments
-    faces = np.concatenate([np.stack([a, c, b], -1), np.stack([b, c, d], -1)]).reshape(-1, 3)
+    # Wound counter-clockwise seen from outside: the faces' normals point out,
+    # as one-sided BSDFs (Mitsuba's diffuse) need.
+    faces = np.concatenate([np.stack([a, b, c], -1), np.stack([b, d, c], -1)]).reshape(-1, 3)
     header = (
         "ply\nformat binary_little_endian 1.0\n"
         f"element vertex {len(points)}\nproperty float x\nproperty float y\nproperty float z\n"
