@@ -67,6 +67,36 @@ def uv_sphere_obj(segments: int, rings: int) -> str:
     return "\n".join(lines) + "\n"
 
 
+def positions_only_ply(
+    mesh: tuple[list[tuple[float, float, float, float, float]], list[tuple[int, int, int]]],
+) -> str:
+    """A mesh (as uv_sphere gives it) as ASCII PLY of positions and faces
+    alone, less its zero-area triangles (the poles'): Mitsuba computes NaN
+    normals for their vertices."""
+    vertices, all_triangles = mesh
+    text = [f"{x:.7f} {y:.7f} {z:.7f}" for x, y, z, _, _ in vertices]
+    points = [tuple(float(c) for c in line.split()) for line in text]  # as written
+    triangles = [t for t in all_triangles if len({points[i] for i in t}) == 3]
+    return (
+        "\n".join(
+            [
+                "ply",
+                "format ascii 1.0",
+                f"element vertex {len(vertices)}",
+                "property float x",
+                "property float y",
+                "property float z",
+                f"element face {len(triangles)}",
+                "property list uchar int vertex_indices",
+                "end_header",
+                *text,
+                *(f"3 {a} {b} {c}" for a, b, c in triangles),
+            ]
+        )
+        + "\n"
+    )
+
+
 def uv_sphere_ply(segments: int, rings: int, *, per_face: bool) -> str:
     """The UV sphere as ASCII PLY with vertex normals and colours: per vertex
     from the position (vertex_color), or per face from its index (face_color)."""

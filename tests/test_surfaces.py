@@ -16,7 +16,15 @@ import numpy as np
 import pytest
 from component_process import ComponentProcess
 from imagestats import block_z_test, pixel_z_test
-from surface_scenes import SPP, render_mitsuba, uv_sphere_obj, uv_sphere_ply, write_scene
+from surface_scenes import (
+    SPP,
+    positions_only_ply,
+    render_mitsuba,
+    uv_sphere,
+    uv_sphere_obj,
+    uv_sphere_ply,
+    write_scene,
+)
 
 from yarf import Client, RenderResult, component, load_scene
 from yarf.assets import upload_scene_assets
@@ -114,8 +122,7 @@ TEXTURED = {
         "</bsdf></bsdf></bsdf></shape>"
     ),
     # A tile facing the camera, its bumps tilted by up to ~35°: gentle enough
-    # that no view falls below a bumped facet, where Mitsuba's one-sided
-    # diffuse is black and yarf's two-sided one is not.
+    # that no view falls below a bumped facet.
     "bump map": (
         '<shape type="rectangle"><transform name="to_world"><scale value="0.9"/>'
         '<rotate x="1" angle="-15"/><translate y="0.1"/></transform><bsdf type="bumpmap">'
@@ -158,12 +165,24 @@ SHAPES = {
         {"sphere.ply": uv_sphere_ply(12, 6, per_face=True)},
     ),
     "smooth low-poly sphere": (low_poly_sphere(False), {"sphere.obj": LOW_POLY}),
+    # No normals in the file: Mitsuba computes smooth ones (angle-weighted).
+    "low-poly sphere without normals": (
+        f'<shape type="ply"><string name="filename" value="sphere.ply"/>{GREY}</shape>',
+        {"sphere.ply": positions_only_ply(uv_sphere(12, 6))},
+    ),
     "faceted low-poly sphere": (low_poly_sphere(True), {"sphere.obj": LOW_POLY}),
     "cylinder": (
         '<shape type="cylinder"><float name="radius" value="0.6"/>'
         '<point name="p0" x="0" y="-1" z="0"/><point name="p1" x="0" y="0.8" z="0"/>'
-        # Its inside is in view: Mitsuba's diffuse is one-sided, yarf's two-sided.
+        # Its inside is in view: twosided makes it reflect like the outside.
         f'<bsdf type="twosided">{GREY}</bsdf></shape>',
+        {},
+    ),
+    # Mitsuba's diffuse alone is one-sided: the inside is black.
+    "open cylinder, one-sided": (
+        '<shape type="cylinder"><float name="radius" value="0.6"/>'
+        '<point name="p0" x="0" y="-1" z="0"/><point name="p1" x="0" y="0.8" z="0"/>'
+        f"{GREY}</shape>",
         {},
     ),
     "cube": (

@@ -218,6 +218,27 @@ TEST_F(SurfaceModelTest, LambertianAndPhongAreTwoSided) {
   }
 }
 
+TEST_F(SurfaceModelTest, OneSidedLambertianIsBlackFromBehind) {
+  Properties props;
+  props.Set("two_sided", false);
+  const auto one_sided = Make("lambertian", props), two_sided = Make("lambertian");
+  for (uint64_t k = 0; k < 500; ++k) {
+    const auto u = Uniform3(23, k), v = Uniform3(24, k);
+    const Vec3 a = SampleUniformHemisphere(u[0], u[1]), b = SampleUniformHemisphere(v[0], v[1]);
+    const Vec3 a_below(a.x, a.y, -a.z), b_below(b.x, b.y, -b.z);
+    ExpectVecNear(EvaluateOne(*one_sided, a, b), EvaluateOne(*two_sided, a, b), 0, "front side");
+    EXPECT_EQ(PdfOne(*one_sided, a, b), PdfOne(*two_sided, a, b));
+    ExpectVecNear(EvaluateOne(*one_sided, a_below, b_below), Vec3(), 0, "back side");
+    EXPECT_EQ(PdfOne(*one_sided, a_below, b_below), 0.0f);
+    const Scattered s = SampleOne(*one_sided, a_below, Uniform3(25, k));
+    EXPECT_EQ(s.pdf, 0.0f);
+    EXPECT_EQ(s.flags, uint32_t(kScatterNone));
+  }
+  const Vec3 reflectance(0.5f, 0.5f, 0.5f);
+  ExpectVecNear(MeanWeight(SampleMany(*one_sided, Normalize(Vec3(0.2f, 0.1f, 0.9f)), 10000, 2)).mean, reflectance,
+                0.01f, "albedo of the front side");
+}
+
 // --- Sample agrees with Pdf and Evaluate ---------------------------------
 
 TEST_F(SurfaceModelTest, SampleAgreesWithPdfAndEvaluate) {

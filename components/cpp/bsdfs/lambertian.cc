@@ -3,7 +3,9 @@
 // Scatters incident light equally in all directions of the side it
 // arrives on: f(wi, wo) = reflectance / π when wi and wo lie on the same
 // side of the surface, 0 otherwise. Both sides reflect alike (a two-sided
-// material, as pbrt's DiffuseBxDF); there is no transmission.
+// material, as pbrt's DiffuseBxDF) unless two_sided is false: then the
+// back side is black (Mitsuba's diffuse, one-sided unless wrapped in its
+// twosided). There is no transmission.
 //
 // Parameters: Lambertian::Parameters() below. A texture's values are
 // clamped to [0, 1].
@@ -32,18 +34,21 @@ class Lambertian final : public yarf::SurfaceModel {
     return {yarf::Parameter::RgbTexture("reflectance")
                 .Default(0.5)
                 .Range(0, 1)
-                .Doc("fraction of the incident light reflected, per channel")};
+                .Doc("fraction of the incident light reflected, per channel"),
+            yarf::Parameter::Bool("two_sided").Default(true).Doc(
+                "whether the back side reflects like the front (false: it is black)")};
   }
 
   explicit Lambertian(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.5f, 0.5f, 0.5f),
-                                                /*unit=*/true)) {}
+                                                /*unit=*/true)),
+        two_sided_(props.Bool("two_sided", true)) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 const yarf::SurfacePoints& at, std::span<float> value) const override {
     const auto reflectance = reflectance_.At(at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
-      return in.z * out.z > 0 ? reflectance[k] * yarf::kInvPi : Vec3();
+      return Reflects(in, out) ? reflectance[k] * yarf::kInvPi : Vec3();
     });
   }
 
@@ -61,7 +66,7 @@ class Lambertian final : public yarf::SurfaceModel {
       // Mirror onto wi's side: the back face reflects like the front.
       if (wi_z < 0) out.z = -out.z;
       const float density = yarf::CosineHemispherePdf(std::abs(out.z));
-      if (!can_reflect || wi_z == 0 || density <= 0) {
+      if (!can_reflect || wi_z == 0 || (wi_z < 0 && !two_sided_) || density <= 0) {
         rows.StoreNoSample(k);
         continue;
       }
@@ -72,20 +77,24 @@ class Lambertian final : public yarf::SurfaceModel {
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf, [](size_t, Vec3 in, Vec3 out) {
-      return in.z * out.z > 0 ? yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
+    yarf::PdfEach(wi, wo, pdf, [&](size_t, Vec3 in, Vec3 out) {
+      return Reflects(in, out) ? yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
     });
   }
 
   uint32_t Lobes() const override { return kLobe; }
 
  private:
+  // wi and wo on one side: the front, or either when two-sided.
+  bool Reflects(Vec3 in, Vec3 out) const { return in.z * out.z > 0 && (two_sided_ || in.z > 0); }
+
   yarf::TexturedValue reflectance_;
+  bool two_sided_;
 };
 
 }  // namespace
 
 YARF_PLUGIN(registrar) {
   yarf::Register<Lambertian>(registrar, "lambertian", "1.0.0",
-                             "Ideal diffuse (Lambertian) reflection, two-sided");
+                             "Ideal diffuse (Lambertian) reflection, two-sided unless told otherwise");
 }

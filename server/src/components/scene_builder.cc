@@ -372,6 +372,15 @@ class Builder {
   }
 
   TriangleMesh LoadMesh(const v1::Mesh& mesh, const std::string& what) {
+    TriangleMesh out = ReadMesh(mesh, what);
+    if (mesh.smooth_normals() && !mesh.face_normals() && out.normals.empty()) {
+      out.normals = AngleWeightedNormals(out);
+      ValidateMesh(out, what);
+    }
+    return out;
+  }
+
+  TriangleMesh ReadMesh(const v1::Mesh& mesh, const std::string& what) {
     const MeshOptions options{mesh.has_flip_tex_coords() ? mesh.flip_tex_coords() : true, mesh.face_normals()};
     switch (mesh.source_case()) {
       case v1::Mesh::kFile: {

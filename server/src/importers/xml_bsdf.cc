@@ -46,7 +46,7 @@ std::string MitsubaImporter::MaskAlpha(const XmlElement& bsdf) {
 
 // Returns the material's name, or "" for a null BSDF (a surface that does
 // not scatter).
-std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string& name) {
+std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string& name, bool two_sided) {
   const RecursionGuard guard(nesting, e.where);
   XmlPlugin p(e, *this);
   const std::string& type = p.type();
@@ -123,19 +123,19 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     }
     class_name = "lambertian";
     reflectance("reflectance", "reflectance", {0.5, 0.5, 0.5});
+    SetBool(props, "two_sided", two_sided);
   } else if (type == "twosided") {
     const XmlElement& front = inner();
-    // yarf's lambertian reflects alike on both sides already.
-    if (front.Get("type") != "diffuse")
+    if (front.Get("type") != "diffuse" && front.Get("type") != "roughdiffuse")
       Warn(e.where, "twosided", "twosided: the back side follows the inner model's own two-sidedness");
-    return MakeMaterial(front, name);
+    return MakeMaterial(front, name, true);
   } else if (type == "mask") {
     // Its opacity is the shape's cut-out (MaskAlpha); the surface is the nested BSDF's.
     p.Accept({"opacity"});
-    return MakeMaterial(inner(), name);
+    return MakeMaterial(inner(), name, two_sided);
   } else if (type == "normalmap") {
     const Textured normals = p.TexturedColor("normalmap", {0.5, 0.5, 1});
-    const std::string nested = MakeMaterial(inner(), name + "-nested");
+    const std::string nested = MakeMaterial(inner(), name + "-nested", two_sided);
     if (!normals.IsTexture()) {
       Warn(e.where, "normalmap-constant", "normalmap without a normal texture: the nested BSDF is used");
       return nested;
@@ -150,7 +150,7 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     if (textures.empty()) Fail(e.where, what + " needs a nested <texture> (the height)");
     const std::string height = TextureReference(*textures.front());
     const double scale = p.Float("scale", 1.0);
-    const std::string nested = MakeMaterial(inner(), name + "-nested");
+    const std::string nested = MakeMaterial(inner(), name + "-nested", two_sided);
     if (height.empty()) {
       Warn(e.where, "bumpmap-texture", "bumpmap: texture type '" + textures.front()->Get("type") +
                                            "' is not supported: the nested BSDF is used unbumped");
@@ -168,7 +168,8 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     if (!weight.IsTexture() && !(weight.constant.r >= 0 && weight.constant.r <= 1))
       Fail(p.WhereIs("weight"), what + ": weight must lie in [0, 1]");
     p.WarnUnused();
-    const std::string first = MakeMaterial(*nested[0], name + "-0"), second = MakeMaterial(*nested[1], name + "-1");
+    const std::string first = MakeMaterial(*nested[0], name + "-0", two_sided),
+                      second = MakeMaterial(*nested[1], name + "-1", two_sided);
     // A null BSDF in the blend: yarf has no partly invisible surfaces.
     if (first.empty() || second.empty()) {
       Warn(e.where, "blendbsdf-null", what + ": a null nested BSDF: the other one used alone");

@@ -61,7 +61,9 @@ class MitsubaImporter {
 
   // xml_bsdf.cc: the material a <bsdf> becomes, made once per element.
   std::string Material(const XmlElement& element);
-  std::string MakeMaterial(const XmlElement& element, const std::string& name);
+  // `two_sided`: inside Mitsuba's twosided, whose back side reflects like
+  // the front (Mitsuba's diffuse is otherwise black from behind).
+  std::string MakeMaterial(const XmlElement& element, const std::string& name, bool two_sided = false);
   // A `mask` BSDF's opacity as the scene texture a shape's alpha names; ""
   // for any other BSDF (or an opaque mask).
   std::string MaskAlpha(const XmlElement& bsdf);

@@ -30,6 +30,7 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     mesh.set_file(folder_.Relative(file));
     mesh.set_format(type);
     mesh.set_face_normals(p.Boolean("face_normals", false));
+    mesh.set_smooth_normals(true);
     mesh.set_flip_tex_coords(p.Boolean("flip_tex_coords", true));
   } else if (type == "serialized") {
     const std::string name = p.String("filename", "");
@@ -47,6 +48,7 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
       colour.mutable_values()->Add(mesh.colors.begin(), mesh.colors.end());
     }
     inline_mesh.set_face_normals(p.Boolean("face_normals", false));
+    inline_mesh.set_smooth_normals(true);
     if (shape.name().empty()) shape.set_name(mesh.name);
     if (p.Has("max_smooth_angle"))
       Warn(p.WhereIs("max_smooth_angle"), "max_smooth_angle",

@@ -582,6 +582,28 @@ void ValidateMesh(TriangleMesh& mesh, const std::string& name) {
   RepairNormals(mesh);
 }
 
+std::vector<Vec3> AngleWeightedNormals(const TriangleMesh& mesh) {
+  std::vector<Vec3> normals(mesh.positions.size());
+  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
+    const uint32_t* v = &mesh.indices[3 * t];
+    const Vec3 p[3] = {mesh.positions[v[0]], mesh.positions[v[1]], mesh.positions[v[2]]};
+    const Vec3 n = Cross(p[1] - p[0], p[2] - p[0]);
+    const float length = Length(n);
+    if (!(length > 0) || !std::isfinite(length)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
+      // The angle at corner k, well conditioned for small angles too.
+      const float angle = std::atan2(Length(Cross(a, b)), Dot(a, b));
+      normals[v[k]] += n * (angle / length);
+    }
+  }
+  for (Vec3& n : normals) {
+    const float length = Length(n);
+    n = length > 0 && std::isfinite(length) ? n / length : Vec3();
+  }
+  return normals;
+}
+
 void DropFaceNormals(TriangleMesh& mesh) {
   if (mesh.normals.empty()) return;
   for (size_t t = 0; t < mesh.TriangleCount(); ++t) {

@@ -67,6 +67,14 @@ TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const st
 // made unit length.
 void ValidateMesh(TriangleMesh& mesh, const std::string& name);
 
+// Smooth vertex normals for a mesh that has none, as Mitsuba computes them
+// for its mesh files: each vertex's is the mean of its triangles' unit
+// normals weighted by the triangle's angle at the vertex (Thürmer and
+// Wüthrich 1998), so that how a surface is split into triangles does not
+// tilt it. Degenerate triangles add nothing; a vertex with none but such
+// gets a zero normal, which ValidateMesh turns into its face's.
+std::vector<Vec3> AngleWeightedNormals(const TriangleMesh& mesh);
+
 // Drops vertex normals that are each triangle's own face normal (a box
 // written with one normal per face): they shade exactly as none, and
 // without them the kernel interpolates nothing. Only normals on the side

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <bit>
 #include <cstring>
 #include <string>
@@ -289,6 +290,55 @@ TEST(ObjReader, IgnoresLinesItDoesNotUse) {
 
 TEST(MeshReader, NamesTheFormatItDoesNotKnow) {
   EXPECT_EQ(ErrorOf("", "stl"), "mesh 'x.stl': unknown format 'stl' (obj or ply)");
+}
+
+// A unit cube's corner: three right angles, so the normal is the diagonal.
+TEST(AngleWeightedNormals, ACubeCornerPointsAlongTheDiagonal) {
+  TriangleMesh corner;
+  corner.positions = {{0, 0, 0}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}, {-1, -1, 0}, {0, -1, -1}, {-1, 0, -1}};
+  // Two triangles on each of the faces x = 0, y = 0, z = 0 at the origin,
+  // wound to face +x, +y, +z.
+  corner.indices = {0, 2, 5, 0, 5, 3, 0, 3, 6, 0, 6, 1, 0, 1, 4, 0, 4, 2};
+  const std::vector<Vec3> normals = AngleWeightedNormals(corner);
+  const float d = 1 / std::sqrt(3.0f);
+  EXPECT_NEAR(normals[0].x, d, 1e-6f);
+  EXPECT_NEAR(normals[0].y, d, 1e-6f);
+  EXPECT_NEAR(normals[0].z, d, 1e-6f);
+}
+
+// The weight is the angle, not the count or area of triangles: neither
+// splitting one face into more triangles nor stretching one tilts it.
+TEST(AngleWeightedNormals, DependOnTheAnglesAlone) {
+  TriangleMesh roof;  // a ridge at the origin: one face tilted 30°, one 60°
+  const float c30 = std::cos(0.5236f), s30 = std::sin(0.5236f), c60 = 0.5f, s60 = std::sqrt(3.0f) / 2;
+  roof.positions = {{0, 0, 0}, {0, 1, 0}, {c30, 0, -s30}, {c30, 1, -s30}, {-c60, 0, -s60}, {-c60, 1, -s60}};
+  roof.indices = {0, 2, 1, 2, 3, 1, 0, 1, 4, 1, 5, 4};
+  TriangleMesh split = roof;  // the first face's triangle at the ridge cut in two
+  split.positions.push_back({c30, 0.5f, -s30});
+  split.indices = {0, 2, 6, 0, 6, 1, 2, 3, 1, 0, 1, 4, 1, 5, 4};
+  TriangleMesh stretched = roof;  // the second face three times as wide
+  stretched.positions[4] = stretched.positions[4] * 3;
+  stretched.positions[5] = {-3 * c60, 1, -3 * s60};
+  const Vec3 a = AngleWeightedNormals(roof)[0];
+  for (const Vec3 b : {AngleWeightedNormals(split)[0], AngleWeightedNormals(stretched)[0]}) {
+    EXPECT_NEAR(a.x, b.x, 1e-5f);
+    EXPECT_NEAR(a.y, b.y, 1e-5f);
+    EXPECT_NEAR(a.z, b.z, 1e-5f);
+  }
+  EXPECT_NEAR(Length(a), 1, 1e-5f);
+  EXPECT_GT(a.y, -1e-6f);  // the ridge's normal lies in the roof's cross-section
+  EXPECT_LT(std::abs(a.y), 1e-5f);
+}
+
+TEST(AngleWeightedNormals, SkipDegenerateTrianglesAndLeaveLoneVerticesZero) {
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {5, 5, 5}};
+  mesh.indices = {0, 1, 2, 0, 1, 3};  // the second is a line
+  const std::vector<Vec3> normals = AngleWeightedNormals(mesh);
+  EXPECT_EQ(normals[0].z, 1.0f);
+  EXPECT_EQ(normals[3].x, 0.0f);
+  EXPECT_EQ(Length(normals[3]), 0.0f);
+  EXPECT_EQ(Length(normals[4]), 0.0f);
 }
 
 }  // namespace
