@@ -1,9 +1,9 @@
 // Embree's raw ray rate on a scene's own triangles: the ceiling a renderer
 // built on it can approach. Builds the scene as yarfd does, makes a set of
-// incoherent closest-hit rays (a quarter from the camera, the rest diffuse
-// bounces from surfaces) and shadow rays (surface to emitter), then times
-// every Embree kernel over them on all cores and prints JSON (with the
-// seconds the scene took to build). A scene that names an aggregate class
+// closest-hit rays (a quarter from the camera in pixel order, the rest
+// diffuse bounces from their hits) and shadow rays (from those hits to
+// emitters), then times every Embree kernel over them on all cores and
+// prints JSON (with the seconds the scene took to build). A scene that names an aggregate class
 // is traced through it, inside Embree's BVH, by the same kernels.
 //
 // usage: embree_ceiling SCENE.json [rays]
@@ -44,9 +44,18 @@ struct RaySets {
 
 RaySets MakeRays(const KernelScene& scene, size_t count) {
   RaySets sets;
+  // Camera rays in the order a renderer traces them: the film's pixels
+  // row by row, one jittered sample each, over as many passes as it takes.
+  // Neighbouring rays meet neighbouring triangles, and so do the bounce and
+  // shadow rays that follow from their hits; random pixels would make the
+  // ceiling lower than what a renderer reaches.
   std::vector<Ray> camera(count);
-  for (size_t i = 0; i < count; ++i)
-    camera[i] = scene.CameraRay(Uniform(i, 0), Uniform(i, 1), 0.5f, 0.5f, 0.0f);
+  const size_t width = scene.FilmWidth(), height = scene.FilmHeight();
+  for (size_t i = 0; i < count; ++i) {
+    const size_t pixel = i % (width * height);
+    camera[i] = scene.CameraRay((float(pixel % width) + Uniform(i, 0)) / float(width),
+                                (float(pixel / width) + Uniform(i, 1)) / float(height), 0.5f, 0.5f, 0.0f);
+  }
   std::vector<Hit> hits(count);
   scene.Intersect(camera, hits);
   sets.closest.assign(camera.begin(), camera.begin() + count / 4);

@@ -41,7 +41,11 @@ from yarf.v1 import scene_pb2
 ROOT = Path(__file__).resolve().parent.parent
 VEACH = ROOT / "scenes" / "veach-mis" / "scene.xml"
 CEILING = ROOT / "build" / "bin" / "embree_ceiling"
+# The samples per pixel S of the lower throughput render (the higher has
+# 4·S), per scene: enough that building the scene (seconds for a million
+# triangles, and never quite the same) is small beside rendering 3·S.
 THROUGHPUT_SPP = int(os.environ.get("YARF_BENCH_SPP", "16"))
+MILLION_TRIANGLES_SPP = 4 * THROUGHPUT_SPP
 REFERENCE_SPP = int(os.environ.get("YARF_BENCH_REFERENCE_SPP", "1024"))
 EQUAL_TIME_SECONDS = float(os.environ.get("YARF_BENCH_SECONDS", "2.0"))
 # 2 · rings · segments triangles.
@@ -85,24 +89,25 @@ def embree_ceiling(scene: scene_pb2.Scene) -> dict[str, dict[str, float]]:
     return json.loads(result.stdout)
 
 
-def ratios(client: Client, path: Path) -> dict[str, object]:
-    """The three ratios for the Mitsuba file `path`."""
+def ratios(client: Client, path: Path, spp: int) -> dict[str, object]:
+    """The three ratios for the Mitsuba file `path`, throughput measured
+    from renders at `spp` and 4·`spp`."""
     scene = load_scene(path)
     ceiling = embree_ceiling(scene)
     upload_scene_assets(client, scene, path.parent)
     pixels = scene.film.width * scene.film.height
 
     yarf_render(client, scene, 1, 99)  # warm-up: plugins, caches
-    _, _, low = yarf_render(client, scene, THROUGHPUT_SPP, 1)
-    _, _, high = yarf_render(client, scene, 4 * THROUGHPUT_SPP, 2)
+    _, _, low = yarf_render(client, scene, spp, 1)
+    _, _, high = yarf_render(client, scene, 4 * spp, 2)
     seconds = high["seconds"] - low["seconds"]
-    samples_per_second = 3 * THROUGHPUT_SPP * pixels / seconds
+    samples_per_second = 3 * spp * pixels / seconds
     closest = high["closest_hit_rays"] - low["closest_hit_rays"]
     shadow = high["shadow_rays"] - low["shadow_rays"]
     c_best, s_best = ceiling["closest"]["best"], ceiling["shadow"]["best"]
     ceiling_rate = (closest + shadow) / (closest / c_best + shadow / s_best)
     yarf_rate = (closest + shadow) / seconds
-    _, mitsuba = mitsuba_render("llvm_ad_rgb", 4 * THROUGHPUT_SPP, 1, path)
+    _, mitsuba = mitsuba_render("llvm_ad_rgb", 4 * spp, 1, path)
 
     yarf_reference, _, _ = yarf_render(client, scene, REFERENCE_SPP, 12345)
     mitsuba_reference, _ = mitsuba_render("llvm_ad_rgb", REFERENCE_SPP, 12345, path)
@@ -136,8 +141,10 @@ def main() -> None:
         server.client() as client,
         tempfile.TemporaryDirectory() as folder,
     ):
-        report["veach_mis"] = ratios(client, VEACH)
-        report["million_triangles"] = ratios(client, million_triangles(Path(folder)))
+        report["veach_mis"] = ratios(client, VEACH, THROUGHPUT_SPP)
+        report["million_triangles"] = ratios(
+            client, million_triangles(Path(folder)), MILLION_TRIANGLES_SPP
+        )
     out = ROOT / "out" / "bench"
     out.mkdir(parents=True, exist_ok=True)
     (out / "scene_ratios.json").write_text(json.dumps(report, indent=2))
