@@ -225,6 +225,10 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // pixel's step at p's distance and angle, shrunk for many samples per
   // pixel). Zero when unknown or the plane is seen edge-on.
   virtual void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const { dpdx = dpdy = Vec3(); }
+  // Whether anything reads texture footprints (SurfaceSite::footprint):
+  // the scene has textures, or materials in other processes, which may
+  // filter their own. When not, transports may leave them zero.
+  virtual bool FootprintsRead() const { return true; }
   // Whether the lens has area (thin lens) or is a point (pinhole).
   // rpc: Layout
   virtual bool CameraHasLens() const = 0;

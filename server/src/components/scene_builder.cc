@@ -210,13 +210,17 @@ class Builder {
       kernel_->ThrowIfStopped();
       resolved_.textures[t.name()] = MakeTexture(t);
     }
+    bool remote_materials = false;
     for (const v1::Material& m : scene_.materials()) {
       const std::string what = "material '" + m.name() + "' (" + m.class_name() + ")";
       // In order: a material may wrap one before it.
       std::shared_ptr<const SurfaceModel> model = Create<SurfaceModel>(m.class_name(), m.properties(), m.address(), what);
+      remote_materials = remote_materials || dynamic_cast<const Remote<SurfaceModel>*>(model.get());
       resolved_.materials[m.name()] = model;
       materials_[m.name()] = kernel_->AddMaterial(std::move(model));
     }
+    // Without textures, only a material in another process may filter.
+    kernel_->ReadFootprints(!scene_.textures().empty() || remote_materials);
     for (const v1::SceneMedium& m : scene_.media()) {
       const std::string what = MediumName(m);
       ResolvedProperties own{resolved_.textures, {}, {}};

@@ -264,6 +264,44 @@ TEST_F(SceneTest, SampleSpacingIsAPixelStepAtTheHitOverRootSpp) {
   EXPECT_EQ(Length(dpdx) + Length(dpdy), 0.0f);
 }
 
+TEST_F(SceneTest, FootprintsAreReadOnlyWhereATextureCanReadThem) {
+  v1::Scene scene = BaseScene();
+  AddTriangle(scene.mutable_shapes());
+  EXPECT_FALSE(Build(scene)->FootprintsRead());
+  v1::SceneTexture* t = scene.add_textures();
+  t->set_name("grey");
+  t->mutable_texture()->set_class_name("constant_texture");
+  EXPECT_TRUE(Build(scene)->FootprintsRead());
+}
+
+// A ridge of two faces without normals, 90° apart: smooth_normals gives
+// the ridge's vertices the mean of the faces' normals; without it, none.
+TEST_F(SceneTest, MeshesWithoutNormalsGetSmoothOnesWhenAsked) {
+  v1::Scene scene = BaseScene();
+  v1::SceneShape* s = AddTriangle(scene.mutable_shapes());
+  v1::Mesh* mesh = s->mutable_mesh();
+  mesh->clear_positions();
+  mesh->clear_indices();
+  // Faces y = 0 (x ≥ 0) and x = 0 (y ≥ 0) sharing the edge x = y = 0, at z 4 to 6.
+  for (float v : {0.f, 0.f, 4.f, 0.f, 0.f, 6.f, 1.f, 0.f, 5.f, 0.f, 1.f, 5.f}) mesh->add_positions(v);
+  for (uint32_t i : {0u, 2u, 1u, 0u, 1u, 3u}) mesh->add_indices(i);
+  // Just beside the ridge, on the face y = 0, seen from below-right.
+  const auto hit_near_ridge = [&](const KernelScene& kernel) {
+    return Trace(kernel, {0.02f, -1, 5}, {0, 1, 0});
+  };
+  const Hit flat = hit_near_ridge(*Build(scene));
+  ASSERT_TRUE(flat.Found());
+  EXPECT_NEAR(flat.shading_normal.y, -1, 1e-5f);
+  mesh->set_smooth_normals(true);
+  const Hit smooth = hit_near_ridge(*Build(scene));
+  ASSERT_TRUE(smooth.Found());
+  // Near the ridge the normal leans toward the ridge's (−1, −1, 0)/√2.
+  EXPECT_LT(smooth.shading_normal.x, -0.5f);
+  EXPECT_NEAR(smooth.shading_normal.x, smooth.shading_normal.y, 0.05f);
+  mesh->set_face_normals(true);  // Mitsuba's face_normals wins
+  EXPECT_NEAR(hit_near_ridge(*Build(scene)).shading_normal.y, -1, 1e-5f);
+}
+
 TEST_F(SceneTest, TexturesNeedUniqueNamesAndTheirAssetsAHash) {
   v1::Scene scene = BaseScene();
   AddTriangle(scene.mutable_shapes());

@@ -92,6 +92,8 @@ class KernelScene final : public SceneView {
   // Whether they find triangles that subtend a fair solid angle by that
   // solid angle (pbrt-v4), or uniformly in area (the default, Mitsuba).
   void SampleTrianglesBySolidAngle(bool by_solid_angle) { triangles_by_solid_angle_ = by_solid_angle; }
+  // Whether anything reads texture footprints (SceneView::FootprintsRead).
+  void ReadFootprints(bool read) { footprints_read_ = read; }
   void Commit();
 
   // Commit (the BVH builds) and every later Intersect and Occluded throw
@@ -135,6 +137,7 @@ class KernelScene final : public SceneView {
   // prefiltered texture's.
   void SetSamplesPerPixel(uint32_t spp);
   void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const override;
+  bool FootprintsRead() const override { return footprints_read_; }
   void Attribute(std::string_view name, std::span<const SurfaceLocation> at, std::span<float> rgb) const override;
   bool CameraHasLens() const override { return camera_.HasLens(); }
   std::string_view CameraUnreachableReason() const override { return camera_.UnreachableReason(); }
@@ -232,6 +235,7 @@ class KernelScene final : public SceneView {
   Camera camera_;
   uint64_t service_handle_ = 0;
   float sample_spacing_ = 1;
+  bool footprints_read_ = true;
   uint32_t width_, height_;
   // Shared: a material may wrap another (normalmap).
   std::vector<std::shared_ptr<const SurfaceModel>> materials_;

@@ -110,7 +110,7 @@ struct ShadingPoint {
 
 // The hit of `ray` as scattering sees it, with the texture footprint of a
 // camera sample's spacing there (SceneView::SampleSpacing) on surfaces
-// with a parameterisation of their own.
+// with a parameterisation of their own, when anything reads footprints.
 inline ShadingPoint ShadingPointOf(const SceneView& scene, const Hit& hit, const Ray& ray) {
   const Frame frame = ShadingFrame(hit);
   ShadingPoint at{ray.origin + ray.direction * hit.t, hit.normal, frame, frame.ToLocal(-ray.direction),
@@ -120,9 +120,11 @@ inline ShadingPoint ShadingPointOf(const SceneView& scene, const Hit& hit, const
     at.site.position = at.position;
     at.site.dpdu = frame.ToLocal(hit.dpdu);
     at.site.dpdv = frame.ToLocal(hit.dpdv);
-    Vec3 dpdx, dpdy;
-    scene.SampleSpacing(at.position, hit.normal, dpdx, dpdy);
-    UvFootprint(hit.dpdu, hit.dpdv, dpdx, dpdy, at.site.footprint);
+    if (scene.FootprintsRead()) {
+      Vec3 dpdx, dpdy;
+      scene.SampleSpacing(at.position, hit.normal, dpdx, dpdy);
+      UvFootprint(hit.dpdu, hit.dpdv, dpdx, dpdy, at.site.footprint);
+    }
   }
   return at;
 }
