@@ -40,6 +40,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <optional>
 #include <vector>
 
 #include "medium_transport.h"
@@ -666,41 +667,42 @@ class Bdpt final : public Transport {
                const SurfaceAnswer* light_answer, const SurfaceAnswer* camera_answer, float emitter_pdf,
                float environment_pdf) const {
     const uint32_t s = j.s, t = j.t, i = j.path;
-    // Copies of the vertices whose densities the connection changes.
-    Vertex pt = camera.at(i, t - 1);
-    Vertex pt_minus = t > 1 ? camera.at(i, t - 2) : Vertex{};
-    Vertex qs = s > 0 ? light.at(i, s - 1) : Vertex{};
-    Vertex qs_minus = s > 1 ? light.at(i, s - 2) : Vertex{};
+    // The connection changes the reverse densities of pt, pt−1, qs and
+    // qs−1 alone; every other density is its subpath's own.
+    std::optional<Vertex> lens;  // pt when t = 1: the camera vertex the connection sampled
     if (t == 1) {
-      // The camera vertex sampled by the connection.
-      pt = Vertex{};
-      pt.kind = Vertex::Kind::kCamera;
-      pt.p = j.camera.lens_point;
-      pt.n = j.camera.axis;
+      lens.emplace();
+      lens->kind = Vertex::Kind::kCamera;
+      lens->p = j.camera.lens_point;
+      lens->n = j.camera.axis;
     }
+    const Vertex& pt = t == 1 ? *lens : camera.at(i, t - 1);
+    float pt_rev = 0, pt_minus_rev = 0, qs_rev = 0, qs_minus_rev = 0;
     if (s > 0) {
+      const Vertex& qs = light.at(i, s - 1);
       // qs as sampled from pt.
       const float pdf = t == 1 ? j.camera.importance : camera_answer->pdf;
-      qs.pdf_rev = pt.ToArea(pdf, qs);
+      qs_rev = pt.ToArea(pdf, qs);
       // pt as sampled from qs.
-      pt.pdf_rev = qs.ToArea(s == 1 ? emitter_pdf : light_answer->pdf, pt);
-      if (t > 1) pt_minus.pdf_rev = pt.ToArea(camera_answer->pdf_reverse, pt_minus);
-      if (s > 1) qs_minus.pdf_rev = qs.ToArea(light_answer->pdf_reverse, qs_minus);
+      pt_rev = qs.ToArea(s == 1 ? emitter_pdf : light_answer->pdf, pt);
+      if (t > 1) pt_minus_rev = pt.ToArea(camera_answer->pdf_reverse, camera.at(i, t - 2));
+      if (s > 1) qs_minus_rev = qs.ToArea(light_answer->pdf_reverse, light.at(i, s - 2));
     } else {
-      // pt as a light sample, and pt−1 as sampled from it.
-      pt.pdf_rev = pt.infinite ? environment_pdf : scene.LightPdfArea(pt.shape);
-      pt_minus.pdf_rev = pt.ToArea(emitter_pdf, pt_minus);
+      // pt as a light sample, and pt−1 as sampled from it (t ≥ 2 here).
+      pt_rev = pt.infinite ? environment_pdf : scene.LightPdfArea(pt.shape);
+      pt_minus_rev = pt.ToArea(emitter_pdf, camera.at(i, t - 2));
     }
-    const auto camera_vertex = [&](uint32_t k) -> const Vertex& {
-      return k == t - 1 ? pt : k == t - 2 ? pt_minus : camera.at(i, k);
+    const auto camera_vertex = [&](uint32_t k) -> const Vertex& { return k == t - 1 ? pt : camera.at(i, k); };
+    const auto camera_rev = [&](uint32_t k) {
+      return k == t - 1 ? pt_rev : k == t - 2 ? pt_minus_rev : camera.at(i, k).pdf_rev;
     };
-    const auto light_vertex = [&](uint32_t k) -> const Vertex& {
-      return k == s - 1 ? qs : k == s - 2 ? qs_minus : light.at(i, k);
+    const auto light_rev = [&](uint32_t k) {
+      return k == s - 1 ? qs_rev : k == s - 2 ? qs_minus_rev : light.at(i, k).pdf_rev;
     };
     float sum = 0, ratio = 1;
     for (uint32_t k = t - 1; k >= 1; --k) {
       const Vertex& v = camera_vertex(k);
-      ratio *= Remap0(v.pdf_rev) / Remap0(v.pdf_fwd);
+      ratio *= Remap0(camera_rev(k)) / Remap0(v.pdf_fwd);
       const bool delta = (k == t - 1 ? false : v.delta) || camera_vertex(k - 1).delta;
       // Joining a light at infinity straight to the camera is no strategy.
       const bool impossible = k == 1 && t == 2 && s == 0 && pt.infinite;
@@ -708,11 +710,11 @@ class Bdpt final : public Transport {
     }
     ratio = 1;
     for (int k = int(s) - 1; k >= 0; --k) {
-      const Vertex& v = light_vertex(uint32_t(k));
-      ratio *= Remap0(v.pdf_rev) / Remap0(v.pdf_fwd);
+      const Vertex& v = light.at(i, uint32_t(k));
+      ratio *= Remap0(light_rev(uint32_t(k))) / Remap0(v.pdf_fwd);
       const bool self_delta = k == int(s) - 1 ? false : v.delta;
       // Strategy (k, ·) needs vertex k − 1 to connect; s = 0 needs a light with area.
-      const bool before_delta = k > 0 ? light_vertex(uint32_t(k - 1)).delta : v.delta_position;
+      const bool before_delta = k > 0 ? light.at(i, uint32_t(k - 1)).delta : v.delta_position;
       if (!self_delta && !before_delta) sum += ratio * ratio;
     }
     return 1 / (1 + sum);
