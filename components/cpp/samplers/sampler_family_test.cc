@@ -393,6 +393,30 @@ TEST_F(SamplerFamilyTest, SamplePairsGivesSamplesValuesExactly) {
 }
 
 
+// zsobol's batch kernel takes the runs of points a job makes (one seed,
+// AtPixel's indices): it gives Sample's values too, for even and odd
+// powers of two, with runs that do not fill its blocks.
+TEST_F(SamplerFamilyTest, ZSobolSamplePairsOfAJobsPointsGivesSamplesValues) {
+  const std::unique_ptr<Sampler> sampler = Make("zsobol", 0);
+  for (uint32_t spp : {8u, 16u}) {
+    std::vector<uint64_t> indices, seeds;
+    for (uint32_t pixel = 0; pixel < 37; ++pixel)
+      for (uint32_t s = 0; s < spp; ++s) {
+        const Sampler::FilmPoint at = sampler->AtPixel(pixel % 64, pixel / 3, 64, 48, s, spp, 7);
+        indices.push_back(at.index);
+        seeds.push_back(at.seed);
+      }
+    for (uint32_t pair : {0u, 2u, 300u}) {
+      std::vector<float> out(2 * indices.size());
+      sampler->SamplePairs(indices, seeds, pair, out);
+      for (size_t k = 0; k < indices.size(); ++k)
+        for (uint32_t c = 0; c < 2; ++c)
+          ASSERT_EQ(out[2 * k + c], sampler->Sample(indices[k], 2 * pair + c, seeds[k]))
+              << "spp " << spp << " pair " << pair << " point " << k;
+    }
+  }
+}
+
 // Whether the points (pairs of coordinates in [0,1)) put exactly one point
 // in each elementary interval of area 1/n, n = points.size() a power of 2:
 // a (0, m, 2)-net.
