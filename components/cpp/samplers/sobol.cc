@@ -89,13 +89,15 @@ inline uint32_t ShuffledReversedIndex(uint64_t index, uint32_t block, uint64_t s
   return yarf::LaineKarrasPermutation(yarf::ReverseBits(uint32_t(index)), shuffle_seed);
 }
 
-// Coordinate `dimension` from its block's shuffled index: Sobol's first
-// dimension is the van der Corput sequence, the bit reversal of the index,
-// so the reversals around the scrambles cancel; then the coordinate's own
-// scramble.
+// The seed of coordinate `dimension`'s scramble, for `seed`.
 inline uint32_t ScrambleSeed(uint32_t dimension, uint64_t seed) {
   return uint32_t(yarf::MixBits(seed ^ kScrambleSeeds[dimension % kCachedSeeds]) + (dimension / kCachedSeeds));
 }
+
+// Coordinate `dimension` from its block's shuffled index: Sobol's first
+// dimension is the van der Corput sequence, the bit reversal of the index,
+// so the reversals around the scrambles cancel; then the coordinate's own
+// scramble (of seed `scramble_seed`).
 inline float ScrambledCoordinate(uint32_t reversed_shuffled, uint32_t dimension, uint32_t scramble_seed) {
   const uint32_t bits = dimension % 2 == 0 ? reversed_shuffled : SobolSecondOfReversed(reversed_shuffled);
   return yarf::ToUnitFloat(yarf::NestedUniformScramble(bits, scramble_seed));
@@ -135,8 +137,10 @@ class Sobol final : public yarf::Sampler {
 
 
 // A 32-bit integer hash (Wellons' "lowbias32"): the choice of each digit's
-// permutation, one per digit, so it must be cheap.
-constexpr uint32_t Mix32(uint32_t v) {
+// permutation, one per digit, so it must be cheap. Of one integer or of
+// each lane of a vector of them (Lanes, below).
+template <typename T>
+[[gnu::always_inline]] constexpr T Mix32(T v) {
   v ^= v >> 16;
   v *= 0x7feb352du;
   v ^= v >> 15;
@@ -197,36 +201,46 @@ struct ZSobolPair {
 
 // Digit `shift` / 2 of a permuted index: that base-4 digit of `index`
 // permuted by the permutation the digits above it choose.
-template <typename Index>
-inline uint32_t PermutedDigit(Index index, int shift, uint32_t salt) {
+inline uint32_t PermutedDigit(uint64_t index, int shift, uint32_t salt) {
   const uint32_t digit = uint32_t(index >> shift) & 3;
-  // None above the top digit of the type (a shift by its width is undefined).
-  const uint32_t above = shift + 2 < int(8 * sizeof(Index)) ? uint32_t(index >> (shift + 2)) : 0;
-  return (kPermutationCodes[Mix32(above ^ salt) % 24] >> (2 * digit)) & 3;
+  return (kPermutationCodes[Mix32(uint32_t(index >> (shift + 2)) ^ salt) % 24] >> (2 * digit)) & 3;
 }
 
 // With an odd power of two samples per pixel: the last digit's free bit
 // dropped, and the sample's bit flipped by a hash of the digits above.
-template <typename Index>
-inline Index WithoutFreeBit(Index permuted, Index index, uint32_t salt) {
+inline uint64_t WithoutFreeBit(uint64_t permuted, uint64_t index, uint32_t salt) {
   return ((permuted | (index & 3)) >> 1) ^ (Mix32(uint32_t(index >> 2) ^ salt) & 1);
 }
 
+// Sixteen 32-bit lanes (GCC's vector extension): the batch kernel's
+// table lookup becomes a shuffle of two registers, which the vectoriser
+// would not make of a table by itself.
+using Lanes = uint32_t __attribute__((vector_size(64)));
+
 // zsobol's pair `pair` of `count` points below 2^32 sharing one seed's
-// keys (at most 16 digits): the digits' permutations a digit at a time
-// over a block of points, loops of fixed length the compiler vectorises,
-// built for AVX-512, AVX2 and the baseline and picked at load time.
+// keys (at most 16 digits), sixteen points at a time, as PermutedDigit
+// and WithoutFreeBit do for one; built for AVX-512, AVX2 and the baseline
+// and picked at load time from the CPU.
 [[gnu::target_clones("avx512f", "avx2", "default")]]
 void ZSobolPairs(const uint64_t* indices, size_t count, uint32_t pair, const ZSobolPair& p, float* out) {
   constexpr size_t kLanes = 16;
+  Lanes first_codes, last_codes;  // kPermutationCodes[0, 16) and [16, 24)
+  for (size_t c = 0; c < kLanes; ++c) {
+    first_codes[c] = kPermutationCodes[c];
+    last_codes[c] = c + kLanes < kPermutationCodes.size() ? kPermutationCodes[c + kLanes] : 0;
+  }
   for (size_t first = 0; first < count; first += kLanes) {
     const size_t n = std::min(kLanes, count - first);
-    uint32_t index[kLanes] = {}, permuted[kLanes] = {};
+    Lanes index = {}, permuted = {};
     for (size_t j = 0; j < n; ++j) index[j] = uint32_t(indices[first + j]);
-    for (int i = p.digits - 1; i >= (p.odd ? 1 : 0); --i)
-      for (size_t j = 0; j < kLanes; ++j) permuted[j] |= PermutedDigit(index[j], 2 * i, p.salt) << (2 * i);
-    if (p.odd)
-      for (size_t j = 0; j < kLanes; ++j) permuted[j] = WithoutFreeBit(permuted[j], index[j], p.salt);
+    for (int i = p.digits - 1; i >= (p.odd ? 1 : 0); --i) {
+      const int shift = 2 * i;
+      const Lanes digit = (index >> shift) & 3;
+      const Lanes above = shift + 2 < 32 ? index >> (shift + 2) : Lanes{};
+      const Lanes code = __builtin_shuffle(first_codes, last_codes, Mix32(above ^ p.salt) % 24);
+      permuted |= ((code >> (2 * digit)) & 3) << shift;
+    }
+    if (p.odd) permuted = ((permuted | (index & 3)) >> 1) ^ (Mix32((index >> 2) ^ p.salt) & 1);
     for (size_t j = 0; j < n; ++j) {
       const uint32_t reversed = yarf::ReverseBits(permuted[j]);
       out[2 * (first + j)] = ScrambledCoordinate(reversed, 2 * pair, p.scramble[0]);
