@@ -3,8 +3,9 @@
 // closest-hit rays (a quarter from the camera in pixel order, the rest
 // diffuse bounces from their hits) and shadow rays (from those hits to
 // emitters), then times every Embree kernel over them on all cores and
-// prints JSON (with the seconds the scene took to build). A scene that names an aggregate class
-// is traced through it, inside Embree's BVH, by the same kernels.
+// prints JSON (with the seconds the scene took to build). A scene that
+// names an aggregate class is traced through it, inside Embree's BVH, by
+// the same kernels.
 //
 // usage: embree_ceiling SCENE.json [rays]
 

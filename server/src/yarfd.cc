@@ -197,7 +197,7 @@ int main(int argc, char** argv) {
   // Render threads allocate and free batch buffers of a few megabytes per
   // tile. With glibc's defaults such a block is a fresh mmap, or is handed
   // back to the kernel when freed, and every reuse faults its pages in
-  // again (a fifth of bdpt's time): blocks up to 32 MiB come from the heap,
+  // again (a tenth of bdpt's cycles): blocks up to 32 MiB come from the heap,
   // and each arena keeps up to 32 MiB free.
   constexpr int kHeldBlock = 32 << 20;
   mallopt(M_MMAP_THRESHOLD, kHeldBlock);

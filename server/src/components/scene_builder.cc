@@ -376,11 +376,8 @@ class Builder {
   }
 
   TriangleMesh LoadMesh(const v1::Mesh& mesh, const std::string& what) {
-    TriangleMesh out = ReadMesh(mesh, what);
-    if (mesh.smooth_normals() && !mesh.face_normals() && out.normals.empty()) {
-      out.normals = AngleWeightedNormals(out);
-      ValidateMesh(out, what);
-    }
+    TriangleMesh out = ReadMesh(mesh, what);  // validated
+    if (mesh.smooth_normals() && !mesh.face_normals() && out.normals.empty()) out.normals = AngleWeightedNormals(out);
     return out;
   }
 

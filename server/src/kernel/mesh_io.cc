@@ -591,9 +591,9 @@ std::vector<Vec3> AngleWeightedNormals(const TriangleMesh& mesh) {
     const float length = Length(n);
     if (!(length > 0) || !std::isfinite(length)) continue;
     for (int k = 0; k < 3; ++k) {
-      const Vec3 a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
-      // The angle at corner k, well conditioned for small angles too.
-      const float angle = std::atan2(Length(Cross(a, b)), Dot(a, b));
+      // The angle at corner k, well conditioned for small angles too: the
+      // cross product of the two edges from any corner is n.
+      const float angle = std::atan2(length, Dot(p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]));
       normals[v[k]] += n * (angle / length);
     }
   }

@@ -72,7 +72,8 @@ void ValidateMesh(TriangleMesh& mesh, const std::string& name);
 // normals weighted by the triangle's angle at the vertex (Thürmer and
 // Wüthrich 1998), so that how a surface is split into triangles does not
 // tilt it. Degenerate triangles add nothing; a vertex with none but such
-// gets a zero normal, which ValidateMesh turns into its face's.
+// gets a zero normal, which the kernel shades flat. For a mesh
+// ValidateMesh has passed.
 std::vector<Vec3> AngleWeightedNormals(const TriangleMesh& mesh);
 
 // Drops vertex normals that are each triangle's own face normal (a box
