@@ -110,7 +110,7 @@ inline float Coordinate(uint32_t reversed_shuffled, uint32_t dimension, uint64_t
 // index's shuffle. One loop of branch-free integer arithmetic, which the
 // compiler vectorises, built for AVX-512, AVX2 and the baseline and picked
 // at load time from the CPU.
-[[gnu::target_clones("avx512f", "avx2", "default")]]
+[[gnu::target_clones("arch=x86-64-v4", "avx2", "default")]]
 void SobolPairs(const uint64_t* indices, const uint64_t* seeds, size_t count, uint32_t pair, float* out) {
   for (size_t k = 0; k < count; ++k) {
     const uint32_t shuffled = ShuffledReversedIndex(indices[k], pair, seeds[k]);
@@ -221,7 +221,7 @@ using Lanes = uint32_t __attribute__((vector_size(64)));
 // keys (at most 16 digits), sixteen points at a time, as PermutedDigit
 // and WithoutFreeBit do for one; built for AVX-512, AVX2 and the baseline
 // and picked at load time from the CPU.
-[[gnu::target_clones("avx512f", "avx2", "default")]]
+[[gnu::target_clones("arch=x86-64-v4", "avx2", "default")]]
 void ZSobolPairs(const uint64_t* indices, size_t count, uint32_t pair, const ZSobolPair& p, float* out) {
   constexpr size_t kLanes = 16;
   Lanes first_codes, last_codes;  // kPermutationCodes[0, 16) and [16, 24)
