@@ -1,4 +1,5 @@
-"""Cornell box samples/s of several yarfd builds, run by run in turn.
+"""Samples/s of several yarfd builds on one scene (the Cornell box unless
+told), run by run in turn.
 
 For "before and after" figures of a change: build the older commit in a
 worktree (``git worktree add ../before COMMIT`` and a CMake build there),
@@ -10,7 +11,9 @@ then
 
 Each build serves its own plugins. The runs alternate between builds, so
 that a busy or throttled machine slows them alike; medians and bests are
-given as ratios against the first build named.
+given as ratios against the first build named. ``--scene FILE`` measures
+another scene (any format yarf reads), ``--size N`` renders its film N
+pixels wide and high.
 """
 
 from __future__ import annotations
@@ -41,9 +44,13 @@ def main() -> None:
     )
     parser.add_argument("--spp", type=int, default=256)
     parser.add_argument("--runs", type=int, default=7)
+    parser.add_argument("--scene", type=Path, default=SCENE)
+    parser.add_argument("--size", type=int, help="film width and height in pixels")
     args = parser.parse_args()
     builds = dict(build.split("=", 1) for build in args.builds)
-    scene = load_scene(SCENE)
+    scene = load_scene(args.scene)
+    if args.size:
+        scene.film.width = scene.film.height = args.size
     samples = scene.film.width * scene.film.height * args.spp
     rates: dict[str, list[float]] = {name: [] for name in builds}
     servers = {name: server_of(Path(path)) for name, path in builds.items()}
@@ -63,14 +70,18 @@ def main() -> None:
             server.__exit__(None, None, None)
     baseline = next(iter(builds))
     median = {name: sorted(r)[len(r) // 2] for name, r in rates.items()}
-    print(f"Cornell box, {args.spp} spp, {args.runs} runs per build, {cpu_model()}")
+    name = "Cornell box" if args.scene == SCENE else str(args.scene)
+    print(f"{name}, {args.spp} spp, {args.runs} runs per build, {cpu_model()}")
     for name, r in rates.items():
         print(
             f"  {name}: median {median[name]:.3f} M samples/s "
             f"({median[name] / median[baseline]:.3f}x), best {max(r):.3f} "
             f"({max(r) / max(rates[baseline]):.3f}x)"
         )
-    write_result("compare_builds", {"cpu": cpu_model(), "spp": args.spp, "rates": rates})
+    write_result(
+        "compare_builds",
+        {"cpu": cpu_model(), "scene": str(args.scene), "spp": args.spp, "rates": rates},
+    )
 
 
 if __name__ == "__main__":

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "yarf/error.h"
-#include "yarf/support/warps.h"
 
 namespace yarf {
 namespace {
@@ -162,15 +161,13 @@ uint32_t MeshSurface::Pick(float u, float& share) const {
   return t;
 }
 
-bool MeshSurface::BySolidAngle(uint32_t t, Vec3 p, float& solid_angle) const {
+bool MeshSurface::BySolidAngle(uint32_t t, Vec3 p, SphericalTriangle& seen) const {
   // pbrt-v4's bounds: below, area sampling is as good and cheaper; above,
   // the spherical triangle is too close to a hemisphere to sample well.
   constexpr float kMinSolidAngle = 3e-4f, kMaxSolidAngle = 6.22f;
   if (!by_solid_angle_) return false;
-  const Vec3 a = corners_[t][0] - p, b = corners_[t][1] - p, c = corners_[t][2] - p;
-  if (!(Length(a) > 0 && Length(b) > 0 && Length(c) > 0)) return false;
-  solid_angle = SphericalTriangleArea(Normalize(a), Normalize(b), Normalize(c));
-  return solid_angle > kMinSolidAngle && solid_angle < kMaxSolidAngle;
+  seen = SphericalTriangle::Seen(corners_[t].data(), p);
+  return seen.area > kMinSolidAngle && seen.area < kMaxSolidAngle;
 }
 
 SurfaceSample MeshSurface::At(uint32_t t, const std::array<float, 3>& b) const {
@@ -199,13 +196,13 @@ void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> unif
   for (size_t k = 0; k < out.size(); ++k) {
     const Vec3 p = from[k];
     const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
-    float share = 0, solid_angle = 0;
+    float share = 0;
     const uint32_t t = Pick(uniform[3 * k], share);
     std::array<float, 3> b;
-    const Vec3 v[3] = {corners_[t][0], corners_[t][1], corners_[t][2]};
-    if (BySolidAngle(t, p, solid_angle) && SampleSphericalTriangle(v, p, u0, u1, b)) {
+    SphericalTriangle seen;
+    if (BySolidAngle(t, p, seen) && SampleSphericalTriangle(corners_[t].data(), p, seen, u0, u1, b)) {
       out[k] = At(t, b);
-      out[k].pdf = share / solid_angle;
+      out[k].pdf = share / seen.area;
       continue;
     }
     out[k] = At(t, SampleUniformTriangle(u0, u1));
@@ -220,9 +217,9 @@ void MeshSurface::Pdf(std::span<const Vec3> from, std::span<const SurfaceSample>
       pdf[k] = 0;
       continue;
     }
-    float solid_angle = 0;
-    if (BySolidAngle(t, from[k], solid_angle)) {
-      pdf[k] = Share(t) / solid_angle;
+    SphericalTriangle seen;
+    if (BySolidAngle(t, from[k], seen)) {
+      pdf[k] = Share(t) / seen.area;
       continue;
     }
     SurfaceSample on = at[k];

@@ -9,6 +9,7 @@
 #include "kernel/mesh_io.h"
 #include "yarf/geometry.h"
 #include "yarf/shape.h"
+#include "yarf/support/warps.h"
 
 namespace yarf {
 
@@ -95,8 +96,9 @@ class MeshSurface final : public ShapeSurface {
   // The triangle u picks in proportion to area, and its share of the area.
   uint32_t Pick(float u, float& share) const;
   float Share(uint32_t triangle) const;
-  // Whether triangle t is sampled by its solid angle from p, and that angle.
-  bool BySolidAngle(uint32_t t, Vec3 p, float& solid_angle) const;
+  // Whether triangle t is sampled by its solid angle from p, and the
+  // triangle as seen from p.
+  bool BySolidAngle(uint32_t t, Vec3 p, SphericalTriangle& seen) const;
   // The point of triangle t at barycentrics b, with its uv.
   SurfaceSample At(uint32_t t, const std::array<float, 3>& b) const;
 

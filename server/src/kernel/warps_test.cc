@@ -313,7 +313,8 @@ TEST(WarpsTest, SphericalTriangleSamplesAreUniformInItsSolidAngle) {
   // area sampling (f's cos/d² change of measure) estimates it.
   const Vec3 v[3] = {Vec3(-1, -0.5f, 1), Vec3(1.5f, -0.8f, 0.7f), Vec3(0.2f, 1.2f, 0.9f)};
   const Vec3 p(0.1f, 0.05f, 0);
-  const float solid_angle = SphericalTriangleArea(Normalize(v[0] - p), Normalize(v[1] - p), Normalize(v[2] - p));
+  const SphericalTriangle seen = SphericalTriangle::Seen(v, p);
+  const float solid_angle = seen.area;
   const auto f = [](Vec3 w) { return double(w.z) * w.z + 0.5 * w.x; };
   const Vec3 normal = Normalize(Cross(v[1] - v[0], v[2] - v[0]));
   const double area = 0.5 * Length(Cross(v[1] - v[0], v[2] - v[0]));
@@ -323,7 +324,7 @@ TEST(WarpsTest, SphericalTriangleSamplesAreUniformInItsSolidAngle) {
   for (int k = 0; k < kCount; ++k) {
     const float u0 = uniforms.Next(), u1 = uniforms.Next();
     std::array<float, 3> b;
-    ASSERT_TRUE(SampleSphericalTriangle(v, p, u0, u1, b));
+    ASSERT_TRUE(SampleSphericalTriangle(v, p, seen, u0, u1, b));
     ASSERT_GE(std::min({b[0], b[1], b[2]}), 0.0f);
     ASSERT_NEAR(b[0] + b[1] + b[2], 1.0f, 1e-5f);
     const Vec3 w = Normalize(v[0] * b[0] + v[1] * b[1] + v[2] * b[2] - p);
@@ -342,7 +343,8 @@ TEST(WarpsTest, SphericalTriangleSamplesAreUniformInItsSolidAngle) {
   EXPECT_NEAR(by_angle / kCount, by_area / kCount, 4 * std::hypot(error(by_angle, by_angle2), error(by_area, by_area2)));
   // Seen from a corner there is nothing to sample.
   std::array<float, 3> b;
-  EXPECT_FALSE(SampleSphericalTriangle(v, v[0], 0.3f, 0.6f, b));
+  EXPECT_FALSE(SampleSphericalTriangle(v, v[0], SphericalTriangle::Seen(v, v[0]), 0.3f, 0.6f, b));
+  EXPECT_EQ(SphericalTriangle::Seen(v, v[0]).area, 0.0f);
 }
 
 }  // namespace

@@ -227,19 +227,37 @@ inline float SphericalTriangleArea(Vec3 a, Vec3 b, Vec3 c) {
   return std::abs(2 * std::atan2(Dot(a, Cross(b, c)), 1 + Dot(a, b) + Dot(a, c) + Dot(b, c)));
 }
 
+// Triangle v0 v1 v2 as seen from a point: the unit directions to its
+// corners and the solid angle they span; zero from a corner. Made once
+// for both the choice of how to sample it and the sample.
+struct SphericalTriangle {
+  Vec3 a, b, c;
+  float area = 0;
+
+  static SphericalTriangle Seen(const Vec3 v[3], Vec3 p) {
+    const Vec3 to_a = v[0] - p, to_b = v[1] - p, to_c = v[2] - p;
+    if (!(Length(to_a) > 0 && Length(to_b) > 0 && Length(to_c) > 0)) return {};
+    SphericalTriangle seen{Normalize(to_a), Normalize(to_b), Normalize(to_c)};
+    seen.area = SphericalTriangleArea(seen.a, seen.b, seen.c);
+    return seen;
+  }
+};
+
 // Uniform in the solid angle that triangle v0 v1 v2 subtends from p
-// (Arvo 1995, in pbrt-v4's formulation): the barycentrics (of v0, v1, v2)
-// of the point the sampled direction meets, density 1/Ω in solid angle.
-// False for a triangle seen edge-on or from a vertex.
-inline bool SampleSphericalTriangle(const Vec3 v[3], Vec3 p, float u0, float u1, std::array<float, 3>& barycentrics) {
-  const Vec3 a = Normalize(v[0] - p), b = Normalize(v[1] - p), c = Normalize(v[2] - p);
+// (Arvo 1995, in pbrt-v4's formulation), `seen` being the triangle as
+// seen from p: the barycentrics (of v0, v1, v2) of the point the sampled
+// direction meets, density 1/Ω in solid angle. False for a triangle seen
+// edge-on or from a vertex.
+inline bool SampleSphericalTriangle(const Vec3 v[3], Vec3 p, const SphericalTriangle& seen, float u0, float u1,
+                                    std::array<float, 3>& barycentrics) {
+  const Vec3 a = seen.a, b = seen.b, c = seen.c;
   const Vec3 n_ab = Cross(a, b), n_bc = Cross(b, c), n_ca = Cross(c, a);
   if (!(Dot(n_ab, n_ab) > 0 && Dot(n_bc, n_bc) > 0 && Dot(n_ca, n_ca) > 0)) return false;
-  // The area (SphericalTriangleArea, as the density has it) and the angle
-  // at a; a sub-triangle of area u0 times the whole is cut off along b c.
-  // Its area beyond π, the angle's excess, enters only through sine and
-  // cosine: sin(π + x) = −sin x, cos(π + x) = −cos x.
-  const float area = SphericalTriangleArea(a, b, c);
+  // The area (as the density has it) and the angle at a; a sub-triangle
+  // of area u0 times the whole is cut off along b c. Its area beyond π,
+  // the angle's excess, enters only through sine and cosine:
+  // sin(π + x) = −sin x, cos(π + x) = −cos x.
+  const float area = seen.area;
   if (!(area > 0)) return false;
   const float cos_alpha = std::clamp(Dot(Normalize(n_ab), -Normalize(n_ca)), -1.0f, 1.0f);
   const float sin_alpha = std::sqrt(1 - cos_alpha * cos_alpha);
