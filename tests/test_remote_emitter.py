@@ -1,8 +1,10 @@
 """A light written in Python: the Cornell box lit by py_area_light, an
 Emitter in another process, renders as the C++ diffuse_area lights it,
 both when paths find the light (path tracing: Radiance) and when they
-start at it (light tracing: SampleDirection); a light its process
-refuses to make fails its job with an error naming it and the property."""
+start at it (light tracing: SampleDirection); the path tracer calls it
+once or twice a bounce however many materials its paths meet; a light
+its process refuses to make fails its job with an error naming it and
+the property."""
 
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ from yarf import Client, load_scene
 from yarf.v1 import render_pb2, scene_pb2
 
 EXAMPLES = REPO / "components" / "python" / "examples"
+COMPONENTS = REPO / "tests" / "components"
 SIZE = 32
 SPP = 64
 
@@ -69,6 +72,34 @@ def test_a_python_light_gives_the_same_path_traced_image_for_the_same_seed(
     np.testing.assert_allclose(
         client.raw(remote.job_id).pixels, client.raw(local.job_id).pixels, rtol=1e-5, atol=1e-6
     )
+
+
+def test_the_path_tracer_calls_a_python_light_at_most_twice_a_bounce(
+    client: Client, tmp_path: Path
+) -> None:
+    """Once for the paths that hit the light and once for the light samples
+    of every material's vertices together: a call per bounce, not per
+    material (the box has five). The film is one batch: 32² pixels at 4
+    samples, one tile of a job that calls another process."""
+    log = tmp_path / "calls.txt"
+    max_depth = 4
+    with ComponentProcess.python(
+        [f"{COMPONENTS / 'counting_light.py'}:CountingLight"], f"unix:{tmp_path / 'light.sock'}"
+    ) as process:
+        scene = cornell_box("path", process.address)
+        for shape in scene.shapes:
+            if shape.HasField("emitter"):
+                shape.emitter.class_name = "py_counting_light"
+                shape.emitter.properties.values["log"].string_value = str(log)
+        scene.transport.properties.values["max_depth"].int_value = max_depth
+        assert len({shape.material for shape in scene.shapes}) >= 4
+        status = client.wait(client.submit(scene, 4, 1, name="counted light"), timeout=300)
+    assert status.state == render_pb2.SUCCEEDED, status.error
+    rows = [int(line) for line in log.read_text().split()]
+    # One call estimates the light's power as the scene is built (lights
+    # are chosen by power); the last bounce only gathers what its rays
+    # hit, with no light samples.
+    assert 0 < len(rows) <= 1 + 2 * max_depth - 1, rows
 
 
 def test_a_light_with_a_negative_radiance_fails_its_job_naming_it(

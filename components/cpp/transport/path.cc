@@ -122,16 +122,31 @@ class PathTracer final : public Transport {
     if (scene.HasEnvironment()) AddEnvironment(scene, paths, active, rays, escaped);
 
     const uint32_t base = kFirstBounceDimension + kDimensionsPerBounce * uint32_t(depth - 1);
+    const auto groups = GroupBy(vertex_material);
+    // One light sample for every vertex whose material can use it, all in
+    // one call per light, then per material the BSDF toward them.
+    std::vector<uint8_t> samples_lights(vertices.size(), 0);
+    if (scene.HasLights())
+      for (const auto& [material, members] : groups)
+        if (SamplesLights(scene.Material(material).Lobes()))
+          for (const uint32_t member : members) samples_lights[member] = 1;
+    const LightSamples lights = SampleLights(scene, points, vertices, samples_lights, base);
+    ShadowTests shadows;
     std::vector<uint32_t> next;
-    for (const auto& [material, members] : GroupBy(vertex_material)) {
+    for (const auto& [material, members] : groups) {
       const SurfaceModel& model = scene.Material(material);
       // The group's vertices as its model's calls take them, for both.
       SurfaceBatch batch(&scene, members.size());
       for (const uint32_t member : members) batch.Add(vertices[member].at.wi, vertices[member].at.site);
-      const bool sample_lights = scene.HasLights() && SamplesLights(model.Lobes());
-      if (sample_lights) SampleLights(scene, points, model, batch, paths, vertices, members, base);
+      const bool sample_lights = samples_lights[members[0]];
+      if (sample_lights) WeighLightSamples(model, batch, paths, vertices, members, lights, shadows);
       ScatterBsdf(points, model, batch, paths, vertices, members, base, depth, sample_lights, next);
     }
+    // The shadow rays of every group, in one batch.
+    std::vector<uint8_t> occluded(shadows.rays.size());
+    scene.Occluded(shadows.rays, occluded);
+    for (size_t q = 0; q < shadows.rays.size(); ++q)
+      if (!occluded[q]) paths[shadows.owner[q]].radiance += shadows.contribution[q];
     return next;
   }
 
@@ -163,29 +178,52 @@ class PathTracer final : public Transport {
     }
   }
 
-  // Next-event estimation: one emitter sample per vertex, MIS-weighted.
-  void SampleLights(const SceneView& scene, const PrimarySamples& points, const SurfaceModel& model,
-                    const SurfaceBatch& batch, std::vector<Path>& paths, const std::vector<Vertex>& vertices,
-                    const std::vector<uint32_t>& members, uint32_t base) const {
-    const size_t m = members.size();
-    std::vector<Vec3> from(m);
-    std::vector<uint32_t> owners(m);
-    for (size_t j = 0; j < m; ++j) {
-      from[j] = vertices[members[j]].at.position;
-      owners[j] = vertices[members[j]].path;
-    }
-    const std::vector<LightDirection> lights =
-        SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition);
-    std::vector<float> wo(3 * m);
-    for (size_t j = 0; j < m; ++j) vertices[members[j]].at.frame.ToLocal(lights[j].direction).Store(&wo[3 * j]);
-    const SurfaceBatch::Evaluation bsdf = batch.Evaluate(model, TransportMode::kRadiance, wo, Densities::kForward);
-    const std::vector<Vec3> le = LightRadiance(scene, lights);
-    // Trace shadow rays only for samples that would contribute.
+  // Next-event estimation's light samples, one for each vertex with
+  // `sampled` set, and the radiance each light sends back: vertex v's are
+  // at slot[v].
+  struct LightSamples {
+    std::vector<uint32_t> slot;
+    std::vector<LightDirection> direction;
+    std::vector<Vec3> radiance;
+  };
+  LightSamples SampleLights(const SceneView& scene, const PrimarySamples& points, const std::vector<Vertex>& vertices,
+                            const std::vector<uint8_t>& sampled, uint32_t base) const {
+    LightSamples out;
+    out.slot.resize(vertices.size());
+    std::vector<uint32_t> owners;
+    std::vector<Vec3> from;
+    for (uint32_t v = 0; v < vertices.size(); ++v)
+      if (sampled[v]) {
+        out.slot[v] = uint32_t(owners.size());
+        owners.push_back(vertices[v].path);
+        from.push_back(vertices[v].at.position);
+      }
+    out.direction = SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition);
+    out.radiance = LightRadiance(scene, out.direction);
+    return out;
+  }
+
+  // The shadow rays of the light samples that would contribute, with the
+  // path each belongs to and what it adds if unoccluded.
+  struct ShadowTests {
     std::vector<Ray> rays;
-    std::vector<uint32_t> owner_of_ray;
-    std::vector<Vec3> contributions;
+    std::vector<uint32_t> owner;
+    std::vector<Vec3> contribution;
+  };
+
+  // Weighs the light samples of a material's vertices by the BSDF and
+  // MIS, and adds the shadow rays of those that would contribute.
+  void WeighLightSamples(const SurfaceModel& model, const SurfaceBatch& batch, const std::vector<Path>& paths,
+                         const std::vector<Vertex>& vertices, const std::vector<uint32_t>& members,
+                         const LightSamples& lights, ShadowTests& shadows) const {
+    const size_t m = members.size();
+    std::vector<float> wo(3 * m);
+    for (size_t j = 0; j < m; ++j)
+      vertices[members[j]].at.frame.ToLocal(lights.direction[lights.slot[members[j]]].direction).Store(&wo[3 * j]);
+    const SurfaceBatch::Evaluation bsdf = batch.Evaluate(model, TransportMode::kRadiance, wo, Densities::kForward);
     for (size_t j = 0; j < m; ++j) {
-      const LightDirection& light = lights[j];
+      const uint32_t slot = lights.slot[members[j]];
+      const LightDirection& light = lights.direction[slot];
       if (!light.emitter || !(light.pdf > 0)) continue;
       const Vertex& v = vertices[members[j]];
       const Path& p = paths[v.path];
@@ -193,16 +231,12 @@ class PathTracer final : public Transport {
       const float mis = light.delta ? 1.0f : PowerHeuristic(light.pdf, bsdf.pdf[j]);
       const float shading =
           ShadingWeight(v.at.frame, v.at.ng, v.at.wi, Vec3::Load(&wo[3 * j]), TransportMode::kRadiance);
-      const Vec3 c = p.throughput * bsdf.F(j) * le[j] * (cos_surface * mis * shading / light.pdf);
+      const Vec3 c = p.throughput * bsdf.F(j) * lights.radiance[slot] * (cos_surface * mis * shading / light.pdf);
       if (!(MaxComponent(c) > 0)) continue;
-      rays.push_back(ShadowRayToLight(v.at.position, v.at.ng, light, v.time));
-      owner_of_ray.push_back(v.path);
-      contributions.push_back(c);
+      shadows.rays.push_back(ShadowRayToLight(v.at.position, v.at.ng, light, v.time));
+      shadows.owner.push_back(v.path);
+      shadows.contribution.push_back(c);
     }
-    std::vector<uint8_t> occluded(rays.size());
-    scene.Occluded(rays, occluded);
-    for (size_t q = 0; q < rays.size(); ++q)
-      if (!occluded[q]) paths[owner_of_ray[q]].radiance += contributions[q];
   }
 
   // Samples the BSDF for each vertex, extends the path, applies roulette.

@@ -13,16 +13,31 @@ namespace yarf {
 namespace {
 
 // Whether the job calls a component in another process: a class named
-// with an address, or registered by a component process.
+// with an address, or registered by a component process, anywhere in the
+// scene (materials, emitters, textures, media, aggregates) or the job.
 bool CallsOtherProcesses(const v1::Scene& scene, const v1::RenderOptions& options, const JobResources& resources) {
   auto remote = [&](const std::string& class_name, const std::string& address) {
-    return !address.empty() ||
-           (!resources.registry.Has(class_name) && resources.remote_classes.AddressOf(class_name).has_value());
+    return !class_name.empty() &&
+           (!address.empty() ||
+            (!resources.registry.Has(class_name) && resources.remote_classes.AddressOf(class_name).has_value()));
   };
+  auto remote_spec = [&](const v1::ComponentSpec& spec) { return remote(spec.class_name(), spec.address()); };
+  auto remote_shape = [&](const v1::SceneShape& shape) { return shape.has_emitter() && remote_spec(shape.emitter()); };
   for (const v1::Material& m : scene.materials())
     if (remote(m.class_name(), m.address())) return true;
-  for (const v1::ComponentSpec* spec : {&options.transport(), &scene.transport(), &options.sampler(), &scene.sampler()})
-    if (!spec->class_name().empty() && remote(spec->class_name(), spec->address())) return true;
+  for (const v1::ComponentSpec* spec : {&options.transport(), &scene.transport(), &options.sampler(), &scene.sampler(),
+                                        &scene.aggregate()})
+    if (remote_spec(*spec)) return true;
+  if (std::any_of(scene.shapes().begin(), scene.shapes().end(), remote_shape)) return true;
+  for (const v1::Group& group : scene.groups())
+    if (remote_spec(group.aggregate()) || std::any_of(group.shapes().begin(), group.shapes().end(), remote_shape))
+      return true;
+  for (const v1::Light& light : scene.lights())
+    if (remote_spec(light.emitter())) return true;
+  for (const v1::SceneTexture& texture : scene.textures())
+    if (remote_spec(texture.texture())) return true;
+  for (const v1::SceneMedium& medium : scene.media())
+    if (remote_spec(medium.medium())) return true;
   return false;
 }
 
