@@ -179,28 +179,20 @@ class PathTracer final : public Transport {
   }
 
   // Next-event estimation's light samples, one for each vertex with
-  // `sampled` set, and the radiance each light sends back: vertex v's are
-  // at slot[v].
-  struct LightSamples {
-    std::vector<uint32_t> slot;
-    std::vector<LightDirection> direction;
-    std::vector<Vec3> radiance;
-  };
+  // `sampled` set.
   LightSamples SampleLights(const SceneView& scene, const PrimarySamples& points, const std::vector<Vertex>& vertices,
                             const std::vector<uint8_t>& sampled, uint32_t base) const {
-    LightSamples out;
-    out.slot.resize(vertices.size());
-    std::vector<uint32_t> owners;
+    std::vector<uint32_t> which, owners;
     std::vector<Vec3> from;
     for (uint32_t v = 0; v < vertices.size(); ++v)
       if (sampled[v]) {
-        out.slot[v] = uint32_t(owners.size());
+        which.push_back(v);
         owners.push_back(vertices[v].path);
         from.push_back(vertices[v].at.position);
       }
-    out.direction = SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition);
-    out.radiance = LightRadiance(scene, out.direction);
-    return out;
+    return LightSamples::Of(
+        scene, SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition), which,
+        vertices.size());
   }
 
   // The shadow rays of the light samples that would contribute, with the
@@ -219,11 +211,10 @@ class PathTracer final : public Transport {
     const size_t m = members.size();
     std::vector<float> wo(3 * m);
     for (size_t j = 0; j < m; ++j)
-      vertices[members[j]].at.frame.ToLocal(lights.direction[lights.slot[members[j]]].direction).Store(&wo[3 * j]);
+      vertices[members[j]].at.frame.ToLocal(lights.Direction(members[j]).direction).Store(&wo[3 * j]);
     const SurfaceBatch::Evaluation bsdf = batch.Evaluate(model, TransportMode::kRadiance, wo, Densities::kForward);
     for (size_t j = 0; j < m; ++j) {
-      const uint32_t slot = lights.slot[members[j]];
-      const LightDirection& light = lights.direction[slot];
+      const LightDirection& light = lights.Direction(members[j]);
       if (!light.emitter || !(light.pdf > 0)) continue;
       const Vertex& v = vertices[members[j]];
       const Path& p = paths[v.path];
@@ -231,7 +222,7 @@ class PathTracer final : public Transport {
       const float mis = light.delta ? 1.0f : PowerHeuristic(light.pdf, bsdf.pdf[j]);
       const float shading =
           ShadingWeight(v.at.frame, v.at.ng, v.at.wi, Vec3::Load(&wo[3 * j]), TransportMode::kRadiance);
-      const Vec3 c = p.throughput * bsdf.F(j) * lights.radiance[slot] * (cos_surface * mis * shading / light.pdf);
+      const Vec3 c = p.throughput * bsdf.F(j) * lights.Radiance(members[j]) * (cos_surface * mis * shading / light.pdf);
       if (!(MaxComponent(c) > 0)) continue;
       shadows.rays.push_back(ShadowRayToLight(v.at.position, v.at.ng, light, v.time));
       shadows.owner.push_back(v.path);

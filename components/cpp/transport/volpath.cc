@@ -205,15 +205,23 @@ class VolPathTracer final : public Transport {
   void ScatterInMedia(const SceneView& scene, const PrimarySamples& points, std::vector<VolPath>& paths,
                       const std::vector<MediumVertex>& scattered, std::vector<LightLink>& links,
                       std::vector<uint32_t>& next) const {
-    std::vector<uint32_t> keys;
+    std::vector<uint32_t> keys, all;
     std::vector<MediumVertex> vertices;
+    // Each vertex's phase sample numbers, drawn before its light sample's
+    // (a deep path draws them from its own stream, in this order).
+    std::vector<float> u_phase;
     for (const MediumVertex& v : scattered) {
       VolPath& p = paths[v.path];
       if (!MayScatter(p)) continue;
       p.scatter_point = v.position;
+      all.push_back(uint32_t(vertices.size()));
       vertices.push_back(v);
       keys.push_back(p.medium);
+      u_phase.push_back(Uniform(points, v.path, p, kScatterDirection));
+      u_phase.push_back(Uniform(points, v.path, p, kScatterDirection + 1));
     }
+    // The light samples of every medium's vertices in one call per light.
+    const LightSamples lights = scene.HasLights() ? SampleLightsAt(scene, points, paths, vertices, all) : LightSamples{};
     for (const auto& [medium_index, members] : GroupBy(keys)) {
       const Medium& medium = scene.MediumAt(medium_index);
       const size_t m = members.size();
@@ -222,22 +230,19 @@ class VolPathTracer final : public Transport {
       std::vector<float> wi(3 * m), position(3 * m), u(2 * m);
       for (size_t j = 0; j < m; ++j) {
         const MediumVertex& v = vertices[members[j]];
-        VolPath& p = paths[v.path];
         from[j] = v.position;
         owners[j] = v.path;
-        (-p.ray.direction).Store(&wi[3 * j]);
+        (-paths[v.path].ray.direction).Store(&wi[3 * j]);
         v.position.Store(&position[3 * j]);
-        u[2 * j] = Uniform(points, v.path, p, kScatterDirection);
-        u[2 * j + 1] = Uniform(points, v.path, p, kScatterDirection + 1);
+        u[2 * j] = u_phase[2 * members[j]];
+        u[2 * j + 1] = u_phase[2 * members[j] + 1];
       }
       if (scene.HasLights()) {
-        const std::vector<LightDirection> lights = SampleLightsAt(scene, points, paths, from, owners);
         std::vector<float> wo(3 * m), value(m), pdf(m);
-        for (size_t j = 0; j < m; ++j) lights[j].direction.Store(&wo[3 * j]);
+        for (size_t j = 0; j < m; ++j) lights.Direction(members[j]).direction.Store(&wo[3 * j]);
         medium.EvaluatePhase(wi, wo, position, value, pdf);
-        const std::vector<Vec3> le = LightRadiance(scene, lights);
         for (size_t j = 0; j < m; ++j) {
-          const LightDirection& light = lights[j];
+          const LightDirection& light = lights.Direction(members[j]);
           const VolPath& p = paths[owners[j]];
           if (!light.emitter || !(light.pdf > 0) || !(value[j] > 0)) continue;
           Ray ray;
@@ -247,7 +252,8 @@ class VolPathTracer final : public Transport {
                                         : (light.delta ? light.distance
                                                        : std::max(0.0f, light.distance - SurfaceOffset(light.position)));
           ray.time = p.ray.time;
-          links.push_back({owners[j], ray, p.medium, p.beta * le[j] * value[j], p.r_u, light.pdf, pdf[j], light.delta});
+          links.push_back({owners[j], ray, p.medium, p.beta * lights.Radiance(members[j]) * value[j], p.r_u, light.pdf,
+                           pdf[j], light.delta});
         }
       }
       std::vector<float> wo(3 * m), weight(m), pdf(m);
@@ -274,7 +280,15 @@ class VolPathTracer final : public Transport {
                          std::vector<uint32_t>& next) const {
     std::vector<uint32_t> keys(vertices.size());
     for (size_t k = 0; k < vertices.size(); ++k) keys[k] = scene.MaterialOf(vertices[k].shape);
-    for (const auto& [material, members] : GroupBy(keys)) {
+    const auto groups = GroupBy(keys);
+    // One light sample for every vertex whose material can use it, all in
+    // one call per light, then per material the BSDF toward them.
+    std::vector<uint32_t> lit;
+    if (scene.HasLights())
+      for (const auto& [material, members] : groups)
+        if (SamplesLights(scene.Material(material).Lobes())) lit.insert(lit.end(), members.begin(), members.end());
+    const LightSamples lights = SampleLightsAt(scene, points, paths, vertices, lit);
+    for (const auto& [material, members] : groups) {
       const SurfaceModel& model = scene.Material(material);
       const size_t m = members.size();
       SurfaceBatch batch(&scene, m);
@@ -284,28 +298,20 @@ class VolPathTracer final : public Transport {
         paths[v.path].scatter_point = v.at.position;
       }
       if (scene.HasLights() && SamplesLights(model.Lobes())) {
-        std::vector<Vec3> from(m);
-        std::vector<uint32_t> owners(m);
-        for (size_t j = 0; j < m; ++j) {
-          from[j] = vertices[members[j]].at.position;
-          owners[j] = vertices[members[j]].path;
-        }
-        const std::vector<LightDirection> lights = SampleLightsAt(scene, points, paths, from, owners);
         std::vector<float> wo(3 * m);
         for (size_t j = 0; j < m; ++j)
-          vertices[members[j]].at.frame.ToLocal(lights[j].direction).Store(&wo[3 * j]);
+          vertices[members[j]].at.frame.ToLocal(lights.Direction(members[j]).direction).Store(&wo[3 * j]);
         const SurfaceBatch::Evaluation bsdf =
             batch.Evaluate(model, TransportMode::kRadiance, wo, Densities::kForward);
-        const std::vector<Vec3> le = LightRadiance(scene, lights);
         for (size_t j = 0; j < m; ++j) {
           const SurfaceVertex& v = vertices[members[j]];
           const VolPath& p = paths[v.path];
-          const LightDirection& light = lights[j];
+          const LightDirection& light = lights.Direction(members[j]);
           if (!light.emitter || !(light.pdf > 0)) continue;
           const Vec3 out = Vec3::Load(&wo[3 * j]);
           const float cos = std::abs(out.z) *
                             ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
-          const Vec3 unweighted = p.beta * bsdf.F(j) * le[j] * cos;
+          const Vec3 unweighted = p.beta * bsdf.F(j) * lights.Radiance(members[j]) * cos;
           if (!(MaxComponent(unweighted) > 0)) continue;
           const uint32_t medium = scene.MediaOf(v.shape).Beyond(light.direction, v.at.ng, p.medium);
           links.push_back({v.path, ShadowRayToLight(v.at.position, v.at.ng, light, p.ray.time), medium, unweighted,
@@ -340,24 +346,31 @@ class VolPathTracer final : public Transport {
     }
   }
 
-  // One light chosen and sampled from each point, with the coordinates of
-  // its owner's current vertex.
-  static std::vector<LightDirection> SampleLightsAt(const SceneView& scene, const PrimarySamples& points,
-                                                    std::vector<VolPath>& paths, const std::vector<Vec3>& from,
-                                                    const std::vector<uint32_t>& owners) {
-    std::vector<float> u(3 * from.size());
-    for (size_t k = 0; k < from.size(); ++k) {
-      VolPath& p = paths[owners[k]];
-      u[3 * k] = Uniform(points, owners[k], p, kLightChoice);
-      u[3 * k + 1] = Uniform(points, owners[k], p, kLightPosition);
-      u[3 * k + 2] = Uniform(points, owners[k], p, kLightPosition + 1);
+  // One light chosen and sampled from each of the vertices `which` (of a
+  // bounce's surface or medium vertices), with the coordinates of its
+  // owner's current vertex.
+  template <typename Vertex>
+  static LightSamples SampleLightsAt(const SceneView& scene, const PrimarySamples& points,
+                                     std::vector<VolPath>& paths, const std::vector<Vertex>& vertices,
+                                     const std::vector<uint32_t>& which) {
+    const size_t n = which.size();
+    std::vector<Vec3> from(n);
+    std::vector<float> u(3 * n);
+    for (size_t j = 0; j < n; ++j) {
+      const Vertex& v = vertices[which[j]];
+      VolPath& p = paths[v.path];
+      from[j] = PositionOf(v);
+      u[3 * j] = Uniform(points, v.path, p, kLightChoice);
+      u[3 * j + 1] = Uniform(points, v.path, p, kLightPosition);
+      u[3 * j + 2] = Uniform(points, v.path, p, kLightPosition + 1);
     }
-    std::vector<LightDirection> out(from.size());
-    scene.SampleLightsFrom(from, u, out);
-    return out;
+    std::vector<LightDirection> drawn(n);
+    scene.SampleLightsFrom(from, u, drawn);
+    return LightSamples::Of(scene, std::move(drawn), which, vertices.size());
   }
+  static Vec3 PositionOf(const MediumVertex& v) { return v.position; }
+  static Vec3 PositionOf(const SurfaceVertex& v) { return v.at.position; }
 
-  // The radiance each sampled light sends toward its point: one call per emitter.
   // Emitting surfaces the rays reached, weighted against light sampling
   // from the path's last scattering vertex.
   void AddEmission(const SceneView& scene, std::vector<VolPath>& paths, const std::vector<uint32_t>& active,

@@ -471,6 +471,27 @@ inline std::vector<Vec3> LightRadiance(const SceneView& scene, const std::vector
   return out;
 }
 
+// Next-event estimation's light samples for the vertices of a bounce that
+// take one, made together whatever their materials or media: vertex v's
+// sample and the radiance its light sends back are at slot[v].
+struct LightSamples {
+  std::vector<uint32_t> slot;
+  std::vector<LightDirection> direction;
+  std::vector<Vec3> radiance;
+
+  // Of `count` vertices, which[j] took sample drawn[j]: its radiance is
+  // asked of each emitter in one call.
+  static LightSamples Of(const SceneView& scene, std::vector<LightDirection> drawn,
+                         const std::vector<uint32_t>& which, size_t count) {
+    LightSamples samples{std::vector<uint32_t>(count, 0), std::move(drawn), {}};
+    for (uint32_t j = 0; j < which.size(); ++j) samples.slot[which[j]] = j;
+    samples.radiance = LightRadiance(scene, samples.direction);
+    return samples;
+  }
+  const LightDirection& Direction(uint32_t v) const { return direction[slot[v]]; }
+  Vec3 Radiance(uint32_t v) const { return radiance[slot[v]]; }
+};
+
 // Methods that connect light paths to the camera (light tracing, bdpt)
 // cannot render a camera light paths cannot reach (orthographic, meters).
 inline void RefuseUnreachableCamera(const SceneView& scene, const std::string& transport) {
