@@ -1,7 +1,7 @@
 """A light written in Python: the Cornell box lit by py_area_light, an
 Emitter in another process, renders as the C++ diffuse_area lights it,
 both when paths find the light (path tracing: Radiance) and when they
-start at it (light tracing: SampleDirection); the path tracer calls it
+start at it (light tracing: SampleDirection); the path tracers call it
 once or twice a bounce however many materials its paths meet; a light
 its process refuses to make fails its job with an error naming it and
 the property."""
@@ -74,8 +74,9 @@ def test_a_python_light_gives_the_same_path_traced_image_for_the_same_seed(
     )
 
 
-def test_the_path_tracer_calls_a_python_light_at_most_twice_a_bounce(
-    client: Client, tmp_path: Path
+@pytest.mark.parametrize("transport", ["path", "volpath"])
+def test_path_tracers_call_a_python_light_at_most_twice_a_bounce(
+    client: Client, tmp_path: Path, transport: str
 ) -> None:
     """Once for the paths that hit the light and once for the light samples
     of every material's vertices together: a call per bounce, not per
@@ -86,7 +87,7 @@ def test_the_path_tracer_calls_a_python_light_at_most_twice_a_bounce(
     with ComponentProcess.python(
         [f"{COMPONENTS / 'counting_light.py'}:CountingLight"], f"unix:{tmp_path / 'light.sock'}"
     ) as process:
-        scene = cornell_box("path", process.address)
+        scene = cornell_box(transport, process.address)
         for shape in scene.shapes:
             if shape.HasField("emitter"):
                 shape.emitter.class_name = "py_counting_light"
