@@ -2,7 +2,7 @@
 Emitter in another process, renders as the C++ diffuse_area lights it,
 both when paths find the light (path tracing: Radiance) and when they
 start at it (light tracing: SampleDirection); the path tracers call it
-once or twice a bounce however many materials its paths meet; a light
+once or twice a bounce however many materials their paths meet; a light
 its process refuses to make fails its job with an error naming it and
 the property."""
 

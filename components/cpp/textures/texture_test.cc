@@ -10,7 +10,9 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -214,7 +216,31 @@ TEST_F(BitmapTextureTest, LookupsFromManyThreadsAgree) {
   for (const auto& g : got) EXPECT_EQ(g, expected);
 }
 
+// TMPDIR at `folder` while it lives, and as it was after: tests running
+// beside one another make and remove folders of the same names in the
+// shared temporary folder.
+class TemporaryFolderAt {
+ public:
+  explicit TemporaryFolderAt(const std::filesystem::path& folder) {
+    if (const char* old = std::getenv("TMPDIR")) old_ = old;
+    setenv("TMPDIR", folder.c_str(), 1);
+  }
+  ~TemporaryFolderAt() {
+    if (old_) {
+      setenv("TMPDIR", old_->c_str(), 1);
+    } else {
+      unsetenv("TMPDIR");
+    }
+  }
+  TemporaryFolderAt(const TemporaryFolderAt&) = delete;
+  TemporaryFolderAt& operator=(const TemporaryFolderAt&) = delete;
+
+ private:
+  std::optional<std::string> old_;
+};
+
 TEST_F(BitmapTextureTest, ItsTemporaryFolderGoesWithIt) {
+  const TemporaryFolderAt own(folder_.path());
   const auto listing = [] {
     std::set<std::filesystem::path> out;
     for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::temp_directory_path()))
