@@ -13,7 +13,7 @@ Each build serves its own plugins. The runs alternate between builds, so
 that a busy or throttled machine slows them alike; medians and bests are
 given as ratios against the first build named. ``--scene FILE`` measures
 another scene (any format yarf reads), ``--size N`` renders its film N
-pixels wide and high.
+pixels wide and high, ``--transport CLASS`` with another transport.
 """
 
 from __future__ import annotations
@@ -46,11 +46,14 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=7)
     parser.add_argument("--scene", type=Path, default=SCENE)
     parser.add_argument("--size", type=int, help="film width and height in pixels")
+    parser.add_argument("--transport", help="the transport class (default: the scene's)")
     args = parser.parse_args()
     builds = dict(build.split("=", 1) for build in args.builds)
     scene = load_scene(args.scene)
     if args.size:
         scene.film.width = scene.film.height = args.size
+    if args.transport:
+        scene.transport.class_name = args.transport
     samples = scene.film.width * scene.film.height * args.spp
     rates: dict[str, list[float]] = {name: [] for name in builds}
     servers = {name: server_of(Path(path)) for name, path in builds.items()}

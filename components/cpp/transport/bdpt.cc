@@ -318,6 +318,8 @@ class Bdpt final : public Transport {
 
       std::vector<ScatterQuery> queries;
       std::vector<uint32_t> scattering;
+      queries.reserve(count);
+      scattering.reserve(count);
       for (size_t k = 0; k < count; ++k) {
         const uint32_t i = active[k];
         Walker& walker = walkers[i];
@@ -364,11 +366,10 @@ class Bdpt final : public Transport {
         v.medium = walker.medium;
         v.emitter = scene.EmitterOf(hits[k].shape);
         if (paths.count[i] == paths.capacity) continue;
-        ScatterQuery q{v.material, v.frame.ToLocal(v.wi), v.site};
+        ScatterQuery& q = queries.emplace_back(v.material, v.frame.ToLocal(v.wi), v.site);
         q.uniform[0] = points.Get(i, base(i) + 2);
         q.uniform[1] = points.Get(i, base(i));
         q.uniform[2] = points.Get(i, base(i) + 1);
-        queries.push_back(q);
         scattering.push_back(i);
       }
       const std::vector<ScatterAnswer> sampled = SampleSurfaces(scene, mode, 0, queries);
@@ -477,11 +478,19 @@ class Bdpt final : public Transport {
   void Connect(const SceneView& scene, const PrimarySamples& points, const Subpaths& camera, const Subpaths& light,
                const std::vector<float>& raster, const std::vector<float>& time, const std::vector<uint32_t>& hero,
                const std::vector<uint64_t>& seed, FilmSamples& out) const {
+    // Every (s, t) of every point at most: the lists are sized once and
+    // their entries made in place.
+    size_t most = 0;
+    for (uint32_t i = 0; i < camera.count.size(); ++i) most += size_t(camera.count[i]) * (light.count[i] + 1);
     std::vector<Join> joins;
     std::vector<SurfaceQuery> light_queries, camera_queries;
     std::vector<PhaseQuery> light_phases, camera_phases;
     std::vector<EmitterQuery> emitter_queries;
     std::vector<Vec3> environment_queries;
+    joins.reserve(most);
+    light_queries.reserve(most);
+    camera_queries.reserve(most);
+    emitter_queries.reserve(most);
     // Surface models see a surface vertex's shading frame; emitters the
     // geometric one.
     const auto local = [](const Vertex& v, Vec3 w) { return v.frame.ToLocal(w); };
@@ -506,7 +515,7 @@ class Bdpt final : public Transport {
           if (s == 0) {
             if (!pt.emitter) continue;
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.push_back({pt.emitter, emitter_local(pt, pt.wi), pt.site});
+            emitter_queries.emplace_back(pt.emitter, emitter_local(pt, pt.wi), pt.site);
             joins.push_back(j);
             continue;
           }
@@ -529,21 +538,21 @@ class Bdpt final : public Transport {
           const Vec3 to_pt = qs.infinite ? qs.n : Normalize(d);
           if (s == 1) {
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.push_back(
-                {qs.emitter, qs.infinite ? qs.frame.ToLocal(to_pt) : emitter_local(qs, to_pt), qs.site});
+            emitter_queries.emplace_back(qs.emitter, qs.infinite ? qs.frame.ToLocal(to_pt) : emitter_local(qs, to_pt),
+                                         qs.site);
           } else if (qs.kind == Vertex::Kind::kMedium) {
             j.light_phase = uint32_t(light_phases.size());
             light_phases.push_back({qs.medium, qs.wi, to_pt, qs.p});
           } else {
             j.light_surface = uint32_t(light_queries.size());
-            light_queries.push_back({qs.material, local(qs, qs.wi), local(qs, to_pt), qs.site});
+            light_queries.emplace_back(qs.material, local(qs, qs.wi), local(qs, to_pt), qs.site);
           }
           if (t > 1 && pt.kind == Vertex::Kind::kMedium) {
             j.camera_phase = uint32_t(camera_phases.size());
             camera_phases.push_back({pt.medium, pt.wi, -to_pt, pt.p});
           } else if (t > 1) {
             j.camera_surface = uint32_t(camera_queries.size());
-            camera_queries.push_back({pt.material, local(pt, pt.wi), local(pt, -to_pt), pt.site});
+            camera_queries.emplace_back(pt.material, local(pt, pt.wi), local(pt, -to_pt), pt.site);
           }
           joins.push_back(j);
         }
@@ -561,6 +570,11 @@ class Bdpt final : public Transport {
     std::vector<Vec3> values, ratios;
     std::vector<uint32_t> owners;
     std::vector<float> xy;
+    shadows.reserve(joins.size());
+    values.reserve(joins.size());
+    ratios.reserve(joins.size());
+    owners.reserve(joins.size());
+    xy.reserve(2 * joins.size());
     for (const Join& j : joins) {
       const Vertex& pt = camera.at(j.path, j.t - 1);
       float x = raster[2 * j.path], y = raster[2 * j.path + 1];
@@ -619,7 +633,7 @@ class Bdpt final : public Transport {
       const float weight =
           Weight(scene, camera, light, j, light_answer, camera_answer,
                  j.s == 1 ? (qs.infinite ? disk : emitted[j.emitter].pdf_direction) : 0, 0);
-      ShadowWalk shadow;
+      ShadowWalk& shadow = shadows.emplace_back();
       Ray& ray = shadow.ray;
       if (qs.infinite) {
         // Toward the light, from pt.
@@ -641,7 +655,6 @@ class Bdpt final : public Transport {
       ray.time = time[j.path];
       shadow.hero = hero[j.path];
       shadow.seed = Hash(seed[j.path], j.s, j.t, 2u);
-      shadows.push_back(shadow);
       values.push_back(value * weight);
       ratios.push_back(qs.r_u * (j.t == 1 ? Vec3(1, 1, 1) : pt.r_u));
       owners.push_back(j.path);
