@@ -203,10 +203,15 @@ class LightTracer final : public Transport {
       uint32_t material;
       float time;
     };
+    // Sized once, their entries made in place: this runs for every bounce.
     std::vector<Vertex> vertices;
     std::vector<SurfaceQuery> to_camera;
     std::vector<CameraConnection> connections;
     std::vector<uint32_t> connected;  // into vertices
+    vertices.reserve(active.size());
+    to_camera.reserve(active.size());
+    connections.reserve(active.size());
+    connected.reserve(active.size());
     for (size_t k = 0; k < active.size(); ++k) {
       if (!at_surface[k] || !hits[k].Found()) continue;
       const Ray& ray = rays[k];
@@ -218,17 +223,17 @@ class LightTracer final : public Transport {
         next.push_back(active[k]);
         continue;
       }
-      const Vertex v{active[k], hits[k].shape, ShadingPointOf(scene, hits[k], ray), scene.MaterialOf(hits[k].shape),
-                     ray.time};
-      CameraConnection c;
-      if (scene.ConnectToCamera(v.at.position, points.Get(v.path, kLensDimension),
-                                points.Get(v.path, kLensDimension + 1), c)) {
-        to_camera.push_back({v.material, v.at.wi, v.at.frame.ToLocal(Normalize(c.lens_point - v.at.position)),
-                             v.at.site});
-        connections.push_back(c);
-        connected.push_back(uint32_t(vertices.size()));
+      const Vertex& v = vertices.emplace_back(active[k], hits[k].shape, ShadingPointOf(scene, hits[k], ray),
+                                              scene.MaterialOf(hits[k].shape), ray.time);
+      CameraConnection& c = connections.emplace_back();
+      if (!scene.ConnectToCamera(v.at.position, points.Get(v.path, kLensDimension),
+                                 points.Get(v.path, kLensDimension + 1), c)) {
+        connections.pop_back();
+        continue;
       }
-      vertices.push_back(v);
+      to_camera.emplace_back(v.material, v.at.wi, v.at.frame.ToLocal(Normalize(c.lens_point - v.at.position)),
+                             v.at.site);
+      connected.push_back(uint32_t(vertices.size() - 1));
     }
     // Connect to the camera.
     const std::vector<SurfaceAnswer> f =
@@ -250,15 +255,16 @@ class LightTracer final : public Transport {
     // Scatter importance onward.
     std::vector<ScatterQuery> queries;
     std::vector<uint32_t> scattering;  // into vertices
+    queries.reserve(vertices.size());
+    scattering.reserve(vertices.size());
     for (uint32_t j = 0; j < vertices.size(); ++j) {
       const Vertex& v = vertices[j];
       LightPath& p = paths[v.path];
       if (!MayScatter(p.bounce)) continue;
-      ScatterQuery q{v.material, v.at.wi, v.at.site};
+      ScatterQuery& q = queries.emplace_back(v.material, v.at.wi, v.at.site);
       q.uniform[0] = Uniform(points, v.path, p, 2);
       q.uniform[1] = Uniform(points, v.path, p, 0);
       q.uniform[2] = Uniform(points, v.path, p, 1);
-      queries.push_back(q);
       scattering.push_back(j);
     }
     const std::vector<ScatterAnswer> sampled =
