@@ -6,6 +6,7 @@
 
 #include "yarf/error.h"
 #include "yarf/support/warps.h"
+#include "yarf/support/wavefront.h"
 
 namespace yarf {
 namespace {
@@ -780,16 +781,9 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
     out[k] = LightDirection{};
     if (!lights_.empty()) picked[k] = PickLightFor(points[k], uniform[3 * k], u_primitive[k], probability[k]);
   }
-  // The points that sampled each light, in order of first appearance.
-  std::vector<std::pair<uint32_t, std::vector<uint32_t>>> by_light;
-  for (uint32_t k = 0; k < n; ++k) {
-    if (picked[k] == kNoLight) continue;
-    auto group = std::find_if(by_light.begin(), by_light.end(), [&](const auto& g) { return g.first == picked[k]; });
-    if (group == by_light.end()) group = by_light.insert(by_light.end(), {picked[k], {}});
-    group->second.push_back(k);
-  }
   std::vector<SurfaceSample> on_surface(n);
-  for (const auto& [index, members] : by_light) {
+  for (const auto& [index, members] : GroupBy(picked)) {
+    if (index == kNoLight) continue;
     const Light& light = lights_[index];
     const size_t m = members.size();
     if (light.kind == LightKind::kSurface) {
