@@ -6,7 +6,6 @@
 
 #include "yarf/error.h"
 #include "yarf/support/warps.h"
-#include "yarf/support/wavefront.h"
 
 namespace yarf {
 namespace {
@@ -770,65 +769,29 @@ Vec3 KernelScene::InfiniteLightOrigin(Vec3 d, float u0, float u1, float& pdf_are
 
 void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
                                    std::span<LightDirection> out) const {
-  // In three passes, so that each light samples all its points in one
-  // call: the light of each point; the points on surface lights and the
-  // environment's directions; then each point's direction, distance and
-  // density.
-  const size_t n = points.size();
-  std::vector<uint32_t> picked(n, kNoLight);
-  std::vector<float> probability(n, 0.0f), u_primitive(n, 0.0f);
-  for (size_t k = 0; k < n; ++k) {
-    out[k] = LightDirection{};
-    if (!lights_.empty()) picked[k] = PickLightFor(points[k], uniform[3 * k], u_primitive[k], probability[k]);
-  }
-  std::vector<SurfaceSample> on_surface(n);
-  for (const auto& [index, members] : GroupBy(picked)) {
-    if (index == kNoLight) continue;
-    const Light& light = lights_[index];
-    const size_t m = members.size();
-    if (light.kind == LightKind::kSurface) {
-      // The surface's own sampler, by solid angle where it can.
-      std::vector<Vec3> from(m);
-      std::vector<float> u(3 * m);
-      std::vector<SurfaceSample> at(m);
-      for (size_t j = 0; j < m; ++j) {
-        const uint32_t k = members[j];
-        from[j] = points[k];
-        u[3 * j] = u_primitive[k], u[3 * j + 1] = uniform[3 * k + 1], u[3 * j + 2] = uniform[3 * k + 2];
-      }
-      light.surface->Sample(from, u, at);
-      for (size_t j = 0; j < m; ++j) on_surface[members[j]] = at[j];
-    } else if (light.kind == LightKind::kEnvironment) {
-      std::vector<float> u(2 * m), w(3 * m), pdf(m);
-      for (size_t j = 0; j < m; ++j) {
-        u[2 * j] = uniform[3 * members[j] + 1];
-        u[2 * j + 1] = uniform[3 * members[j] + 2];
-      }
-      light.emitter->SampleDirection(u, w, pdf);
-      for (size_t j = 0; j < m; ++j) {
-        LightDirection& s = out[members[j]];
-        s.emitter = light.emitter;
-        s.w = Vec3::Load(&w[3 * j]);
-        s.direction = -Normalize(light.frame.ToWorld(s.w));
-        s.distance = kInfinity;
-        s.pdf = std::isfinite(pdf[j]) ? probability[members[j]] * pdf[j] : 0.0f;
-      }
-    }
-  }
-  for (size_t k = 0; k < n; ++k) {
-    if (picked[k] == kNoLight) continue;
-    const Light& light = lights_[picked[k]];
+  std::vector<uint32_t> from_environment;
+  for (size_t k = 0; k < points.size(); ++k) {
     LightDirection& s = out[k];
+    s = LightDirection{};
+    if (lights_.empty()) continue;
+    const Vec3 p = points[k];
+    const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
+    float u_primitive = 0, probability = 0;
     // A surface light's density per solid angle.
     float solid_angle_pdf = 0;
+    const uint32_t index = PickLightFor(p, uniform[3 * k], u_primitive, probability);
+    if (index == kNoLight) continue;
+    const Light& light = lights_[index];
+    s.emitter = light.emitter;
     switch (light.kind) {
       case LightKind::kEnvironment:
-        continue;  // sampled above
+        from_environment.push_back(uint32_t(k));
+        s.pdf = probability;  // times the direction's density below
+        continue;
       case LightKind::kDirectional:
-        s.emitter = light.emitter;
         s.direction = -light.frame.n;
         s.distance = kInfinity;
-        s.pdf = probability[k];
+        s.pdf = probability;
         s.delta = true;
         s.w = Vec3(0, 0, 1);
         continue;
@@ -838,24 +801,48 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
         s.delta = true;
         break;
       case LightKind::kSurface: {
-        const SurfaceSample& at = on_surface[k];
+        // The surface's own sampler, by solid angle where it can.
+        const float u[3] = {u_primitive, u0, u1};
+        SurfaceSample at;
+        light.surface->Sample({&p, 1}, u, {&at, 1});
         s.position = at.position;
         s.normal = at.normal;
         s.shape = light.shape;
         s.u = at.u, s.v = at.v;
-        solid_angle_pdf = probability[k] * at.pdf;
-        if (!(solid_angle_pdf > 0)) continue;
+        solid_angle_pdf = probability * at.pdf;
+        if (!(solid_angle_pdf > 0)) {
+          s.emitter = nullptr;
+          continue;
+        }
         break;
       }
     }
     // A point: its direction, distance and density from p.
-    const Vec3 d = s.position - points[k];
+    const Vec3 d = s.position - p;
     s.distance = Length(d);
-    if (!(s.distance > 0)) continue;
-    s.emitter = light.emitter;
+    if (!(s.distance > 0)) {
+      s.emitter = nullptr;
+      continue;
+    }
     s.direction = d / s.distance;
     s.w = Frame(s.normal).ToLocal(-s.direction);
-    s.pdf = s.delta ? probability[k] * s.distance * s.distance : solid_angle_pdf;
+    s.pdf = s.delta ? probability * s.distance * s.distance : solid_angle_pdf;
+  }
+  if (from_environment.empty()) return;
+  const Light& environment = lights_[environment_];
+  const size_t m = from_environment.size();
+  std::vector<float> u(2 * m), w(3 * m), pdf(m);
+  for (size_t j = 0; j < m; ++j) {
+    u[2 * j] = uniform[3 * from_environment[j] + 1];
+    u[2 * j + 1] = uniform[3 * from_environment[j] + 2];
+  }
+  environment.emitter->SampleDirection(u, w, pdf);
+  for (size_t j = 0; j < m; ++j) {
+    LightDirection& s = out[from_environment[j]];
+    s.w = Vec3::Load(&w[3 * j]);
+    s.direction = -Normalize(environment.frame.ToWorld(s.w));
+    s.distance = kInfinity;
+    s.pdf = std::isfinite(pdf[j]) ? s.pdf * pdf[j] : 0.0f;
   }
 }
 
