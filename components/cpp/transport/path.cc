@@ -124,7 +124,8 @@ class PathTracer final : public Transport {
     const uint32_t base = kFirstBounceDimension + kDimensionsPerBounce * uint32_t(depth - 1);
     const auto groups = GroupBy(vertex_material);
     // One light sample for every vertex whose material can use it, all in
-    // one call per light, then per material the BSDF toward them.
+    // one SampleLightsFrom call and one Radiance call per emitter, then
+    // per material the BSDF toward them.
     std::vector<uint8_t> samples_lights(vertices.size(), 0);
     if (scene.HasLights())
       for (const auto& [material, members] : groups)

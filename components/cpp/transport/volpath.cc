@@ -220,7 +220,8 @@ class VolPathTracer final : public Transport {
       u_phase.push_back(Uniform(points, v.path, p, kScatterDirection));
       u_phase.push_back(Uniform(points, v.path, p, kScatterDirection + 1));
     }
-    // The light samples of every medium's vertices in one call per light.
+    // The light samples of every medium's vertices, in one SampleLightsFrom
+    // call and one Radiance call per emitter.
     const LightSamples lights = scene.HasLights() ? SampleLightsAt(scene, points, paths, vertices, all) : LightSamples{};
     for (const auto& [medium_index, members] : GroupBy(keys)) {
       const Medium& medium = scene.MediumAt(medium_index);
@@ -282,7 +283,8 @@ class VolPathTracer final : public Transport {
     for (size_t k = 0; k < vertices.size(); ++k) keys[k] = scene.MaterialOf(vertices[k].shape);
     const auto groups = GroupBy(keys);
     // One light sample for every vertex whose material can use it, all in
-    // one call per light, then per material the BSDF toward them.
+    // one SampleLightsFrom call and one Radiance call per emitter, then
+    // per material the BSDF toward them.
     std::vector<uint32_t> lit;
     if (scene.HasLights())
       for (const auto& [material, members] : groups)

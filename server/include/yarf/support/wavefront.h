@@ -473,7 +473,8 @@ inline std::vector<Vec3> LightRadiance(const SceneView& scene, const std::vector
 
 // Next-event estimation's light samples for the vertices of a bounce that
 // take one, made together whatever their materials or media: vertex v's
-// sample and the radiance its light sends back are at slot[v].
+// sample and the radiance its light sends back are at slot[v] (only for
+// the vertices that took one).
 struct LightSamples {
   std::vector<uint32_t> slot;
   std::vector<LightDirection> direction;
