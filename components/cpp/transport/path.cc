@@ -126,12 +126,7 @@ class PathTracer final : public Transport {
     // One light sample for every vertex whose material can use it, all in
     // one SampleLightsFrom call and one Radiance call per emitter, then
     // per material the BSDF toward them.
-    std::vector<uint8_t> samples_lights(vertices.size(), 0);
-    if (scene.HasLights())
-      for (const auto& [material, members] : groups)
-        if (SamplesLights(scene.Material(material).Lobes()))
-          for (const uint32_t member : members) samples_lights[member] = 1;
-    const LightSamples lights = SampleLights(scene, points, vertices, samples_lights, base);
+    const LightSamples lights = SampleLights(scene, points, vertices, LitVertices(scene, groups), base);
     ShadowTests shadows;
     std::vector<uint32_t> next;
     for (const auto& [material, members] : groups) {
@@ -139,7 +134,7 @@ class PathTracer final : public Transport {
       // The group's vertices as its model's calls take them, for both.
       SurfaceBatch batch(&scene, members.size());
       for (const uint32_t member : members) batch.Add(vertices[member].at.wi, vertices[member].at.site);
-      const bool sample_lights = samples_lights[members[0]];
+      const bool sample_lights = scene.HasLights() && SamplesLights(model.Lobes());
       if (sample_lights) WeighLightSamples(model, batch, paths, vertices, members, lights, shadows);
       ScatterBsdf(points, model, batch, paths, vertices, members, base, depth, sample_lights, next);
     }
@@ -179,20 +174,17 @@ class PathTracer final : public Transport {
     }
   }
 
-  // Next-event estimation's light samples, one for each vertex with
-  // `sampled` set.
+  // Next-event estimation's light samples, one for each vertex of `lit`.
   LightSamples SampleLights(const SceneView& scene, const PrimarySamples& points, const std::vector<Vertex>& vertices,
-                            const std::vector<uint8_t>& sampled, uint32_t base) const {
-    std::vector<uint32_t> which, owners;
-    std::vector<Vec3> from;
-    for (uint32_t v = 0; v < vertices.size(); ++v)
-      if (sampled[v]) {
-        which.push_back(v);
-        owners.push_back(vertices[v].path);
-        from.push_back(vertices[v].at.position);
-      }
+                            const std::vector<uint32_t>& lit, uint32_t base) const {
+    std::vector<uint32_t> owners(lit.size());
+    std::vector<Vec3> from(lit.size());
+    for (size_t j = 0; j < lit.size(); ++j) {
+      owners[j] = vertices[lit[j]].path;
+      from[j] = vertices[lit[j]].at.position;
+    }
     return LightSamples::Of(
-        scene, SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition), which,
+        scene, SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition), lit,
         vertices.size());
   }
 

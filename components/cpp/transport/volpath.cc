@@ -285,11 +285,7 @@ class VolPathTracer final : public Transport {
     // One light sample for every vertex whose material can use it, all in
     // one SampleLightsFrom call and one Radiance call per emitter, then
     // per material the BSDF toward them.
-    std::vector<uint32_t> lit;
-    if (scene.HasLights())
-      for (const auto& [material, members] : groups)
-        if (SamplesLights(scene.Material(material).Lobes())) lit.insert(lit.end(), members.begin(), members.end());
-    const LightSamples lights = SampleLightsAt(scene, points, paths, vertices, lit);
+    const LightSamples lights = SampleLightsAt(scene, points, paths, vertices, LitVertices(scene, groups));
     for (const auto& [material, members] : groups) {
       const SurfaceModel& model = scene.Material(material);
       const size_t m = members.size();

@@ -493,6 +493,17 @@ struct LightSamples {
   Vec3 Radiance(uint32_t v) const { return radiance[slot[v]]; }
 };
 
+// The vertices of a bounce, grouped by material (GroupBy), that take a
+// light sample: those whose material can use one, none without lights.
+inline std::vector<uint32_t> LitVertices(const SceneView& scene,
+                                         const std::vector<std::pair<uint32_t, std::vector<uint32_t>>>& groups) {
+  std::vector<uint32_t> lit;
+  if (scene.HasLights())
+    for (const auto& [material, members] : groups)
+      if (SamplesLights(scene.Material(material).Lobes())) lit.insert(lit.end(), members.begin(), members.end());
+  return lit;
+}
+
 // Methods that connect light paths to the camera (light tracing, bdpt)
 // cannot render a camera light paths cannot reach (orthographic, meters).
 inline void RefuseUnreachableCamera(const SceneView& scene, const std::string& transport) {
