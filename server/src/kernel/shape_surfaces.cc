@@ -17,18 +17,28 @@ float AreaToSolidAngle(float pdf_area, Vec3 p, const SurfaceSample& at) {
   return cos_at > 0 && d2 > 0 ? pdf_area * d2 * std::sqrt(d2) / cos_at : 0.0f;
 }
 
-}  // namespace
-
-void SphereParameters(const std::array<Vec3, 3>& axes, Vec3 d, float r, Hit& hit) {
+// Unit direction d from a sphere's centre in the sphere's own frame
+// (`axes`), and its texture coordinates there (SphereParameters').
+Vec3 SphereUv(const std::array<Vec3, 3>& axes, Vec3 d, float& u, float& v) {
   const Vec3 local(Dot(d, axes[0]), Dot(d, axes[1]), Dot(d, axes[2]));
   float phi = std::atan2(local.y, local.x);
   if (phi < 0) phi += 2 * kPi;
+  u = phi * (0.5f * kInvPi);
+  v = std::acos(std::clamp(local.z, -1.0f, 1.0f)) * kInvPi;
+  return local;
+}
+
+}  // namespace
+
+void SphereParameters(const std::array<Vec3, 3>& axes, Vec3 d, float r, Hit& hit) {
+  const Vec3 local = SphereUv(axes, d, hit.u, hit.v);
   const float cos_theta = std::clamp(local.z, -1.0f, 1.0f), sin_theta = std::sqrt(1 - cos_theta * cos_theta);
-  hit.u = phi * (0.5f * kInvPi);
-  hit.v = std::acos(cos_theta) * kInvPi;
+  // cos φ and sin φ from the direction itself, without trigonometry; at
+  // the poles φ = 0, as atan2(0, 0) gives.
+  const float rho = std::sqrt(local.x * local.x + local.y * local.y);
+  const float cos_phi = rho > 0 ? local.x / rho : 1.0f, sin_phi = rho > 0 ? local.y / rho : 0.0f;
   const Vec3 along_phi = axes[0] * (-local.y) + axes[1] * local.x;
-  const Vec3 along_theta =
-      axes[0] * (cos_theta * std::cos(phi)) + axes[1] * (cos_theta * std::sin(phi)) - axes[2] * sin_theta;
+  const Vec3 along_theta = axes[0] * (cos_theta * cos_phi) + axes[1] * (cos_theta * sin_phi) - axes[2] * sin_theta;
   hit.dpdu = along_phi * (2 * kPi * r);
   hit.dpdv = along_theta * (kPi * r);
 }
@@ -47,9 +57,7 @@ SurfaceSample SphereSurface::At(Vec3 d) const {
   SurfaceSample s;
   s.position = sphere_.center + d * sphere_.radius;
   s.normal = sphere_.flip_normals ? -d : d;
-  Hit parameters;
-  SphereParameters(sphere_.axes, d, sphere_.radius, parameters);
-  s.u = parameters.u, s.v = parameters.v;
+  SphereUv(sphere_.axes, d, s.u, s.v);
   return s;
 }
 
