@@ -20,17 +20,27 @@ constexpr uint64_t MixBits(uint64_t v) {
   return v;
 }
 
+// Hash's state before any value.
+inline constexpr uint64_t kHashStart = 0x243f6a8885a308d3ull;
+
+// `values` folded into a running hash state, each in turn: Hash(a, b, c)
+// is HashOnto(Hash(a, b), c), so hashes sharing leading values can share
+// their work.
+template <std::integral... Values>
+constexpr uint64_t HashOnto(uint64_t state, Values... values) {
+  // Golden-ratio increment (as splitmix64's) keeps an all-zero input from
+  // mapping to the fixed point MixBits(0) = 0.
+  constexpr uint64_t kIncrement = 0x9e3779b97f4a7c15ull;
+  ((state = MixBits(state + kIncrement + static_cast<uint64_t>(values))), ...);
+  return state;
+}
+
 // One 64-bit hash of several integers; the order of the arguments matters.
 // Each value is folded into the running state and the state re-mixed, so
 // (a, b) and (b, a) hash differently.
 template <std::integral... Values>
 constexpr uint64_t Hash(Values... values) {
-  // Golden-ratio increment (as splitmix64's) keeps an all-zero input from
-  // mapping to the fixed point MixBits(0) = 0.
-  constexpr uint64_t kIncrement = 0x9e3779b97f4a7c15ull;
-  uint64_t state = 0x243f6a8885a308d3ull;
-  ((state = MixBits(state + kIncrement + static_cast<uint64_t>(values))), ...);
-  return state;
+  return HashOnto(kHashStart, values...);
 }
 
 // A float in [0, 1) from 32 random bits. Only the top 24 bits are used:
