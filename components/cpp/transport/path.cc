@@ -134,7 +134,7 @@ class PathTracer final : public Transport {
       // The group's vertices as its model's calls take them, for both.
       SurfaceBatch batch(&scene, members.size());
       for (const uint32_t member : members) batch.Add(vertices[member].at.wi, vertices[member].at.site);
-      const bool sample_lights = scene.HasLights() && SamplesLights(model.Lobes());
+      const bool sample_lights = TakesLightSamples(scene, model);
       if (sample_lights) WeighLightSamples(model, batch, paths, vertices, members, lights, shadows);
       ScatterBsdf(points, model, batch, paths, vertices, members, base, depth, sample_lights, next);
     }

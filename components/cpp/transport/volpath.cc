@@ -295,7 +295,7 @@ class VolPathTracer final : public Transport {
         batch.Add(v.at.wi, v.at.site);
         paths[v.path].scatter_point = v.at.position;
       }
-      if (scene.HasLights() && SamplesLights(model.Lobes())) {
+      if (TakesLightSamples(scene, model)) {
         std::vector<float> wo(3 * m);
         for (size_t j = 0; j < m; ++j)
           vertices[members[j]].at.frame.ToLocal(lights.Direction(members[j]).direction).Store(&wo[3 * j]);

@@ -18,7 +18,7 @@ float AreaToSolidAngle(float pdf_area, Vec3 p, const SurfaceSample& at) {
 }
 
 // Unit direction d from a sphere's centre in the sphere's own frame
-// (`axes`), and its texture coordinates there (SphereParameters').
+// (`axes`), and its texture coordinates there (those SphereParameters gives).
 Vec3 SphereUv(const std::array<Vec3, 3>& axes, Vec3 d, float& u, float& v) {
   const Vec3 local(Dot(d, axes[0]), Dot(d, axes[1]), Dot(d, axes[2]));
   float phi = std::atan2(local.y, local.x);

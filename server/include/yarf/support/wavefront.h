@@ -493,14 +493,19 @@ struct LightSamples {
   Vec3 Radiance(uint32_t v) const { return radiance[slot[v]]; }
 };
 
+// Whether a surface vertex of this model takes a light sample: the scene
+// has lights, and the model's lobes can use one.
+inline bool TakesLightSamples(const SceneView& scene, const SurfaceModel& model) {
+  return scene.HasLights() && SamplesLights(model.Lobes());
+}
+
 // The vertices of a bounce, grouped by material (GroupBy), that take a
-// light sample: those whose material can use one, none without lights.
+// light sample (TakesLightSamples).
 inline std::vector<uint32_t> LitVertices(const SceneView& scene,
                                          const std::vector<std::pair<uint32_t, std::vector<uint32_t>>>& groups) {
   std::vector<uint32_t> lit;
-  if (scene.HasLights())
-    for (const auto& [material, members] : groups)
-      if (SamplesLights(scene.Material(material).Lobes())) lit.insert(lit.end(), members.begin(), members.end());
+  for (const auto& [material, members] : groups)
+    if (TakesLightSamples(scene, scene.Material(material))) lit.insert(lit.end(), members.begin(), members.end());
   return lit;
 }
 
