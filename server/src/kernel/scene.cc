@@ -767,68 +767,125 @@ Vec3 KernelScene::InfiniteLightOrigin(Vec3 d, float u0, float u1, float& pdf_are
   return bounds_center_ + (disk.s * x + disk.t * y - d) * bounds_radius_;
 }
 
+namespace {
+
+// A finite light's point seen from p: the direction, distance and local
+// direction toward p; the density is the caller's. False when p is the
+// point itself.
+bool AimAt(LightDirection& s, Vec3 p) {
+  const Vec3 d = s.position - p;
+  s.distance = Length(d);
+  if (!(s.distance > 0)) return false;
+  s.direction = d / s.distance;
+  s.w = Frame(s.normal).ToLocal(-s.direction);
+  return true;
+}
+
+}  // namespace
+
 void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
                                    std::span<LightDirection> out) const {
-  std::vector<uint32_t> from_environment;
-  for (size_t k = 0; k < points.size(); ++k) {
+  const size_t n = points.size();
+  std::fill_n(out.begin(), n, LightDirection{});
+  if (lights_.empty()) return;
+  // Each point's light. Surface lights are sampled afterwards, all of a
+  // light's points in one call; the rest here.
+  std::vector<uint32_t> from_environment, on_surface;
+  std::vector<uint32_t> picked(n);
+  std::vector<float> probability(n), u_primitive(n);
+  for (size_t k = 0; k < n; ++k) {
     LightDirection& s = out[k];
-    s = LightDirection{};
-    if (lights_.empty()) continue;
     const Vec3 p = points[k];
-    const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
-    float u_primitive = 0, probability = 0;
-    // A surface light's density per solid angle.
-    float solid_angle_pdf = 0;
-    const uint32_t index = PickLightFor(p, uniform[3 * k], u_primitive, probability);
-    if (index == kNoLight) continue;
-    const Light& light = lights_[index];
+    picked[k] = PickLightFor(p, uniform[3 * k], u_primitive[k], probability[k]);
+    if (picked[k] == kNoLight) continue;
+    const Light& light = lights_[picked[k]];
     s.emitter = light.emitter;
     switch (light.kind) {
       case LightKind::kEnvironment:
         from_environment.push_back(uint32_t(k));
-        s.pdf = probability;  // times the direction's density below
-        continue;
+        s.pdf = probability[k];  // times the direction's density below
+        break;
       case LightKind::kDirectional:
         s.direction = -light.frame.n;
         s.distance = kInfinity;
-        s.pdf = probability;
+        s.pdf = probability[k];
         s.delta = true;
         s.w = Vec3(0, 0, 1);
-        continue;
+        break;
       case LightKind::kPoint:
         s.position = light.position;
         s.normal = light.axis;
         s.delta = true;
-        break;
-      case LightKind::kSurface: {
-        // The surface's own sampler, by solid angle where it can.
-        const float u[3] = {u_primitive, u0, u1};
-        SurfaceSample at;
-        light.surface->Sample({&p, 1}, u, {&at, 1});
-        s.position = at.position;
-        s.normal = at.normal;
-        s.shape = light.shape;
-        s.u = at.u, s.v = at.v;
-        solid_angle_pdf = probability * at.pdf;
-        if (!(solid_angle_pdf > 0)) {
+        if (!AimAt(s, p)) {
           s.emitter = nullptr;
-          continue;
+          break;
         }
+        s.pdf = probability[k] * s.distance * s.distance;
         break;
-      }
+      case LightKind::kSurface:
+        on_surface.push_back(uint32_t(k));
+        break;
     }
-    // A point: its direction, distance and density from p.
-    const Vec3 d = s.position - p;
-    s.distance = Length(d);
-    if (!(s.distance > 0)) {
+  }
+  SampleSurfaceLights(points, uniform, picked, probability, u_primitive, on_surface, out);
+  if (!from_environment.empty()) SampleEnvironment(uniform, from_environment, out);
+}
+
+void KernelScene::SampleSurfaceLights(std::span<const Vec3> points, std::span<const float> uniform,
+                                      std::span<const uint32_t> picked, std::span<const float> probability,
+                                      std::span<const float> u_primitive, std::vector<uint32_t>& on_surface,
+                                      std::span<LightDirection> out) const {
+  // The points in order of their light (a counting sort, when the lights
+  // are not many more than the points), so that each light's surface
+  // samples its points in long runs.
+  if (lights_.size() <= 4 * on_surface.size()) {
+    std::vector<uint32_t> start(lights_.size() + 1, 0);
+    for (const uint32_t k : on_surface) ++start[picked[k] + 1];
+    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+    std::vector<uint32_t> sorted(on_surface.size());
+    for (const uint32_t k : on_surface) sorted[start[picked[k]]++] = k;
+    on_surface = std::move(sorted);
+  }
+  const size_t m = on_surface.size();
+  std::vector<Vec3> from(m);
+  std::vector<float> u(3 * m);
+  std::vector<SurfaceSample> at(m);
+  for (size_t j = 0; j < m; ++j) {
+    const uint32_t k = on_surface[j];
+    from[j] = points[k];
+    u[3 * j] = u_primitive[k];
+    u[3 * j + 1] = uniform[3 * k + 1];
+    u[3 * j + 2] = uniform[3 * k + 2];
+  }
+  // The surface's own sampler, by solid angle where it can, once per run.
+  for (size_t first = 0; first < m;) {
+    const uint32_t index = picked[on_surface[first]];
+    size_t end = first + 1;
+    while (end < m && picked[on_surface[end]] == index) ++end;
+    const std::span<const Vec3> run(&from[first], end - first);
+    lights_[index].surface->Sample(run, std::span<const float>(&u[3 * first], 3 * run.size()),
+                                   std::span<SurfaceSample>(&at[first], run.size()));
+    first = end;
+  }
+  for (size_t j = 0; j < m; ++j) {
+    const uint32_t k = on_surface[j];
+    LightDirection& s = out[k];
+    s.position = at[j].position;
+    s.normal = at[j].normal;
+    s.shape = lights_[picked[k]].shape;
+    s.u = at[j].u, s.v = at[j].v;
+    // Density per solid angle.
+    const float pdf = probability[k] * at[j].pdf;
+    if (!(pdf > 0) || !AimAt(s, points[k])) {
       s.emitter = nullptr;
       continue;
     }
-    s.direction = d / s.distance;
-    s.w = Frame(s.normal).ToLocal(-s.direction);
-    s.pdf = s.delta ? probability * s.distance * s.distance : solid_angle_pdf;
+    s.pdf = pdf;
   }
-  if (from_environment.empty()) return;
+}
+
+void KernelScene::SampleEnvironment(std::span<const float> uniform, std::span<const uint32_t> from_environment,
+                                    std::span<LightDirection> out) const {
   const Light& environment = lights_[environment_];
   const size_t m = from_environment.size();
   std::vector<float> u(2 * m), w(3 * m), pdf(m);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "kernel/light_point_kernels.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -30,6 +31,12 @@ Vec3 SphereUv(const std::array<Vec3, 3>& axes, Vec3 d, float& u, float& v) {
 
 }  // namespace
 
+// Here, not beside the kernels, which are built for AVX2 throughout.
+bool LightPointKernelsAvailable() {
+  static const bool available = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return available;
+}
+
 void SphereParameters(const std::array<Vec3, 3>& axes, Vec3 d, float r, Hit& hit) {
   const Vec3 local = SphereUv(axes, d, hit.u, hit.v);
   const float cos_theta = std::clamp(local.z, -1.0f, 1.0f), sin_theta = std::sqrt(1 - cos_theta * cos_theta);
@@ -53,13 +60,30 @@ void SphereSurface::Bounds(Vec3& lower, Vec3& upper) const {
 
 float SphereSurface::Area() const { return 4 * kPi * sphere_.radius * sphere_.radius; }
 
-SurfaceSample SphereSurface::At(Vec3 d) const {
+SurfaceSample SpherePointAt(const SphereGeometry& sphere, Vec3 d) {
   SurfaceSample s;
-  s.position = sphere_.center + d * sphere_.radius;
-  s.normal = sphere_.flip_normals ? -d : d;
-  SphereUv(sphere_.axes, d, s.u, s.v);
+  s.position = sphere.center + d * sphere.radius;
+  s.normal = sphere.flip_normals ? -d : d;
+  SphereUv(sphere.axes, d, s.u, s.v);
   return s;
 }
+
+SurfaceSample SampleSphereCone(const SphereGeometry& sphere, Vec3 p, float u0, float u1) {
+  // Uniform in the cone, then the point the direction meets on the near
+  // side.
+  const float r2 = sphere.radius * sphere.radius;
+  const Vec3 to_center = sphere.center - p;
+  const float distance2 = Dot(to_center, to_center);
+  const float cos_max = std::sqrt(std::max(0.0f, 1 - r2 / distance2));
+  const Vec3 dir = Frame(Normalize(to_center)).ToWorld(SampleUniformCone(u0, u1, cos_max));
+  const float b = Dot(dir, to_center);
+  const float t = b - std::sqrt(std::max(0.0f, r2 - (distance2 - b * b)));
+  SurfaceSample s = SpherePointAt(sphere, Normalize(p + dir * t - sphere.center));
+  s.pdf = UniformConePdf(1, cos_max);
+  return s;
+}
+
+SurfaceSample SphereSurface::At(Vec3 d) const { return SpherePointAt(sphere_, d); }
 
 bool SphereSurface::SeenByCone(Vec3 p) const {
   // From just outside, the cone is too ill-conditioned to be worth it.
@@ -76,25 +100,19 @@ void SphereSurface::Sample(std::span<const float> uniform, std::span<SurfaceSamp
 
 void SphereSurface::Sample(std::span<const Vec3> from, std::span<const float> uniform,
                            std::span<SurfaceSample> out) const {
-  const float r2 = sphere_.radius * sphere_.radius;
+  // Every point by cone, eight at a time where the CPU can; those that do
+  // not see the sphere by cone are redrawn below.
+  const bool batched = by_cone_ && LightPointKernelsAvailable();
+  if (batched) SampleSphereCones(sphere_, from, uniform, out.first(from.size()));
   for (size_t k = 0; k < out.size(); ++k) {
     const Vec3 p = from[k];
     const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
     if (!SeenByCone(p)) {
       out[k] = At(SampleUniformSphere(u0, u1));
       out[k].pdf = AreaToSolidAngle(1 / Area(), p, out[k]);
-      continue;
+    } else if (!batched) {
+      out[k] = SampleSphereCone(sphere_, p, u0, u1);
     }
-    // Uniform in the cone, then the point the direction meets on the
-    // near side.
-    const Vec3 to_center = sphere_.center - p;
-    const float distance2 = Dot(to_center, to_center);
-    const float cos_max = std::sqrt(std::max(0.0f, 1 - r2 / distance2));
-    const Vec3 dir = Frame(Normalize(to_center)).ToWorld(SampleUniformCone(u0, u1, cos_max));
-    const float b = Dot(dir, to_center);
-    const float t = b - std::sqrt(std::max(0.0f, r2 - (distance2 - b * b)));
-    out[k] = At(Normalize(p + dir * t - sphere_.center));
-    out[k].pdf = UniformConePdf(1, cos_max);
   }
 }
 
@@ -169,13 +187,17 @@ uint32_t MeshSurface::Pick(float u, float& share) const {
   return t;
 }
 
-bool MeshSurface::BySolidAngle(uint32_t t, Vec3 p, SphericalTriangle& seen) const {
+bool MeshSurface::SampledBySolidAngle(float solid_angle) {
   // pbrt-v4's bounds: below, area sampling is as good and cheaper; above,
   // the spherical triangle is too close to a hemisphere to sample well.
   constexpr float kMinSolidAngle = 3e-4f, kMaxSolidAngle = 6.22f;
+  return solid_angle > kMinSolidAngle && solid_angle < kMaxSolidAngle;
+}
+
+bool MeshSurface::BySolidAngle(uint32_t t, Vec3 p, SphericalTriangle& seen) const {
   if (!by_solid_angle_) return false;
   seen = SphericalTriangle::Seen(corners_[t].data(), p);
-  return seen.area > kMinSolidAngle && seen.area < kMaxSolidAngle;
+  return SampledBySolidAngle(seen.area);
 }
 
 SurfaceSample MeshSurface::At(uint32_t t, const std::array<float, 3>& b) const {
@@ -201,6 +223,7 @@ void MeshSurface::Sample(std::span<const float> uniform, std::span<SurfaceSample
 
 void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> uniform,
                          std::span<SurfaceSample> out) const {
+  if (by_solid_angle_ && LightPointKernelsAvailable()) return SampleBatched(from, uniform, out);
   for (size_t k = 0; k < out.size(); ++k) {
     const Vec3 p = from[k];
     const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
@@ -213,9 +236,32 @@ void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> unif
       out[k].pdf = share / seen.area;
       continue;
     }
-    out[k] = At(t, SampleUniformTriangle(u0, u1));
-    out[k].pdf = AreaToSolidAngle(1 / area_, p, out[k]);
+    SampleByArea(t, p, u0, u1, out[k]);
   }
+}
+
+void MeshSurface::SampleBatched(std::span<const Vec3> from, std::span<const float> uniform,
+                                std::span<SurfaceSample> out) const {
+  const size_t n = from.size();
+  std::vector<uint32_t> triangle(n);
+  std::vector<float> share(n);
+  for (size_t k = 0; k < n; ++k) triangle[k] = Pick(uniform[3 * k], share[k]);
+  std::vector<SphericalTriangleSample> seen(n);
+  SampleSphericalTriangles(corners_, triangle, from, uniform, seen);
+  for (size_t k = 0; k < n; ++k) {
+    const SphericalTriangleSample& s = seen[k];
+    if (s.sampled && SampledBySolidAngle(s.solid_angle)) {
+      out[k] = At(triangle[k], {1 - s.b1 - s.b2, s.b1, s.b2});
+      out[k].pdf = share[k] / s.solid_angle;
+      continue;
+    }
+    SampleByArea(triangle[k], from[k], uniform[3 * k + 1], uniform[3 * k + 2], out[k]);
+  }
+}
+
+void MeshSurface::SampleByArea(uint32_t t, Vec3 p, float u0, float u1, SurfaceSample& out) const {
+  out = At(t, SampleUniformTriangle(u0, u1));
+  out.pdf = AreaToSolidAngle(1 / area_, p, out);
 }
 
 void MeshSurface::Pdf(std::span<const Vec3> from, std::span<const SurfaceSample> at, std::span<float> pdf) const {

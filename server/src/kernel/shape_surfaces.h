@@ -47,6 +47,14 @@ struct SphereGeometry {
   bool flip_normals = false;
 };
 
+// The point of `sphere` at unit direction d from its centre, with its
+// normal and uv (no pdf).
+SurfaceSample SpherePointAt(const SphereGeometry& sphere, Vec3 d);
+// The point of `sphere` in the direction from p drawn uniformly in the
+// cone the sphere subtends (u0, u1), and that density per unit solid
+// angle; p must lie outside the sphere.
+SurfaceSample SampleSphereCone(const SphereGeometry& sphere, Vec3 p, float u0, float u1);
+
 class SphereSurface final : public ShapeSurface {
  public:
   // by_cone: points outside the sphere find it by the cone it subtends
@@ -64,7 +72,7 @@ class SphereSurface final : public ShapeSurface {
   SurfaceSample SamplePoint(float u0, float u1) const override;
 
  private:
-  // The point of the sphere at unit direction d from its centre.
+  // SpherePointAt of this sphere.
   SurfaceSample At(Vec3 d) const;
   bool SeenByCone(Vec3 p) const;
 
@@ -96,9 +104,18 @@ class MeshSurface final : public ShapeSurface {
   // The triangle u picks in proportion to area, and its share of the area.
   uint32_t Pick(float u, float& share) const;
   float Share(uint32_t triangle) const;
+  // Whether a triangle that subtends `solid_angle` is sampled by it.
+  static bool SampledBySolidAngle(float solid_angle);
   // Whether triangle t is sampled by its solid angle from p, and the
   // triangle as seen from p.
   bool BySolidAngle(uint32_t t, Vec3 p, SphericalTriangle& seen) const;
+  // Sample(from, ...) by solid angle, eight points at a time
+  // (light_point_kernels.h).
+  void SampleBatched(std::span<const Vec3> from, std::span<const float> uniform,
+                     std::span<SurfaceSample> out) const;
+  // A point of triangle t uniform in its area, with the density per solid
+  // angle at p that Sample gives it.
+  void SampleByArea(uint32_t t, Vec3 p, float u0, float u1, SurfaceSample& out) const;
   // The point of triangle t at barycentrics b, with its uv.
   SurfaceSample At(uint32_t t, const std::array<float, 3>& b) const;
 
