@@ -368,10 +368,11 @@ void KernelScene::ChooseLightsByPower() {
   double total = 0;
   for (double w : weight) total += w;
   double running = 0;
+  light_cdf_.resize(lights_.size());
   for (size_t l = 0; l < lights_.size(); ++l) {
     lights_[l].probability = float(weight[l] / total);
     running += weight[l];
-    lights_[l].cdf = l + 1 == lights_.size() ? 1.0f : float(running / total);
+    light_cdf_[l] = l + 1 == lights_.size() ? 1.0f : float(running / total);
   }
   for (const Light& light : lights_)
     if (light.kind == LightKind::kSurface) shape_light_pdf_[light.shape] = light.probability / light.surface->Area();
@@ -646,11 +647,19 @@ void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occlude
 }
 
 uint32_t KernelScene::PickLight(float u_choice, float& u_rest) const {
-  const auto it = std::upper_bound(lights_.begin(), lights_.end(), u_choice,
-                                   [](float u, const Light& light) { return u < light.cdf; });
-  const uint32_t index = uint32_t(std::min<size_t>(it - lights_.begin(), lights_.size() - 1));
+  // The first light whose running sum exceeds u_choice (upper_bound),
+  // by halving without branches: which half is taken is a coin toss per
+  // sample, too random for the branch predictor.
+  const float* cdf = light_cdf_.data();
+  size_t first = 0, count = light_cdf_.size();
+  while (count > 1) {
+    const size_t half = count / 2;
+    first = cdf[first + half - 1] <= u_choice ? first + half : first;
+    count -= half;
+  }
+  const uint32_t index = uint32_t(std::min(first + (cdf[first] <= u_choice ? 1 : 0), light_cdf_.size() - 1));
   const Light& light = lights_[index];
-  const float below = light.cdf - light.probability;
+  const float below = light_cdf_[index] - light.probability;
   u_rest = light.probability > 0 ? std::clamp((u_choice - below) / light.probability, 0.0f, 0x1.fffffep-1f) : 0.0f;
   return index;
 }

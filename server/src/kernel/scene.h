@@ -278,12 +278,14 @@ class KernelScene final : public SceneView {
     Vec3 position, axis;
     // Lights at infinity: the emitter's local frame in the world.
     Frame frame{Vec3(0, 0, 1)};
-    // Of being chosen, and the running sum of the probabilities.
-    float probability = 0, cdf = 0;
+    // Of being chosen.
+    float probability = 0;
     float power = 0;
   };
   static constexpr uint32_t kNoLight = 0xFFFFFFFFu;
   std::vector<Light> lights_;
+  // The running sum of the lights' probabilities, apart for PickLight's search.
+  std::vector<float> light_cdf_;
   uint32_t environment_ = kNoLight;
   LightChoice light_choice_ = LightChoice::kPower;
   LightBvh light_bvh_;
