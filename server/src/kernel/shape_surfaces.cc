@@ -103,7 +103,7 @@ void SphereSurface::Sample(std::span<const Vec3> from, std::span<const float> un
   // Every point by cone, eight at a time where the CPU can; those that do
   // not see the sphere by cone are redrawn below.
   const bool batched = by_cone_ && LightPointKernelsAvailable();
-  if (batched) SampleSphereCones(sphere_, from, uniform, out.first(from.size()));
+  if (batched) SampleSphereCones(sphere_, from.first(out.size()), uniform, out);
   for (size_t k = 0; k < out.size(); ++k) {
     const Vec3 p = from[k];
     const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
@@ -242,12 +242,12 @@ void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> unif
 
 void MeshSurface::SampleBatched(std::span<const Vec3> from, std::span<const float> uniform,
                                 std::span<SurfaceSample> out) const {
-  const size_t n = from.size();
+  const size_t n = out.size();
   std::vector<uint32_t> triangle(n);
   std::vector<float> share(n);
   for (size_t k = 0; k < n; ++k) triangle[k] = Pick(uniform[3 * k], share[k]);
   std::vector<SphericalTriangleSample> seen(n);
-  SampleSphericalTriangles(corners_, triangle, from, uniform, seen);
+  SampleSphericalTriangles(corners_, triangle, from.first(n), uniform, seen);
   for (size_t k = 0; k < n; ++k) {
     const SphericalTriangleSample& s = seen[k];
     if (s.sampled && SampledBySolidAngle(s.solid_angle)) {

@@ -110,7 +110,7 @@ class MeshSurface final : public ShapeSurface {
   // triangle as seen from p.
   bool BySolidAngle(uint32_t t, Vec3 p, SphericalTriangle& seen) const;
   // Sample(from, ...) by solid angle, eight points at a time
-  // (light_point_kernels.h).
+  // (light_point_kernels.h); those the kernel leaves by area.
   void SampleBatched(std::span<const Vec3> from, std::span<const float> uniform,
                      std::span<SurfaceSample> out) const;
   // A point of triangle t uniform in its area, with the density per solid
