@@ -647,17 +647,18 @@ void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occlude
 }
 
 uint32_t KernelScene::PickLight(float u_choice, float& u_rest) const {
-  // The first light whose running sum exceeds u_choice (upper_bound),
-  // by halving without branches: which half is taken is a coin toss per
-  // sample, too random for the branch predictor.
+  // The first light whose running sum exceeds u_choice (upper_bound's
+  // answer, a NaN going past every light), by halving without branches:
+  // which half is taken is a coin toss per sample, too random for the
+  // branch predictor.
   const float* cdf = light_cdf_.data();
   size_t first = 0, count = light_cdf_.size();
   while (count > 1) {
     const size_t half = count / 2;
-    first = cdf[first + half - 1] <= u_choice ? first + half : first;
+    first = !(u_choice < cdf[first + half - 1]) ? first + half : first;
     count -= half;
   }
-  const uint32_t index = uint32_t(std::min(first + (cdf[first] <= u_choice ? 1 : 0), light_cdf_.size() - 1));
+  const uint32_t index = uint32_t(std::min(first + (!(u_choice < cdf[first]) ? 1 : 0), light_cdf_.size() - 1));
   const Light& light = lights_[index];
   const float below = light_cdf_[index] - light.probability;
   u_rest = light.probability > 0 ? std::clamp((u_choice - below) / light.probability, 0.0f, 0x1.fffffep-1f) : 0.0f;
