@@ -6,6 +6,7 @@
 
 #include "yarf/error.h"
 #include "yarf/support/warps.h"
+#include "yarf/support/wavefront.h"
 
 namespace yarf {
 namespace {
@@ -843,54 +844,40 @@ void KernelScene::SampleLightsFrom(std::span<const Vec3> points, std::span<const
 
 void KernelScene::SampleSurfaceLights(std::span<const Vec3> points, std::span<const float> uniform,
                                       std::span<const uint32_t> picked, std::span<const float> probability,
-                                      std::span<const float> u_primitive, std::vector<uint32_t>& on_surface,
+                                      std::span<const float> u_primitive, std::span<const uint32_t> on_surface,
                                       std::span<LightDirection> out) const {
-  // The points in order of their light (a counting sort, when the lights
-  // are not many more than the points), so that each light's surface
-  // samples its points in long runs.
-  if (lights_.size() <= 4 * on_surface.size()) {
-    std::vector<uint32_t> start(lights_.size() + 1, 0);
-    for (const uint32_t k : on_surface) ++start[picked[k] + 1];
-    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-    std::vector<uint32_t> sorted(on_surface.size());
-    for (const uint32_t k : on_surface) sorted[start[picked[k]]++] = k;
-    on_surface = std::move(sorted);
-  }
-  const size_t m = on_surface.size();
-  std::vector<Vec3> from(m);
-  std::vector<float> u(3 * m);
-  std::vector<SurfaceSample> at(m);
-  for (size_t j = 0; j < m; ++j) {
-    const uint32_t k = on_surface[j];
-    from[j] = points[k];
-    u[3 * j] = u_primitive[k];
-    u[3 * j + 1] = uniform[3 * k + 1];
-    u[3 * j + 2] = uniform[3 * k + 2];
-  }
-  // The surface's own sampler, by solid angle where it can, once per run.
-  for (size_t first = 0; first < m;) {
-    const uint32_t index = picked[on_surface[first]];
-    size_t end = first + 1;
-    while (end < m && picked[on_surface[end]] == index) ++end;
-    const std::span<const Vec3> run(&from[first], end - first);
-    lights_[index].surface->Sample(run, std::span<const float>(&u[3 * first], 3 * run.size()),
-                                   std::span<SurfaceSample>(&at[first], run.size()));
-    first = end;
-  }
-  for (size_t j = 0; j < m; ++j) {
-    const uint32_t k = on_surface[j];
-    LightDirection& s = out[k];
-    s.position = at[j].position;
-    s.normal = at[j].normal;
-    s.shape = lights_[picked[k]].shape;
-    s.u = at[j].u, s.v = at[j].v;
-    // Density per solid angle.
-    const float pdf = probability[k] * at[j].pdf;
-    if (!(pdf > 0) || !AimAt(s, points[k])) {
-      s.emitter = nullptr;
-      continue;
+  std::vector<uint32_t> light_of(on_surface.size());
+  for (size_t j = 0; j < on_surface.size(); ++j) light_of[j] = picked[on_surface[j]];
+  // Each light's points in one call to its surface's own sampler, by solid
+  // angle where it can.
+  for (const auto& [index, members] : GroupBy(light_of)) {
+    const size_t m = members.size();
+    std::vector<Vec3> from(m);
+    std::vector<float> u(3 * m);
+    std::vector<SurfaceSample> at(m);
+    for (size_t j = 0; j < m; ++j) {
+      const uint32_t k = on_surface[members[j]];
+      from[j] = points[k];
+      u[3 * j] = u_primitive[k];
+      u[3 * j + 1] = uniform[3 * k + 1];
+      u[3 * j + 2] = uniform[3 * k + 2];
     }
-    s.pdf = pdf;
+    lights_[index].surface->Sample(from, u, at);
+    for (size_t j = 0; j < m; ++j) {
+      const uint32_t k = on_surface[members[j]];
+      LightDirection& s = out[k];
+      s.position = at[j].position;
+      s.normal = at[j].normal;
+      s.shape = lights_[index].shape;
+      s.u = at[j].u, s.v = at[j].v;
+      // Density per solid angle.
+      const float pdf = probability[k] * at[j].pdf;
+      if (!(pdf > 0) || !AimAt(s, points[k])) {
+        s.emitter = nullptr;
+        continue;
+      }
+      s.pdf = pdf;
+    }
   }
 }
 
@@ -973,11 +960,7 @@ LightDirection KernelScene::LightPoint(uint32_t index, Vec3 seen_from) const {
     }
   }
   s.emitter = light.emitter;
-  const Vec3 d = s.position - seen_from;
-  s.distance = Length(d);
-  if (!(s.distance > 0)) return LightDirection{};
-  s.direction = d / s.distance;
-  s.w = Frame(s.normal).ToLocal(-s.direction);
+  if (!AimAt(s, seen_from)) return LightDirection{};
   const float d2 = s.distance * s.distance;
   if (s.delta) {
     s.pdf = d2;

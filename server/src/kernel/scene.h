@@ -220,12 +220,12 @@ class KernelScene final : public SceneView {
   // The light u_choice picks for a light sample from point p, its
   // probability, and u_choice rescaled; kNoLight when none can reach p.
   uint32_t PickLightFor(Vec3 p, float u_choice, float& u_rest, float& probability) const;
-  // SampleLightsFrom's points `on_surface` (indices into points, reordered
-  // here), whose lights `picked` are surfaces, with PickLightFor's
-  // probability and u_rest for every point.
+  // SampleLightsFrom's points `on_surface` (indices into points), whose
+  // lights `picked` are surfaces, with PickLightFor's probability and
+  // u_rest for every point.
   void SampleSurfaceLights(std::span<const Vec3> points, std::span<const float> uniform,
                            std::span<const uint32_t> picked, std::span<const float> probability,
-                           std::span<const float> u_primitive, std::vector<uint32_t>& on_surface,
+                           std::span<const float> u_primitive, std::span<const uint32_t> on_surface,
                            std::span<LightDirection> out) const;
   // SampleLightsFrom's points `from_environment`, whose light is the
   // environment: their directions, and their pdf multiplied by the map's.
