@@ -52,8 +52,10 @@ struct Path {
   bool last = false;
 };
 
-// A surface hit that scatters further.
+// A surface hit that scatters further, made in place (emplace_back).
 struct Vertex {
+  Vertex(uint32_t path, const SceneView& scene, const Hit& hit, const Ray& ray)
+      : path(path), at(scene, hit, ray), time(ray.time) {}
   uint32_t path;
   ShadingPoint at;
   float time;
@@ -115,7 +117,7 @@ class PathTracer final : public Transport {
       }
       if (scene.EmitterOf(hit.shape)) emitted.push_back(uint32_t(k));
       if (!may_scatter || paths[active[k]].last) continue;
-      vertices.emplace_back(active[k], ShadingPointOf(scene, hit, rays[k]), rays[k].time);
+      vertices.emplace_back(active[k], scene, hit, rays[k]);
       vertex_material.push_back(scene.MaterialOf(hit.shape));
     }
     AddEmission(scene, paths, active, rays, hits, emitted);

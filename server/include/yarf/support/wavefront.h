@@ -100,7 +100,31 @@ class SurfaceRows {
   std::vector<SurfaceLocation> location_;
 };
 
+// The hit of `ray` as scattering sees it, with the texture footprint of a
+// camera sample's spacing there (SceneView::SampleSpacing) on surfaces
+// with a parameterisation of their own, when anything reads footprints.
+// A constructor, so that a batch's entry is made where it lives
+// (emplace_back): one made elsewhere and copied in is read back in wider
+// loads than it was written with, which stall.
 struct ShadingPoint {
+  ShadingPoint(const SceneView& scene, const Hit& hit, const Ray& ray)
+      : position(ray.origin + ray.direction * hit.t),
+        ng(hit.normal),
+        frame(ShadingFrame(hit)),
+        wi(frame.ToLocal(-ray.direction)),
+        site(SurfaceSite::Of(hit)) {
+    if (!hit.parameterised) return;
+    site.parameterised = true;
+    site.position = position;
+    site.dpdu = frame.ToLocal(hit.dpdu);
+    site.dpdv = frame.ToLocal(hit.dpdv);
+    if (scene.FootprintsRead()) {
+      Vec3 dpdx, dpdy;
+      scene.SampleSpacing(position, hit.normal, dpdx, dpdy);
+      UvFootprint(hit.dpdu, hit.dpdv, dpdx, dpdy, site.footprint);
+    }
+  }
+
   Vec3 position;
   Vec3 ng;
   Frame frame;
@@ -108,25 +132,8 @@ struct ShadingPoint {
   SurfaceSite site;
 };
 
-// The hit of `ray` as scattering sees it, with the texture footprint of a
-// camera sample's spacing there (SceneView::SampleSpacing) on surfaces
-// with a parameterisation of their own, when anything reads footprints.
 inline ShadingPoint ShadingPointOf(const SceneView& scene, const Hit& hit, const Ray& ray) {
-  const Frame frame = ShadingFrame(hit);
-  ShadingPoint at{ray.origin + ray.direction * hit.t, hit.normal, frame, frame.ToLocal(-ray.direction),
-                  SurfaceSite::Of(hit)};
-  if (hit.parameterised) {
-    at.site.parameterised = true;
-    at.site.position = at.position;
-    at.site.dpdu = frame.ToLocal(hit.dpdu);
-    at.site.dpdv = frame.ToLocal(hit.dpdv);
-    if (scene.FootprintsRead()) {
-      Vec3 dpdx, dpdy;
-      scene.SampleSpacing(at.position, hit.normal, dpdx, dpdy);
-      UvFootprint(hit.dpdu, hit.dpdv, dpdx, dpdy, at.site.footprint);
-    }
-  }
-  return at;
+  return ShadingPoint(scene, hit, ray);
 }
 
 // What a scattering from local wi to local wo at a surface point carries
