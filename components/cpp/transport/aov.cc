@@ -110,7 +110,7 @@ class Aov final : public Transport {
     std::vector<ScatterQuery> queries(hits.size());
     for (size_t k = 0; k < hits.size(); ++k) {
       const CameraHit& first = hits[k];
-      const ShadingPoint at = ShadingPointOf(scene, first.hit, first.ray);
+      const ShadingPoint at(scene, first.hit, first.ray);
       ScatterQuery& q = queries[k];
       q.material = scene.MaterialOf(first.hit.shape);
       q.wi = at.wi;

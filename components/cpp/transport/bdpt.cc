@@ -352,7 +352,7 @@ class Bdpt final : public Transport {
         Vertex& prev = paths.at(i, paths.count[i] - 1);
         Vertex& v = paths.at(i, paths.count[i]++);
         v = Vertex{};
-        const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
+        const ShadingPoint at(scene, hits[k], rays[k]);
         v.p = at.position;
         v.n = hits[k].normal;
         v.frame = at.frame;

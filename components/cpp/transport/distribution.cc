@@ -98,7 +98,7 @@ class DistributionRayTracer final : public Transport {
         seen.push_back(EmitterQuery::Seen(emitter, rays[k], hits[k]));
         seen_by.push_back(active[k]);
       }
-      vertices.push_back({active[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
+      vertices.push_back({active[k], ShadingPoint(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
     }
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen);
     for (size_t q = 0; q < seen.size(); ++q)

@@ -252,7 +252,7 @@ class IrradianceCache final : public Transport {
         escaped_directions.push_back(rays[k].direction);
         continue;
       }
-      const Vertex v{active[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
+      const Vertex v{active[k], ShadingPoint(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
       // Paths reach here from the camera or through delta lobes only, so
       // every emitter they hit counts.
       if (const Emitter* emitter = scene.EmitterOf(hits[k].shape)) {
@@ -351,7 +351,7 @@ class IrradianceCache final : public Transport {
       std::vector<Vertex> specular;
       for (size_t k = 0; k < rays.size(); ++k) {
         if (!hits[k].Found()) continue;
-        const Vertex v{owner[k], ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
+        const Vertex v{owner[k], ShadingPoint(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)};
         const uint32_t lobes = scene.Material(v.material).Lobes();
         if (HasDiffuseLobe(lobes) && v.at.wi.z != 0)
           found[v.path].push_back({v.at.position, v.at.frame.n * (v.at.wi.z > 0 ? 1.0f : -1.0f), v.at.ng});

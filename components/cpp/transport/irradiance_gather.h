@@ -107,7 +107,7 @@ inline IrradianceRecord GatherRecord(const SceneView& scene, const SurfacePoint&
     distance[c] = hits[c].t;
     const uint32_t material = scene.MaterialOf(hits[c].shape);
     if (!TakesLightSamples(scene, scene.Material(material))) continue;
-    const ShadingPoint at = ShadingPointOf(scene, hits[c], rays[c]);
+    const ShadingPoint at(scene, hits[c], rays[c]);
     connections.push_back({material, at.position, at.ng, at.frame, at.wi, at.site, time, {}});
     lit.push_back(c);
     from.push_back(at.position);

@@ -223,7 +223,7 @@ class LightTracer final : public Transport {
         next.push_back(active[k]);
         continue;
       }
-      const Vertex& v = vertices.emplace_back(active[k], hits[k].shape, ShadingPointOf(scene, hits[k], ray),
+      const Vertex& v = vertices.emplace_back(active[k], hits[k].shape, ShadingPoint(scene, hits[k], ray),
                                               scene.MaterialOf(hits[k].shape), ray.time);
       CameraConnection& c = connections.emplace_back();
       if (!scene.ConnectToCamera(v.at.position, points.Get(v.path, kLensDimension),

@@ -233,7 +233,7 @@ std::vector<Photon> ShootPhotons(const SceneView& scene, const PhotonShooting& s
         }
         if (p.bounce >= last_bounce) continue;
         const uint32_t base = kFirstBounce + kPerBounce * uint32_t(p.bounce - 1);
-        const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
+        const ShadingPoint at(scene, hits[k], rays[k]);
         ScatterQuery q{material, at.wi, at.site};
         q.uniform[0] = points.Get(active[k], base + 2);
         q.uniform[1] = points.Get(active[k], base);
@@ -528,7 +528,7 @@ inline std::vector<SurfacePoint> WalkToDiffuse(const SceneView& scene, const Pri
         if (++steps[i] < kMaxBoundarySteps) next.push_back(i);
         continue;
       }
-      const ShadingPoint at = ShadingPointOf(scene, hits[k], rays[k]);
+      const ShadingPoint at(scene, hits[k], rays[k]);
       const uint32_t material = scene.MaterialOf(hits[k].shape);
       if (StoresPhotons(scene.Material(material).Lobes())) {
         reached.push_back({w.owner, w.Throughput(), at, rays[k].time, material, hits[k].shape, w.medium});

@@ -180,7 +180,7 @@ class VolPathTracer final : public Transport {
         continue;
       }
       if (!MayScatter(p)) continue;
-      vertices.push_back({i, hit.shape, ShadingPointOf(scene, hit, rays[k])});
+      vertices.push_back({i, hit.shape, ShadingPoint(scene, hit, rays[k])});
     }
     AddEmission(scene, paths, active, rays, hits, emitted);
     if (scene.HasEnvironment()) AddEnvironment(scene, paths, active, rays, escaped);

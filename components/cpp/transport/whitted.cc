@@ -87,7 +87,7 @@ class Whitted final : public Transport {
         seen.push_back(EmitterQuery::Seen(emitter, rays[k], hits[k]));
         seen_by.push_back(uint32_t(k));
       }
-      vertices.push_back({uint32_t(k), ShadingPointOf(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
+      vertices.push_back({uint32_t(k), ShadingPoint(scene, hits[k], rays[k]), scene.MaterialOf(hits[k].shape)});
     }
     const std::vector<EmitterAnswer> emitted = EvaluateEmitters(scene, seen, Densities::kNone);
     for (size_t q = 0; q < seen.size(); ++q) {

@@ -228,7 +228,7 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // Whether anything reads texture footprints (SurfaceSite::footprint):
   // the scene has textures, or materials in other processes, which may
   // filter their own. When not, transports may leave them zero.
-  // in-process only: it spares ShadingPointOf work; a transport in another
+  // in-process only: it spares ShadingPoint work; a transport in another
   // process asks SampleSpacing where it wants a footprint.
   virtual bool FootprintsRead() const { return true; }
   // Whether the lens has area (thin lens) or is a point (pinhole).

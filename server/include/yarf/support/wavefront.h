@@ -103,9 +103,8 @@ class SurfaceRows {
 // The hit of `ray` as scattering sees it, with the texture footprint of a
 // camera sample's spacing there (SceneView::SampleSpacing) on surfaces
 // with a parameterisation of their own, when anything reads footprints.
-// A constructor, so that a batch's entry is made where it lives
-// (emplace_back): one made elsewhere and copied in is read back in wider
-// loads than it was written with, which stall.
+// A constructor, so that a batch's entry can be made where it lives
+// (emplace_back) rather than built elsewhere and copied in.
 struct ShadingPoint {
   ShadingPoint(const SceneView& scene, const Hit& hit, const Ray& ray)
       : position(ray.origin + ray.direction * hit.t),
@@ -131,10 +130,6 @@ struct ShadingPoint {
   Vec3 wi;  // local: back along the ray
   SurfaceSite site;
 };
-
-inline ShadingPoint ShadingPointOf(const SceneView& scene, const Hit& hit, const Ray& ray) {
-  return ShadingPoint(scene, hit, ray);
-}
 
 // What a scattering from local wi to local wo at a surface point carries
 // beyond f·|cos θo|: nothing where the geometric and the shading normal
