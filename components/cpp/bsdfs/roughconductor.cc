@@ -81,20 +81,27 @@ class RoughConductor final : public yarf::SurfaceModel {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
       const float* u = &uniform[3 * k];
       const mf::Roughness roughness = roughnesses[k];
-      Vec3 out;
-      float density = 0;
-      if (can_reflect && in.z > 0) {
-        const Vec3 m = mf::SampleVisibleNormal(in, roughness, u[1], u[2]);
-        out = mf::ReflectAbout(in, m);
-        // Density and value both from (wi, wo), as Pdf and Evaluate see them.
-        density = Density(roughness, in, out);
+      if (!can_reflect || !(in.z > 0)) {
+        rows.StoreNoSample(k);
+        continue;
       }
+      const Vec3 out = mf::ReflectAbout(in, mf::SampleVisibleNormal(in, roughness, u[1], u[2]));
+      if (!(out.z > 0)) {
+        rows.StoreNoSample(k);
+        continue;
+      }
+      // The density from (wi, wo), as Pdf sees it; the weight f·cos θo /
+      // pdf reduces to R·F·G2 / G1(wi), without D or the cosines.
+      const Vec3 h = yarf::Normalize(in + out);
+      const float lambda_in = mf::SmithLambda(in, roughness);
+      const float density = Density(roughness, in, h, lambda_in);
       if (!(density > 0)) {
         rows.StoreNoSample(k);
         continue;
       }
-      rows.Store(k, out, Value(roughness, specular[k], {ior.eta[k], ior.k[k]}, in, out) * (out.z / density), density,
-                 kLobe);
+      const float g2_over_g1 = (1.0f + lambda_in) / (1.0f + lambda_in + mf::SmithLambda(out, roughness));
+      const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(in, h), ior.eta[k], ior.k[k]);
+      rows.Store(k, out, specular[k] * fresnel * g2_over_g1, density, kLobe);
     }
   }
 
@@ -121,8 +128,11 @@ class RoughConductor final : public yarf::SurfaceModel {
   // times the Jacobian 1 / (4 wi·h) of reflection about h.
   static float Density(mf::Roughness roughness, Vec3 wi, Vec3 wo) {
     if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
-    const Vec3 h = yarf::Normalize(wi + wo);
-    return mf::SmithG1(wi, roughness) * mf::Ndf(h, roughness) / (4.0f * wi.z);
+    return Density(roughness, wi, yarf::Normalize(wi + wo), mf::SmithLambda(wi, roughness));
+  }
+  // The same from the half vector h and Smith's Λ(wi) (G1 = 1 / (1 + Λ)).
+  static float Density(mf::Roughness roughness, Vec3 wi, Vec3 h, float lambda_wi) {
+    return mf::Ndf(h, roughness) / ((1.0f + lambda_wi) * 4.0f * wi.z);
   }
 
   mf::TexturedRoughness roughness_;
