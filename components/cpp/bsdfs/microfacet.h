@@ -230,8 +230,13 @@ inline float Ndf(Vec3 m, const Roughness& r) {
 
 // --- Masking and shadowing -------------------------------------------------
 
+// G1 and G2 (below) from the directions' Λ, for a caller that shares a
+// direction's Λ between them.
+inline float SmithG1OfLambda(float lambda) { return 1.0f / (1.0f + lambda); }
+inline float SmithG2OfLambdas(float lambda_i, float lambda_o) { return 1.0f / (1.0f + lambda_i + lambda_o); }
+
 // G1 of a direction on either side of the surface: 1 / (1 + Λ).
-inline float SmithG1(Vec3 w, const Roughness& r) { return 1.0f / (1.0f + SmithLambda(w, r)); }
+inline float SmithG1(Vec3 w, const Roughness& r) { return SmithG1OfLambda(SmithLambda(w, r)); }
 
 // Smith's joint masking-shadowing, in its height-correlated form (Heitz,
 // "Understanding the masking-shadowing function", JCGT 2014, eq. 99):
@@ -242,7 +247,7 @@ inline float SmithG1(Vec3 w, const Roughness& r) { return 1.0f / (1.0f + SmithLa
 // as α → 0.
 inline float SmithG2(Vec3 wi, Vec3 wo, const Roughness& r) {
   if (wi.z == 0 || wo.z == 0) return 0.0f;
-  return 1.0f / (1.0f + SmithLambda(wi, r) + SmithLambda(wo, r));
+  return SmithG2OfLambdas(SmithLambda(wi, r), SmithLambda(wo, r));
 }
 
 // --- Visible normals ---------------------------------------------------------

@@ -99,9 +99,10 @@ class RoughConductor final : public yarf::SurfaceModel {
         rows.StoreNoSample(k);
         continue;
       }
-      const float g2_over_g1 = (1.0f + lambda_in) / (1.0f + lambda_in + mf::SmithLambda(out, roughness));
-      const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(in, h), ior.eta[k], ior.k[k]);
-      rows.Store(k, out, specular[k] * fresnel * g2_over_g1, density, kLobe);
+      const float g2 = mf::SmithG2OfLambdas(lambda_in, mf::SmithLambda(out, roughness));
+      rows.Store(k, out,
+                 Reflectance(specular[k], {ior.eta[k], ior.k[k]}, in, h) * (g2 / mf::SmithG1OfLambda(lambda_in)),
+                 density, kLobe);
     }
   }
 
@@ -120,8 +121,12 @@ class RoughConductor final : public yarf::SurfaceModel {
     const Vec3 h = yarf::Normalize(wi + wo);
     const float d = mf::Ndf(h, roughness);
     const float g = mf::SmithG2(wi, wo, roughness);
-    const Vec3 fresnel = mf::FresnelConductor(yarf::Dot(wi, h), ior.eta, ior.k);
-    return specular * fresnel * (d * g / (4.0f * wi.z * wo.z));
+    return Reflectance(specular, ior, wi, h) * (d * g / (4.0f * wi.z * wo.z));
+  }
+
+  // R·F(wi·h): what a mirror microfacet of normal h reflects of light from wi.
+  static Vec3 Reflectance(Vec3 specular, yarf::metals::ComplexIor ior, Vec3 wi, Vec3 h) {
+    return specular * mf::FresnelConductor(yarf::Dot(wi, h), ior.eta, ior.k);
   }
 
   // The density of visible normals, D_wi(h) = G1(wi) (wi·h) D(h) / cos θi,
@@ -130,9 +135,9 @@ class RoughConductor final : public yarf::SurfaceModel {
     if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
     return Density(roughness, wi, yarf::Normalize(wi + wo), mf::SmithLambda(wi, roughness));
   }
-  // The same from the half vector h and Smith's Λ(wi) (G1 = 1 / (1 + Λ)).
+  // The same from the half vector h and Smith's Λ(wi).
   static float Density(mf::Roughness roughness, Vec3 wi, Vec3 h, float lambda_wi) {
-    return mf::Ndf(h, roughness) / ((1.0f + lambda_wi) * 4.0f * wi.z);
+    return mf::SmithG1OfLambda(lambda_wi) * mf::Ndf(h, roughness) / (4.0f * wi.z);
   }
 
   mf::TexturedRoughness roughness_;
