@@ -25,6 +25,8 @@
 //
 // Parameters: PathTracer::Parameters() below.
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include <algorithm>
 #include <vector>
 
@@ -61,6 +63,56 @@ struct Vertex {
   float time;
 };
 
+// The shadow rays of the light samples that would contribute, with the
+// path each belongs to and what it adds if unoccluded.
+struct ShadowTests {
+  std::vector<Ray> rays;
+  std::vector<uint32_t> owner;
+  std::vector<Vec3> contribution;
+  void Clear() {
+    rays.clear();
+    owner.clear();
+    contribution.clear();
+  }
+};
+
+// One thread's buffers, kept from bounce to bounce and batch to batch:
+// a bounce allocates none of them once they have grown to its batch.
+struct Workspace {
+  std::vector<Path> paths;
+  std::vector<uint32_t> active, next;
+  // The bounce's rays and hits, its vertices and their materials, and
+  // which of its rays hit emitters or escaped (indices into active).
+  std::vector<Ray> rays;
+  std::vector<Hit> hits;
+  std::vector<Vertex> vertices;
+  std::vector<uint32_t> vertex_material, emitted, escaped;
+  ShadowTests shadows;
+  std::vector<uint8_t> occluded;
+  // A material group's calls: directions toward the light samples, the
+  // BSDF's uniform numbers, roulette's, and the paths of the group.
+  std::vector<float> wo, u, roulette, coordinate;
+  std::vector<uint32_t> owners;
+  // Set while a batch uses it: a thread that waits inside a component's
+  // own parallel loop may be given another tile's batch meanwhile.
+  bool busy = false;
+};
+
+// The thread's workspace for the length of one batch, or, when the
+// thread is already inside one, a workspace of the batch's own.
+class WorkspaceLease {
+ public:
+  explicit WorkspaceLease(Workspace& mine) : used_(mine.busy ? own_ : mine) { used_.busy = true; }
+  ~WorkspaceLease() { used_.busy = false; }
+  WorkspaceLease(const WorkspaceLease&) = delete;
+  WorkspaceLease& operator=(const WorkspaceLease&) = delete;
+  Workspace& operator*() { return used_; }
+
+ private:
+  Workspace own_;
+  Workspace& used_;
+};
+
 class PathTracer final : public Transport {
  public:
   // Each sample lands in its own pixel: the film may be rendered in tiles.
@@ -81,34 +133,43 @@ class PathTracer final : public Transport {
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     const size_t n = points.Count();
-    std::vector<Path> paths(n);
-    std::vector<uint32_t> active;
-    active.reserve(n);
+    WorkspaceLease lease(workspaces_.local());
+    Workspace& w = *lease;
+    w.paths.assign(n, Path{});
+    w.active.clear();
     for (uint32_t i = 0; i < n; ++i) {
-      paths[i].ray = CameraRayOf(scene, points, i);
-      active.push_back(i);
+      w.paths[i].ray = CameraRayOf(scene, points, i);
+      w.active.push_back(i);
     }
-    for (int depth = 1; !active.empty() && length_.max_depth != 0; ++depth)
-      active = Bounce(scene, points, paths, active, depth);
-    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, paths[i].radiance, out);
+    for (int depth = 1; !w.active.empty() && length_.max_depth != 0; ++depth) {
+      Bounce(scene, points, w, depth);
+      std::swap(w.active, w.next);
+    }
+    for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, w.paths[i].radiance, out);
   }
 
  private:
-  // Advances the paths in `active` by one bounce; returns those that go on.
-  std::vector<uint32_t> Bounce(const SceneView& scene, const PrimarySamples& points,
-                               std::vector<Path>& paths, const std::vector<uint32_t>& active,
-                               int depth) const {
-    std::vector<Ray> rays(active.size());
-    std::vector<Hit> hits(active.size());
+  // Advances the paths in w.active by one bounce; those that go on are
+  // w.next.
+  void Bounce(const SceneView& scene, const PrimarySamples& points, Workspace& w, int depth) const {
+    std::vector<Path>& paths = w.paths;
+    const std::vector<uint32_t>& active = w.active;
+    std::vector<Ray>& rays = w.rays;
+    std::vector<Hit>& hits = w.hits;
+    rays.resize(active.size());
+    hits.assign(active.size(), Hit{});
     for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
     scene.Intersect(rays, hits);
 
     const bool may_scatter = length_.max_depth < 0 || depth < length_.max_depth;
-    std::vector<Vertex> vertices;
-    std::vector<uint32_t> vertex_material;
-    vertices.reserve(active.size());
-    vertex_material.reserve(active.size());
-    std::vector<uint32_t> emitted, escaped;  // indices into active/hits
+    std::vector<Vertex>& vertices = w.vertices;
+    std::vector<uint32_t>& vertex_material = w.vertex_material;
+    std::vector<uint32_t>& emitted = w.emitted;
+    std::vector<uint32_t>& escaped = w.escaped;
+    vertices.clear();
+    vertex_material.clear();
+    emitted.clear();
+    escaped.clear();
     for (size_t k = 0; k < active.size(); ++k) {
       const Hit& hit = hits[k];
       if (!hit.Found()) {
@@ -129,23 +190,24 @@ class PathTracer final : public Transport {
     // one SampleLightsFrom call and one Radiance call per emitter, then
     // per material the BSDF toward them.
     const LightSamples lights = SampleLights(scene, points, vertices, LitVertices(scene, groups), base);
-    ShadowTests shadows;
-    std::vector<uint32_t> next;
+    ShadowTests& shadows = w.shadows;
+    shadows.Clear();
+    w.next.clear();
     for (const auto& [material, members] : groups) {
       const SurfaceModel& model = scene.Material(material);
       // The group's vertices as its model's calls take them, for both.
       SurfaceBatch batch(&scene, members.size());
       for (const uint32_t member : members) batch.Add(vertices[member].at.wi, vertices[member].at.site);
       const bool sample_lights = TakesLightSamples(scene, model);
-      if (sample_lights) WeighLightSamples(model, batch, paths, vertices, members, lights, shadows);
-      ScatterBsdf(points, model, batch, paths, vertices, members, base, depth, sample_lights, next);
+      if (sample_lights) WeighLightSamples(model, batch, w, members, lights);
+      ScatterBsdf(points, model, batch, w, members, base, depth, sample_lights);
     }
     // The shadow rays of every group, in one batch.
-    std::vector<uint8_t> occluded(shadows.rays.size());
+    std::vector<uint8_t>& occluded = w.occluded;
+    occluded.assign(shadows.rays.size(), 0);
     scene.Occluded(shadows.rays, occluded);
     for (size_t q = 0; q < shadows.rays.size(); ++q)
       if (!occluded[q]) paths[shadows.owner[q]].radiance += shadows.contribution[q];
-    return next;
   }
 
   // Emitters hit by the rays of this bounce, weighted against light sampling.
@@ -190,21 +252,16 @@ class PathTracer final : public Transport {
         vertices.size());
   }
 
-  // The shadow rays of the light samples that would contribute, with the
-  // path each belongs to and what it adds if unoccluded.
-  struct ShadowTests {
-    std::vector<Ray> rays;
-    std::vector<uint32_t> owner;
-    std::vector<Vec3> contribution;
-  };
-
   // Weighs the light samples of a material's vertices by the BSDF and
   // MIS, and adds the shadow rays of those that would contribute.
-  void WeighLightSamples(const SurfaceModel& model, const SurfaceBatch& batch, const std::vector<Path>& paths,
-                         const std::vector<Vertex>& vertices, const std::vector<uint32_t>& members,
-                         const LightSamples& lights, ShadowTests& shadows) const {
+  void WeighLightSamples(const SurfaceModel& model, const SurfaceBatch& batch, Workspace& w,
+                         const std::vector<uint32_t>& members, const LightSamples& lights) const {
+    const std::vector<Path>& paths = w.paths;
+    const std::vector<Vertex>& vertices = w.vertices;
+    ShadowTests& shadows = w.shadows;
     const size_t m = members.size();
-    std::vector<float> wo(3 * m);
+    std::vector<float>& wo = w.wo;
+    wo.resize(3 * m);
     for (size_t j = 0; j < m; ++j)
       vertices[members[j]].at.frame.ToLocal(lights.Direction(members[j]).direction).Store(&wo[3 * j]);
     const SurfaceBatch::Evaluation bsdf = batch.Evaluate(model, TransportMode::kRadiance, wo, Densities::kForward);
@@ -227,15 +284,19 @@ class PathTracer final : public Transport {
 
   // Samples the BSDF for each vertex, extends the path, applies roulette.
   void ScatterBsdf(const PrimarySamples& points, const SurfaceModel& model, const SurfaceBatch& batch,
-                   std::vector<Path>& paths, const std::vector<Vertex>& vertices,
-                   const std::vector<uint32_t>& members, uint32_t base, int depth, bool sampled_lights,
-                   std::vector<uint32_t>& next) const {
+                   Workspace& w, const std::vector<uint32_t>& members, uint32_t base, int depth,
+                   bool sampled_lights) const {
+    std::vector<Path>& paths = w.paths;
+    const std::vector<Vertex>& vertices = w.vertices;
     const size_t m = members.size();
-    std::vector<float> u(3 * m), roulette(m);
-    std::vector<uint32_t> owners(m);
+    std::vector<float>&u = w.u, &roulette = w.roulette, &coordinate = w.coordinate;
+    std::vector<uint32_t>& owners = w.owners;
+    u.resize(3 * m);
+    roulette.resize(m);
+    coordinate.resize(m);
+    owners.resize(m);
     for (size_t j = 0; j < m; ++j) owners[j] = vertices[members[j]].path;
     // The lobe choice and the direction, interleaved per vertex.
-    std::vector<float> coordinate(m);
     for (uint32_t j = 0; j < 3; ++j) {
       points.Gather(owners, base + (j == 0 ? kBsdfLobe : kBsdfDirection + j - 1), coordinate);
       for (size_t q = 0; q < m; ++q) u[3 * q + j] = coordinate[q];
@@ -246,21 +307,23 @@ class PathTracer final : public Transport {
       const Vertex& v = vertices[members[j]];
       Path& p = paths[v.path];
       const Vec3 out = sampled.Wo(j);
-      const Vec3 w = sampled.Weight(j) * ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
-      if (!(sampled.pdf[j] > 0) || !(MaxComponent(w) > 0)) continue;
-      p.throughput *= w;
+      const Vec3 weight =
+          sampled.Weight(j) * ShadingWeight(v.at.frame, v.at.ng, v.at.wi, out, TransportMode::kRadiance);
+      if (!(sampled.pdf[j] > 0) || !(MaxComponent(weight) > 0)) continue;
+      p.throughput *= weight;
       p.bsdf_pdf = sampled.pdf[j];
       p.full_weight = !sampled_lights || (sampled.flags[j] & kScatterDelta);
       p.last = !diffuse_indirect_ && (sampled.flags[j] & kScatterDiffuse);
       const Vec3 dir = Normalize(v.at.frame.ToWorld(out));
       Redirect(p.ray, v.at.position, v.at.ng, dir);
       if (depth >= length_.rr_depth && !Survives(p.throughput, roulette[j])) continue;
-      next.push_back(v.path);
+      w.next.push_back(v.path);
     }
   }
 
   PathLength length_;
   bool diffuse_indirect_;
+  mutable tbb::enumerable_thread_specific<Workspace> workspaces_;
 };
 
 }  // namespace
