@@ -25,11 +25,10 @@
 //
 // Parameters: PathTracer::Parameters() below.
 
-#include <tbb/enumerable_thread_specific.h>
-
 #include <algorithm>
 #include <vector>
 
+#include "yarf/support/per_thread.h"
 #include "yarf/support/wavefront.h"
 #include "yarf/plugin.h"
 
@@ -93,24 +92,6 @@ struct Workspace {
   // BSDF's uniform numbers, roulette's, and the paths of the group.
   std::vector<float> wo, u, roulette, coordinate;
   std::vector<uint32_t> owners;
-  // Set while a batch uses it: a thread that waits inside a component's
-  // own parallel loop may be given another tile's batch meanwhile.
-  bool busy = false;
-};
-
-// The thread's workspace for the length of one batch, or, when the
-// thread is already inside one, a workspace of the batch's own.
-class WorkspaceLease {
- public:
-  explicit WorkspaceLease(Workspace& mine) : used_(mine.busy ? own_ : mine) { used_.busy = true; }
-  ~WorkspaceLease() { used_.busy = false; }
-  WorkspaceLease(const WorkspaceLease&) = delete;
-  WorkspaceLease& operator=(const WorkspaceLease&) = delete;
-  Workspace& operator*() { return used_; }
-
- private:
-  Workspace own_;
-  Workspace& used_;
 };
 
 class PathTracer final : public Transport {
@@ -133,7 +114,7 @@ class PathTracer final : public Transport {
 
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
     const size_t n = points.Count();
-    WorkspaceLease lease(workspaces_.local());
+    const PerThread<Workspace>::Lease lease(workspaces_);
     Workspace& w = *lease;
     w.paths.assign(n, Path{});
     w.active.clear();
@@ -323,7 +304,7 @@ class PathTracer final : public Transport {
 
   PathLength length_;
   bool diffuse_indirect_;
-  mutable tbb::enumerable_thread_specific<Workspace> workspaces_;
+  PerThread<Workspace> workspaces_;
 };
 
 }  // namespace
