@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -37,6 +38,8 @@ REFERENCE_SPP = int(os.environ.get("YARF_BENCH_REFERENCE_SPP", "1024"))
 EQUAL_TIME_SECONDS = float(os.environ.get("YARF_BENCH_SECONDS", "2.0"))
 # Independent equal-time renders per renderer; their mean squared error is reported.
 EQUAL_TIME_SEEDS = (7, 8, 9)
+# Renders per thread count for the scaling ratio.
+SCALING_RUNS = 3
 
 
 def yarf_render(
@@ -116,14 +119,20 @@ def main() -> None:
         _, yarf = yarf_render(client, THROUGHPUT_SPP, 1)
         report["yarf"] = yarf
 
-        # Scaling: the same render on one thread and on every thread.
+        # Scaling: the same render on one thread and on every thread, in
+        # turn, SCALING_RUNS times; the medians, so that one slow run on a
+        # shared machine does not decide the ratio.
         cores = os.cpu_count() or 1
-        _, one = yarf_render(client, THROUGHPUT_SPP, 1, threads=1)
-        _, every = yarf_render(client, THROUGHPUT_SPP, 1, threads=cores)
+        rates: dict[int, list[float]] = {1: [], cores: []}
+        for _ in range(SCALING_RUNS):
+            for threads in rates:
+                _, run = yarf_render(client, THROUGHPUT_SPP, 1, threads=threads)
+                rates[threads].append(run["samples_per_second"])
         report["threads"] = {
             "threads": cores,
-            "one_thread_samples_per_second": one["samples_per_second"],
-            "samples_per_second": every["samples_per_second"],
+            "runs": SCALING_RUNS,
+            "one_thread_samples_per_second": statistics.median(rates[1]),
+            "samples_per_second": statistics.median(rates[cores]),
         }
 
         ceiling = embree_ceiling()
