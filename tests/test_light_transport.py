@@ -126,6 +126,41 @@ def test_method_agrees_with_the_path_tracer_within_noise(
     assert np.allclose(pixels.mean(axis=(0, 1)), ref_pixels.mean(axis=(0, 1)), rtol=0.02)
 
 
+@pytest.mark.parametrize("scene_name", ["cornell-box", "cornell-box-glossy"])
+def test_bdpt_with_roulette_from_the_first_segment_agrees_with_the_path_tracer(
+    client: Client, path_references: dict[str, RenderResult], scene_name: str
+) -> None:
+    # Russian roulette may end either subpath at its first vertex: the
+    # survivors' throughput is divided by their survival probability, so
+    # the image keeps its expectation and only its noise grows.
+    scene = small(SCENES[scene_name])
+    reference = path_references[scene_name]
+    result = client.render(
+        scene,
+        spp=SPP["bdpt"],
+        seed=3,
+        transport=component("bdpt", max_depth=MAX_DEPTH, rr_depth=1),
+        sampler=INDEPENDENT,
+        timeout=600,
+    )
+    assert np.isfinite(result.pixels).all()
+    test = block_z_test(
+        result.pixels,
+        result.variance,
+        reference.pixels,
+        reference.variance,
+        block=BLOCK,
+        family_alpha=FAMILY_ALPHA,
+    )
+    assert not test.failing.size, (
+        f"bdpt with rr_depth 1 vs path on {scene_name}: blocks beyond |z| {test.threshold:.2f}:\n"
+        + test.report()
+    )
+    assert np.allclose(
+        result.pixels.mean(axis=(0, 1)), reference.pixels.mean(axis=(0, 1)), rtol=0.02
+    )
+
+
 def test_rmse_between_methods_falls_like_one_over_root_spp(client: Client) -> None:
     scene = small(SCENES["cornell-box"])
 

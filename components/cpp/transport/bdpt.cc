@@ -30,9 +30,16 @@
 // is found by camera subpaths alone (no light subpath starts in a medium),
 // so it takes full weight.
 //
+// From rr_depth segments on, Russian roulette may end a subpath at a
+// surface vertex, surviving with its throughput since the walk began (at
+// most 0.95), with the parameter and default of Mitsuba 0.6's bdpt. The
+// strategy weights leave the survival probabilities out, as they leave
+// transmittance out: computed alike for every strategy from the same
+// vertex densities, they still sum to one over the strategies of a path.
+//
 // Primary sample space: 0–1 film, 2–3 lens, 4 time; (6, 7) light
 // position, (8, 9) emission direction, 10 light choice; from 12, four per
-// camera vertex (direction pair, lobe, unused), then four per light
+// camera vertex (direction pair, lobe, roulette), then four per light
 // vertex; the walks through media draw from a hash of the coordinates.
 //
 // Parameters: Bdpt::Parameters() below; bidirectional weights need
@@ -125,6 +132,8 @@ struct Subpaths {
 // the ray leaving the last vertex, the solid-angle density its direction
 // was sampled with, and the medium it travels through.
 struct Walker : SpectralPath {
+  // The throughput where the walk began: roulette weighs what it became.
+  Vec3 start{1, 1, 1};
   Ray ray;
   float pdf_dir = 0;
   uint32_t medium = kNoMedium;
@@ -174,12 +183,16 @@ float DiskPdf(const SceneView& scene) {
 class Bdpt final : public Transport {
  public:
   static ParameterSchema Parameters() {
-    return {Parameter::Int("max_depth").Default(8).Min(1).Doc("longest path in segments (Mitsuba's convention)")};
+    return {Parameter::Int("max_depth").Default(8).Min(1).Doc("longest path in segments (Mitsuba's convention)"),
+            Parameter::Int("rr_depth").Default(5).Min(1).Doc(
+                "subpath length in segments from which Russian roulette may end a subpath")};
   }
 
-  explicit Bdpt(const Properties& props) : max_depth_(int(props.Int("max_depth", 8))) {
+  explicit Bdpt(const Properties& props)
+      : max_depth_(int(props.Int("max_depth", 8))), rr_depth_(int(props.Int("rr_depth", 5))) {
     if (max_depth_ < 1)
       throw Error("property 'max_depth' must be >= 1: bidirectional weights need a finite depth");
+    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
   }
 
   uint32_t Dimensions() const override { return kFirstBounce + 2 * kPerBounce * uint32_t(max_depth_); }
@@ -253,7 +266,7 @@ class Bdpt final : public Transport {
         Walker& walker = walkers[i];
         walker = Walker{};
         walker.ray = s.FirstRay(time[i]);
-        walker.beta = s.Throughput();
+        walker.beta = walker.start = s.Throughput();
         walker.pdf_dir = s.pdf_direction;
         walker.medium = l.MediumToward(scene, s.direction);
         walker.random.seed = Hash(seed[i], 1u);
@@ -392,6 +405,9 @@ class Bdpt final : public Transport {
         prev.pdf_rev = v.ToArea(pdf_rev, prev);
         walker.medium = v.MediumToward(scene, dir);
         Redirect(walker.ray, v.p, v.n, dir);
+        if (int(paths.count[i]) - 1 >= rr_depth_ &&
+            !Survives(walker.beta, points.Get(i, base(i) + 3), MaxComponent(walker.start)))
+          continue;
         next.push_back(i);
       }
       active = std::move(next);
@@ -734,6 +750,7 @@ class Bdpt final : public Transport {
   }
 
   int max_depth_;
+  int rr_depth_;
   bool null_boundaries_ = false;
 };
 

@@ -196,10 +196,12 @@ inline void Redirect(Ray& ray, Vec3 p, Vec3 n, Vec3 direction) {
   ray.tfar = kInfinity;
 }
 
-// Russian roulette: the path goes on with probability min(max throughput,
-// 0.95), its throughput scaled up to stay unbiased.
-inline bool Survives(Vec3& throughput, float u) {
-  const float survive = std::min(MaxComponent(throughput), 0.95f);
+// Russian roulette: the path goes on with probability min(max throughput
+// / start, 0.95), its throughput scaled up to stay unbiased. `start` is the
+// largest channel of the throughput where the walk began (a light
+// subpath's starts at the light's emitted power, not at 1).
+inline bool Survives(Vec3& throughput, float u, float start = 1) {
+  const float survive = std::min(MaxComponent(throughput) / start, 0.95f);
   if (u >= survive) return false;
   throughput *= 1.0f / survive;
   return true;
