@@ -132,8 +132,9 @@ struct Subpaths {
 // the ray leaving the last vertex, the solid-angle density its direction
 // was sampled with, and the medium it travels through.
 struct Walker : SpectralPath {
-  // The throughput where the walk began: roulette weighs what it became.
-  Vec3 start{1, 1, 1};
+  // The throughput's largest channel where the walk began: roulette
+  // weighs what it became against it.
+  float start = 1;
   Ray ray;
   float pdf_dir = 0;
   uint32_t medium = kNoMedium;
@@ -266,7 +267,8 @@ class Bdpt final : public Transport {
         Walker& walker = walkers[i];
         walker = Walker{};
         walker.ray = s.FirstRay(time[i]);
-        walker.beta = walker.start = s.Throughput();
+        walker.beta = s.Throughput();
+        walker.start = MaxComponent(walker.beta);
         walker.pdf_dir = s.pdf_direction;
         walker.medium = l.MediumToward(scene, s.direction);
         walker.random.seed = Hash(seed[i], 1u);
@@ -406,7 +408,7 @@ class Bdpt final : public Transport {
         walker.medium = v.MediumToward(scene, dir);
         Redirect(walker.ray, v.p, v.n, dir);
         if (int(paths.count[i]) - 1 >= rr_depth_ &&
-            !Survives(walker.beta, points.Get(i, base(i) + 3), MaxComponent(walker.start)))
+            !Survives(walker.beta, points.Get(i, base(i) + 3), walker.start))
           continue;
         next.push_back(i);
       }
