@@ -68,12 +68,9 @@ PixelWindow Film::Footprint(float x, float y) const {
 }
 
 template <typename Visit>
-void Film::ForEachPixelInFilter(float x, float y, const PixelWindow& window, Visit&& visit) const {
-  const PixelWindow reach = Footprint(x, y);
-  const uint32_t x0 = std::max(reach.x0, window.x0), x1 = std::min(reach.x1, window.x1);
-  const uint32_t y0 = std::max(reach.y0, window.y0), y1 = std::min(reach.y1, window.y1);
-  for (uint32_t j = y0; j < y1; ++j)
-    for (uint32_t i = x0; i < x1; ++i) {
+void Film::ForEachPixelInFilter(float x, float y, const PixelWindow& pixels, Visit&& visit) const {
+  for (uint32_t j = pixels.y0; j < pixels.y1; ++j)
+    for (uint32_t i = pixels.x0; i < pixels.x1; ++i) {
       const double w = filter_.Weight(float(i) + 0.5f - x, float(j) + 0.5f - y);
       if (w > 0) visit(size_t(j) * width_ + i, w);
     }
@@ -83,9 +80,9 @@ namespace {
 bool Finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 }  // namespace
 
-void Film::Add(float x, float y, Vec3 value, const PixelWindow& window) {
+void Film::Add(float x, float y, Vec3 value, const PixelWindow& pixels) {
   if (!Finite(value)) return;
-  ForEachPixelInFilter(x, y, window, [&](size_t k, double w) {
+  ForEachPixelInFilter(x, y, pixels, [&](size_t k, double w) {
     Pixel& p = pixels_[k];
     p.weight += w;
     p.weight_sq += w * w;
@@ -143,12 +140,12 @@ void Film::Splat(float x, float y, Vec3 value) {
   // A film that never had a splat that counts has no splat images to save.
   if (!Finite(value) || !(std::isfinite(x) && std::isfinite(y))) return;
   PrepareSplats();
-  Splat(x, y, value, Whole());
+  Splat(x, y, value, Footprint(x, y));
 }
 
-void Film::Splat(float x, float y, Vec3 value, const PixelWindow& window) {
+void Film::Splat(float x, float y, Vec3 value, const PixelWindow& pixels) {
   if (!Finite(value)) return;
-  ForEachPixelInFilter(x, y, window, [&](size_t k, double w) {
+  ForEachPixelInFilter(x, y, pixels, [&](size_t k, double w) {
     const double scale = 1.0 / (double(column_mass_[k % width_]) * row_mass_[k / width_]);
     for (int c = 0; c < 3; ++c) splats_.pass[3 * k + c] += w * scale * value[c];
   });

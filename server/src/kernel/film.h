@@ -46,15 +46,15 @@ class Film {
   uint32_t width() const { return width_; }
   uint32_t height() const { return height_; }
   // A camera sample of radiance `value` at raster position (x, y) in pixels.
-  void Add(float x, float y, Vec3 value) { Add(x, y, value, Whole()); }
+  void Add(float x, float y, Vec3 value) { Add(x, y, value, Footprint(x, y)); }
   // A contribution to the current pass's splat image.
   void Splat(float x, float y, Vec3 value);
-  // The same, to the pixels of `window` alone: a sample whose filter
-  // reaches several windows is added to each of them in turn, by writers
-  // that each hold the lock of one window.
-  void Add(float x, float y, Vec3 value, const PixelWindow& window);
+  // The same, to the pixels of `pixels` alone, a part of the sample's
+  // Footprint: a sample whose filter reaches several windows is added to
+  // each of them in turn, by writers that each hold the lock of one.
+  void Add(float x, float y, Vec3 value, const PixelWindow& pixels);
   // Needs PrepareSplats() first.
-  void Splat(float x, float y, Vec3 value, const PixelWindow& window);
+  void Splat(float x, float y, Vec3 value, const PixelWindow& pixels);
   // Makes the splat images and the border masses (once; later calls do
   // nothing), so that windowed splats from many threads only write pixels.
   void PrepareSplats();
@@ -110,11 +110,10 @@ class Film {
     uint32_t passes = 0;
   };
 
-  PixelWindow Whole() const { return {0, 0, width_, height_}; }
-  // Calls visit(pixel index, weight) for the pixels of `window` under the
-  // filter around (x, y).
+  // Calls visit(pixel index, weight) for the pixels of `pixels` (a part
+  // of Footprint(x, y)) under the filter around (x, y).
   template <typename Visit>
-  void ForEachPixelInFilter(float x, float y, const PixelWindow& window, Visit&& visit) const;
+  void ForEachPixelInFilter(float x, float y, const PixelWindow& pixels, Visit&& visit) const;
 
   uint32_t width_, height_;
   v1::ReconstructionFilter filter_spec_;  // kept for Save

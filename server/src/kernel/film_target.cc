@@ -24,6 +24,8 @@ namespace {
 // A batch's samples by the blocks their filters reach; within a block in
 // batch order, so that each pixel sums them in the order it would one by one.
 struct BlockGroups {
+  // Per sample, the pixels its filter reaches (Film::Footprint).
+  std::vector<PixelWindow> footprints;
   // The blocks reached, in block coordinates: [x0, x1) × [y0, y1).
   PixelWindow blocks{0, 0, 0, 0};
   // Per block of `blocks`, row by row, where its samples start in
@@ -42,9 +44,10 @@ BlockGroups GroupByBlock(const Film& film, const FilmSamples& batch, uint32_t si
   const uint32_t n = uint32_t(batch.Count());
   std::vector<PixelWindow> reach(n, PixelWindow{0, 0, 0, 0});
   BlockGroups groups;
+  groups.footprints.resize(n);
   groups.blocks = {UINT32_MAX, UINT32_MAX, 0, 0};
   for (uint32_t i = 0; i < n; ++i) {
-    const PixelWindow pixels = film.Footprint(batch.xy[2 * i], batch.xy[2 * i + 1]);
+    const PixelWindow& pixels = groups.footprints[i] = film.Footprint(batch.xy[2 * i], batch.xy[2 * i + 1]);
     if (pixels.x0 == pixels.x1) continue;
     PixelWindow& r = reach[i];
     r = {pixels.x0 / side, pixels.y0 / side, (pixels.x1 - 1) / side + 1, (pixels.y1 - 1) / side + 1};
@@ -92,10 +95,14 @@ void FilmTarget::Accumulate(const FilmSamples& samples) {
       for (uint32_t k = first; k < end; ++k) {
         const uint32_t i = groups.samples[k];
         const float x = samples.xy[2 * i], y = samples.xy[2 * i + 1];
+        // The sample's pixels in this block.
+        const PixelWindow& reach = groups.footprints[i];
+        const PixelWindow pixels{std::max(reach.x0, window.x0), std::max(reach.y0, window.y0),
+                                 std::min(reach.x1, window.x1), std::min(reach.y1, window.y1)};
         if (samples.splats)
-          film_.Splat(x, y, samples.rgb[i], window);
+          film_.Splat(x, y, samples.rgb[i], pixels);
         else
-          film_.Add(x, y, samples.rgb[i] * camera_weight_, window);
+          film_.Add(x, y, samples.rgb[i] * camera_weight_, pixels);
       }
     }
 }
