@@ -25,7 +25,7 @@ APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
 # Mitsuba's LLVM variant and perf (bench/profile.py), for the benchmarks only.
 BENCH_APT_PACKAGES := libllvm19 linux-perf
 
-.PHONY: all deps venv build stubs lint render test fuzz bench clean
+.PHONY: all deps venv profile build stubs lint render test fuzz bench clean
 
 all: build
 
@@ -59,9 +59,30 @@ stubs: venv
 	$(PY) -m grpc_tools.protoc -I proto --python_out=clients/python \
 	  --grpc_python_out=clients/python --pyi_out=clients/python proto/yarf/v1/*.proto
 
+# Profile-guided optimisation: yarfd and the plugins built once
+# instrumented, in $(BUILD)/profiling, render the training scenes
+# (tools/profile_training.py), and the build proper is optimised for the
+# branches and calls those renders took. Made with a build folder's first
+# build; `make profile` makes a new one and has the next build recompile
+# everything with it (until then a file changed since compiles without its
+# stale profile).
+PROFILE := $(abspath $(BUILD))/profile
+profile: deps stubs
+	@date -u +'%T profile'
+	rm -rf $(PROFILE) $(BUILD)/profiling
+	cmake -S . -B $(BUILD)/profiling -G Ninja -DCMAKE_BUILD_TYPE=Release \
+	  -DYARF_PROFILE=generate -DYARF_PROFILE_DIR=$(PROFILE)
+	cmake --build $(BUILD)/profiling -j2 --target yarf_runtime
+	$(PY) tools/profile_training.py $(BUILD)/profiling/bin/yarfd
+	rm -rf $(BUILD)/profiling
+	@if [ -f $(BUILD)/build.ninja ]; then ninja -C $(BUILD) -t clean >/dev/null; fi
+	touch $(PROFILE)/trained
+
 build: deps stubs
+	@test -f $(PROFILE)/trained || $(MAKE) --no-print-directory profile
 	@date -u +'%T build'
-	@test -f $(BUILD)/build.ninja || cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
+	@grep -qs '^YARF_PROFILE:STRING=use' $(BUILD)/CMakeCache.txt || cmake -S . -B $(BUILD) -G Ninja \
+	  -DCMAKE_BUILD_TYPE=Release -DYARF_PROFILE=use -DYARF_PROFILE_DIR=$(PROFILE)
 	cmake --build $(BUILD) -j2
 	components/go/build.sh
 
@@ -71,8 +92,8 @@ render: build
 
 # Python style: formatted and lint-clean (ruff).
 lint: venv
-	$(VENV)/bin/ruff format --check bench tests clients/python components/python deploy fuzz
-	$(VENV)/bin/ruff check bench tests clients/python components/python deploy fuzz
+	$(VENV)/bin/ruff format --check bench tests clients/python components/python deploy fuzz tools
+	$(VENV)/bin/ruff check bench tests clients/python components/python deploy fuzz tools
 
 # Each stage prints when it starts, so a slow or stalled run shows where.
 test: build lint

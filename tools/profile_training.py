@@ -1,0 +1,59 @@
+"""The training renders of a profile-guided build (the Makefile's `profile`).
+
+An instrumented yarfd (built with YARF_PROFILE=generate) renders the
+repository's scenes with the light transport methods users run most, at
+small sizes: what it records is which branches and calls the hot loops
+take, not how long they run, so a few seconds of each suffice. The
+repository's own scenes only, so that a clone builds without anything
+beside it.
+
+Usage: profile_training.py BUILD/bin/yarfd
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from yarf import LocalServer, component, load_scene
+from yarf.scene import rgb
+from yarf.v1 import scene_pb2
+
+ROOT = Path(__file__).resolve().parent.parent
+# (scene, transport or None for the scene's own, spp, film width, in fog)
+RENDERS: tuple[tuple[str, str | None, int, int, bool], ...] = (
+    ("cornell-box/scene.json", None, 16, 256, False),
+    ("cornell-box/glossy.json", None, 16, 128, False),
+    ("cornell-box/glossy.json", "bdpt", 8, 64, False),
+    ("cornell-box/glossy.json", "light", 16, 64, False),
+    ("cornell-box/scene.json", "volpath", 8, 64, True),
+    ("cornell-box/glossy.json", "bdpt", 4, 64, True),
+    ("veach-mis/scene.xml", None, 16, 256, False),
+)
+
+
+def in_fog(scene: scene_pb2.Scene) -> None:
+    """The whole scene in a scattering medium, camera and all."""
+    fog = component("homogeneous", sigma_a=rgb(0.0004), sigma_s=rgb(0.0015, 0.001, 0.0006), g=0.3)
+    scene.media.add(name="fog", medium=fog)
+    scene.camera_medium = "fog"
+
+
+def main() -> None:
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    binary = Path(sys.argv[1]).resolve()
+    plugins = binary.parent.parent / "plugins"
+    with LocalServer(binary=binary, plugin_paths=[plugins]) as server, server.client() as client:
+        for name, transport, spp, width, fog in RENDERS:
+            scene = load_scene(ROOT / "scenes" / name)
+            if fog:
+                in_fog(scene)
+            height = scene.film.height * width // scene.film.width
+            client.render(scene, spp=spp, seed=1, transport=transport, res=(width, height))
+            method = transport or scene.transport.class_name
+            print(f"trained on {name}{' in fog' if fog else ''} with {method}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
