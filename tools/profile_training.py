@@ -28,7 +28,7 @@ RENDERS: tuple[tuple[str, str | None, int, int, bool], ...] = (
     ("cornell-box/glossy.json", "light", 16, 64, False),
     ("cornell-box/scene.json", "volpath", 8, 64, True),
     ("cornell-box/glossy.json", "bdpt", 4, 64, True),
-    ("veach-mis/scene.xml", None, 16, 256, False),
+    ("veach-mis/scene.json", None, 16, 256, False),
 )
 
 
