@@ -20,23 +20,31 @@ from yarf.scene import rgb
 from yarf.v1 import scene_pb2
 
 ROOT = Path(__file__).resolve().parent.parent
-# (scene, transport or None for the scene's own, spp, film width, in fog)
-RENDERS: tuple[tuple[str, str | None, int, int, bool], ...] = (
-    ("cornell-box/scene.json", None, 16, 256, False),
-    ("cornell-box/glossy.json", None, 16, 128, False),
-    ("cornell-box/glossy.json", "bdpt", 8, 64, False),
-    ("cornell-box/glossy.json", "light", 16, 64, False),
-    ("cornell-box/scene.json", "volpath", 8, 64, True),
-    ("cornell-box/glossy.json", "bdpt", 4, 64, True),
-    ("veach-mis/scene.json", None, 16, 256, False),
+# (scene, transport or None for the scene's own, spp, film width, where
+# fog is: "" nowhere, "everywhere" (camera included), or "in glass" (the
+# glossy box's glass sphere, a medium behind a refracting boundary))
+RENDERS: tuple[tuple[str, str | None, int, int, str], ...] = (
+    ("cornell-box/scene.json", None, 16, 256, ""),
+    ("cornell-box/glossy.json", None, 16, 128, ""),
+    ("cornell-box/glossy.json", "bdpt", 8, 64, ""),
+    ("cornell-box/glossy.json", "light", 16, 64, ""),
+    ("cornell-box/scene.json", "volpath", 8, 64, "everywhere"),
+    ("cornell-box/glossy.json", "bdpt", 4, 64, "everywhere"),
+    ("cornell-box/glossy.json", "volpath", 16, 64, "in glass"),
+    ("cornell-box/glossy.json", "bdpt", 4, 64, "in glass"),
+    ("veach-mis/scene.json", None, 16, 256, ""),
 )
 
 
-def in_fog(scene: scene_pb2.Scene) -> None:
-    """The whole scene in a scattering medium, camera and all."""
-    fog = component("homogeneous", sigma_a=rgb(0.0004), sigma_s=rgb(0.0015, 0.001, 0.0006), g=0.3)
+def add_fog(scene: scene_pb2.Scene, where: str) -> None:
+    """A scattering medium, everywhere or inside the glass sphere."""
+    sigma_s = rgb(0.0015, 0.001, 0.0006) if where == "everywhere" else rgb(0.02, 0.015, 0.01)
+    fog = component("homogeneous", sigma_a=rgb(0.0004), sigma_s=sigma_s, g=0.3)
     scene.media.add(name="fog", medium=fog)
-    scene.camera_medium = "fog"
+    if where == "everywhere":
+        scene.camera_medium = "fog"
+        return
+    next(shape for shape in scene.shapes if shape.name == "glass_sphere").interior = "fog"
 
 
 def main() -> None:
@@ -48,11 +56,11 @@ def main() -> None:
         for name, transport, spp, width, fog in RENDERS:
             scene = load_scene(ROOT / "scenes" / name)
             if fog:
-                in_fog(scene)
+                add_fog(scene, fog)
             height = scene.film.height * width // scene.film.width
             client.render(scene, spp=spp, seed=1, transport=transport, res=(width, height))
             method = transport or scene.transport.class_name
-            print(f"trained on {name}{' in fog' if fog else ''} with {method}", flush=True)
+            print(f"trained on {name}{f' (fog {fog})' if fog else ''} with {method}", flush=True)
 
 
 if __name__ == "__main__":
