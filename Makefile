@@ -132,6 +132,7 @@ fuzz: build
 bench: build
 	$(call apt_install,$(BENCH_APT_PACKAGES))
 	$(PY) bench/cornell_box.py
+	$(PY) bench/path_lengths.py
 	$(PY) bench/scene_ratios.py
 	$(PY) bench/aggregates.py
 	$(PY) bench/profile.py

@@ -66,7 +66,11 @@ def yarf_render(
 
 
 def mitsuba_render(
-    variant: str, spp: int, seed: int, scene_path: Path = MITSUBA_SCENE
+    variant: str,
+    spp: int,
+    seed: int,
+    scene_path: Path = MITSUBA_SCENE,
+    max_depth: int | None = None,
 ) -> tuple[np.ndarray, dict[str, float]]:
     env = dict(os.environ)
     if variant.startswith("llvm"):
@@ -86,6 +90,8 @@ def mitsuba_render(
             "--out",
             str(out),
         ]
+        if max_depth is not None:
+            command += ["--max-depth", str(max_depth)]
         result = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
         if result.returncode != 0:
             sys.exit(f"mitsuba {variant} failed:\n{result.stderr[-2000:]}")

@@ -23,13 +23,19 @@ def main() -> None:
     parser.add_argument("--spp", type=int, default=16)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path)
+    parser.add_argument(
+        "--max-depth",
+        type=int,
+        help="the scene's max_depth parameter (the Cornell box declares it)",
+    )
     args = parser.parse_args()
 
     import drjit as dr
     import mitsuba as mi
 
     mi.set_variant(args.variant)
-    scene = mi.load_file(str(args.scene))
+    parameters = {} if args.max_depth is None else {"max_depth": args.max_depth}
+    scene = mi.load_file(str(args.scene), **parameters)
     np.asarray(mi.render(scene, spp=4, seed=args.seed + 1_000_003))  # warm-up
     start = time.perf_counter()
     image = mi.render(scene, spp=args.spp, seed=args.seed)
