@@ -96,9 +96,9 @@ void FilmTarget::Accumulate(const FilmSamples& samples) {
         const uint32_t i = groups.samples[k];
         const float x = samples.xy[2 * i], y = samples.xy[2 * i + 1];
         // The sample's pixels in this block.
-        const PixelWindow& reach = groups.footprints[i];
-        const PixelWindow pixels{std::max(reach.x0, window.x0), std::max(reach.y0, window.y0),
-                                 std::min(reach.x1, window.x1), std::min(reach.y1, window.y1)};
+        const PixelWindow& footprint = groups.footprints[i];
+        const PixelWindow pixels{std::max(footprint.x0, window.x0), std::max(footprint.y0, window.y0),
+                                 std::min(footprint.x1, window.x1), std::min(footprint.y1, window.y1)};
         if (samples.splats)
           film_.Splat(x, y, samples.rgb[i], pixels);
         else
