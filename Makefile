@@ -59,9 +59,9 @@ stubs: venv
 	$(PY) -m grpc_tools.protoc -I proto --python_out=clients/python \
 	  --grpc_python_out=clients/python --pyi_out=clients/python proto/yarf/v1/*.proto
 
-# Profile-guided optimisation: yarfd and the plugins built once
-# instrumented, in $(BUILD)/profiling, render the training scenes
-# (tools/profile_training.py), and the build proper is optimised for the
+# Profile-guided optimisation: yarfd and the plugins the training renders
+# load (tools/profile_training.py --plugins), built once instrumented in
+# $(BUILD)/profiling, render the training scenes, and the build proper is optimised for the
 # branches and calls those renders took. Made with a build folder's first
 # build; `make profile` makes a new one and has the next build recompile
 # everything with it (until then a file changed since compiles without its
@@ -72,7 +72,7 @@ profile: deps stubs
 	rm -rf $(PROFILE) $(BUILD)/profiling
 	cmake -S . -B $(BUILD)/profiling -G Ninja -DCMAKE_BUILD_TYPE=Release \
 	  -DYARF_PROFILE=generate -DYARF_PROFILE_DIR=$(PROFILE)
-	cmake --build $(BUILD)/profiling -j2 --target yarf_runtime
+	cmake --build $(BUILD)/profiling -j2 --target yarfd $$($(PY) tools/profile_training.py --plugins)
 	$(PY) tools/profile_training.py $(BUILD)/profiling/bin/yarfd
 	rm -rf $(BUILD)/profiling
 	@if [ -f $(BUILD)/build.ninja ]; then ninja -C $(BUILD) -t clean >/dev/null; fi

@@ -8,12 +8,16 @@ repository's own scenes only, so that a clone builds without anything
 beside it.
 
 Usage: profile_training.py BUILD/bin/yarfd
+       profile_training.py --plugins   (the plugins the renders load, which
+                                        are all the instrumented build needs)
 """
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
+
+from google.protobuf.message import Message
 
 from yarf import LocalServer, component, load_scene
 from yarf.scene import rgb
@@ -47,19 +51,58 @@ def add_fog(scene: scene_pb2.Scene, where: str) -> None:
     next(shape for shape in scene.shapes if shape.name == "glass_sphere").interior = "fog"
 
 
+def training_scene(name: str, transport: str | None, fog: str) -> scene_pb2.Scene:
+    """One render's scene, with its fog and the transport it is rendered with."""
+    scene = load_scene(ROOT / "scenes" / name)
+    if fog:
+        add_fog(scene, fog)
+    if transport:
+        scene.transport.class_name = transport
+    return scene
+
+
+def class_names(message: Message) -> set[str]:
+    """The component classes a message names, at any depth."""
+    names: set[str] = set()
+    for field, value in message.ListFields():
+        if field.name == "class_name":
+            names.add(value)
+        elif isinstance(value, Message):
+            names |= class_names(value)
+        elif field.type == field.TYPE_MESSAGE:  # repeated, or a map
+            items = value.values() if hasattr(value, "values") else value
+            for item in items:
+                if isinstance(item, Message):
+                    names |= class_names(item)
+    return names
+
+
+def plugins() -> list[str]:
+    """The plugins the training renders load: a plugin's build target is
+    named after the class it registers."""
+    names: set[str] = set()
+    for name, transport, _, _, fog in RENDERS:
+        names |= class_names(training_scene(name, transport, fog))
+    return sorted(names)
+
+
 def main() -> None:
+    if sys.argv[1:] == ["--plugins"]:
+        print(" ".join(plugins()))
+        return
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     binary = Path(sys.argv[1]).resolve()
-    plugins = binary.parent.parent / "plugins"
-    with LocalServer(binary=binary, plugin_paths=[plugins]) as server, server.client() as client:
+    plugins_folder = binary.parent.parent / "plugins"
+    with (
+        LocalServer(binary=binary, plugin_paths=[plugins_folder]) as server,
+        server.client() as client,
+    ):
         for name, transport, spp, width, fog in RENDERS:
-            scene = load_scene(ROOT / "scenes" / name)
-            if fog:
-                add_fog(scene, fog)
+            scene = training_scene(name, transport, fog)
             height = scene.film.height * width // scene.film.width
-            client.render(scene, spp=spp, seed=1, transport=transport, res=(width, height))
-            method = transport or scene.transport.class_name
+            client.render(scene, spp=spp, seed=1, res=(width, height))
+            method = scene.transport.class_name
             print(f"trained on {name}{f' (fog {fog})' if fog else ''} with {method}", flush=True)
 
 
