@@ -61,11 +61,11 @@ stubs: venv
 
 # Profile-guided optimisation: yarfd and the plugins the training renders
 # load (tools/profile_training.py --plugins), built once instrumented in
-# $(BUILD)/profiling, render the training scenes, and the build proper is optimised for the
-# branches and calls those renders took. Made with a build folder's first
-# build; `make profile` makes a new one and has the next build recompile
-# everything with it (until then a file changed since compiles without its
-# stale profile).
+# $(BUILD)/profiling, render the training scenes, and the build proper is
+# optimised for the branches and calls those renders took. Made with a
+# build folder's first build; `make profile` makes a new one and has the
+# next build recompile everything with it (until then a file changed since
+# compiles without its stale profile).
 PROFILE := $(abspath $(BUILD))/profile
 profile: deps stubs
 	@date -u +'%T profile'

@@ -56,8 +56,9 @@ def training_scene(name: str, transport: str | None, fog: str) -> scene_pb2.Scen
     scene = load_scene(ROOT / "scenes" / name)
     if fog:
         add_fog(scene, fog)
-    if transport:
-        scene.transport.class_name = transport
+    if transport and transport != scene.transport.class_name:
+        # With its own defaults, as Client.render(transport=...) gives it.
+        scene.transport.CopyFrom(scene_pb2.ComponentSpec(class_name=transport))
     return scene
 
 
