@@ -51,14 +51,11 @@ def add_fog(scene: scene_pb2.Scene, where: str) -> None:
     next(shape for shape in scene.shapes if shape.name == "glass_sphere").interior = "fog"
 
 
-def training_scene(name: str, transport: str | None, fog: str) -> scene_pb2.Scene:
-    """One render's scene, with its fog and the transport it is rendered with."""
+def training_scene(name: str, fog: str) -> scene_pb2.Scene:
+    """One render's scene, with its fog."""
     scene = load_scene(ROOT / "scenes" / name)
     if fog:
         add_fog(scene, fog)
-    if transport and transport != scene.transport.class_name:
-        # With its own defaults, as Client.render(transport=...) gives it.
-        scene.transport.CopyFrom(scene_pb2.ComponentSpec(class_name=transport))
     return scene
 
 
@@ -83,7 +80,7 @@ def plugins() -> list[str]:
     named after the class it registers."""
     names: set[str] = set()
     for name, transport, _, _, fog in RENDERS:
-        names |= class_names(training_scene(name, transport, fog))
+        names |= class_names(training_scene(name, fog)) | ({transport} if transport else set())
     return sorted(names)
 
 
@@ -100,10 +97,10 @@ def main() -> None:
         server.client() as client,
     ):
         for name, transport, spp, width, fog in RENDERS:
-            scene = training_scene(name, transport, fog)
+            scene = training_scene(name, fog)
             height = scene.film.height * width // scene.film.width
-            client.render(scene, spp=spp, seed=1, res=(width, height))
-            method = scene.transport.class_name
+            client.render(scene, spp=spp, seed=1, transport=transport, res=(width, height))
+            method = transport or scene.transport.class_name
             print(f"trained on {name}{f' (fog {fog})' if fog else ''} with {method}", flush=True)
 
 
