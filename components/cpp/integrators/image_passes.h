@@ -55,11 +55,9 @@ class TilePoints : public PrimarySamples {
   }
   void Gather(std::span<const uint32_t> points, uint32_t dimension, std::span<float> out) const override {
     std::vector<float>& values = Pair(dimension / 2);
-    for (size_t k = 0; k < points.size(); ++k) {
-      const uint32_t i = points[k];
-      if (values[2 * i] == kUnmade) MakeBlock(values, dimension / 2, i);
-      out[k] = Place(i, dimension, values[2 * i + dimension % 2]);
-    }
+    MakePoints(values, dimension / 2, points);
+    for (size_t k = 0; k < points.size(); ++k)
+      out[k] = Place(points[k], dimension, values[2 * points[k] + dimension % 2]);
   }
 
  protected:
@@ -82,6 +80,28 @@ class TilePoints : public PrimarySamples {
   void MakeBlock(std::vector<float>& values, uint32_t pair, size_t i) const {
     const size_t first = i - i % kBlock, count = std::min(kBlock, indices_.size() - first);
     sampler_.SamplePairs({&indices_[first], count}, {&seeds_[first], count}, pair, {&values[2 * first], 2 * count});
+  }
+  // Makes pair `pair` of those of `points` that lack it, in one call: a
+  // wavefront's later bounces ask for scattered survivors, and making
+  // only theirs spares the sampler the coordinates of ended paths.
+  void MakePoints(std::vector<float>& values, uint32_t pair, std::span<const uint32_t> points) const {
+    Missing& missing = missing_;
+    missing.points.clear();
+    missing.indices.clear();
+    missing.seeds.clear();
+    for (const uint32_t i : points)
+      if (values[2 * i] == kUnmade) {
+        missing.points.push_back(i);
+        missing.indices.push_back(indices_[i]);
+        missing.seeds.push_back(seeds_[i]);
+      }
+    if (missing.points.empty()) return;
+    missing.values.resize(2 * missing.points.size());
+    sampler_.SamplePairs(missing.indices, missing.seeds, pair, missing.values);
+    for (size_t k = 0; k < missing.points.size(); ++k) {
+      values[2 * missing.points[k]] = missing.values[2 * k];
+      values[2 * missing.points[k] + 1] = missing.values[2 * k + 1];
+    }
   }
   // Uniform coordinate u of point i where it lands: the film position in
   // its pixel, the rest through Warp.
@@ -109,6 +129,14 @@ class TilePoints : public PrimarySamples {
   // Per pair of dimensions asked for: [Count(), 2] coordinates, kUnmade
   // until made.
   mutable std::vector<std::vector<float>> pairs_;
+  // MakePoints' points lacking a pair, their sampler inputs and values,
+  // kept from call to call.
+  struct Missing {
+    std::vector<uint32_t> points;
+    std::vector<uint64_t> indices, seeds;
+    std::vector<float> values;
+  };
+  mutable Missing missing_;
 };
 
 // Runs passes from target.FirstSample() until target.SamplesPerPixel()
