@@ -257,6 +257,8 @@ class PathTracer final : public Transport {
           ShadingWeight(v.at.frame, v.at.ng, v.at.wi, Vec3::Load(&wo[3 * j]), TransportMode::kRadiance);
       const Vec3 c = p.throughput * bsdf.F(j) * lights.Radiance(members[j]) * (cos_surface * mis * shading / light.pdf);
       if (!(MaxComponent(c) > 0)) continue;
+      // Field by field: copying the whole Ray rereads, as one wide load,
+      // fields just stored one at a time, a stall per shadow ray.
       const Ray ray = ShadowRayToLight(v.at.position, v.at.ng, light, v.time);
       shadows.rays.emplace_back(ray.origin, ray.tnear, ray.direction, ray.tfar, ray.time);
       shadows.owner.push_back(v.path);
