@@ -234,6 +234,14 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // Whether the lens has area (thin lens) or is a point (pinhole).
   // rpc: Layout
   virtual bool CameraHasLens() const = 0;
+  // Whether camera rays depend on the lens coordinates (a thin lens, a
+  // meter), and on the time coordinate (an open shutter): CameraRayOf
+  // leaves those they ignore undrawn.
+  // in-process only: it spares the sampler a pair per camera ray; a
+  // transport in another process draws them all.
+  virtual bool CameraReadsLens() const { return true; }
+  // in-process only: as CameraReadsLens.
+  virtual bool CameraReadsTime() const { return true; }
   // Why light paths cannot reach the camera (an orthographic camera's
   // rays are parallel; a radiance or irradiance meter has no lens and film
   // to land on), empty when they can: ConnectToCamera never succeeds then,

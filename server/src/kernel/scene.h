@@ -140,6 +140,8 @@ class KernelScene final : public SceneView {
   bool FootprintsRead() const override { return footprints_read_; }
   void Attribute(std::string_view name, std::span<const SurfaceLocation> at, std::span<float> rgb) const override;
   bool CameraHasLens() const override { return camera_.HasLens(); }
+  bool CameraReadsLens() const override { return camera_.ReadsLens(); }
+  bool CameraReadsTime() const override { return camera_.ReadsTime(); }
   std::string_view CameraUnreachableReason() const override { return camera_.UnreachableReason(); }
   // What each camera sample's radiance counts for on the film (π for an
   // irradiance meter); the film target applies it.

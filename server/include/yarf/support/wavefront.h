@@ -175,9 +175,12 @@ struct PathLength {
 
 // The camera ray of point i: its film, lens and time coordinates.
 inline Ray CameraRayOf(const SceneView& scene, const PrimarySamples& points, size_t i) {
+  // Coordinates the camera ignores are not drawn: each pair costs the
+  // sampler, and a pinhole with a closed shutter reads only the film's.
+  const bool lens = scene.CameraReadsLens(), time = scene.CameraReadsTime();
   return scene.CameraRay(points.Get(i, kFilmDimension), points.Get(i, kFilmDimension + 1),
-                         points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
-                         scene.ShutterTime(points.Get(i, kTimeDimension)));
+                         lens ? points.Get(i, kLensDimension) : 0.5f, lens ? points.Get(i, kLensDimension + 1) : 0.5f,
+                         scene.ShutterTime(time ? points.Get(i, kTimeDimension) : 0.0f));
 }
 
 // Adds a camera sample of `radiance` where point i lies on the film.
