@@ -335,8 +335,10 @@ def test_a_node_killed_mid_task_loses_its_task_to_another(
 
 def test_cancel_stops_every_node_within_a_second(farm: Farm) -> None:
     with farm.client() as client:
-        # 8 shares of 2048 samples of 32² pixels: seconds each on one thread.
-        job_id = client.submit(cornell(32), 16384, SEED, name="cancelled")
+        # 8 shares of 16384 samples of 32² pixels: seconds each, so that
+        # every node is still rendering its first when Cancel comes (a
+        # share of 2048 took 0.5 s, a race with the Cancel 0.5 s in).
+        job_id = client.submit(cornell(32), 131072, SEED, name="cancelled")
         for node in farm.nodes:
             wait_until(
                 lambda node=node: events_of([node], "task started", job_id),  # type: ignore[misc]
