@@ -234,8 +234,8 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // Whether the lens has area (thin lens) or is a point (pinhole).
   // rpc: Layout
   virtual bool CameraHasLens() const = 0;
-  // Whether camera rays depend on the lens coordinates (a thin lens, a
-  // meter), and on the time coordinate (an open shutter): CameraRayOf
+  // Whether camera rays depend on the lens coordinates (a thin lens, an
+  // irradiance meter), and on the time coordinate (an open shutter): CameraRayOf
   // leaves those they ignore undrawn.
   // in-process only: it spares the sampler a pair per camera ray; a
   // transport in another process draws them all.

@@ -52,9 +52,9 @@ class Camera {
   // The shutter's time for a uniform u: u·shutter.
   float Time(float u) const { return u * shutter_; }
   bool HasLens() const { return lens_radius_ > 0; }
-  // Whether Generate's rays depend on the lens pair (a thin lens; a
-  // meter's) and on the time (an open shutter).
-  bool ReadsLens() const { return HasLens() || IsMeter(); }
+  // Whether Generate's rays depend on the lens pair (a thin lens; the
+  // irradiance meter's direction) and on the time (an open shutter).
+  bool ReadsLens() const { return HasLens() || IsIrradianceMeter(); }
   bool ReadsTime() const { return shutter_ > 0; }
   bool IsIrradianceMeter() const { return kind_ == Kind::kIrradianceMeter; }
   Vec3 axis() const { return forward_; }
