@@ -1,6 +1,7 @@
 #include "kernel/film.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -69,11 +70,20 @@ PixelWindow Film::Footprint(float x, float y) const {
 
 template <typename Visit>
 void Film::ForEachPixelInFilter(float x, float y, const PixelWindow& pixels, Visit&& visit) const {
-  for (uint32_t j = pixels.y0; j < pixels.y1; ++j)
-    for (uint32_t i = pixels.x0; i < pixels.x1; ++i) {
-      const double w = filter_.Weight(float(i) + 0.5f - x, float(j) + 0.5f - y);
-      if (w > 0) visit(size_t(j) * width_ + i, w);
+  // The filter is separable: a weight per column and one per row, each
+  // made once, rather than two per pixel (exponentials, for a Gaussian).
+  std::array<float, kMaxFootprintSide> column_weight, row_weight;
+  const uint32_t columns = pixels.x1 - pixels.x0, rows = pixels.y1 - pixels.y0;
+  for (uint32_t i = 0; i < columns; ++i) column_weight[i] = filter_.Weight1(float(pixels.x0 + i) + 0.5f - x);
+  for (uint32_t j = 0; j < rows; ++j) row_weight[j] = filter_.Weight1(float(pixels.y0 + j) + 0.5f - y);
+  for (uint32_t j = 0; j < rows; ++j) {
+    if (!(row_weight[j] > 0)) continue;
+    const size_t row = size_t(pixels.y0 + j) * width_ + pixels.x0;
+    for (uint32_t i = 0; i < columns; ++i) {
+      const double w = column_weight[i] * row_weight[j];
+      if (w > 0) visit(row + i, w);
     }
+  }
 }
 
 namespace {

@@ -28,12 +28,14 @@ class ReconstructionFilter {
   explicit ReconstructionFilter(const v1::ReconstructionFilter& filter);
   float radius() const { return radius_; }
   float Weight(float dx, float dy) const { return Weight1(dx) * Weight1(dy); }
+  // The weight along one axis at distance d from the centre: Weight is
+  // the product of the two axes'.
+  float Weight1(float d) const;
   // ∫ of the 1-D weight around `centre` over [lo, hi]: the part of a
   // pixel's filter that lies on the film, along one axis.
   float Mass1(float centre, float lo, float hi) const;
 
  private:
-  float Weight1(float d) const;
   v1::ReconstructionFilter::Kind kind_;
   float radius_;
   float gaussian_offset_ = 0;
@@ -80,8 +82,10 @@ class Film {
   // value or variance that is not finite is left out.
   void AddEstimate(uint32_t px, uint32_t py, Vec3 value, Vec3 variance, uint32_t samples);
   // The pixels a sample at raster position (x, y) may add to under the
-  // filter (empty for a position that is not finite).
+  // filter (empty for a position that is not finite): at most
+  // kMaxFootprintSide along each axis.
   PixelWindow Footprint(float x, float y) const;
+  static constexpr uint32_t kMaxFootprintSide = 2 * uint32_t(ReconstructionFilter::kMaxRadius) + 1;
   // Closes a sample pass of `samples` samples per pixel (passes of W×H
   // points each): its splat image over `samples` becomes one more
   // independent estimate of the pixels' splat values.

@@ -1,9 +1,7 @@
 #include "kernel/film_target.h"
 
 #include <algorithm>
-#include <numeric>
 #include <utility>
-#include <vector>
 
 namespace yarf {
 
@@ -19,57 +17,6 @@ void FilmLock::lock_shared() {
   mutex_.lock_shared();
 }
 
-namespace {
-
-// A batch's samples by the blocks their filters reach; within a block in
-// batch order, so that each pixel sums them in the order it would one by one.
-struct BlockGroups {
-  // Per sample, the pixels its filter reaches (Film::Footprint).
-  std::vector<PixelWindow> footprints;
-  // The blocks reached, in block coordinates: [x0, x1) × [y0, y1).
-  PixelWindow blocks{0, 0, 0, 0};
-  // Per block of `blocks`, row by row, where its samples start in
-  // `samples`; one more entry for the end.
-  std::vector<uint32_t> starts;
-  std::vector<uint32_t> samples;
-
-  size_t Index(uint32_t bx, uint32_t by) const {
-    return size_t(by - blocks.y0) * (blocks.x1 - blocks.x0) + (bx - blocks.x0);
-  }
-};
-
-// By counting, not sorting: time in the samples and the blocks the batch
-// reaches (a few for a tile's camera samples, at most the film's for splats).
-BlockGroups GroupByBlock(const Film& film, const FilmSamples& batch, uint32_t side) {
-  const uint32_t n = uint32_t(batch.Count());
-  std::vector<PixelWindow> reach(n, PixelWindow{0, 0, 0, 0});
-  BlockGroups groups;
-  groups.footprints.resize(n);
-  groups.blocks = {UINT32_MAX, UINT32_MAX, 0, 0};
-  for (uint32_t i = 0; i < n; ++i) {
-    const PixelWindow& pixels = groups.footprints[i] = film.Footprint(batch.xy[2 * i], batch.xy[2 * i + 1]);
-    if (pixels.x0 == pixels.x1) continue;
-    PixelWindow& r = reach[i];
-    r = {pixels.x0 / side, pixels.y0 / side, (pixels.x1 - 1) / side + 1, (pixels.y1 - 1) / side + 1};
-    groups.blocks = {std::min(groups.blocks.x0, r.x0), std::min(groups.blocks.y0, r.y0),
-                     std::max(groups.blocks.x1, r.x1), std::max(groups.blocks.y1, r.y1)};
-  }
-  if (groups.blocks.x0 >= groups.blocks.x1) return {};
-  groups.starts.assign(size_t(groups.blocks.x1 - groups.blocks.x0) * (groups.blocks.y1 - groups.blocks.y0) + 1, 0);
-  const auto for_each_block = [&](const PixelWindow& r, auto&& visit) {
-    for (uint32_t by = r.y0; by < r.y1; ++by)
-      for (uint32_t bx = r.x0; bx < r.x1; ++bx) visit(groups.Index(bx, by));
-  };
-  for (const PixelWindow& r : reach) for_each_block(r, [&](size_t b) { ++groups.starts[b + 1]; });
-  std::partial_sum(groups.starts.begin(), groups.starts.end(), groups.starts.begin());
-  groups.samples.resize(groups.starts.back());
-  std::vector<uint32_t> next(groups.starts.begin(), groups.starts.end() - 1);
-  for (uint32_t i = 0; i < n; ++i) for_each_block(reach[i], [&](size_t b) { groups.samples[next[b]++] = i; });
-  return groups;
-}
-
-}  // namespace
-
 FilmTarget::FilmTarget(Film& film, FilmLock& lock, uint32_t spp, uint64_t seed, Share share,
                        const std::atomic<bool>& cancel, PassCallback on_pass)
     : film_(film), lock_(lock), spp_(spp), seed_(seed), share_(share), cancel_(cancel),
@@ -80,31 +27,36 @@ FilmTarget::FilmTarget(Film& film, FilmLock& lock, uint32_t spp, uint64_t seed, 
 
 void FilmTarget::Accumulate(const FilmSamples& samples) {
   if (samples.Count() == 0) return;
-  // Without the lock: footprints depend only on the film's size and filter.
-  const BlockGroups groups = GroupByBlock(film_, samples, kBlockSide);
   std::shared_lock adding(lock_);
   if (samples.splats) std::call_once(splats_prepared_, [&] { film_.PrepareSplats(); });
-  for (uint32_t by = groups.blocks.y0; by < groups.blocks.y1; ++by)
-    for (uint32_t bx = groups.blocks.x0; bx < groups.blocks.x1; ++bx) {
-      const size_t group = groups.Index(bx, by);
-      const uint32_t first = groups.starts[group], end = groups.starts[group + 1];
-      if (first == end) continue;
-      const PixelWindow window{bx * kBlockSide, by * kBlockSide, std::min(film_.width(), (bx + 1) * kBlockSide),
-                               std::min(film_.height(), (by + 1) * kBlockSide)};
-      std::lock_guard block(block_mutexes_[size_t(by) * block_columns_ + bx].mutex);
-      for (uint32_t k = first; k < end; ++k) {
-        const uint32_t i = groups.samples[k];
-        const float x = samples.xy[2 * i], y = samples.xy[2 * i + 1];
-        // The sample's pixels in this block.
-        const PixelWindow& footprint = groups.footprints[i];
-        const PixelWindow pixels{std::max(footprint.x0, window.x0), std::max(footprint.y0, window.y0),
-                                 std::min(footprint.x1, window.x1), std::min(footprint.y1, window.y1)};
+  // In batch order, so that each pixel sums its samples in the order it
+  // would one by one. A block's lock is kept from one sample to the next
+  // while they stay in it: a tile's samples come in runs in one block.
+  std::unique_lock<std::mutex> held;
+  const auto hold = [&](uint32_t bx, uint32_t by) {
+    std::mutex& block = block_mutexes_[size_t(by) * block_columns_ + bx].mutex;
+    if (held.mutex() == &block) return;
+    if (held.owns_lock()) held.unlock();
+    held = std::unique_lock(block);
+  };
+  for (size_t i = 0; i < samples.Count(); ++i) {
+    const float x = samples.xy[2 * i], y = samples.xy[2 * i + 1];
+    const PixelWindow footprint = film_.Footprint(x, y);
+    if (footprint.x0 == footprint.x1) continue;
+    const Vec3 value = samples.splats ? samples.rgb[i] : samples.rgb[i] * camera_weight_;
+    // Each block the filter reaches, with the sample's pixels there.
+    for (uint32_t by = footprint.y0 / kBlockSide; by <= (footprint.y1 - 1) / kBlockSide; ++by)
+      for (uint32_t bx = footprint.x0 / kBlockSide; bx <= (footprint.x1 - 1) / kBlockSide; ++bx) {
+        const PixelWindow pixels{std::max(footprint.x0, bx * kBlockSide), std::max(footprint.y0, by * kBlockSide),
+                                 std::min(footprint.x1, (bx + 1) * kBlockSide),
+                                 std::min(footprint.y1, (by + 1) * kBlockSide)};
+        hold(bx, by);
         if (samples.splats)
-          film_.Splat(x, y, samples.rgb[i], pixels);
+          film_.Splat(x, y, value, pixels);
         else
-          film_.Add(x, y, samples.rgb[i] * camera_weight_, pixels);
+          film_.Add(x, y, value, pixels);
       }
-    }
+  }
 }
 
 float FilmTarget::PixelWeight(uint32_t px, uint32_t py, float x, float y) const {

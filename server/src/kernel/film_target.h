@@ -3,8 +3,8 @@
 //
 // Render threads add to the film without waiting for each other: the film
 // is cut into blocks of kBlockSide × kBlockSide pixels with a mutex each,
-// and a batch takes, once, the lock of each block its samples' filters
-// reach (a sample near a block's edge goes to each block it reaches, its
+// and a batch holds the lock of the block its samples go to, one block at
+// a time (a sample near a block's edge goes to each block it reaches, its
 // pixels there alone). Whoever reads the whole film meanwhile (progress
 // images, checkpoints, results) and the end of a pass hold the film's
 // FilmLock alone; batches hold it shared.
@@ -51,9 +51,10 @@ class FilmTarget final : public RenderTarget {
     std::optional<PixelWindow> crop;
   };
 
-  // Side in pixels of the blocks written under one lock: tiles side by side
-  // share only the blocks along their edges, and a tile's batch takes a few.
-  static constexpr uint32_t kBlockSide = 16;
+  // Side in pixels of the blocks written under one lock: as large as the
+  // integrators' tiles, so that a tile's batch takes one block's lock or,
+  // with a wide filter, those of a few blocks along its edges.
+  static constexpr uint32_t kBlockSide = 32;
 
   // `lock` guards `film` for everyone who reads it while it renders.
   FilmTarget(Film& film, FilmLock& lock, uint32_t spp, uint64_t seed, Share share, const std::atomic<bool>& cancel,
