@@ -58,7 +58,8 @@ PixelWindow Film::Footprint(float x, float y) const {
   // off the film does not fit an int.
   const auto span = [r](float at, uint32_t size) -> std::pair<uint32_t, uint32_t> {
     const float first = std::max(0.0f, std::ceil(at - r - 0.5f));
-    const float last = std::min(float(size) - 1, std::floor(at + r - 0.5f));
+    // At most kMaxFootprintSide pixels even where floats round coarsely.
+    const float last = std::min({float(size) - 1, std::floor(at + r - 0.5f), first + float(kMaxFootprintSide - 1)});
     if (!(first <= last)) return {0, 0};
     return {uint32_t(first), uint32_t(last) + 1};
   };
@@ -78,10 +79,11 @@ void Film::ForEachPixelInFilter(float x, float y, const PixelWindow& pixels, Vis
   for (uint32_t j = 0; j < rows; ++j) row_weight[j] = filter_.Weight1(float(pixels.y0 + j) + 0.5f - y);
   for (uint32_t j = 0; j < rows; ++j) {
     if (!(row_weight[j] > 0)) continue;
-    const size_t row = size_t(pixels.y0 + j) * width_ + pixels.x0;
+    const uint32_t y = pixels.y0 + j;
+    const size_t row = size_t(y) * width_;
     for (uint32_t i = 0; i < columns; ++i) {
       const double w = column_weight[i] * row_weight[j];
-      if (w > 0) visit(row + i, w);
+      if (w > 0) visit(row + pixels.x0 + i, pixels.x0 + i, y, w);
     }
   }
 }
@@ -92,7 +94,7 @@ bool Finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::is
 
 void Film::Add(float x, float y, Vec3 value, const PixelWindow& pixels) {
   if (!Finite(value)) return;
-  ForEachPixelInFilter(x, y, pixels, [&](size_t k, double w) {
+  ForEachPixelInFilter(x, y, pixels, [&](size_t k, uint32_t, uint32_t, double w) {
     Pixel& p = pixels_[k];
     p.weight += w;
     p.weight_sq += w * w;
@@ -155,8 +157,8 @@ void Film::Splat(float x, float y, Vec3 value) {
 
 void Film::Splat(float x, float y, Vec3 value, const PixelWindow& pixels) {
   if (!Finite(value)) return;
-  ForEachPixelInFilter(x, y, pixels, [&](size_t k, double w) {
-    const double scale = 1.0 / (double(column_mass_[k % width_]) * row_mass_[k / width_]);
+  ForEachPixelInFilter(x, y, pixels, [&](size_t k, uint32_t column, uint32_t row, double w) {
+    const double scale = 1.0 / (double(column_mass_[column]) * row_mass_[row]);
     for (int c = 0; c < 3; ++c) splats_.pass[3 * k + c] += w * scale * value[c];
   });
 }

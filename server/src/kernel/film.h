@@ -114,8 +114,8 @@ class Film {
     uint32_t passes = 0;
   };
 
-  // Calls visit(pixel index, weight) for the pixels of `pixels` (a part
-  // of Footprint(x, y)) under the filter around (x, y).
+  // Calls visit(pixel index, column, row, weight) for the pixels of
+  // `pixels` (a part of Footprint(x, y)) under the filter around (x, y).
   template <typename Visit>
   void ForEachPixelInFilter(float x, float y, const PixelWindow& pixels, Visit&& visit) const;
 
