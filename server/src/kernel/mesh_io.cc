@@ -217,7 +217,7 @@ class PlyReader {
             triangles += ReadList(p, is_face, mesh);
             continue;
           }
-          const double v = ReadNumber(p.type);
+          const double v = ReadNumber(p.scalar);
           if (p.target == Target::kNone) continue;
           // Converting a double beyond float's range is undefined.
           if (!(std::abs(v) <= std::numeric_limits<float>::max()))
@@ -242,8 +242,11 @@ class PlyReader {
   static constexpr uint64_t kMaxAttributeValues = uint64_t(1) << 28;
   // What a scalar property's value is.
   enum class Target { kNone, kPosition, kNormal, kUv, kAttribute };
+  // A scalar type, named once in the header: values are read by it.
+  enum class Scalar { kUnknown, kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
   struct Property {
-    std::string name, type, count_type;
+    std::string name, type, count_type;  // as the header spells them
+    Scalar scalar = Scalar::kUnknown, count_scalar = Scalar::kUnknown;
     bool is_list = false;
     bool is_vertex_indices = false;
     Target target = Target::kNone;
@@ -272,13 +275,13 @@ class PlyReader {
   // Reads one list property; a face's vertex indices become triangles (a
   // fan), whose number it returns. Other lists are read and dropped.
   size_t ReadList(const Property& p, bool is_face, TriangleMesh& mesh) {
-    const double n = ReadNumber(p.count_type);
+    const double n = ReadNumber(p.count_scalar);
     if (!(n >= 0 && n <= kMaxPolygonVertices) || n != std::floor(n))
       Fail("a list has " + FormatNumber(n) + " entries (at most " + std::to_string(kMaxPolygonVertices) + ")");
     const bool indices = is_face && p.is_vertex_indices;
     indices_.clear();
     for (int k = 0; k < int(n); ++k) {
-      const double v = ReadNumber(p.type);
+      const double v = ReadNumber(p.scalar);
       if (!indices) continue;
       if (!(v >= 0 && v < 4294967296.0) || v != std::floor(v))
         Fail("face vertex index " + FormatNumber(v) + " is not an index");
@@ -326,7 +329,7 @@ class PlyReader {
     uint64_t least = 0;
     for (const Property& p : element.properties) {
       if (encoding_ == Encoding::kAscii) least += 2;  // a digit and a separator
-      else least += p.is_list ? SizeOf(p.count_type) : SizeOf(p.type);
+      else least += p.is_list ? SizeOf(p.count_scalar) : SizeOf(p.scalar);
     }
     return least;
   }
@@ -370,11 +373,13 @@ class PlyReader {
         }
         words >> p.name;
         if (!words) Fail("bad property line");
-        if (SizeOf(p.type) == 0) Fail("property '" + p.name + "' has unknown type '" + p.type + "'");
-        if (p.is_list && !IsInteger(p.count_type))
+        p.scalar = ScalarOf(p.type);
+        if (p.is_list) p.count_scalar = ScalarOf(p.count_type);
+        if (p.scalar == Scalar::kUnknown) Fail("property '" + p.name + "' has unknown type '" + p.type + "'");
+        if (p.is_list && !IsInteger(p.count_scalar))
           Fail("list property '" + p.name + "' has count type '" + p.count_type + "' (an integer type is needed)");
         p.is_vertex_indices = p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index");
-        if (p.is_vertex_indices && !IsInteger(p.type))
+        if (p.is_vertex_indices && !IsInteger(p.scalar))
           Fail("list property '" + p.name + "' has index type '" + p.type + "' (an integer type is needed)");
         for (const Property& q : element.properties)
           if (q.name == p.name) Fail("element '" + element.name + "' has two properties '" + p.name + "'");
@@ -436,7 +441,7 @@ class PlyReader {
       if (p.name == name) {
         attribute = is_vertex ? "vertex_color" : "face_color", channels = 3, p.component = component;
         // Integer colours are stored in their type's range.
-        if (IsInteger(p.type)) p.scale = 1.0 / (std::ldexp(1.0, 8 * int(SizeOf(p.type))) - 1);
+        if (IsInteger(p.scalar)) p.scale = 1.0 / (std::ldexp(1.0, 8 * int(SizeOf(p.scalar))) - 1);
       }
     size_t index = 0;
     while (index < element.attributes.size() && element.attributes[index].first != attribute) ++index;
@@ -449,21 +454,44 @@ class PlyReader {
     p.target = Target::kAttribute, p.attribute = index;
   }
 
-  static size_t SizeOf(const std::string& type) {
-    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-    if (type == "int" || type == "uint" || type == "float" || type == "int32" ||
-        type == "uint32" || type == "float32")
-      return 4;
-    if (type == "double" || type == "float64") return 8;
+  static Scalar ScalarOf(const std::string& type) {
+    static constexpr std::pair<const char*, Scalar> kNames[] = {
+        {"char", Scalar::kInt8},     {"int8", Scalar::kInt8},       {"uchar", Scalar::kUint8},
+        {"uint8", Scalar::kUint8},   {"short", Scalar::kInt16},     {"int16", Scalar::kInt16},
+        {"ushort", Scalar::kUint16}, {"uint16", Scalar::kUint16},   {"int", Scalar::kInt32},
+        {"int32", Scalar::kInt32},   {"uint", Scalar::kUint32},     {"uint32", Scalar::kUint32},
+        {"float", Scalar::kFloat32}, {"float32", Scalar::kFloat32}, {"double", Scalar::kFloat64},
+        {"float64", Scalar::kFloat64}};
+    for (const auto& [name, scalar] : kNames)
+      if (type == name) return scalar;
+    return Scalar::kUnknown;
+  }
+
+  static size_t SizeOf(Scalar type) {
+    switch (type) {
+      case Scalar::kInt8:
+      case Scalar::kUint8:
+        return 1;
+      case Scalar::kInt16:
+      case Scalar::kUint16:
+        return 2;
+      case Scalar::kInt32:
+      case Scalar::kUint32:
+      case Scalar::kFloat32:
+        return 4;
+      case Scalar::kFloat64:
+        return 8;
+      case Scalar::kUnknown:
+        break;
+    }
     return 0;
   }
 
-  static bool IsInteger(const std::string& type) {
-    return SizeOf(type) != 0 && type != "float" && type != "float32" && type != "double" && type != "float64";
+  static bool IsInteger(Scalar type) {
+    return type != Scalar::kUnknown && type != Scalar::kFloat32 && type != Scalar::kFloat64;
   }
 
-  double ReadNumber(const std::string& type) {
+  double ReadNumber(Scalar type) {
     if (encoding_ == Encoding::kAscii) {
       while (pos_ < bytes_.size() && std::isspace(static_cast<unsigned char>(bytes_[pos_]))) ++pos_;
       size_t start = pos_;
@@ -483,14 +511,16 @@ class PlyReader {
     pos_ += size;
     if (encoding_ == Encoding::kBig) std::reverse(raw, raw + size);
     auto as = [&]<typename T>() { T v; std::memcpy(&v, raw, sizeof(T)); return double(v); };
-    if (type == "char" || type == "int8") return as.operator()<int8_t>();
-    if (type == "uchar" || type == "uint8") return as.operator()<uint8_t>();
-    if (type == "short" || type == "int16") return as.operator()<int16_t>();
-    if (type == "ushort" || type == "uint16") return as.operator()<uint16_t>();
-    if (type == "int" || type == "int32") return as.operator()<int32_t>();
-    if (type == "uint" || type == "uint32") return as.operator()<uint32_t>();
-    if (type == "float" || type == "float32") return as.operator()<float>();
-    return as.operator()<double>();
+    switch (type) {
+      case Scalar::kInt8: return as.operator()<int8_t>();
+      case Scalar::kUint8: return as.operator()<uint8_t>();
+      case Scalar::kInt16: return as.operator()<int16_t>();
+      case Scalar::kUint16: return as.operator()<uint16_t>();
+      case Scalar::kInt32: return as.operator()<int32_t>();
+      case Scalar::kUint32: return as.operator()<uint32_t>();
+      case Scalar::kFloat32: return as.operator()<float>();
+      default: return as.operator()<double>();
+    }
   }
 
   std::string_view bytes_;
