@@ -1,5 +1,5 @@
 // bitmap — an image file looked up by uv (Mitsuba's `bitmap`, pbrt-v4's
-// `imagemap`), filtered by OpenImageIO's TextureSystem
+// `imagemap`), from memory or, MIP-mapped, by OpenImageIO's TextureSystem
 //
 // Parameters: Bitmap::Parameters() below. Several settings have two
 // names, Mitsuba's and pbrt's (filter_type / filter, wrap_mode / wrap,
@@ -23,12 +23,14 @@
 // three; alpha is ignored). Mean: the mean over the texels of the value
 // above (it ignores the uv map and the wrap mode).
 //
-// OpenImageIO 2.4's TextureSystem filters the stored values and has no
-// colour conversion of its own, so the image is decoded here to linear
-// float, written as a tiled, MIP-mapped float EXR into a private
-// temporary folder this instance owns, and the TextureSystem reads that.
-// Each instance has its own TextureSystem with a bounded 64 MiB cache:
-// no state is shared between instances, and lookups are thread-safe.
+// The image is decoded here to linear float. Without a MIP map (nearest,
+// bilinear) it is looked up in memory (texel_grid.h). With one
+// (trilinear, ewa), OpenImageIO 2.4's TextureSystem filters it: it has no
+// colour conversion of its own, so the decoded image is written as a
+// tiled, MIP-mapped float EXR into a private temporary folder this
+// instance owns, and the TextureSystem reads that, each instance its own
+// with a bounded 64 MiB cache: no state is shared between instances, and
+// lookups are thread-safe.
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/texture.h>
@@ -46,6 +48,7 @@
 
 #include "linear_image.h"
 #include "temporary_folder.h"
+#include "texel_grid.h"
 #include "texture_rows.h"
 #include "uv_map.h"
 #include "yarf/plugin.h"
@@ -56,6 +59,7 @@ using yarf::Error;
 using yarf::Properties;
 using yarf::textures::Encoding;
 using yarf::textures::LinearImage;
+using yarf::textures::Wrap;
 
 // The Mitsuba key's value, or else the pbrt key's; both at once is an error.
 std::string ReadEither(const Properties& props, const std::string& mitsuba, const std::string& pbrt,
@@ -69,21 +73,28 @@ std::string KeyOf(const Properties& props, const std::string& mitsuba, const std
   return props.Has(pbrt) ? pbrt : mitsuba;
 }
 
-OIIO::TextureOpt ReadLookup(const Properties& props) {
-  OIIO::TextureOpt opt;
+// How a bitmap is looked up: its filter, its wrap and, for ewa, the bound
+// on the footprint's axis ratio.
+struct Lookup {
+  enum class Filter { kNearest, kBilinear, kTrilinear, kEwa };
+  Filter filter = Filter::kBilinear;
+  Wrap wrap = Wrap::kRepeat;
+  int max_anisotropy = 8;
+
+  bool MipMapped() const { return filter == Filter::kTrilinear || filter == Filter::kEwa; }
+};
+
+Lookup ReadLookup(const Properties& props) {
+  Lookup lookup;
   const std::string filter = ReadEither(props, "filter_type", "filter", "bilinear");
   if (filter == "nearest" || filter == "point") {
-    opt.interpmode = OIIO::TextureOpt::InterpClosest;
-    opt.mipmode = OIIO::TextureOpt::MipModeNoMIP;
+    lookup.filter = Lookup::Filter::kNearest;
   } else if (filter == "bilinear") {
-    opt.interpmode = OIIO::TextureOpt::InterpBilinear;
-    opt.mipmode = OIIO::TextureOpt::MipModeNoMIP;
+    lookup.filter = Lookup::Filter::kBilinear;
   } else if (filter == "trilinear") {
-    opt.interpmode = OIIO::TextureOpt::InterpBilinear;
-    opt.mipmode = OIIO::TextureOpt::MipModeTrilinear;
+    lookup.filter = Lookup::Filter::kTrilinear;
   } else if (filter == "ewa") {
-    opt.interpmode = OIIO::TextureOpt::InterpBilinear;
-    opt.mipmode = OIIO::TextureOpt::MipModeAniso;
+    lookup.filter = Lookup::Filter::kEwa;
   } else {
     throw Error("property '" + KeyOf(props, "filter_type", "filter") + "' must be one of nearest (or point), " +
                 "bilinear, trilinear, ewa; got '" + filter + "'");
@@ -92,13 +103,13 @@ OIIO::TextureOpt ReadLookup(const Properties& props) {
   const std::string wrap = ReadEither(props, "wrap_mode", "wrap", "repeat");
   const std::string wrap_key = KeyOf(props, "wrap_mode", "wrap");
   if (wrap == "repeat") {
-    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
+    lookup.wrap = Wrap::kRepeat;
   } else if (wrap == "mirror") {
-    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapMirror;
+    lookup.wrap = Wrap::kMirror;
   } else if (wrap == "clamp") {
-    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapClamp;
+    lookup.wrap = Wrap::kClamp;
   } else if (wrap == "black") {
-    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapBlack;
+    lookup.wrap = Wrap::kBlack;
   } else if (wrap == "octahedralsphere") {
     throw Error("property '" + wrap_key + "': the octahedral sphere wrap (of pbrt's equal-area environment " +
                 "maps) is not supported for textures");
@@ -109,7 +120,31 @@ OIIO::TextureOpt ReadLookup(const Properties& props) {
   const double anisotropy = props.Float("maxanisotropy", 8.0);
   if (!(anisotropy >= 1.0 && anisotropy <= 1024.0))
     throw Error("property 'maxanisotropy' must lie in [1, 1024]");
-  opt.anisotropic = int(std::lround(anisotropy));
+  lookup.max_anisotropy = int(std::lround(anisotropy));
+  return lookup;
+}
+
+// The TextureSystem's options for a MIP-mapped lookup.
+OIIO::TextureOpt MipOptions(const Lookup& lookup) {
+  OIIO::TextureOpt opt;
+  opt.interpmode = OIIO::TextureOpt::InterpBilinear;
+  opt.mipmode =
+      lookup.filter == Lookup::Filter::kEwa ? OIIO::TextureOpt::MipModeAniso : OIIO::TextureOpt::MipModeTrilinear;
+  const auto wrap = [&] {
+    switch (lookup.wrap) {
+      case Wrap::kMirror:
+        return OIIO::TextureOpt::WrapMirror;
+      case Wrap::kClamp:
+        return OIIO::TextureOpt::WrapClamp;
+      case Wrap::kBlack:
+        return OIIO::TextureOpt::WrapBlack;
+      case Wrap::kRepeat:
+        break;
+    }
+    return OIIO::TextureOpt::WrapPeriodic;
+  }();
+  opt.swrap = opt.twrap = wrap;
+  opt.anisotropic = lookup.max_anisotropy;
   return opt;
 }
 
@@ -163,6 +198,46 @@ struct TextureSystemDeleter {
   void operator()(OIIO::TextureSystem* system) const { OIIO::TextureSystem::destroy(system); }
 };
 
+// An image MIP-mapped into a private file, filtered by its own
+// TextureSystem over a footprint.
+class MipMappedImage {
+ public:
+  MipMappedImage(LinearImage& image, const Lookup& lookup, const std::filesystem::path& source)
+      : options_(MipOptions(lookup)), source_(source), folder_("yarf-bitmap") {
+    const std::filesystem::path texture_file = folder_.path() / "texture.exr";
+    WriteMipmapped(image, texture_file);
+    system_.reset(OIIO::TextureSystem::create(false));
+    if (!system_) throw Error("the image texture system could not be created");
+    system_->attribute("max_memory_MB", 64.0f);
+    system_->attribute("max_open_files", 4);
+    system_->attribute("deduplicate", 0);
+    handle_ = system_->get_texture_handle(OIIO::ustring(texture_file.string()));
+    if (!handle_ || !system_->good(handle_))
+      throw Error("property 'filename': the MIP-mapped copy of the image could not be opened: " +
+                  system_->geterror());
+  }
+
+  // `channels` values at (s, t) over the footprint d = (ds/dx, dt/dx, ds/dy, dt/dy).
+  void At(OIIO::TextureSystem::Perthread* thread, double s, double t, const std::array<double, 4>& d,
+              int channels, float* out) const {
+    OIIO::TextureOpt opt = options_;  // texture() may change its options
+    if (!system_->texture(handle_, thread, opt, float(s), float(t), float(d[0]), float(d[1]), float(d[2]),
+                          float(d[3]), channels, out))
+      throw Error("bitmap '" + source_.filename().string() + "': lookup failed: " + system_->geterror());
+  }
+
+  OIIO::TextureSystem::Perthread* ThisThread() const { return system_->get_perthread_info(); }
+
+ private:
+  OIIO::TextureOpt options_;
+  std::filesystem::path source_;
+  // Declared before the texture system, so destroyed after it: the
+  // system's open file lives in this folder.
+  yarf::textures::TemporaryFolder folder_;
+  std::unique_ptr<OIIO::TextureSystem, TextureSystemDeleter> system_;
+  OIIO::TextureSystem::TextureHandle* handle_ = nullptr;  // owned by system_
+};
+
 class Bitmap final : public yarf::Texture {
  public:
   static yarf::ParameterSchema Parameters() {
@@ -187,48 +262,42 @@ class Bitmap final : public yarf::Texture {
   }
 
   explicit Bitmap(const Properties& props)
-      : file_(props.ResolvedFile("filename")),
-        lookup_(ReadLookup(props)),
+      : lookup_(ReadLookup(props)),
         map_(yarf::textures::ReadUvMap(props)),
         scale_(float(yarf::textures::RequireFinite(props.Float("scale", 1.0), "scale"))),
-        invert_(props.Bool("invert", false)),
-        folder_("yarf-bitmap") {
-    LinearImage image = yarf::textures::ReadLinearImage(file_, ReadEncoding(props), "filename");
+        invert_(props.Bool("invert", false)) {
+    const std::filesystem::path file = props.ResolvedFile("filename");
+    LinearImage image = yarf::textures::ReadLinearImage(file, ReadEncoding(props), "filename");
     channels_ = uint32_t(image.channels);
     mean_ = MeanOf(image);
-    const std::filesystem::path texture_file = folder_.path() / "texture.exr";
-    WriteMipmapped(image, texture_file);
-
-    system_.reset(OIIO::TextureSystem::create(false));
-    if (!system_) throw Error("the image texture system could not be created");
-    system_->attribute("max_memory_MB", 64.0f);
-    system_->attribute("max_open_files", 4);
-    system_->attribute("deduplicate", 0);
-    handle_ = system_->get_texture_handle(OIIO::ustring(texture_file.string()));
-    if (!handle_ || !system_->good(handle_))
-      throw Error("property 'filename': the MIP-mapped copy of the image could not be opened: " +
-                  system_->geterror());
+    if (lookup_.MipMapped())
+      mipmapped_ = std::make_unique<MipMappedImage>(image, lookup_, file);
+    else
+      grid_ = std::make_unique<yarf::textures::TexelGrid>(std::move(image), lookup_.wrap);
   }
 
   uint32_t Channels() const override { return channels_; }
 
   void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
     yarf::textures::CheckShapes(at, value, channels_);
-    OIIO::TextureSystem::Perthread* thread = system_->get_perthread_info();
-    OIIO::TextureOpt opt = lookup_;  // texture() may change its options
+    OIIO::TextureSystem::Perthread* thread = mipmapped_ ? mipmapped_->ThisThread() : nullptr;
     float texel[3];
     for (size_t k = 0; k < at.Count(); ++k) {
       const double u = at.uv[2 * k], v = at.uv[2 * k + 1];
-      const std::array<double, 4> d = map_.Footprint(yarf::textures::FootprintAt(at, k));
       // OIIO's (s, t) are yarf's (u, v): t = 0 at the top row.
-      if (!system_->texture(handle_, thread, opt, float(map_.U(u, v)), float(map_.V(u, v)), float(d[0]),
-                            float(d[1]), float(d[2]), float(d[3]), int(channels_), texel))
-        throw Error("bitmap '" + file_.filename().string() + "': lookup failed: " + system_->geterror());
+      const double s = map_.U(u, v), t = map_.V(u, v);
+      if (mipmapped_)
+        mipmapped_->At(thread, s, t, map_.Footprint(yarf::textures::FootprintAt(at, k)), int(channels_), texel);
+      else if (lookup_.filter == Lookup::Filter::kNearest)
+        grid_->Nearest(s, t, texel);
+      else
+        grid_->Bilinear(s, t, texel);
       for (uint32_t c = 0; c < channels_; ++c) value[k * channels_ + c] = Adjust(texel[c]);
     }
   }
 
   std::vector<float> Mean() const override { return mean_; }
+  bool ReadsFootprints() const override { return mipmapped_ != nullptr; }
 
  private:
   // pbrt's order: scale first, then invert.
@@ -246,23 +315,20 @@ class Bitmap final : public yarf::Texture {
     return mean;
   }
 
-  std::filesystem::path file_;
-  OIIO::TextureOpt lookup_;
+  Lookup lookup_;
   yarf::textures::UvMap map_;
   float scale_;
   bool invert_;
   uint32_t channels_ = 0;
   std::vector<float> mean_;
-  // Declared before the texture system, so destroyed after it: the
-  // system's open file lives in this folder.
-  yarf::textures::TemporaryFolder folder_;
-  std::unique_ptr<OIIO::TextureSystem, TextureSystemDeleter> system_;
-  OIIO::TextureSystem::TextureHandle* handle_ = nullptr;  // owned by system_
+  // One of the two, by the filter.
+  std::unique_ptr<yarf::textures::TexelGrid> grid_;
+  std::unique_ptr<MipMappedImage> mipmapped_;
 };
 
 }  // namespace
 
 YARF_PLUGIN(registrar) {
   yarf::Register<Bitmap>(registrar, "bitmap", "1.0.0",
-                         "An image file looked up by uv, decoded to linear and filtered by OpenImageIO");
+                         "An image file looked up by uv, decoded to linear; MIP-mapped filters by OpenImageIO");
 }

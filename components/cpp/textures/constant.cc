@@ -36,6 +36,8 @@ class Constant final : public yarf::Texture {
     for (size_t k = 0; k < rows.size(); ++k) rows[k].Store(&value[3 * k]);
   }
 
+  bool ReadsFootprints() const override { return value_.ReadsFootprints(); }
+
   std::vector<float> Mean() const override {
     const Vec3 mean = value_.Mean();
     return {mean.x, mean.y, mean.z};

@@ -55,6 +55,7 @@ class MeshAttribute final : public yarf::Texture {
   }
 
   std::vector<float> Mean() const override { return {0.5f, 0.5f, 0.5f}; }
+  bool ReadsFootprints() const override { return false; }
 
  private:
   std::string name_;

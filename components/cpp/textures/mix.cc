@@ -49,6 +49,10 @@ class Mix final : public yarf::Texture {
       ((1.0f - amount[k]) * tex1[k] + amount[k] * tex2[k]).Store(&value[3 * k]);
   }
 
+  bool ReadsFootprints() const override {
+    return tex1_.ReadsFootprints() || tex2_.ReadsFootprints() || amount_.ReadsFootprints();
+  }
+
   std::vector<float> Mean() const override {
     const float a = amount_.Mean().x;
     const Vec3 mean = (1.0f - a) * tex1_.Mean() + a * tex2_.Mean();

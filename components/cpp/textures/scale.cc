@@ -43,6 +43,8 @@ class Scale final : public yarf::Texture {
     for (size_t k = 0; k < tex.size(); ++k) (tex[k] * scale[k]).Store(&value[3 * k]);
   }
 
+  bool ReadsFootprints() const override { return tex_.ReadsFootprints() || scale_.ReadsFootprints(); }
+
   std::vector<float> Mean() const override {
     const Vec3 mean = tex_.Mean() * scale_.Mean().x;
     return {mean.x, mean.y, mean.z};

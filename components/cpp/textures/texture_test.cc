@@ -250,12 +250,44 @@ TEST_F(BitmapTextureTest, ItsTemporaryFolderGoesWithIt) {
   const auto before = listing();
   std::set<std::filesystem::path> made;
   {
-    const auto texture = MakeBitmap(Four());
+    // Only a MIP-mapped filter writes its image to a file.
+    const auto bilinear = MakeBitmap(Four());
+    EXPECT_EQ(listing(), before);
+    const auto texture = MakeBitmap(Four(), With({{"filter_type", S("trilinear")}}));
     for (const auto& p : listing())
       if (!before.count(p)) made.insert(p);
     EXPECT_EQ(made.size(), 1u);
   }
   for (const auto& p : made) EXPECT_FALSE(std::filesystem::exists(p)) << p;
+}
+
+// Nearest and bilinear are looked up in memory, trilinear by OpenImageIO:
+// at a point footprint trilinear reads the full image bilinearly, so the
+// two must agree under every wrap, inside the image and outside it.
+TEST_F(BitmapTextureTest, BilinearInMemoryAgreesWithOpenImageIoUnderEveryWrap) {
+  constexpr int kWidth = 5, kHeight = 3;
+  std::vector<float> texels(kWidth * kHeight * 3);
+  for (size_t i = 0; i < texels.size(); ++i) texels[i] = float((i * 7919) % 23) / 23.0f;
+  const auto file = WriteImage("odd.exr", kWidth, kHeight, 3, texels);
+  std::vector<float> uv;
+  for (int i = 0; i < 400; ++i) uv.insert(uv.end(), {-2.3f + 0.0157f * float(i), 3.1f - 0.0163f * float(i)});
+  for (const S wrap : {"repeat", "mirror", "clamp", "black"}) {
+    const auto memory = Lookup(*MakeBitmap(file, With({{"wrap_mode", wrap}})), uv);
+    const auto oiio = Lookup(*MakeBitmap(file, With({{"wrap_mode", wrap}, {"filter_type", S("trilinear")}})), uv);
+    ASSERT_EQ(memory.size(), oiio.size());
+    for (size_t k = 0; k < memory.size(); ++k) EXPECT_NEAR(memory[k], oiio[k], 1e-5) << wrap << " at " << k / 3;
+  }
+}
+
+TEST_F(BitmapTextureTest, CoordinatesNotFiniteOrFarOffGiveFiniteValues) {
+  for (const S filter : {"nearest", "bilinear"})
+    for (const S wrap : {"repeat", "mirror", "clamp", "black"}) {
+      const auto texture = MakeBitmap(Four(), With({{"filter_type", filter}, {"wrap_mode", wrap}}));
+      const std::vector<float> values = Lookup(*texture, {NAN, 0.5f, 0.5f, INFINITY, 1e30f, -1e30f, -3e9f, 7e9f});
+      EXPECT_EQ(values[0], 0) << filter << " " << wrap;
+      EXPECT_EQ(values[1], 0) << filter << " " << wrap;
+      for (float v : values) EXPECT_TRUE(v >= 0 && v <= 4) << filter << " " << wrap << ": " << v;
+    }
 }
 
 TEST_F(BitmapTextureTest, BadPropertiesAndFilesGiveClearErrors) {

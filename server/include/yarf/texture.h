@@ -31,6 +31,12 @@ class Texture : public virtual Component {
   // The mean over the unit square of uv, Channels() values (for methods
   // that need one number, e.g. light selection by power).
   virtual std::vector<float> Mean() const = 0;
+  // Whether Evaluate reads SurfacePoints::footprint: a texture that never
+  // filters over one (a lookup without a MIP map, a constant, a mesh
+  // attribute) says not, and a scene whose textures all say so spares
+  // transports the footprints (SceneView::FootprintsRead).
+  // in-process only: a texture in another process is taken to read them.
+  virtual bool ReadsFootprints() const { return true; }
 };
 
 // A property's values at a batch of points (TexturedValue::At and
@@ -92,6 +98,7 @@ class TexturedValue {
 
   bool IsConstant() const { return texture_ == nullptr; }
   Vec3 Constant() const { return constant_; }
+  bool ReadsFootprints() const { return texture_ && texture_->ReadsFootprints(); }
   // Whether the value is 0 everywhere: a constant black (a texture is
   // taken to be non-zero somewhere), so a model can drop the lobe.
   bool IsZero() const { return IsConstant() && constant_.x == 0 && constant_.y == 0 && constant_.z == 0; }

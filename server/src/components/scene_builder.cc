@@ -219,8 +219,11 @@ class Builder {
       resolved_.materials[m.name()] = model;
       materials_[m.name()] = kernel_->AddMaterial(std::move(model));
     }
-    // Without textures, only a material in another process may filter.
-    kernel_->ReadFootprints(!scene_.textures().empty() || remote_materials);
+    // Footprints are made for the textures that filter over them and for
+    // materials in other processes, which may filter their own.
+    bool footprints_read = remote_materials;
+    for (const auto& [name, texture] : resolved_.textures) footprints_read = footprints_read || texture->ReadsFootprints();
+    kernel_->ReadFootprints(footprints_read);
     for (const v1::SceneMedium& m : scene_.media()) {
       const std::string what = MediumName(m);
       ResolvedProperties own{resolved_.textures, {}, {}};

@@ -268,9 +268,14 @@ TEST_F(SceneTest, FootprintsAreReadOnlyWhereATextureCanReadThem) {
   v1::Scene scene = BaseScene();
   AddTriangle(scene.mutable_shapes());
   EXPECT_FALSE(Build(scene)->FootprintsRead());
+  // A constant never filters; a checkerboard box-filters its cells.
   v1::SceneTexture* t = scene.add_textures();
   t->set_name("grey");
   t->mutable_texture()->set_class_name("constant_texture");
+  EXPECT_FALSE(Build(scene)->FootprintsRead());
+  t = scene.add_textures();
+  t->set_name("cells");
+  t->mutable_texture()->set_class_name("checkerboard");
   EXPECT_TRUE(Build(scene)->FootprintsRead());
 }
 
