@@ -1,5 +1,7 @@
 """yarf's path tracer against Mitsuba 3 and Embree beyond the Cornell box:
-the Veach MIS scene and a mesh of about a million triangles.
+the Veach MIS scene, a mesh of about a million triangles, Mitsuba's own
+Cornell box file (its default Gaussian filter, spectra read as RGB) and a
+scene of bitmap textures (bilinear, Mitsuba's default).
 
 Both renderers read one Mitsuba file per scene. For each, the three ratios
 bench/cornell_box.py gives for the Cornell box, measured in this run:
@@ -30,7 +32,7 @@ from aggregates import bumpy_sphere_ply
 from bench_report import cpu_model
 from cornell_box import EQUAL_TIME_SEEDS, mean_rmse, mitsuba_render, spp_for
 from google.protobuf import json_format
-from lights import mitsuba_scene, yarf_render
+from lights import mitsuba_scene, write_pfm, yarf_render
 
 from yarf.assets import upload_scene_assets
 from yarf.client import Client
@@ -40,6 +42,7 @@ from yarf.v1 import scene_pb2
 
 ROOT = Path(__file__).resolve().parent.parent
 VEACH = ROOT / "scenes" / "veach-mis" / "scene.xml"
+MITSUBA_CBOX = ROOT.parent / "shared" / "scenes" / "mitsuba-cbox" / "cbox.xml"
 CEILING = ROOT / "build" / "bin" / "embree_ceiling"
 # The samples per pixel S of the lower throughput render (the higher has
 # 4·S), per scene: enough that building the scene (seconds for a million
@@ -76,11 +79,49 @@ def million_triangles(folder: Path) -> Path:
     return path
 
 
+def textured(folder: Path) -> Path:
+    """A floor, a wall and a sphere under a square light, each diffuse with
+    a bilinear bitmap texture of coloured checks and ramps."""
+    rows, columns = np.mgrid[0:512, 0:512]
+    checks = (rows // 32 + columns // 32) % 2
+    image = np.stack([0.2 + 0.6 * checks, 0.3 + 0.4 * columns / 512, 0.3 + 0.4 * rows / 512], -1)
+    write_pfm(folder / "checks.pfm", image.astype(np.float32))
+    bsdf = """<bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+      <string name="filename" value="checks.pfm"/></texture></bsdf>"""
+    path = folder / "textured.xml"
+    path.write_text(
+        mitsuba_scene(
+            "0, 1, 5",
+            256,
+            256,
+            f"""  <shape type="rectangle"><transform name="to_world"><scale value="3"/>
+    <rotate x="1" angle="-90"/><translate y="-1"/></transform>{bsdf}</shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="3"/><translate z="-2"/>
+    </transform>{bsdf}</shape>
+  <shape type="sphere"><point name="center" x="0" y="0" z="0"/><float name="radius" value="0.9"/>
+    {bsdf}</shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="0.7"/><rotate x="1" angle="90"/>
+    <translate y="2.5"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="12, 12, 12"/></emitter></shape>
+""",
+        )
+    )
+    return path
+
+
 def embree_ceiling(scene: scene_pb2.Scene) -> dict[str, dict[str, float]]:
     """Embree's rates on the scene as loaded (meshes inline, as load_scene reads them)."""
+    # Only the shapes matter to Embree: textures, whose files stay in the
+    # scene's folder, become constants.
+    shapes = scene_pb2.Scene()
+    shapes.CopyFrom(scene)
+    for texture in shapes.textures:
+        texture.texture.Clear()
+        texture.texture.class_name = "constant_texture"
     with tempfile.TemporaryDirectory() as temporary:
         path = Path(temporary) / "scene.json"
-        path.write_text(json_format.MessageToJson(scene))
+        path.write_text(json_format.MessageToJson(shapes))
         result = subprocess.run(
             [str(CEILING), str(path)], capture_output=True, text=True, check=False
         )
@@ -145,13 +186,15 @@ def main() -> None:
         report["million_triangles"] = ratios(
             client, million_triangles(Path(folder)), MILLION_TRIANGLES_SPP
         )
+        report["mitsuba_cbox"] = ratios(client, MITSUBA_CBOX, THROUGHPUT_SPP)
+        report["textured"] = ratios(client, textured(Path(folder)), THROUGHPUT_SPP)
     out = ROOT / "out" / "bench"
     out.mkdir(parents=True, exist_ok=True)
     (out / "scene_ratios.json").write_text(json.dumps(report, indent=2))
     print(f"cpu: {report['cpu_model']}")
     header = ("scene", "samples/s", "vs mitsuba", "rays vs embree", "equal-time rmse")
     print(f"{header[0]:<20}{header[1]:>12}{header[2]:>12}{header[3]:>16}{header[4]:>17}")
-    for name in ("veach_mis", "million_triangles"):
+    for name in ("veach_mis", "million_triangles", "mitsuba_cbox", "textured"):
         row = report[name]
         assert isinstance(row, dict)
         print(

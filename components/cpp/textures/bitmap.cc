@@ -218,8 +218,8 @@ class MipMappedImage {
   }
 
   // `channels` values at (s, t) over the footprint d = (ds/dx, dt/dx, ds/dy, dt/dy).
-  void At(OIIO::TextureSystem::Perthread* thread, double s, double t, const std::array<double, 4>& d,
-              int channels, float* out) const {
+  void At(OIIO::TextureSystem::Perthread* thread, double s, double t, const std::array<double, 4>& d, int channels,
+          float* out) const {
     OIIO::TextureOpt opt = options_;  // texture() may change its options
     if (!system_->texture(handle_, thread, opt, float(s), float(t), float(d[0]), float(d[1]), float(d[2]),
                           float(d[3]), channels, out))
