@@ -257,11 +257,12 @@ inline float SmithG2(Vec3 wi, Vec3 wo, const Roughness& r) {
 
 // --- Visible normals ---------------------------------------------------------
 
-// A slope (x, y) of Beckmann's unit-roughness distribution visible from a
+// The x slope of Beckmann's unit-roughness distribution visible from a
 // direction at angle θi to the normal in the xz-plane (Heitz & d'Eon
-// 2014): x from the inverse of its CDF, found by Newton's method kept
-// inside its bracket, in the variable b = erf(x); y is Gaussian.
-inline std::array<float, 2> SampleBeckmannSlope(float cos_theta, float u0, float u1) {
+// 2014): the inverse of its CDF at u0, found by Newton's method kept
+// inside its bracket, in the variable b = erf(x). The y slope is Gaussian,
+// independent of it (SampleBeckmannSlope).
+inline float SampleBeckmannSlopeX(float cos_theta, float u0) {
   const float sin_theta = SinFromCos(cos_theta);
   const float tan_theta = sin_theta / std::max(cos_theta, 1e-7f);
   const float inv_sqrt_pi = 1.0f / std::sqrt(kPi);
@@ -286,7 +287,26 @@ inline std::array<float, 2> SampleBeckmannSlope(float cos_theta, float u0, float
     const float next = derivative > 0 ? b - value / derivative : 0.5f * (low + high);
     b = next > low && next < high ? next : 0.5f * (low + high);
   }
-  return {ErfInv(b), ErfInv(2.0f * u1 - 1.0f)};
+  return ErfInv(b);
+}
+
+inline float SampleBeckmannSlopeY(float u1) { return ErfInv(2.0f * u1 - 1.0f); }
+
+inline std::array<float, 2> SampleBeckmannSlope(float cos_theta, float u0, float u1) {
+  return {SampleBeckmannSlopeX(cos_theta, u0), SampleBeckmannSlopeY(u1)};
+}
+
+// wi stretched to Beckmann's unit roughness, and the normal of the unit
+// slope (x11, y11) sampled there, rotated and stretched back.
+inline Vec3 StretchToUnitRoughness(Vec3 wi, const Roughness& r) {
+  return Normalize(Vec3(r.alpha_x * wi.x, r.alpha_y * wi.y, wi.z));
+}
+inline Vec3 BeckmannNormalOfSlope(Vec3 stretched, const Roughness& r, float x11, float y11) {
+  const float planar = std::sqrt(stretched.x * stretched.x + stretched.y * stretched.y);
+  const float cos_phi = planar > 0 ? stretched.x / planar : 1.0f, sin_phi = planar > 0 ? stretched.y / planar : 0.0f;
+  const float x = (cos_phi * x11 - sin_phi * y11) * r.alpha_x;
+  const float y = (sin_phi * x11 + cos_phi * y11) * r.alpha_y;
+  return Normalize(Vec3(-x, -y, 1.0f));
 }
 
 // A visible normal of the distribution seen from wi (wi.z > 0), with
@@ -295,13 +315,30 @@ inline std::array<float, 2> SampleBeckmannSlope(float cos_theta, float u0, float
 // d'Eon 2014).
 inline Vec3 SampleVisibleNormal(Vec3 wi, const Roughness& r, float u0, float u1) {
   if (r.distribution == Distribution::kGgx) return SampleGgxVisibleNormal(wi, r.alpha_x, r.alpha_y, u0, u1);
-  const Vec3 stretched = Normalize(Vec3(r.alpha_x * wi.x, r.alpha_y * wi.y, wi.z));
+  const Vec3 stretched = StretchToUnitRoughness(wi, r);
   const auto [x11, y11] = SampleBeckmannSlope(stretched.z, u0, u1);
-  const float planar = std::sqrt(stretched.x * stretched.x + stretched.y * stretched.y);
-  const float cos_phi = planar > 0 ? stretched.x / planar : 1.0f, sin_phi = planar > 0 ? stretched.y / planar : 0.0f;
-  const float x = (cos_phi * x11 - sin_phi * y11) * r.alpha_x;
-  const float y = (sin_phi * x11 + cos_phi * y11) * r.alpha_y;
-  return Normalize(Vec3(-x, -y, 1.0f));
+  return BeckmannNormalOfSlope(stretched, r, x11, y11);
+}
+
+// Calls visit(m) for the visible normals SampleVisibleNormal gives at the
+// midpoints of a strata × strata grid of (u0, u1), for integrals over
+// them. Beckmann's slopes are separable, x by u0 and y by u1: each of its
+// 2·strata slope searches is made once, not once per cell.
+template <typename Visit>
+void ForEachVisibleNormalOnGrid(Vec3 wi, const Roughness& r, int strata, Visit&& visit) {
+  const auto at = [strata](int i) { return (float(i) + 0.5f) / float(strata); };
+  if (r.distribution == Distribution::kGgx) {
+    for (int i = 0; i < strata; ++i)
+      for (int j = 0; j < strata; ++j) visit(SampleVisibleNormal(wi, r, at(i), at(j)));
+    return;
+  }
+  const Vec3 stretched = StretchToUnitRoughness(wi, r);
+  std::vector<float> y11(static_cast<size_t>(strata));
+  for (int j = 0; j < strata; ++j) y11[size_t(j)] = SampleBeckmannSlopeY(at(j));
+  for (int i = 0; i < strata; ++i) {
+    const float x11 = SampleBeckmannSlopeX(stretched.z, at(i));
+    for (int j = 0; j < strata; ++j) visit(BeckmannNormalOfSlope(stretched, r, x11, y11[size_t(j)]));
+  }
 }
 
 // The density of visible normals, G1(wi)·max(0, wi·m)·D(m) / cos θi.
@@ -373,13 +410,10 @@ inline float RoughDielectricReflectance(float cos_theta, const Roughness& r, flo
   const Vec3 wi(SinFromCos(cos_theta), 0.0f, cos_theta);
   const float g1 = SmithG1(wi, r);
   double sum = 0;
-  for (int i = 0; i < strata; ++i)
-    for (int j = 0; j < strata; ++j) {
-      const Vec3 m = SampleVisibleNormal(wi, r, (i + 0.5f) / strata, (j + 0.5f) / strata);
-      const Vec3 wo = ReflectAbout(wi, m);
-      if (wo.z <= 0) continue;
-      sum += FresnelDielectric(Dot(wi, m), eta) * SmithG2(wi, wo, r) / g1;
-    }
+  ForEachVisibleNormalOnGrid(wi, r, strata, [&](Vec3 m) {
+    const Vec3 wo = ReflectAbout(wi, m);
+    if (wo.z > 0) sum += FresnelDielectric(Dot(wi, m), eta) * SmithG2(wi, wo, r) / g1;
+  });
   return float(sum / (double(strata) * strata));
 }
 
