@@ -222,7 +222,8 @@ class Builder {
     // Footprints are made for the textures that filter over them and for
     // materials in other processes, which may filter their own.
     bool footprints_read = remote_materials;
-    for (const auto& [name, texture] : resolved_.textures) footprints_read = footprints_read || texture->ReadsFootprints();
+    for (const auto& [name, texture] : resolved_.textures)
+      footprints_read = footprints_read || texture->ReadsFootprints();
     kernel_->ReadFootprints(footprints_read);
     for (const v1::SceneMedium& m : scene_.media()) {
       const std::string what = MediumName(m);
