@@ -177,8 +177,9 @@ inline bool RefractAbout(Vec3 wi, Vec3 m, float eta, Vec3* wt) {
 // --- The distributions -------------------------------------------------------
 
 // The inverse error function by Giles' single-precision approximation
-// ("Approximating the erfinv function", 2010): within 4·10⁻⁷ of the root
-// over (-1, 1), as close as a Newton step on std::erf would bring it.
+// ("Approximating the erfinv function", 2010): within a relative 4·10⁻⁷
+// of the root over (-1, 1), as close as a Newton step on std::erf in
+// single precision would bring it.
 inline float ErfInv(float y) {
   y = std::clamp(y, -0.99999994f, 0.99999994f);
   float w = -std::log((1.0f - y) * (1.0f + y)), p;
