@@ -254,7 +254,7 @@ inline float SmithG2(Vec3 wi, Vec3 wo, const Roughness& r) {
 // direction at angle θi to the normal in the xz-plane (Heitz & d'Eon
 // 2014): the inverse of its CDF at u0, found by Newton's method kept
 // inside its bracket, in the variable b = erf(x). The y slope is Gaussian,
-// independent of it (SampleBeckmannSlope).
+// independent of it (SampleBeckmannSlopeY).
 inline float SampleBeckmannSlopeX(float cos_theta, float u0) {
   const float sin_theta = SinFromCos(cos_theta);
   const float tan_theta = sin_theta / std::max(cos_theta, 1e-7f);
@@ -283,10 +283,6 @@ inline float SampleBeckmannSlopeX(float cos_theta, float u0) {
 
 inline float SampleBeckmannSlopeY(float u1) { return ErfInv(2.0f * u1 - 1.0f); }
 
-inline std::array<float, 2> SampleBeckmannSlope(float cos_theta, float u0, float u1) {
-  return {SampleBeckmannSlopeX(cos_theta, u0), SampleBeckmannSlopeY(u1)};
-}
-
 // wi stretched to Beckmann's unit roughness, and the normal of the unit
 // slope (x11, y11) sampled there, rotated and stretched back.
 inline Vec3 StretchToUnitRoughness(Vec3 wi, const Roughness& r) {
@@ -307,8 +303,7 @@ inline Vec3 BeckmannNormalOfSlope(Vec3 stretched, const Roughness& r, float x11,
 inline Vec3 SampleVisibleNormal(Vec3 wi, const Roughness& r, float u0, float u1) {
   if (r.distribution == Distribution::kGgx) return SampleGgxVisibleNormal(wi, r.alpha_x, r.alpha_y, u0, u1);
   const Vec3 stretched = StretchToUnitRoughness(wi, r);
-  const auto [x11, y11] = SampleBeckmannSlope(stretched.z, u0, u1);
-  return BeckmannNormalOfSlope(stretched, r, x11, y11);
+  return BeckmannNormalOfSlope(stretched, r, SampleBeckmannSlopeX(stretched.z, u0), SampleBeckmannSlopeY(u1));
 }
 
 // Calls visit(m) for the visible normals SampleVisibleNormal gives at the

@@ -23,9 +23,7 @@ class TexelGrid {
  public:
   TexelGrid(LinearImage image, Wrap wrap) : image_(std::move(image)), wrap_(wrap) {}
 
-  int Channels() const { return image_.channels; }
-
-  // Each writes Channels() values to `out`: 0 where (s, t) is not finite,
+  // Each writes the image's channels to `out`: 0 where (s, t) is not finite,
   // or for a texel outside the image under Wrap::kBlack.
   void Nearest(double s, double t, float* out) const {
     if (!(std::isfinite(s) && std::isfinite(t))) return Black(out);
