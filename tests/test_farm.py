@@ -30,7 +30,7 @@ from yarf import Client, LocalServer, RenderResult, load_scene
 from yarf.assets import upload_scene_assets
 from yarf.farm import streams
 from yarf.farm.cache import SceneCache
-from yarf.farm.loops import Loops
+from yarf.farm.loops import Loops, run
 from yarf.farm.merge import ImageMerge, TaskImage
 from yarf.farm.tasks import SplitPolicy, Task, Window, split
 from yarf.farm.validation import SubmitChecker
@@ -536,9 +536,60 @@ def test_loops_end_a_loop_whose_client_turns_the_cancel_into_a_timeout() -> None
     assert asyncio.run(scenario())
 
 
+def test_run_ends_a_task_that_loses_its_first_cancels() -> None:
+    """As nats-py's reconnect loop when a cancel meets its connect timeout."""
+    ended = threading.Event()
+
+    async def reconnecting() -> None:
+        for _ in range(3):
+            try:
+                await asyncio.sleep(60)
+            except asyncio.CancelledError:
+                continue
+        try:
+            await asyncio.sleep(60)
+        finally:
+            ended.set()
+
+    left: list[asyncio.Task[None]] = []
+
+    async def main() -> str:
+        left.append(asyncio.create_task(reconnecting(), name="reconnect"))
+        await asyncio.sleep(0)
+        return "stopped"
+
+    began = time.monotonic()
+    assert run(main(), timeout=5.0) == "stopped"
+    assert ended.is_set()
+    assert time.monotonic() - began < 5.0
+
+
+def test_run_returns_after_its_timeout_past_a_task_that_ignores_every_cancel(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    async def stubborn() -> None:
+        while True:
+            try:
+                await asyncio.sleep(60)
+            except asyncio.CancelledError:
+                continue
+
+    left: list[asyncio.Task[None]] = []
+
+    async def main() -> int:
+        left.append(asyncio.create_task(stubborn(), name="stubborn"))
+        await asyncio.sleep(0)
+        return 7
+
+    began = time.monotonic()
+    assert run(main(), timeout=0.5) == 7
+    assert time.monotonic() - began < 5.0
+    assert "stubborn" in caplog.text
+
+
 @pytest.mark.parametrize("after", [0.0, 0.5, 1.5], ids=["at once", "0.5 s", "1.5 s"])
 def test_farm_processes_stop_on_sigterm_after_nats_is_gone(after: float) -> None:
-    """A coordinator and a node whose NATS died a moment before still exit on SIGTERM."""
+    """A coordinator and a node whose NATS died a moment before still exit cleanly on SIGTERM."""
     with Farm(coordinator_args=COORDINATOR_ARGS) as farm:
         processes = {"coordinator": farm.start_coordinator(), "node": farm.start_node()}
         assert farm.nats is not None
@@ -553,6 +604,7 @@ def test_farm_processes_stop_on_sigterm_after_nats_is_gone(after: float) -> None
                 pytest.fail(
                     f"the {what} did not stop within {STOP_SECONDS} s:\n{process.log[-3000:]}"
                 )
+            assert process.process.returncode == 0, f"the {what}:\n{process.log[-3000:]}"
 
 
 def test_a_task_past_the_node_timeout_fails_and_the_node_serves_on(own_farm: Farm) -> None:

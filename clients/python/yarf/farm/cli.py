@@ -17,12 +17,14 @@ from pathlib import Path
 
 import nats
 from nats.aio.client import Client as Nats
+from nats.errors import Error as NatsError
 
 from yarf.credentials import channel_credentials, resolve
 from yarf.farm.access import AccessError
 from yarf.farm.cache import DEFAULT_CACHE_BYTES
 from yarf.farm.coordinator import Coordinator, Retention
 from yarf.farm.listen import ListenSecurity, listen_security
+from yarf.farm.loops import run
 from yarf.farm.node import DEFAULT_TASK_TIMEOUT, Node
 from yarf.farm.service import start_server
 from yarf.farm.store import JobStore
@@ -182,6 +184,14 @@ async def _connect(url: str, name: str) -> Nats:
             await asyncio.sleep(0.25)
 
 
+async def _close(nc: Nats) -> None:
+    """Closes the connection; with NATS gone its last flush fails, which is no error here."""
+    try:
+        await nc.close()
+    except (OSError, NatsError) as error:
+        log.info("NATS connection closed without its last flush: %r", error)
+
+
 def _stop_event() -> asyncio.Event:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -216,7 +226,7 @@ async def _run_coordinator(args: argparse.Namespace, security: ListenSecurity) -
     await server.stop(grace=1.0)
     await coordinator.stop()
     # Everything is committed and acked, or will be redelivered: no drain.
-    await nc.close()
+    await _close(nc)
     store.close()
     return 0
 
@@ -265,7 +275,7 @@ async def _run_node(args: argparse.Namespace, token: str, tls_ca: str) -> int:
         except PermissionError as error:
             raise SystemExit(f"yarf-farm: {error}") from None
         await node.run(stop)
-        await nc.close()
+        await _close(nc)
     finally:
         if watchdog is not None:
             watchdog.cancel()
@@ -297,7 +307,7 @@ def main(argv: list[str] | None = None) -> int:
         except AccessError as error:
             print(f"yarf-farm: {error}", file=sys.stderr)
             return 2
-        return asyncio.run(_run_coordinator(args, security))
+        return run(_run_coordinator(args, security))
     if args.cache_bytes < 0 or args.task_timeout < 0:
         _parser().error("--cache-bytes and --task-timeout must be 0 or more")
     if args.yarfd is not None and args.threads is not None:
@@ -309,4 +319,4 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as error:
         print(f"yarf-farm: {error}", file=sys.stderr)
         return 2
-    return asyncio.run(_run_node(args, token, tls_ca))
+    return run(_run_node(args, token, tls_ca))
