@@ -25,7 +25,7 @@ from conftest import small_scene
 
 from yarf import Client, LocalServer, component, properties, rgb, transform, vec3
 from yarf.integrate import serve_function
-from yarf.scene import float_array
+from yarf.scene import Reference, float_array
 from yarf.server import find_yarfd
 from yarf.v1 import asset_pb2, math_pb2, math_pb2_grpc, render_pb2, scene_pb2
 
@@ -328,6 +328,89 @@ def test_properties_of_a_material_are_checked_like_every_field(client: Client) -
     )
     error = refusal(client, submit_request(scene))
     assert "scene.materials[1].properties.values" in error.details(), error.details()
+
+
+def scale_chain(scene: scene_pb2.Scene, length: int) -> str:
+    """Textures t0 … t(length − 1), each the one before scaled; the last one's name."""
+    scene.textures.add(name="t0").texture.CopyFrom(component("constant_texture", value=rgb(0.5)))
+    for k in range(1, length):
+        scene.textures.add(name=f"t{k}").texture.CopyFrom(
+            component("scale", tex=Reference(f"t{k - 1}"), scale=1.0)
+        )
+    return f"t{length - 1}"
+
+
+def mix_of_mixes(scene: scene_pb2.Scene, levels: int) -> str:
+    """Each mix blends the one before with itself: 2^levels lookups of the first."""
+    scene.textures.add(name="m0").texture.CopyFrom(component("constant_texture", value=rgb(0.5)))
+    for k in range(1, levels + 1):
+        before = Reference(f"m{k - 1}")
+        scene.textures.add(name=f"m{k}").texture.CopyFrom(
+            component("mix", tex1=before, tex2=before, amount=0.5)
+        )
+    return f"m{levels}"
+
+
+def blend_of_blends(scene: scene_pb2.Scene, levels: int) -> str:
+    for k in range(1, levels + 1):
+        before = Reference("grey" if k == 1 else f"b{k - 1}")
+        scene.materials.add(
+            name=f"b{k}", class_name="blend", properties=properties(bsdf_0=before, bsdf_1=before)
+        )
+    return f"b{levels}"
+
+
+def with_sphere_of(scene: scene_pb2.Scene, part: str) -> scene_pb2.Scene:
+    """The sphere made of material `part`, or of a grey one textured by texture `part`."""
+    if any(m.name == part for m in scene.materials):
+        scene.shapes[1].material = part
+    else:
+        scene.shapes[1].material = "sphere"
+        scene.materials.add(name="sphere", class_name="lambertian").properties.CopyFrom(
+            properties(reflectance=Reference(part))
+        )
+    return scene
+
+
+# A material counts the texture it refers to: the sphere's grey one adds a
+# part to the chain and the mixes.
+@pytest.mark.parametrize(
+    "make, refused, accepted, what",
+    [
+        (scale_chain, 1025, 1023, "texture 't1024' (scale)"),
+        (mix_of_mixes, 10, 9, "texture 'm10' (mix)"),
+        (blend_of_blends, 10, 9, "material 'b10' (blend)"),
+    ],
+    ids=["a chain of 1025 textures", "a mix of mixes 10 deep", "a blend of blends 10 deep"],
+)
+def test_a_texture_or_material_referring_to_too_many_parts_is_refused_at_submit(
+    client: Client,
+    make: Callable[[scene_pb2.Scene, int], str],
+    refused: int,
+    accepted: int,
+    what: str,
+) -> None:
+    """Each lookup evaluates its tree of references: a chain, or a DAG whose
+    shared parts double at every level, would stall every render thread
+    (2^40 lookups at 40 levels) or exhaust its stack."""
+    scene = small_scene()
+    error = refusal(client, submit_request(with_sphere_of(scene, make(scene, refused))))
+    assert what in error.details() and "at most 1024" in error.details(), error.details()
+
+    scene = small_scene()
+    job = client.submit(with_sphere_of(scene, make(scene, accepted)), spp=1)
+    status = client.wait(job, timeout=60)
+    assert status.state == render_pb2.SUCCEEDED, status.error
+
+
+def test_a_scene_of_fifty_thousand_textures_starts_rendering_at_once(client: Client) -> None:
+    """Making each texture copied the table of those before it: this scene
+    (2.6 MB) took the server minutes of work before its first sample."""
+    scene = small_scene()
+    for k in range(50_000):
+        scene.textures.add(name=f"t{k}").texture.CopyFrom(component("constant_texture", value=0.5))
+    status = client.wait(client.submit(with_sphere_of(scene, "t49999"), spp=1), timeout=60)
+    assert status.state == render_pb2.SUCCEEDED, status.error
 
 
 def test_the_camera_frame_must_not_be_degenerate(client: Client) -> None:

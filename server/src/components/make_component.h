@@ -48,9 +48,12 @@ struct ComponentSources {
 // server found for it (a request names files only by relative path or
 // asset hash).
 struct ResolvedProperties {
-  std::map<std::string, std::shared_ptr<const Texture>> textures;        // by texture name
-  std::map<std::string, std::shared_ptr<const SurfaceModel>> materials;  // by material name
-  std::map<std::string, std::filesystem::path> files;                    // by property key
+  // The scene's, by name, which every component made from it shares
+  // (never copied: a scene may hold many); null: none may be named.
+  const std::map<std::string, std::shared_ptr<const Texture>>* textures = nullptr;
+  const std::map<std::string, std::shared_ptr<const SurfaceModel>>* materials = nullptr;
+  // The component's own, by property key.
+  std::map<std::string, std::filesystem::path> files;
 };
 
 // The interfaces with a Remote<I>.
@@ -75,10 +78,14 @@ std::unique_ptr<I> MakeComponent(const ComponentSources& sources, const std::str
     if (resolved) {
       for (const auto& [key, value] : properties.values()) {
         if (value.value_case() != v1::Property::kReference) continue;
-        if (auto it = resolved->textures.find(value.reference()); it != resolved->textures.end())
-          local.Set(key, it->second);
-        else if (auto model = resolved->materials.find(value.reference()); model != resolved->materials.end())
-          local.Set(key, model->second);
+        if (resolved->textures)
+          if (auto it = resolved->textures->find(value.reference()); it != resolved->textures->end()) {
+            local.Set(key, it->second);
+            continue;
+          }
+        if (resolved->materials)
+          if (auto model = resolved->materials->find(value.reference()); model != resolved->materials->end())
+            local.Set(key, model->second);
       }
       for (const auto& [key, path] : resolved->files) local.Set(key, path);
     }

@@ -150,6 +150,37 @@ std::string TextureName(const v1::SceneTexture& texture) {
   return "texture '" + texture.name() + "' (" + texture.texture().class_name() + ")";
 }
 
+std::string MaterialName(const v1::Material& material) {
+  return "material '" + material.name() + "' (" + material.class_name() + ")";
+}
+
+// Textures and materials refer to those before them, and a lookup of one
+// evaluates the whole tree its references make: a chain or a mix of mixes
+// of a few dozen parts would make every lookup take forever, or exhaust a
+// render thread's stack. Each tree is bounded (SceneLimits::kMaxReferenceTree).
+void CheckReferenceTrees(const v1::Scene& scene) {
+  // References resolve to a texture first, then to a material (MakeComponent).
+  std::map<std::string, uint64_t> texture_tree, material_tree;
+  const auto tree_of = [&](const v1::Properties& properties, bool materials, const std::string& what) {
+    uint64_t size = 1;
+    for (const auto& [key, value] : properties.values()) {
+      if (value.value_case() != v1::Property::kReference) continue;
+      if (auto t = texture_tree.find(value.reference()); t != texture_tree.end())
+        size += t->second;
+      else if (auto m = material_tree.find(value.reference()); materials && m != material_tree.end())
+        size += m->second;
+    }
+    if (size > SceneLimits::kMaxReferenceTree)
+      throw Error(what + ": its references make a tree of " + std::to_string(size) + " parts (at most " +
+                  std::to_string(SceneLimits::kMaxReferenceTree) + ", a part shared by two references counted twice)");
+    return size;
+  };
+  for (const v1::SceneTexture& t : scene.textures())
+    texture_tree[t.name()] = tree_of(t.texture().properties(), false, TextureName(t));
+  for (const v1::Material& m : scene.materials())
+    material_tree[m.name()] = tree_of(m.properties(), true, MaterialName(m));
+}
+
 // Whether a component's property names a file of its own: `filename`, or
 // `NAME_filename` for components that read several (a medium's grids).
 // Such a file is read under the scene's folder; the same key with `asset`
@@ -188,6 +219,9 @@ std::vector<std::pair<std::string, const v1::ComponentSpec*>> FileComponents(con
 class Builder {
  public:
   Builder(const v1::Scene& scene, const SceneSources& sources) : scene_(scene), sources_(sources) {}
+  // scene_references_ points into the builder itself.
+  Builder(const Builder&) = delete;
+  Builder& operator=(const Builder&) = delete;
 
   std::unique_ptr<KernelScene> Build() {
     const uint32_t w = scene_.film().width(), h = scene_.film().height();
@@ -208,26 +242,26 @@ class Builder {
     // In order: a texture may refer to those before it.
     for (const v1::SceneTexture& t : scene_.textures()) {
       kernel_->ThrowIfStopped();
-      resolved_.textures[t.name()] = MakeTexture(t);
+      textures_[t.name()] = MakeTexture(t);
     }
     bool remote_materials = false;
     for (const v1::Material& m : scene_.materials()) {
-      const std::string what = "material '" + m.name() + "' (" + m.class_name() + ")";
+      const std::string what = MaterialName(m);
       // In order: a material may wrap one before it.
       std::shared_ptr<const SurfaceModel> model = Create<SurfaceModel>(m.class_name(), m.properties(), m.address(), what);
       remote_materials = remote_materials || dynamic_cast<const Remote<SurfaceModel>*>(model.get());
-      resolved_.materials[m.name()] = model;
+      models_[m.name()] = model;
       materials_[m.name()] = kernel_->AddMaterial(std::move(model));
     }
     // Footprints are made for the textures that filter over them and for
     // materials in other processes, which may filter their own.
     bool footprints_read = remote_materials;
-    for (const auto& [name, texture] : resolved_.textures)
+    for (const auto& [name, texture] : textures_)
       footprints_read = footprints_read || texture->ReadsFootprints();
     kernel_->ReadFootprints(footprints_read);
     for (const v1::SceneMedium& m : scene_.media()) {
       const std::string what = MediumName(m);
-      ResolvedProperties own{resolved_.textures, {}, {}};
+      ResolvedProperties own{&textures_, nullptr, {}};
       const v1::Properties props = WithoutFile(m.medium(), what, own);
       media_[m.name()] = kernel_->AddMedium(Create<Medium>(m.medium().class_name(), props, m.medium().address(), what, &own));
     }
@@ -235,7 +269,7 @@ class Builder {
     for (int i = 0; i < scene_.lights_size(); ++i) {
       const v1::Light& light = scene_.lights(i);
       const std::string what = LightName(light, i);
-      ResolvedProperties own{resolved_.textures, {}, {}};
+      ResolvedProperties own{&textures_, nullptr, {}};
       const v1::Properties props = WithoutFile(light.emitter(), what, own);
       const Emitter* emitter =
           kernel_->AddEmitter(Create<Emitter>(light.emitter().class_name(), props, light.emitter().address(), what, &own));
@@ -270,7 +304,8 @@ class Builder {
   std::unique_ptr<I> Create(const std::string& class_name, const v1::Properties& props, const std::string& address,
                             const std::string& what, const ResolvedProperties* resolved = nullptr) {
     try {
-      return MakeComponent<I>(sources_.components, class_name, props, address, resolved ? resolved : &resolved_);
+      return MakeComponent<I>(sources_.components, class_name, props, address,
+                              resolved ? resolved : &scene_references_);
     } catch (const Error& e) {
       throw Error(what + ": " + e.what());
     }
@@ -312,7 +347,7 @@ class Builder {
   // A texture of the scene, its file found for it.
   std::shared_ptr<const Texture> MakeTexture(const v1::SceneTexture& t) {
     const std::string what = TextureName(t);
-    ResolvedProperties own{resolved_.textures, {}, {}};
+    ResolvedProperties own{&textures_, nullptr, {}};
     const v1::Properties props = WithoutFile(t.texture(), what, own);
     return Create<Texture>(t.texture().class_name(), props, t.texture().address(), what, &own);
   }
@@ -331,8 +366,8 @@ class Builder {
       if (!s.interior().empty() || !s.exterior().empty())
         look.media = {MediumNumber(s.interior()), MediumNumber(s.exterior()), true};
       if (!s.alpha().empty()) {
-        const auto alpha = resolved_.textures.find(s.alpha());
-        if (alpha == resolved_.textures.end()) throw Error(what + ": alpha names no texture of the scene");
+        const auto alpha = textures_.find(s.alpha());
+        if (alpha == textures_.end()) throw Error(what + ": alpha names no texture of the scene");
         look.alpha = alpha->second;
       }
       if (s.has_emitter())
@@ -455,8 +490,11 @@ class Builder {
   std::map<std::string, uint32_t> materials_;
   std::map<std::string, uint32_t> media_;
   std::map<std::string, std::pair<const v1::Group*, uint32_t>> groups_;
-  // The scene's textures, for the materials and emitters that refer to them.
-  ResolvedProperties resolved_;
+  // The scene's textures and surface models by name, for the components
+  // that refer to them (scene_references_: textures and models both).
+  std::map<std::string, std::shared_ptr<const Texture>> textures_;
+  std::map<std::string, std::shared_ptr<const SurfaceModel>> models_;
+  const ResolvedProperties scene_references_{&textures_, &models_, {}};
 };
 
 void CheckInstance(const v1::Instance& instance) {
@@ -570,6 +608,7 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
     if (m.medium().class_name().empty()) throw Error("medium '" + m.name() + "' has no class");
     if (!names.media.insert(m.name()).second) throw Error("medium '" + m.name() + "' defined twice");
   }
+  CheckReferenceTrees(scene);
   if (!scene.camera_medium().empty() && !names.media.count(scene.camera_medium()))
     throw Error("camera_medium '" + scene.camera_medium() + "' is not a medium of the scene");
   for (const auto& [what, spec] : FileComponents(scene))

@@ -19,6 +19,9 @@ struct SceneLimits {
   static constexpr uint64_t kMaxPixels = uint64_t(1) << 26;
   static constexpr int kMaxInstanceDepth = 16;
   static constexpr uint64_t kMaxPlacements = 1'000'000;
+  // Parts one lookup of a texture or material may evaluate: itself and
+  // what it refers to, a part shared by two references counted twice.
+  static constexpr uint64_t kMaxReferenceTree = 1024;
 };
 
 // Mesh files uploaded by content (Mesh.asset), named by their SHA-256.
