@@ -413,6 +413,30 @@ def test_a_scene_of_fifty_thousand_textures_starts_rendering_at_once(client: Cli
     assert status.state == render_pb2.SUCCEEDED, status.error
 
 
+def test_whitted_between_glass_and_mirrors_keeps_its_branches_bounded(client: Client) -> None:
+    """Glass splits each branch in two: in a mirror room, max_depth 60 asked
+    for 2^59 branches per pixel and took the server's memory."""
+    scene = small_scene()
+    scene.materials.add(name="glass", class_name="dielectric")
+    scene.materials.add(name="mirror", class_name="mirror")
+    scene.shapes[1].material = "glass"
+    second = scene.shapes.add(name="second ball", material="glass")
+    second.sphere.center.CopyFrom(vec3(0.3, 0.2, 0.2))
+    second.sphere.radius = 0.4
+    room = scene.shapes.add(name="room", material="mirror", flip_normals=True)
+    room.sphere.radius = 10
+    job = client.submit(scene, spp=1, transport=component("whitted", max_depth=60))
+    status = client.wait(job, timeout=120)
+    assert status.state == render_pb2.SUCCEEDED, status.error
+    assert np.isfinite(client.image(job)).all()
+
+
+def test_a_bdpt_deeper_than_its_limit_is_refused_at_submit(client: Client) -> None:
+    options = render_pb2.RenderOptions(spp=2, transport=component("bdpt", max_depth=100_000))
+    error = refusal(client, render_pb2.SubmitRequest(scene=small_scene(), options=options))
+    assert "max_depth: 100000 is above 4096" in error.details(), error.details()
+
+
 def test_the_camera_frame_must_not_be_degenerate(client: Client) -> None:
     scene = small_scene()
     scene.camera.up.CopyFrom(vec3(0, 0, -1))  # along the view direction

@@ -11,12 +11,15 @@
 // position within the pixel, so passes only antialias.
 //
 // Rays advance level by level as a wavefront: each level intersects all
-// its rays and calls each SurfaceModel and Emitter once per group.
+// its rays and calls each SurfaceModel and Emitter once per group. A point
+// keeps its 64 strongest branches per level (KeepStrongest).
 //
 // Primary sample space: 0–1 film, 2–3 lens, 4 time; nothing more.
 //
 // Parameters: Whitted::Parameters() below.
 
+#include <algorithm>
+#include <numeric>
 #include <vector>
 
 #include "yarf/support/wavefront.h"
@@ -53,8 +56,10 @@ class Whitted final : public Transport {
     std::vector<Vec3> radiance(n);
     std::vector<Branch> level(n);
     for (uint32_t i = 0; i < n; ++i) level[i] = {i, CameraRayOf(scene, points, i), Vec3(1, 1, 1)};
-    for (int depth = 1; !level.empty() && depth <= max_depth_; ++depth)
+    for (int depth = 1; !level.empty() && depth <= max_depth_; ++depth) {
       level = Trace(scene, level, depth, radiance);
+      KeepStrongest(level, n);
+    }
     for (uint32_t i = 0; i < n; ++i) AddCameraSample(scene, points, i, radiance[i], out);
   }
 
@@ -153,6 +158,32 @@ class Whitted final : public Transport {
       }
     }
     return next;
+  }
+
+  // Glass splits every branch in two: between glass and mirrors a point's
+  // branches would double at every level, 2^max_depth of them. Each point
+  // keeps its kMaxBranches strongest (by their largest channel), which a
+  // path of the default max_depth never exceeds.
+  static constexpr uint32_t kMaxBranches = 64;
+  static void KeepStrongest(std::vector<Branch>& level, size_t points) {
+    std::vector<uint32_t> count(points, 0);
+    bool over = false;
+    for (const Branch& b : level) over = ++count[b.point] > kMaxBranches || over;
+    if (!over) return;
+    std::vector<uint32_t> order(level.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      if (level[a].point != level[b].point) return level[a].point < level[b].point;
+      return MaxComponent(level[a].weight) > MaxComponent(level[b].weight);
+    });
+    std::vector<Branch> kept;
+    kept.reserve(std::min<size_t>(level.size(), points * kMaxBranches));
+    uint32_t run = 0;
+    for (size_t k = 0; k < order.size(); ++k) {
+      run = k > 0 && level[order[k]].point == level[order[k - 1]].point ? run + 1 : 0;
+      if (run < kMaxBranches) kept.push_back(level[order[k]]);
+    }
+    level = std::move(kept);
   }
 
   int max_depth_;
