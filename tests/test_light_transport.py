@@ -156,6 +156,37 @@ def test_bdpt_with_roulette_from_the_first_segment_agrees_with_the_path_tracer(
     )
 
 
+def test_bdpt_at_a_depth_whose_subpaths_outgrow_a_batch_agrees_with_the_path_tracer(
+    client: Client,
+) -> None:
+    # At max_depth 1000 a batch's subpaths would take hundreds of MB: bdpt
+    # evaluates it in runs of points, and makes only the vertices reached.
+    scene = small(SCENES["cornell-box"])
+    reference = client.render(
+        scene,
+        spp=SPP["path"],
+        seed=5,
+        transport=component("path", max_depth=-1),
+        sampler=INDEPENDENT,
+        timeout=600,
+    )
+    result = client.render(
+        scene,
+        spp=SPP["bdpt"],
+        seed=6,
+        transport=component("bdpt", max_depth=1000),
+        sampler=INDEPENDENT,
+        timeout=600,
+    )
+    assert_renders_agree(
+        result,
+        reference,
+        "bdpt at max_depth 1000 vs path unbounded",
+        block=BLOCK,
+        family_alpha=FAMILY_ALPHA,
+    )
+
+
 def test_rmse_between_methods_falls_like_one_over_root_spp(client: Client) -> None:
     scene = small(SCENES["cornell-box"])
 

@@ -47,6 +47,8 @@
 
 #include <algorithm>
 #include <bit>
+#include <memory>
+#include <type_traits>
 #include <optional>
 #include <vector>
 
@@ -118,14 +120,27 @@ struct Vertex {
   }
 };
 
-// Subpaths of a batch: up to `capacity` vertices per point.
+// Subpaths of a batch: room for `capacity` vertices per point, each made
+// when its subpath reaches it (most end long before a deep max_depth).
 struct Subpaths {
-  std::vector<Vertex> vertices;
   std::vector<uint32_t> count;
   uint32_t capacity = 0;
-  Subpaths(size_t n, uint32_t capacity_) : vertices(n * capacity_), count(n, 0), capacity(capacity_) {}
-  Vertex& at(size_t path, uint32_t k) { return vertices[path * capacity + k]; }
-  const Vertex& at(size_t path, uint32_t k) const { return vertices[path * capacity + k]; }
+  Subpaths(size_t n, uint32_t capacity_)
+      : count(n, 0), capacity(capacity_), room_(n * capacity_), vertices_(Room().allocate(room_)) {}
+  ~Subpaths() { Room().deallocate(vertices_, room_); }
+  Subpaths(const Subpaths&) = delete;
+  Subpaths& operator=(const Subpaths&) = delete;
+
+  // The next vertex of `path`'s subpath, fresh.
+  Vertex& Append(size_t path) { return *std::construct_at(vertices_ + path * capacity + count[path]++); }
+  Vertex& at(size_t path, uint32_t k) { return vertices_[path * capacity + k]; }
+  const Vertex& at(size_t path, uint32_t k) const { return vertices_[path * capacity + k]; }
+
+ private:
+  static_assert(std::is_trivially_destructible_v<Vertex>, "vertices are left without destruction");
+  static std::allocator<Vertex> Room() { return {}; }
+  size_t room_;
+  Vertex* vertices_;
 };
 
 // A walk in progress: its weight, channel ratios, hero and walk numbers;
@@ -169,6 +184,24 @@ std::vector<SurfaceAnswer> EvaluatePhases(const SceneView& scene, const std::vec
   return answers;
 }
 
+// Points first … first + count − 1 of a batch, as a batch of their own.
+class PointRun final : public PrimarySamples {
+ public:
+  PointRun(const PrimarySamples& all, size_t first, size_t count) : all_(all), first_(first), count_(count) {}
+  size_t Count() const override { return count_; }
+  float Get(size_t i, uint32_t dimension) const override { return all_.Get(first_ + i, dimension); }
+  void Gather(std::span<const uint32_t> points, uint32_t dimension, std::span<float> out) const override {
+    std::vector<uint32_t> in_all(points.begin(), points.end());
+    for (uint32_t& i : in_all) i += uint32_t(first_);
+    all_.Gather(in_all, dimension, out);
+  }
+  uint64_t SampleIndex(size_t i) const override { return all_.SampleIndex(first_ + i); }
+
+ private:
+  const PrimarySamples& all_;
+  size_t first_, count_;
+};
+
 float Remap0(float f) { return f != 0 ? f : 1; }
 
 uint32_t FloatBits(float f) { return std::bit_cast<uint32_t>(f); }
@@ -184,15 +217,16 @@ float DiskPdf(const SceneView& scene) {
 class Bdpt final : public Transport {
  public:
   static ParameterSchema Parameters() {
-    return {Parameter::Int("max_depth").Default(8).Min(1).Doc("longest path in segments (Mitsuba's convention)"),
+    return {Parameter::Int("max_depth").Default(8).Range(1, kMaxDepth).Doc("longest path in segments (Mitsuba's convention)"),
             Parameter::Int("rr_depth").Default(5).Min(1).Doc(
                 "subpath length in segments from which Russian roulette may end a subpath")};
   }
 
   explicit Bdpt(const Properties& props)
       : max_depth_(int(props.Int("max_depth", 8))), rr_depth_(int(props.Int("rr_depth", 5))) {
-    if (max_depth_ < 1)
-      throw Error("property 'max_depth' must be >= 1: bidirectional weights need a finite depth");
+    if (max_depth_ < 1 || max_depth_ > kMaxDepth)
+      throw Error("property 'max_depth' must be 1 to " + std::to_string(kMaxDepth) +
+                  ": bidirectional weights need a finite depth");
     if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
   }
 
@@ -203,7 +237,29 @@ class Bdpt final : public Transport {
     null_boundaries_ = HasNullBoundaries(scene);
   }
 
+  // Every point of a batch keeps both its subpaths to the end (Subpaths):
+  // a batch whose subpaths would take more than kSubpathBytes is evaluated
+  // in runs of points that fit.
   void Evaluate(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) override {
+    out.splats = true;
+    const size_t n = points.Count();
+    const size_t per_point = (2 * size_t(max_depth_) + 1) * sizeof(Vertex);
+    const size_t run = std::max<size_t>(1, kSubpathBytes / per_point);
+    if (n <= run) return EvaluateRun(scene, points, out);
+    FilmSamples part;
+    for (size_t first = 0; first < n; first += run) {
+      part.Clear();
+      EvaluateRun(scene, PointRun(points, first, std::min(run, n - first)), part);
+      for (size_t k = 0; k < part.Count(); ++k)
+        out.Add(part.point[k] + uint32_t(first), part.xy[2 * k], part.xy[2 * k + 1], part.rgb[k]);
+    }
+  }
+
+ private:
+  static constexpr int kMaxDepth = 4096;
+  static constexpr size_t kSubpathBytes = size_t(32) << 20;
+
+  void EvaluateRun(const SceneView& scene, const PrimarySamples& points, FilmSamples& out) const {
     out.splats = true;
     const size_t n = points.Count();
     const float w = float(scene.FilmWidth()), h = float(scene.FilmHeight());
@@ -219,13 +275,12 @@ class Bdpt final : public Transport {
       raster[2 * i] = fx * w;
       raster[2 * i + 1] = fy * h;
       const Ray ray = scene.CameraRay(fx, fy, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1), time[i]);
-      Vertex& c = camera.at(i, 0);
+      Vertex& c = camera.Append(i);
       c.kind = Vertex::Kind::kCamera;
       c.p = ray.origin;
       c.n = ray.direction;  // only its role as "not a surface" matters
       c.beta = Vec3(1, 1, 1);
       c.medium = scene.CameraMedium();
-      camera.count[i] = 1;
       Walker& walker = walkers[i];
       walker.ray = ray;
       walker.pdf_dir = scene.CameraDirectionPdf(ray.direction);
@@ -250,7 +305,7 @@ class Bdpt final : public Transport {
       for (uint32_t i = 0; i < n; ++i) {
         const LightStart& s = starts[i];
         if (!s.light.emitter || !(s.light.pdf > 0)) continue;
-        Vertex& l = light.at(i, 0);
+        Vertex& l = light.Append(i);
         l.kind = Vertex::Kind::kLight;
         l.delta_position = s.light.delta_position || s.light.delta_direction;
         l.infinite = s.light.infinite;
@@ -262,7 +317,6 @@ class Bdpt final : public Transport {
         l.medium = media[i];
         l.site = SurfaceSite::Uv(s.light.u, s.light.v);
         l.emitter = s.light.emitter;
-        light.count[i] = 1;
         if (!s.Valid()) continue;
         Walker& walker = walkers[i];
         walker = Walker{};
@@ -291,7 +345,6 @@ class Bdpt final : public Transport {
     Connect(scene, points, camera, light, raster, time, hero, seed, out);
   }
 
- private:
   // The medium each light path starts in: the one its point lies in, seen
   // from the camera (an emitting boundary's side is the vertex's to choose).
   static std::vector<uint32_t> StartMedia(const SceneView& scene, const std::vector<LightStart>& starts,
@@ -343,8 +396,7 @@ class Bdpt final : public Transport {
           // A camera path that leaves the scene ends at the environment.
           if (mode == TransportMode::kRadiance && scene.HasEnvironment()) {
             const Vec3 from = paths.at(i, paths.count[i] - 1).p;
-            Vertex& v = paths.at(i, paths.count[i]++);
-            v = Vertex{};
+            Vertex& v = paths.Append(i);
             v.kind = Vertex::Kind::kLight;
             v.infinite = true;
             v.n = -rays[k].direction;
@@ -365,8 +417,7 @@ class Bdpt final : public Transport {
           continue;
         }
         Vertex& prev = paths.at(i, paths.count[i] - 1);
-        Vertex& v = paths.at(i, paths.count[i]++);
-        v = Vertex{};
+        Vertex& v = paths.Append(i);
         const ShadingPoint at(scene, hits[k], rays[k]);
         v.p = at.position;
         v.n = hits[k].normal;
@@ -436,8 +487,7 @@ class Bdpt final : public Transport {
     for (const auto& [i, position] : scattered) {
       Walker& walker = walkers[i];
       Vertex& prev = paths.at(i, paths.count[i] - 1);
-      Vertex& v = paths.at(i, paths.count[i]++);
-      v = Vertex{};
+      Vertex& v = paths.Append(i);
       v.kind = Vertex::Kind::kMedium;
       v.p = position;
       v.wi = -walker.ray.direction;
