@@ -14,7 +14,9 @@
 // Both subpaths advance as wavefronts, and every connection of a batch is
 // evaluated together: each SurfaceModel and Emitter is called once per
 // bounce per subpath direction and once per connection round, never per
-// sample. The light subpath's vertex 0 serves the s = 1 strategies.
+// sample (a batch whose subpaths would outgrow kSubpathBytes, at a deep
+// max_depth, goes in runs of points). The light subpath's vertex 0 serves
+// the s = 1 strategies.
 //
 // In media (pbrt-v4's BDPTIntegrator), both subpaths are walked by delta
 // tracking with one hero channel per sample, and a collision that scatters
@@ -48,8 +50,8 @@
 #include <algorithm>
 #include <bit>
 #include <memory>
-#include <type_traits>
 #include <optional>
+#include <type_traits>
 #include <vector>
 
 #include "medium_transport.h"
@@ -217,7 +219,8 @@ float DiskPdf(const SceneView& scene) {
 class Bdpt final : public Transport {
  public:
   static ParameterSchema Parameters() {
-    return {Parameter::Int("max_depth").Default(8).Range(1, kMaxDepth).Doc("longest path in segments (Mitsuba's convention)"),
+    return {Parameter::Int("max_depth").Default(8).Range(1, kMaxDepth).Doc(
+                "longest path in segments (Mitsuba's convention)"),
             Parameter::Int("rr_depth").Default(5).Min(1).Doc(
                 "subpath length in segments from which Russian roulette may end a subpath")};
   }
