@@ -567,7 +567,7 @@ def test_run_ends_a_task_that_loses_its_first_cancels() -> None:
 def test_run_returns_after_its_timeout_past_a_task_that_ignores_every_cancel(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    async def stubborn() -> None:
+    async def deaf_to_cancels() -> None:
         while True:
             try:
                 await asyncio.sleep(60)
@@ -577,14 +577,14 @@ def test_run_returns_after_its_timeout_past_a_task_that_ignores_every_cancel(
     left: list[asyncio.Task[None]] = []
 
     async def main() -> int:
-        left.append(asyncio.create_task(stubborn(), name="stubborn"))
+        left.append(asyncio.create_task(deaf_to_cancels(), name="deaf to cancels"))
         await asyncio.sleep(0)
         return 7
 
     began = time.monotonic()
     assert run(main(), timeout=0.5) == 7
     assert time.monotonic() - began < 5.0
-    assert "stubborn" in caplog.text
+    assert "deaf to cancels" in caplog.text
 
 
 @pytest.mark.parametrize("after", [0.0, 0.5, 1.5], ids=["at once", "0.5 s", "1.5 s"])
