@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include "importers/matrix.h"
+
 namespace yarf::importers {
 namespace {
 
@@ -16,7 +18,90 @@ void Add(google::protobuf::RepeatedField<T>* out, std::initializer_list<T> value
   for (T value : values) out->Add(value);
 }
 
+// A bilinear patch's corners in pbrt's order p00, p10, p01, p11, and its
+// point and tangents at (u, v).
+struct Patch {
+  std::array<Vec3d, 4> p;
+
+  static Vec3d Lerp(const std::array<Vec3d, 4>& c, double u, double v) {
+    return c[0] * ((1 - u) * (1 - v)) + c[1] * (u * (1 - v)) + c[2] * ((1 - u) * v) + c[3] * (u * v);
+  }
+  Vec3d At(double u, double v) const { return Lerp(p, u, v); }
+  Vec3d Normal(double u, double v) const {
+    const Vec3d dpdu = (p[1] - p[0]) * (1 - v) + (p[3] - p[2]) * v;
+    const Vec3d dpdv = (p[2] - p[0]) * (1 - u) + (p[3] - p[1]) * u;
+    return Cross(dpdu, dpdv);
+  }
+  // How far p11 lies off the plane the other three corners span, or the
+  // diagonals' when those three are in a line; 0 when flat.
+  double Twist() const {
+    const Vec3d twist = p[0] - p[1] - p[2] + p[3];
+    std::optional<Vec3d> n = Normalized(Cross(p[1] - p[0], p[2] - p[0]));
+    if (!n) n = Normalized(Cross(p[3] - p[0], p[2] - p[1]));
+    return n ? std::abs(Dot(twist, *n)) : 0.0;
+  }
+  // Cells per side: a cell's facets are off the surface by at most
+  // twist / (4 n²).
+  int Cells(int most) const {
+    const double size = std::max(Length(p[3] - p[0]), Length(p[2] - p[1]));
+    const double twist = Twist();
+    if (!(twist > kBilinearTolerance * size)) return 1;
+    const double cells = std::ceil(std::sqrt(twist / (4 * kBilinearTolerance * size)));
+    return int(std::clamp(cells, 1.0, double(most)));
+  }
+};
+
 }  // namespace
+
+TriangleArrays BilinearPatches(const std::vector<double>& positions, const std::vector<uint32_t>& indices,
+                               const std::vector<double>& normals, const std::vector<double>& uvs) {
+  const size_t patches = indices.size() / 4;
+  auto corners = [&](const std::vector<double>& values, size_t width, size_t k) {
+    std::array<Vec3d, 4> c;
+    for (size_t i = 0; i < 4; ++i) {
+      const double* v = &values[width * indices[4 * k + i]];
+      c[i] = {v[0], v[1], width == 3 ? v[2] : 0.0};
+    }
+    return c;
+  };
+  // The finest grid the triangle budget allows every patch.
+  const double budget = double(kBilinearTriangles) / (2.0 * double(std::max<size_t>(patches, 1)));
+  const int most = int(std::clamp(std::floor(std::sqrt(budget)), 1.0, double(kBilinearCells)));
+  std::vector<int> cells(patches);
+  bool twisted = false;
+  for (size_t k = 0; k < patches; ++k) {
+    cells[k] = Patch{corners(positions, 3, k)}.Cells(most);
+    twisted = twisted || cells[k] > 1;
+  }
+  const bool surface_normals = normals.empty() && twisted;
+  TriangleArrays out;
+  for (size_t k = 0; k < patches; ++k) {
+    const Patch patch{corners(positions, 3, k)};
+    const std::array<Vec3d, 4> uv =
+        uvs.empty() ? std::array<Vec3d, 4>{Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{1, 1, 0}}
+                    : corners(uvs, 2, k);
+    const int n = cells[k];
+    const uint32_t first = uint32_t(out.positions.size() / 3);
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const double u = double(i) / n, v = double(j) / n;
+        const Vec3d p = patch.At(u, v), t = Patch::Lerp(uv, u, v);
+        out.positions.insert(out.positions.end(), {p.x, p.y, p.z});
+        out.uvs.insert(out.uvs.end(), {t.x, t.y});
+        if (surface_normals || !normals.empty()) {
+          const Vec3d m = surface_normals ? patch.Normal(u, v) : Patch::Lerp(corners(normals, 3, k), u, v);
+          out.normals.insert(out.normals.end(), {m.x, m.y, m.z});
+        }
+      }
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const uint32_t a = first + uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
+        out.indices.insert(out.indices.end(), {a, b, d, a, d, c});
+      }
+    out.face_triangles.push_back(uint32_t(2 * n * n));
+  }
+  return out;
+}
 
 v1::Mesh InlineMesh(const std::vector<float>& positions, const std::vector<uint32_t>& indices) {
   v1::Mesh mesh;

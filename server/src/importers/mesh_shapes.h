@@ -38,6 +38,36 @@ v1::Mesh DiskMesh(DiskUv uv);
 // normals pointing outward. Tessellated: yarf has no cylinder primitive.
 v1::Mesh CylinderMesh(double phi_max_degrees);
 
+// A triangle mesh as plain arrays: xyz triples, index triples, and
+// per-vertex normals (xyz) and uv (pairs), each empty or one per vertex.
+struct TriangleArrays {
+  std::vector<double> positions, normals, uvs;
+  std::vector<uint32_t> indices;
+  // How many triangles, in order, make each face of the shape it stands
+  // for (a bilinear patch); empty when each triangle is a face.
+  std::vector<uint32_t> face_triangles;
+};
+
+// Whether bilinear patches may be cut into cells: a twisted patch is cut
+// into n × n cells, n the least whose facets lie within kBilinearTolerance
+// of the patch's diagonal off its surface (at most kBilinearCells), fewer
+// when the mesh would pass kBilinearTriangles triangles.
+constexpr double kBilinearTolerance = 1e-3;
+constexpr int kBilinearCells = 16;
+constexpr size_t kBilinearTriangles = size_t(1) << 22;
+
+// pbrt-v4's bilinear patches as triangles. Patch k has the corners p00,
+// p10, p01, p11 at indices[4k..4k+3] and is the surface (1−u)(1−v)p00 +
+// u(1−v)p10 + (1−u)v p01 + uv p11: a flat patch (four corners in one
+// plane) becomes two triangles, a twisted one a grid of cells, wound as
+// ∂p/∂u × ∂p/∂v as pbrt orients the patch. Normals and uv (either empty,
+// or one per vertex of `positions`) are interpolated bilinearly as pbrt
+// does; uv default to the patch's (u, v). A mesh without normals that has
+// a twisted patch gets the surface's own normal at each grid point (pbrt
+// shades the patch with it), so the facets do not show.
+TriangleArrays BilinearPatches(const std::vector<double>& positions, const std::vector<uint32_t>& indices,
+                               const std::vector<double>& normals, const std::vector<double>& uvs);
+
 // An inline mesh from xyz triples and index triples.
 v1::Mesh InlineMesh(const std::vector<float>& positions, const std::vector<uint32_t>& indices);
 

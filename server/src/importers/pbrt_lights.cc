@@ -59,8 +59,8 @@ void PbrtImporter::AreaLightSource(const std::string& type, PbrtParams& params, 
 // pbrt-v4's DiffuseAreaLight::Create: with `power` Φ the radiance is
 // multiplied by Φ / (π · (two-sided ? 2 : 1) · A), A the area of the pbrt
 // shape the light is made for. pbrt-v4 makes one light per shape, and a
-// triangle mesh is a shape per triangle: each triangle emits Φ, its
-// radiance set by its own area. L has been made unit luminance already
+// triangle mesh is a shape per triangle (a bilinear mesh one per patch):
+// each triangle emits Φ, its radiance set by its own area. L has been made unit luminance already
 // (RGB values stay as given), as pbrt-v4 divides by its luminance first.
 Rgb PbrtImporter::AreaLightRadiance(const std::vector<double>& areas, const std::string& shape) {
   const AreaLight& light = *state_.area_light;
@@ -75,9 +75,9 @@ Rgb PbrtImporter::AreaLightRadiance(const std::vector<double>& areas, const std:
   area /= double(areas.size());
   if (*most - *least > 1e-4 * *most)
     Warn(light.power_where, "light-power-mesh",
-         "area light power: pbrt-v4 gives each triangle of " + shape +
+         "area light power: pbrt-v4 gives each triangle (or patch) of " + shape +
              " the power, a radiance for its own area; yarf gives one radiance to the shape: that of the mean "
-             "triangle area");
+             "triangle (or patch) area");
   if (!(area > 0)) {
     Warn(light.power_where, "light-power-area", "area light power on " + shape + " of zero area: no emission");
     return {0, 0, 0};

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "importers/importer_test_support.h"
+#include "importers/mesh_shapes.h"
 
 namespace yarf::importers {
 namespace {
@@ -368,6 +369,7 @@ TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {
       {"malformed/absurd.pbrt", "absurd.pbrt:1: film resolution 1000000000x1000000000 is out of range"},
       {"malformed/cycle.pbrt", "cycle.pbrt:1: include cycle"},
       {"malformed/bad_indices.pbrt", "bad_indices.pbrt:2: shape 'trianglemesh': index 7 is not a vertex"},
+      {"malformed/bad_patches.pbrt", "bad_patches.pbrt:2: shape 'bilinearmesh': indices needs four per patch"},
       {"malformed/unbalanced.pbrt", "unbalanced.pbrt:2: AttributeEnd without AttributeBegin"},
       {"malformed/huge_integer.pbrt", "huge_integer.pbrt:1: parameter 'xresolution' needs an integer"},
   };
@@ -414,6 +416,104 @@ namespace {
 using testing::IntProperty;
 using testing::FloatProperty;
 using testing::Warns;
+
+// A mesh's vertex i, and the triangles it makes (index triples).
+Vec3d Vertex(const v1::Mesh& mesh, int i) {
+  return {mesh.positions(3 * i), mesh.positions(3 * i + 1), mesh.positions(3 * i + 2)};
+}
+Vec3d NormalOf(const v1::Mesh& mesh, int i) {
+  return {mesh.normals(3 * i), mesh.normals(3 * i + 1), mesh.normals(3 * i + 2)};
+}
+std::vector<std::array<Vec3d, 3>> Triangles(const v1::Mesh& mesh) {
+  std::vector<std::array<Vec3d, 3>> out;
+  for (int t = 0; t + 2 < mesh.indices_size(); t += 3)
+    out.push_back({Vertex(mesh, int(mesh.indices(t))), Vertex(mesh, int(mesh.indices(t + 1))),
+                   Vertex(mesh, int(mesh.indices(t + 2)))});
+  return out;
+}
+
+TEST(PbrtImport, AFlatBilinearPatchIsTwoTrianglesWoundAsPbrtOrientsIt) {
+  // p00 p10 p01 p11 of a 2 × 1 rectangle: ∂p/∂u × ∂p/∂v is +z.
+  const ImportResult result =
+      ImportPbrt("WorldBegin\nShape \"bilinearmesh\" \"point3 P\" [0 0 0  2 0 0  0 1 0  2 1 0]\n", "patch.pbrt");
+  ASSERT_EQ(result.scene.shapes_size(), 1);
+  const v1::Mesh& mesh = result.scene.shapes(0).mesh();
+  EXPECT_EQ(mesh.normals_size(), 0);  // flat: the facets are the surface
+  double area = 0;
+  for (const auto& [a, b, c] : Triangles(mesh)) {
+    const Vec3d winding = Cross(b - a, c - a);
+    EXPECT_GT(winding.z, 0);
+    area += Length(winding) / 2;
+  }
+  EXPECT_EQ(mesh.indices_size(), 6);
+  EXPECT_NEAR(area, 2, 1e-9);
+  // Without uv each corner has the patch's own (u, v).
+  ASSERT_EQ(mesh.uvs_size(), 2 * mesh.positions_size() / 3);
+  for (int i = 0; i < mesh.positions_size() / 3; ++i) {
+    const Vec3d p = Vertex(mesh, i);
+    EXPECT_NEAR(mesh.uvs(2 * i), p.x / 2, 1e-6);
+    EXPECT_NEAR(mesh.uvs(2 * i + 1), p.y, 1e-6);
+  }
+}
+
+TEST(PbrtImport, ATwistedBilinearPatchIsCutIntoFacetsOnItsSurfaceWithItsNormals) {
+  // The patch z = x·y over the unit square, with uv given (mirrored in u).
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\nShape \"bilinearmesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0  1 1 1]"
+      " \"point2 uv\" [1 0  0 0  1 1  0 1]\n",
+      "twisted.pbrt");
+  const v1::Mesh& mesh = result.scene.shapes(0).mesh();
+  const int vertices = mesh.positions_size() / 3;
+  ASSERT_EQ(mesh.normals_size(), mesh.positions_size());
+  ASSERT_EQ(mesh.uvs_size(), 2 * vertices);
+  for (int i = 0; i < vertices; ++i) {
+    const Vec3d p = Vertex(mesh, i);
+    EXPECT_NEAR(p.z, p.x * p.y, 1e-6);
+    EXPECT_NEAR(mesh.uvs(2 * i), 1 - p.x, 1e-6);
+    EXPECT_NEAR(mesh.uvs(2 * i + 1), p.y, 1e-6);
+    // ∂p/∂u × ∂p/∂v = (1, 0, y) × (0, 1, x) = (−y, −x, 1).
+    const Vec3d n = NormalOf(mesh, i);
+    ExpectNear(n * (1 / Length(n)), Vec3d{-p.y, -p.x, 1} * (1 / std::sqrt(1 + p.x * p.x + p.y * p.y)), 1e-6);
+  }
+  // Every facet lies within the tolerance of the surface, is wound as its
+  // normals point, and the facets' area is the surface's,
+  // ∫∫ √(1 + x² + y²) dx dy over the unit square.
+  double area = 0, off = 0;
+  for (const auto& [a, b, c] : Triangles(mesh)) {
+    const Vec3d centroid = (a + b + c) * (1.0 / 3);
+    off = std::max(off, std::abs(centroid.z - centroid.x * centroid.y));
+    const Vec3d winding = Cross(b - a, c - a);
+    EXPECT_GT(Dot(winding, Vec3d{-centroid.y, -centroid.x, 1}), 0);
+    area += Length(winding) / 2;
+  }
+  double exact = 0;
+  constexpr int kSteps = 1000;
+  for (int i = 0; i < kSteps; ++i)
+    for (int j = 0; j < kSteps; ++j) {
+      const double x = (i + 0.5) / kSteps, y = (j + 0.5) / kSteps;
+      exact += std::sqrt(1 + x * x + y * y) / (kSteps * kSteps);
+    }
+  EXPECT_GT(mesh.indices_size(), 6);
+  EXPECT_LE(off, kBilinearTolerance * std::sqrt(3.0));
+  EXPECT_NEAR(area, exact, 1e-3 * exact);
+}
+
+TEST(PbrtImport, AnAreaLightOnBilinearPatchesEmitsItsPowerOverTheirArea) {
+  // Two unit-square patches sharing an edge, 2 W of power: pbrt-v4 makes a
+  // light of each patch, L = Φ / (π A) for A = 1 (each triangle's area, ½,
+  // would double it).
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"float power\" 2\n"
+      "Shape \"bilinearmesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0  1 1 0  2 0 0  2 1 0]"
+      " \"integer indices\" [0 1 2 3  1 4 3 5] \"string emissionfilename\" \"unused.exr\"\n",
+      "lit_patches.pbrt");
+  const v1::SceneShape& shape = result.scene.shapes(0);
+  EXPECT_EQ(shape.mesh().indices_size(), 12);
+  ASSERT_TRUE(shape.has_emitter());
+  const Vec3d radiance = RgbProperty(shape.emitter().properties(), "radiance");
+  EXPECT_NEAR(Luminance(radiance), 2 / M_PI, 1e-6);
+  EXPECT_FALSE(Warns(result, "emissionfilename"));
+}
 
 ImportResult PbrtWithIntegrator(const std::string& integrator) {
   return ImportPbrt("Integrator " + integrator + "\nWorldBegin\nShape \"sphere\"\n", "integrator.pbrt");

@@ -42,14 +42,19 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
   // light's power: a triangle mesh's triangles after the CTM, the
   // quadrics' as pbrt-v4 gives them (in object space, partial as given).
   std::vector<double> light_areas;
-  if (type == "trianglemesh") {
+  if (type == "trianglemesh" || type == "bilinearmesh") {
+    // A bilinear patch has four corners where a triangle has three.
+    const bool patches = type == "bilinearmesh";
+    const size_t corners = patches ? 4 : 3;
     const std::vector<double> p = params.Numbers("P", {"point3"});
     std::vector<double> raw = params.Numbers("indices", {"integer"});
     const std::vector<double> n = params.Numbers("N", {"normal3"});
     if (p.empty() || p.size() % 3 != 0) Fail(params.WhereIs("P", where), what + ": P needs xyz triples");
     const size_t vertices = p.size() / 3;
-    if (raw.empty() && vertices == 3) raw = {0, 1, 2};
-    if (raw.empty() || raw.size() % 3 != 0) Fail(params.WhereIs("indices", where), what + ": indices needs triples");
+    if (raw.empty() && vertices == corners) raw = patches ? std::vector<double>{0, 1, 2, 3} : std::vector<double>{0, 1, 2};
+    if (raw.empty() || raw.size() % corners != 0)
+      Fail(params.WhereIs("indices", where),
+           what + (patches ? ": indices needs four per patch" : ": indices needs triples"));
     std::vector<uint32_t> indices;
     indices.reserve(raw.size());
     for (double i : raw) {
@@ -58,28 +63,43 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
              what + ": index " + std::to_string(int64_t(std::clamp(i, -9e18, 9e18))) + " is not a vertex of P");
       indices.push_back(uint32_t(i));
     }
-    if (!n.empty()) {
-      if (n.size() != p.size()) Fail(params.WhereIs("N", where), what + ": N needs one normal per vertex");
-      OrientByNormals(p, n, indices);
-    }
+    if (!n.empty() && n.size() != p.size()) Fail(params.WhereIs("N", where), what + ": N needs one normal per vertex");
     std::vector<double> uv = params.Numbers("uv", {"point2", "float"});
     if (uv.empty()) uv = params.Numbers("st", {"point2", "float"});
     if (!uv.empty() && uv.size() != 2 * vertices)
       Fail(params.WhereIs(params.Has("uv") ? "uv" : "st", where), what + ": uv needs one (u, v) per vertex");
-    std::vector<float> positions(p.begin(), p.end());
+    TriangleArrays mesh_arrays =
+        patches ? BilinearPatches(p, indices, n, uv) : TriangleArrays{p, n, uv, std::move(indices)};
+    if (!mesh_arrays.normals.empty()) OrientByNormals(mesh_arrays.positions, mesh_arrays.normals, mesh_arrays.indices);
     if (state_.area_light) {
-      auto point = [&](uint32_t i) { return to_world.Point({p[3 * i], p[3 * i + 1], p[3 * i + 2]}); };
-      for (size_t t = 0; t + 2 < indices.size(); t += 3)
-        light_areas.push_back(TriangleArea(point(indices[t]), point(indices[t + 1]), point(indices[t + 2])));
+      // pbrt-v4 makes a light of each triangle, and of each patch.
+      const std::vector<double>& q = mesh_arrays.positions;
+      const std::vector<uint32_t>& t = mesh_arrays.indices;
+      auto point = [&](uint32_t i) { return to_world.Point({q[3 * i], q[3 * i + 1], q[3 * i + 2]}); };
+      auto area = [&](size_t k) { return TriangleArea(point(t[3 * k]), point(t[3 * k + 1]), point(t[3 * k + 2])); };
+      const size_t triangles = t.size() / 3;
+      if (mesh_arrays.face_triangles.empty()) {
+        for (size_t k = 0; k < triangles; ++k) light_areas.push_back(area(k));
+      } else {
+        size_t k = 0;
+        for (const uint32_t count : mesh_arrays.face_triangles) {
+          double face = 0;
+          for (const size_t end = k + count; k < end; ++k) face += area(k);
+          light_areas.push_back(face);
+        }
+      }
     }
-    v1::Mesh& mesh = *shape.mutable_mesh() = InlineMesh(positions, indices);
-    mesh.mutable_normals()->Add(n.begin(), n.end());
-    mesh.mutable_uvs()->Add(uv.begin(), uv.end());
+    const std::vector<float> positions(mesh_arrays.positions.begin(), mesh_arrays.positions.end());
+    v1::Mesh& mesh = *shape.mutable_mesh() = InlineMesh(positions, mesh_arrays.indices);
+    mesh.mutable_normals()->Add(mesh_arrays.normals.begin(), mesh_arrays.normals.end());
+    mesh.mutable_uvs()->Add(mesh_arrays.uvs.begin(), mesh_arrays.uvs.end());
     if (params.Has("S")) {
       params.Find("S");
       Warn(params.WhereIs("S", where), "trianglemesh-S", "per-vertex tangents (S) are not supported: ignored");
     }
-    params.Accept({"faceIndices"});
+    // pbrt-v4 samples a bilinear mesh's area light by its emission image:
+    // a way of sampling, the light it gives is the same.
+    params.Accept({"faceIndices", "emissionfilename"});
   } else if (type == "plymesh") {
     const std::string name = params.String("filename", "");
     const auto file = folder_.Resolve(name, origin_.file, params.WhereIs("filename", where));
@@ -133,8 +153,8 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     Warn(where, "cylinder",
          "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads per turn");
   } else {
-    static const std::vector<std::string> kKnown = {"trianglemesh", "plymesh", "sphere", "disk", "cylinder",
-                                                    "bilinearmesh", "loopsubdiv", "curve"};
+    static const std::vector<std::string> kKnown = {"trianglemesh", "bilinearmesh", "plymesh", "sphere", "disk",
+                                                    "cylinder", "loopsubdiv", "curve"};
     Warn(where, "shape:" + type, "shape '" + type + "' is not supported: ignored" + DidYouMean(type, kKnown));
     return;
   }
