@@ -95,6 +95,23 @@ class AdaptiveMap {
   }
   uint32_t dimensions() const { return dims_; }
 
+  // A bin no point fell in (points are uniform in y, so a bin gets none
+  // by chance when there are few per bin) has its neighbours' average
+  // rather than 0: scored 0 it would shrink for nothing, and bend the map
+  // of a constant integrand.
+  static constexpr double kUnseen = -1;
+  static void FillUnseenBins(std::vector<double>& d) {
+    const size_t n = d.size();
+    std::vector<double> left(n, kUnseen), right(n, kUnseen);
+    for (size_t i = 1; i < n; ++i) left[i] = d[i - 1] != kUnseen ? d[i - 1] : left[i - 1];
+    for (size_t i = n - 1; i-- > 0;) right[i] = d[i + 1] != kUnseen ? d[i + 1] : right[i + 1];
+    for (size_t i = 0; i < n; ++i) {
+      if (d[i] != kUnseen) continue;
+      const bool l = left[i] != kUnseen, r = right[i] != kUnseen;
+      d[i] = l && r ? (left[i] + right[i]) / 2 : l ? left[i] : r ? right[i] : 0;
+    }
+  }
+
   // Moves the edges of every axis so that each bin holds an equal share of
   // the smoothed, damped weights, then starts collecting afresh.
   void Refine(double alpha) {
@@ -102,8 +119,9 @@ class AdaptiveMap {
     for (uint32_t j = 0; j < dims_; ++j) {
       for (uint32_t i = 0; i < bins_; ++i) {
         const size_t b = size_t(j) * bins_ + i;
-        d[i] = mass_[b] > 0 ? sums_[b] / mass_[b] : 0;
+        d[i] = mass_[b] > 0 ? sums_[b] / mass_[b] : kUnseen;
       }
+      FillUnseenBins(d);
       smooth[0] = (7 * d[0] + d[1]) / 8;
       smooth[bins_ - 1] = (d[bins_ - 2] + 7 * d[bins_ - 1]) / 8;
       for (uint32_t i = 1; i + 1 < bins_; ++i) smooth[i] = (d[i - 1] + 6 * d[i] + d[i + 1]) / 8;
@@ -183,35 +201,50 @@ inline double GammaQ(double a, double x) {
 inline double ChiSquareQ(double chi2, double dof) { return GammaQ(dof / 2, chi2 / 2); }
 
 // Iteration estimates of one output, combined by inverse variances.
+//
+// An iteration whose points agreed within every hypercube has a sample
+// variance of 0: it measured nothing of its own precision (a step whose
+// pairs of points each fell on one side, a small peak missed), and weighed
+// by 1/0 it would be the answer, thousands of its σ off. It takes the
+// mean weight of the iterations that did measure a spread, as GSL's VEGAS
+// does; when none did, all weigh the same and the error is their spread
+// about the mean (0 for a constant integrand).
 class Combination {
  public:
   void Add(double estimate, double variance) {
-    // An iteration without spread (a constant integrand) is exact up to
-    // rounding: it gets a weight that dominates the others but stays
-    // finite, and no error below what summing in double precision keeps.
-    const double floor = std::max(1e-24 * estimate * estimate, std::numeric_limits<double>::min());
     estimates_.push_back(estimate);
-    weights_.push_back(1 / std::max(variance, floor));
+    variances_.push_back(variance);
   }
   double Estimate() const {
+    const std::vector<double> w = Weights();
     double sum = 0, weighted = 0;
     for (size_t t = 0; t < estimates_.size(); ++t) {
-      sum += weights_[t];
-      weighted += weights_[t] * estimates_[t];
+      sum += w[t];
+      weighted += w[t] * estimates_[t];
     }
     return weighted / sum;
   }
   double Error() const {
+    if (!Measured()) {
+      // The standard error of the mean of the iterations' estimates.
+      const double n = double(estimates_.size()), mean = Estimate();
+      if (n < 2) return 0;
+      double squares = 0;
+      for (double e : estimates_) squares += (e - mean) * (e - mean);
+      return std::sqrt(squares / (n - 1) / n);
+    }
     double sum = 0;
-    for (double w : weights_) sum += w;
+    for (double w : Weights()) sum += w;
     return 1 / std::sqrt(sum);
   }
-  // Σ_t (I_t - I)² / σ_t² over the iterations, about their weighted mean.
+  // Σ_t (I_t - I)² / σ_t² over the iterations, about their weighted mean;
+  // 0 when no iteration measured a spread.
   double ChiSquare() const {
+    if (!Measured()) return 0;
+    const std::vector<double> w = Weights();
     const double mean = Estimate();
     double chi2 = 0;
-    for (size_t t = 0; t < estimates_.size(); ++t)
-      chi2 += (estimates_[t] - mean) * (estimates_[t] - mean) * weights_[t];
+    for (size_t t = 0; t < estimates_.size(); ++t) chi2 += (estimates_[t] - mean) * (estimates_[t] - mean) * w[t];
     return chi2;
   }
   double DegreesOfFreedom() const { return double(estimates_.size()) - 1; }
@@ -228,7 +261,36 @@ class Combination {
   }
 
  private:
-  std::vector<double> estimates_, weights_;
+  // Whether iteration t measured a spread: beyond what rounding leaves
+  // of a constant integrand's.
+  bool Spread(size_t t) const {
+    const double variance = variances_[t];
+    return variance > 1e-24 * estimates_[t] * estimates_[t] && std::isfinite(1 / variance);
+  }
+  bool Measured() const {
+    for (size_t t = 0; t < variances_.size(); ++t)
+      if (Spread(t)) return true;
+    return false;
+  }
+  // 1/σ_t², the mean of those for an iteration without spread; all 1 when
+  // no iteration has one.
+  std::vector<double> Weights() const {
+    std::vector<double> w(variances_.size(), 1.0);
+    double sum = 0;
+    size_t measured = 0;
+    for (size_t t = 0; t < w.size(); ++t)
+      if (Spread(t)) {
+        w[t] = 1 / variances_[t];
+        sum += w[t];
+        ++measured;
+      }
+    if (measured > 0)
+      for (size_t t = 0; t < w.size(); ++t)
+        if (!Spread(t)) w[t] = sum / double(measured);
+    return w;
+  }
+
+  std::vector<double> estimates_, variances_;
 };
 
 // The result of the iterations kept, every output of f combined apart.

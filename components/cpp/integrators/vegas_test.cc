@@ -154,6 +154,69 @@ TEST_F(VegasTest, ReportedErrorIsCalibratedOnEveryIntegrandFamily) {
   }
 }
 
+// 1 where every coordinate lies in [a, a + side), else 0: a step, or a
+// small box the first points may miss altogether.
+class BoxIndicator final : public Function {
+ public:
+  BoxIndicator(uint32_t d, double a, double side) : d_(d), a_(a), side_(side) {}
+  uint32_t InputDimensions() const override { return d_; }
+  uint32_t OutputDimensions() const override { return 1; }
+  void Evaluate(std::span<const float> points, std::span<float> values) override {
+    for (size_t i = 0; i < values.size(); ++i) {
+      bool inside = true;
+      for (uint32_t j = 0; j < d_; ++j) inside = inside && points[i * d_ + j] >= a_ && points[i * d_ + j] < a_ + side_;
+      values[i] = inside ? 1.0f : 0.0f;
+    }
+  }
+  double Exact() const { return std::pow(side_, d_); }
+
+ private:
+  uint32_t d_;
+  double a_, side_;
+};
+
+TEST_F(VegasTest, AnIterationWhosePointsAllAgreeDoesNotDecideTheResult) {
+  // On a step, each hypercube's pair of points mostly agree: an iteration
+  // may measure no spread at all, which says nothing of its error. Weighed
+  // by 1/0 (a floor) it was the answer, with an error of 10⁻¹³ and 10⁹ of
+  // it off. Now no error is that small, and each result is within a few σ
+  // or says by χ² that its iterations disagree, unless it saw nothing of
+  // the box (0 ± 0, as any sampler that misses it).
+  for (const char* name : kVegasFamily) {
+    for (const BoxIndicator& shape : {BoxIndicator(1, 0.5, 0.5), BoxIndicator(2, 0.3, 0.01)}) {
+      BoxIndicator f = shape;
+      for (uint64_t seed = 0; seed < 40; ++seed) {
+        const uint64_t evaluations = seed % 2 ? 10000 : 100000;
+        const IntegrationResult r = Make(name)->Integrate(f, Zeros(f.InputDimensions()), Ones(f.InputDimensions()),
+                                                          evaluations, seed, *sampler_);
+        const double estimate = r.estimate[0], error = r.standard_error[0];
+        const bool within = std::abs(estimate - f.Exact()) <= 8 * error;
+        const bool flagged = r.chi2_per_dof[0] > 3;
+        const bool unseen = estimate == 0 && error == 0;
+        const bool plausible = error > 1e-9 * f.Exact();
+        EXPECT_TRUE((within || flagged) && plausible || unseen) << name << ", " << f.InputDimensions() << "-D box, " << evaluations << " points, seed " << seed
+                                                 << ": " << estimate << " ± " << error << " against " << f.Exact()
+                                                 << ", chi2/dof " << r.chi2_per_dof[0];
+      }
+    }
+  }
+}
+
+TEST(VegasCombination, AnIterationWithoutSpreadTakesTheOthersMeanWeight) {
+  Combination c;
+  c.Add(1.0, 0.01);
+  c.Add(0.5, 0.0);
+  EXPECT_DOUBLE_EQ(c.Estimate(), 0.75);
+  EXPECT_DOUBLE_EQ(c.Error(), 1 / std::sqrt(200.0));
+  // None with a spread: equal weights, the error their spread about the mean.
+  Combination none;
+  none.Add(1.0, 0.0);
+  none.Add(3.0, 0.0);
+  EXPECT_DOUBLE_EQ(none.Estimate(), 2.0);
+  EXPECT_DOUBLE_EQ(none.Error(), 1.0);
+  EXPECT_DOUBLE_EQ(none.ChiSquare(), 0.0);
+}
+
 TEST_F(VegasTest, ReportsChiSquareAndQPerOutput) {
   for (const char* name : kVegasFamily) {
     Polynomial f;
