@@ -50,7 +50,12 @@ class MeanSampleIntegrator final : public Integrator {
                               const Sampler& sampler) override {
     const uint32_t d = f.InputDimensions(), k = f.OutputDimensions();
     CheckBoxDimensions(lower, upper, d);
+    for (uint32_t j = 0; j < d; ++j)
+      if (!std::isfinite(lower[j]) || !std::isfinite(upper[j]))
+        throw Error("integration box bounds must be finite");
     if (evaluations < 2) throw Error("need at least 2 evaluations");
+    // Negative when lower > upper in an odd number of dimensions: the
+    // signed integral, as vegas gives it; its error is positive.
     const double volume = BoxVolume(lower, upper);
     std::vector<double> sum(k, 0.0), sum_sq(k, 0.0);
     constexpr uint64_t kBatch = 4096;
@@ -76,7 +81,7 @@ class MeanSampleIntegrator final : public Integrator {
       const double mean = sum[c] / n;
       const double var = std::max(0.0, (sum_sq[c] / n - mean * mean) * n / (n - 1));
       result.estimate.push_back(volume * mean);
-      result.standard_error.push_back(volume * std::sqrt(var / n));
+      result.standard_error.push_back(std::abs(volume) * std::sqrt(var / n));
     }
     return result;
   }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "components/registry.h"
 #include "yarf/math.h"
@@ -59,6 +60,21 @@ TEST_F(MeanSampleTest, RejectsABoxOfTheWrongDimension) {
   Polynomial f;
   const double lower[] = {0, 0}, upper[] = {1, 1};
   EXPECT_THROW(integrator->Integrate(f, lower, upper, 100, 0, *sampler), Error);
+}
+
+TEST_F(MeanSampleTest, AReversedBoxGivesTheSignedIntegralWithAPositiveErrorAndAnInfiniteOneIsRefused) {
+  auto integrator = registry_.CreateAs<Integrator>("mean_sample", Properties{});
+  auto sampler = registry_.CreateAs<Sampler>("independent", Properties{});
+  Polynomial f;
+  // x from 1 down to 0: the integral over the box of volume -4.
+  const double lower[] = {1, 0, -1}, upper[] = {0, 2, 1};
+  const IntegrationResult r = integrator->Integrate(f, lower, upper, 4096, 0, *sampler);
+  EXPECT_NEAR(r.estimate[1], -4.0, 1e-6);
+  EXPECT_GT(r.standard_error[0], 0);
+  EXPECT_NEAR(r.estimate[0], -4.0 / 3.0, 4 * r.standard_error[0]);
+  const double infinite[] = {1, 2, std::numeric_limits<double>::infinity()};
+  const double zeros[] = {0, 0, 0};
+  EXPECT_THROW(integrator->Integrate(f, zeros, infinite, 100, 0, *sampler), Error);
 }
 
 }  // namespace
