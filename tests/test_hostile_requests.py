@@ -431,6 +431,44 @@ def test_whitted_between_glass_and_mirrors_keeps_its_branches_bounded(client: Cl
     assert np.isfinite(client.image(job)).all()
 
 
+def resident_megabytes(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    raise AssertionError("no VmRSS")
+
+
+def test_a_path_that_never_ends_between_mirrors_keeps_its_memory_bounded() -> None:
+    """Without roulette and without a depth limit, a path inside a mirror
+    never ends; each bounce asks for new sample dimensions, and the batch
+    kept every one: 75 MB more every second until the server's memory was
+    gone. It may run until cancelled (or its time limit), in bounded memory."""
+    scene = small_scene()
+    scene.materials.add(name="mirror", class_name="mirror")
+    room = scene.shapes.add(name="room", material="mirror", flip_normals=True)
+    room.sphere.radius = 10
+    transport = component("path", max_depth=-1, rr_depth=2**31 - 1)
+    with LocalServer() as local, local.client() as own:
+        job = own.submit(scene, spp=1, transport=transport, name="endless")
+        time.sleep(1)
+        start = resident_megabytes(local.pid)
+        time.sleep(4)
+        grown = resident_megabytes(local.pid) - start
+        assert own.status(job).state == render_pb2.RUNNING
+        own.cancel(job)
+        assert own.wait(job, timeout=10).state == render_pb2.CANCELLED
+        assert grown < 50, f"{grown:.0f} MB more in 4 s"
+
+
+def test_a_batch_of_more_points_than_the_integrator_allows_fails_its_job_saying_so(client: Client) -> None:
+    """A tile of 1024² pixels at 1024 samples a pass is 2^30 paths in one
+    batch: gigabytes of path state the memory estimate never saw."""
+    integrator = component("mean_sample", tile_size=1024, samples_per_pass=1024)
+    status = client.wait(client.submit(small_scene(), spp=1024, integrator=integrator), timeout=60)
+    assert status.state == render_pb2.FAILED
+    assert "1073741824 points a batch, above 262144" in status.error, status.error
+
+
 def test_a_bdpt_deeper_than_its_limit_is_refused_at_submit(client: Client) -> None:
     options = render_pb2.RenderOptions(spp=2, transport=component("bdpt", max_depth=100_000))
     error = refusal(client, render_pb2.SubmitRequest(scene=small_scene(), options=options))

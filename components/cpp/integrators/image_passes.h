@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <deque>
+#include <unordered_map>
 #include <vector>
 
 #include "yarf/support/hash.h"
@@ -34,6 +36,8 @@ class TilePoints : public PrimarySamples {
     indices_.clear();
     seeds_.clear();
     pairs_.clear();
+    deep_pairs_.clear();
+    deep_order_.clear();
     for (uint32_t y = y0; y < y1; ++y)
       for (uint32_t x = x0; x < x1; ++x) {
         pixels_.push_back({x, y});
@@ -68,11 +72,27 @@ class TilePoints : public PrimarySamples {
   // first use of either and kept (kUnmade until then): the two share the
   // sampler's work on the index, and a coordinate asked for twice (the
   // film position) is made once.
+  // The first kKeptPairs pairs are kept for the whole batch; of the deeper
+  // ones only the kDeepPairs made last, the oldest dropped (and made
+  // again, the same, if asked for again): a path that never ends, between
+  // mirrors without roulette, would otherwise keep a pair per bounce.
   std::vector<float>& Pair(uint32_t pair) const {
+    if (pair >= kKeptPairs) return DeepPair(pair);
     if (pair >= pairs_.size()) pairs_.resize(pair + 1);
     std::vector<float>& values = pairs_[pair];
     if (values.empty()) values.assign(2 * indices_.size(), kUnmade);
     return values;
+  }
+  std::vector<float>& DeepPair(uint32_t pair) const {
+    if (const auto it = deep_pairs_.find(pair); it != deep_pairs_.end()) return it->second;
+    std::vector<float> values;
+    if (deep_pairs_.size() >= kDeepPairs) {
+      values = std::move(deep_pairs_.extract(deep_order_.front()).mapped());
+      deep_order_.pop_front();
+    }
+    values.assign(2 * indices_.size(), kUnmade);
+    deep_order_.push_back(pair);
+    return deep_pairs_.emplace(pair, std::move(values)).first->second;
   }
   // Makes pair `pair` of the aligned block of points around point i at
   // once, one call the sampler can vectorise; a block whose paths have all
@@ -114,6 +134,8 @@ class TilePoints : public PrimarySamples {
   // Marks a pair not made yet: samplers give values in [0, 1).
   static constexpr float kUnmade = -1;
   static constexpr size_t kBlock = 16;
+  static constexpr uint32_t kKeptPairs = 64;
+  static constexpr size_t kDeepPairs = 16;
 
   struct Pixel {
     uint32_t x, y;
@@ -129,6 +151,9 @@ class TilePoints : public PrimarySamples {
   // Per pair of dimensions asked for: [Count(), 2] coordinates, kUnmade
   // until made.
   mutable std::vector<std::vector<float>> pairs_;
+  // Pairs from kKeptPairs on, and the order they were made in.
+  mutable std::unordered_map<uint32_t, std::vector<float>> deep_pairs_;
+  mutable std::deque<uint32_t> deep_order_;
   // MakePoints' points lacking a pair, their sampler inputs and values,
   // kept from call to call.
   struct Missing {

@@ -33,7 +33,10 @@ class MeanSampleIntegrator final : public Integrator {
     using P = Parameter;
     return {
         P::Int("tile_size").Default(32).Range(1, 1024).Doc("side in pixels of the tiles rendered in parallel"),
-        P::Int("samples_per_pass").Default(1).Range(1, 1024).Doc("samples per pixel each tile's batch carries"),
+        P::Int("samples_per_pass")
+            .Default(1)
+            .Range(1, 1024)
+            .Doc("samples per pixel each tile's batch carries (tile_size² × samples_per_pass at most 262144)"),
     };
   }
 
@@ -43,7 +46,13 @@ class MeanSampleIntegrator final : public Integrator {
     if (tile_size_ < 1 || tile_size_ > 1024) throw Error("property 'tile_size' must be in [1, 1024]");
     if (samples_per_pass_ < 1 || samples_per_pass_ > 1024)
       throw Error("property 'samples_per_pass' must be in [1, 1024]");
+    // A batch's points each hold a path's state in the transport.
+    const uint64_t batch = uint64_t(tile_size_) * tile_size_ * samples_per_pass_;
+    if (batch > kMaxBatch)
+      throw Error("tile_size² × samples_per_pass is " + std::to_string(batch) + " points a batch, above " +
+                  std::to_string(kMaxBatch));
   }
+  static constexpr uint64_t kMaxBatch = uint64_t(1) << 18;
 
   IntegrationResult Integrate(Function& f, std::span<const double> lower,
                               std::span<const double> upper, uint64_t evaluations, uint64_t seed,

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "components/registry.h"
+#include "image_passes.h"
 #include "yarf/math.h"
 
 namespace yarf {
@@ -75,6 +76,28 @@ TEST_F(MeanSampleTest, AReversedBoxGivesTheSignedIntegralWithAPositiveErrorAndAn
   const double infinite[] = {1, 2, std::numeric_limits<double>::infinity()};
   const double zeros[] = {0, 0, 0};
   EXPECT_THROW(integrator->Integrate(f, zeros, infinite, 100, 0, *sampler), Error);
+}
+
+TEST_F(MeanSampleTest, ATilesDeepCoordinatesAreTheSameWhenAskedForAgainAfterOthers) {
+  // A tile keeps only the last pairs of deep dimensions: one asked for
+  // again after many others is made again, and must come out the same.
+  auto sampler = registry_.CreateAs<Sampler>("sobol", Properties{});
+  TilePoints points(*sampler, 0, 8, 8, 4);
+  points.Reset(0, 0, 8, 8, 7);
+  const std::vector<uint32_t> all = [&] {
+    std::vector<uint32_t> v(points.Count());
+    for (uint32_t i = 0; i < v.size(); ++i) v[i] = i;
+    return v;
+  }();
+  std::vector<float> first(all.size()), again(all.size()), other(all.size());
+  constexpr uint32_t kDeep = 1001;
+  points.Gather(all, kDeep, first);
+  for (uint32_t d = kDeep + 1; d < kDeep + 400; ++d) points.Gather(all, d, other);
+  points.Gather(all, kDeep, again);
+  EXPECT_EQ(first, again);
+  EXPECT_EQ(points.Get(5, kDeep), first[5]);
+  // And the coordinates differ from dimension to dimension.
+  EXPECT_NE(first, other);
 }
 
 }  // namespace
