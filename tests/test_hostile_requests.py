@@ -469,6 +469,29 @@ def test_a_batch_of_more_points_than_the_integrator_allows_fails_its_job_saying_
     assert "1073741824 points a batch, above 262144" in status.error, status.error
 
 
+def peak_megabytes(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    raise AssertionError("no VmHWM")
+
+
+def test_an_sppm_radius_that_covers_the_scene_is_estimated_in_bounded_memory() -> None:
+    """Each point's estimate pairs it with every photon within the radius;
+    with a radius over the whole scene a batch held points × photons
+    pairs (std::bad_alloc after 3 s at 2.8 GB under an 8 GB limit). They
+    are weighed in runs of points now."""
+    scene = small_scene()
+    scene.film.width = scene.film.height = 16
+    transport = component("sppm", initial_radius=1e6, photons_per_pass=1_000_000)
+    with LocalServer() as local, local.client() as own:
+        job = own.submit(scene, spp=1, transport=transport)
+        status = own.wait(job, timeout=300)
+        assert status.state == render_pb2.SUCCEEDED, status.error
+        assert np.isfinite(own.image(job)).all()
+        assert peak_megabytes(local.pid) < 1500
+
+
 def test_a_bdpt_deeper_than_its_limit_is_refused_at_submit(client: Client) -> None:
     options = render_pb2.RenderOptions(spp=2, transport=component("bdpt", max_depth=100_000))
     error = refusal(client, render_pb2.SubmitRequest(scene=small_scene(), options=options))

@@ -64,7 +64,7 @@ class PhotonMapper final : public Transport {
         P::Int("photons").Default(200000).Range(0, double(kMaxPhotons)).Doc("photon paths shot for the global map"),
         P::Int("caustic_photons").Default(200000).Range(0, double(kMaxPhotons)).Doc(
             "photon paths shot for the caustic map"),
-        P::Int("nearest").Default(64).Min(1).Doc("photons per estimate, k, on surfaces and in media"),
+        P::Int("nearest").Default(64).Range(1, 65536).Doc("photons per estimate, k, on surfaces and in media"),
         P::Bool("final_gather").Default(true).Doc("gather indirect light with one ray"),
         P::Int("seed").Default(0).Doc("the photons' random stream"),
     };
@@ -80,7 +80,7 @@ class PhotonMapper final : public Transport {
         nearest_(props.Int("nearest", 64)),
         final_gather_(props.Bool("final_gather", true)),
         seed_(props.Int("seed", 0)) {
-    if (nearest_ < 1) throw Error("property 'nearest' must be >= 1");
+    if (nearest_ < 1 || nearest_ > 65536) throw Error("property 'nearest' must be in [1, 65536]");
   }
 
   uint32_t Dimensions() const override { return GatherWalk() + 4 * uint32_t(Bounces()); }

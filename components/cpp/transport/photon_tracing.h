@@ -656,39 +656,64 @@ inline bool SameSurface(const Photon& photon, Vec3 facing_normal) {
   return Dot(photon.normal, facing_normal) > 0.5f;
 }
 
+// The kernel photons an estimate gathers before it weighs them: a radius
+// that covers the scene pairs every point with every photon, so past this
+// many the points are weighed in runs.
+constexpr size_t kMaxKernelPhotons = size_t(1) << 22;
+
+// An estimate at every point of `at`: gather(q, found) adds point q's
+// kernel photons, weigh(found) gives every point's radiance from them
+// (zero for points without any); runs of points are weighed apart once
+// kMaxKernelPhotons are found, and their radiances summed.
+template <typename Points, typename Gather, typename Weigh>
+std::vector<Vec3> EstimateInRuns(const Points& at, Gather&& gather, Weigh&& weigh) {
+  std::vector<Vec3> radiance(at.size());
+  std::vector<KernelPhoton> found;
+  const auto weigh_run = [&] {
+    if (found.empty()) return;
+    const std::vector<Vec3> run = weigh(found);
+    for (size_t k = 0; k < at.size(); ++k) radiance[k] += run[k];
+    found.clear();
+  };
+  for (uint32_t q = 0; q < at.size(); ++q) {
+    gather(q, found);
+    if (found.size() >= kMaxKernelPhotons) weigh_run();
+  }
+  weigh_run();
+  return radiance;
+}
+
 // Jensen's estimate over the k nearest photons with a cone filter (k = 1):
 // weight 1 − d/r, normalised by (1 − 2/3)·πr², r the k-th distance.
 inline std::vector<Vec3> ConeEstimate(const SceneView& scene, const PhotonTree& tree,
                                       const std::vector<SurfacePoint>& at, size_t k) {
-  std::vector<KernelPhoton> found;
   std::vector<uint32_t> indices(k);
   std::vector<float> distance2(k);
-  for (uint32_t q = 0; q < at.size(); ++q) {
+  const auto gather = [&](uint32_t q, std::vector<KernelPhoton>& found) {
     const size_t count = tree.Nearest(at[q].at.position, k, indices.data(), distance2.data());
-    if (count == 0) continue;
+    if (count == 0) return;
     const float r = std::sqrt(distance2[count - 1]);
-    if (!(r > 0)) continue;
+    if (!(r > 0)) return;
     const float norm = 1.0f / ((1.0f - 2.0f / 3.0f) * kPi * r * r);
     const Vec3 facing = at[q].FacingNormal();
     for (size_t j = 0; j < count; ++j)
       if (SameSurface(tree[indices[j]], facing))
         found.push_back({q, indices[j], (1.0f - std::sqrt(distance2[j]) / r) * norm});
-  }
-  return ReflectedRadiance(scene, tree, at, found);
+  };
+  return EstimateInRuns(at, gather, [&](const auto& found) { return ReflectedRadiance(scene, tree, at, found); });
 }
 
 // The estimate over the photons within a fixed radius, uniform kernel 1/(πr²).
 inline std::vector<Vec3> DiscEstimate(const SceneView& scene, const PhotonTree& tree,
                                       const std::vector<SurfacePoint>& at, float radius) {
-  std::vector<KernelPhoton> found;
   const float weight = 1.0f / (kPi * radius * radius);
-  for (uint32_t q = 0; q < at.size(); ++q) {
+  const auto gather = [&](uint32_t q, std::vector<KernelPhoton>& found) {
     const Vec3 facing = at[q].FacingNormal();
     tree.Within(at[q].at.position, radius, [&](uint32_t photon, float) {
       if (SameSurface(tree[photon], facing)) found.push_back({q, photon, weight});
     });
-  }
-  return ReflectedRadiance(scene, tree, at, found);
+  };
+  return EstimateInRuns(at, gather, [&](const auto& found) { return ReflectedRadiance(scene, tree, at, found); });
 }
 
 // Density estimation of in-scattered radiance (Jensen & Christensen
@@ -725,28 +750,27 @@ inline std::vector<Vec3> InScatteredRadiance(const SceneView& scene, const Photo
 // The volume estimate over the k nearest photons, r the k-th distance.
 inline std::vector<Vec3> VolumeNearestEstimate(const SceneView& scene, const PhotonTree& tree,
                                                const std::vector<VolumePoint>& at, size_t k) {
-  std::vector<KernelPhoton> found;
   std::vector<uint32_t> indices(k);
   std::vector<float> distance2(k);
-  for (uint32_t q = 0; q < at.size(); ++q) {
+  const auto gather = [&](uint32_t q, std::vector<KernelPhoton>& found) {
     const size_t count = tree.Nearest(at[q].position, k, indices.data(), distance2.data());
-    if (count == 0) continue;
+    if (count == 0) return;
     const float r = std::sqrt(distance2[count - 1]);
-    if (!(r > 0)) continue;
+    if (!(r > 0)) return;
     const float weight = 1.0f / (4.0f / 3.0f * kPi * r * r * r);
     for (size_t j = 0; j < count; ++j) found.push_back({q, indices[j], weight});
-  }
-  return InScatteredRadiance(scene, tree, at, found);
+  };
+  return EstimateInRuns(at, gather, [&](const auto& found) { return InScatteredRadiance(scene, tree, at, found); });
 }
 
 // The volume estimate over the photons within a fixed radius.
 inline std::vector<Vec3> VolumeBallEstimate(const SceneView& scene, const PhotonTree& tree,
                                             const std::vector<VolumePoint>& at, float radius) {
-  std::vector<KernelPhoton> found;
   const float weight = 1.0f / (4.0f / 3.0f * kPi * radius * radius * radius);
-  for (uint32_t q = 0; q < at.size(); ++q)
+  const auto gather = [&](uint32_t q, std::vector<KernelPhoton>& found) {
     tree.Within(at[q].position, radius, [&](uint32_t photon, float) { found.push_back({q, photon, weight}); });
-  return InScatteredRadiance(scene, tree, at, found);
+  };
+  return EstimateInRuns(at, gather, [&](const auto& found) { return InScatteredRadiance(scene, tree, at, found); });
 }
 
 }  // namespace yarf
