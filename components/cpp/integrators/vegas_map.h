@@ -42,12 +42,23 @@ constexpr double kMinDensity = 0.05;
 // that refine it.
 class AdaptiveMap {
  public:
+  // The map keeps three numbers per bin of every axis: at most this many bins.
+  static constexpr uint64_t kMaxMapBins = uint64_t(1) << 22;
+
   AdaptiveMap(std::span<const double> lower, std::span<const double> upper, uint32_t bins)
-      : dims_(uint32_t(lower.size())), bins_(bins), edges_(size_t(dims_) * (bins + 1)),
+      : dims_(uint32_t(CheckedBins(lower.size(), bins))), bins_(bins), edges_(size_t(dims_) * (bins + 1)),
         sums_(size_t(dims_) * bins, 0.0), mass_(size_t(dims_) * bins, 0.0) {
     for (uint32_t j = 0; j < dims_; ++j)
       for (uint32_t i = 0; i <= bins_; ++i)
         edges_[size_t(j) * (bins_ + 1) + i] = lower[j] + (upper[j] - lower[j]) * i / bins_;
+  }
+
+  // The number of axes, once their bins are known to fit kMaxMapBins.
+  static size_t CheckedBins(size_t axes, uint32_t bins) {
+    if (uint64_t(axes) * bins > kMaxMapBins)
+      throw Error(std::to_string(bins) + " bins on each of " + std::to_string(axes) + " axes are " +
+                  std::to_string(uint64_t(axes) * bins) + " bins, above " + std::to_string(kMaxMapBins));
+    return axes;
   }
 
   // x(y) for one point; returns the Jacobian and notes each axis's bin.
