@@ -3,6 +3,7 @@
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -26,7 +27,19 @@ struct ObjGeometry {
   uint64_t vertices = 0, faces = 0, face_vertices = 0;
 };
 
-ObjGeometry ObjGeometryLines(std::string_view bytes) {
+// Whether a `v`, `vt` or `vn` line has a word where a number goes
+// ("nan", "inf"): tinyobjloader reads it as 0, silently.
+bool HasWordForNumber(std::string_view line) {
+  for (size_t k = line.find_first_of(" \t"); k < line.size(); ++k) {
+    if (line[k] == ' ' || line[k] == '\t') continue;
+    const size_t digit = line[k] == '+' || line[k] == '-' ? k + 1 : k;
+    if (digit < line.size() && std::isalpha(static_cast<unsigned char>(line[digit]))) return true;
+    k = std::min(line.find_first_of(" \t", k), line.size());
+  }
+  return false;
+}
+
+ObjGeometry ObjGeometryLines(std::string_view bytes, const std::string& name) {
   ObjGeometry geometry;
   size_t at = 0;
   while (at < bytes.size()) {
@@ -40,6 +53,8 @@ ObjGeometry ObjGeometryLines(std::string_view bytes) {
                            (line[2] == ' ' || line[2] == '\t');
     if (!attribute && ((line[0] != 'v' && line[0] != 'f') || (line[1] != ' ' && line[1] != '\t'))) continue;
     if (line[0] == 'v') {
+      if (HasWordForNumber(line))
+        throw Error("mesh '" + name + "': '" + std::string(line.substr(0, 80)) + "': not a finite number");
       ++geometry.vertices;
     } else {
       ++geometry.faces;
@@ -95,7 +110,7 @@ struct ObjCornerHash {
 };
 
 TriangleMesh ParseObj(std::string_view bytes, const std::string& name, const MeshOptions& options) {
-  ObjGeometry geometry = ObjGeometryLines(bytes);
+  ObjGeometry geometry = ObjGeometryLines(bytes, name);
   const uint64_t parse_bytes = geometry.vertices * kObjBytesPerVertex +
                                geometry.face_vertices * kObjBytesPerFaceVertex + geometry.faces * kObjBytesPerFace;
   if (parse_bytes > kMaxObjParseBytes)

@@ -268,6 +268,16 @@ TEST(ObjReader, RefusesIndicesOutOfRange) {
   EXPECT_NE(ErrorOf(kObjVertices + "l 1 2\np 1\n", "obj").find("has no faces"), std::string::npos);
 }
 
+TEST(ObjReader, RefusesWordsWhereNumbersGo) {
+  // tinyobjloader reads "nan" and "inf" as 0: the vertex moved, silently.
+  for (const std::string line : {"v nan 0 0\n", "v 0 -inf 0\n", "vt 0 NaN\n", "vn 0 0 +Infinity\n"}) {
+    const std::string error = ErrorOf(line + kObjVertices + "f 1 2 3\n", "obj");
+    EXPECT_NE(error.find("not a finite number"), std::string::npos) << line << ": " << error;
+  }
+  // Numbers in every spelling tinyobjloader reads still are.
+  EXPECT_EQ(ErrorOf("v -1e-3 +2.5 .5\n" + kObjVertices + "f 2 3 4\n", "obj"), "");
+}
+
 TEST(ObjReader, RefusesFacesOfMoreThan255Vertices) {
   for (int n : {255, 256, 258, 1000, 5000}) {
     std::string obj = kObjVertices + "f";
