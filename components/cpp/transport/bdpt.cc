@@ -221,16 +221,19 @@ class Bdpt final : public Transport {
   static ParameterSchema Parameters() {
     return {Parameter::Int("max_depth").Default(8).Range(1, kMaxDepth).Doc(
                 "longest path in segments (Mitsuba's convention)"),
-            Parameter::Int("rr_depth").Default(5).Min(1).Doc(
+            Parameter::Int("rr_depth").Default(5).Range(1, double(PathLength::kLongest)).Doc(
                 "subpath length in segments from which Russian roulette may end a subpath")};
   }
 
   explicit Bdpt(const Properties& props)
-      : max_depth_(int(props.Int("max_depth", 8))), rr_depth_(int(props.Int("rr_depth", 5))) {
-    if (max_depth_ < 1 || max_depth_ > kMaxDepth)
+      : max_depth_(MaxDepthOf(props)), rr_depth_(int(props.Int("rr_depth", 5, 1, PathLength::kLongest))) {}
+
+  static int MaxDepthOf(const Properties& props) {
+    const int64_t depth = props.Int("max_depth", 8);
+    if (depth < 1 || depth > kMaxDepth)
       throw Error("property 'max_depth' must be 1 to " + std::to_string(kMaxDepth) +
                   ": bidirectional weights need a finite depth");
-    if (rr_depth_ < 1) throw Error("property 'rr_depth' must be >= 1");
+    return int(depth);
   }
 
   uint32_t Dimensions() const override { return kFirstBounce + 2 * kPerBounce * uint32_t(max_depth_); }

@@ -40,13 +40,12 @@ class Whitted final : public Transport {
   // Each sample lands in its own pixel: the film may be rendered in tiles.
   static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
   static ParameterSchema Parameters() {
-    return {Parameter::Int("max_depth").Default(6).Min(0).Doc(
+    return {Parameter::Int("max_depth").Default(6).Range(0, double(PathLength::kLongest)).Doc(
         "longest path in segments, counting the shadow ray (Mitsuba's: 1 emitters only)")};
   }
 
-  explicit Whitted(const Properties& props) : max_depth_(int(props.Int("max_depth", 6))) {
-    if (max_depth_ < 0) throw Error("property 'max_depth' must be >= 0");
-  }
+  explicit Whitted(const Properties& props)
+      : max_depth_(int(props.Int("max_depth", 6, 0, PathLength::kLongest))) {}
 
   uint32_t Dimensions() const override { return kTransportDimension; }
   void Prepare(const SceneView& scene) override { RefuseMedia(scene, "whitted"); }

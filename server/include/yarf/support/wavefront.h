@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -153,17 +154,19 @@ inline bool SamplesLights(uint32_t lobes) {
 // max_depth in segments (Mitsuba's convention, -1 unbounded) and the depth
 // from which roulette may end a path.
 struct PathLength {
+  // Both are ints: a larger value would wrap.
+  static constexpr int64_t kLongest = std::numeric_limits<int32_t>::max();
   explicit PathLength(const Properties& props)
-      : max_depth(int(props.Int("max_depth", -1))), rr_depth(int(props.Int("rr_depth", 5))) {
-    if (max_depth < -1) throw Error("property 'max_depth' must be -1 (unbounded) or >= 0");
-    if (rr_depth < 1) throw Error("property 'rr_depth' must be >= 1");
-  }
+      : max_depth(int(props.Int("max_depth", -1, -1, kLongest))), rr_depth(int(props.Int("rr_depth", 5, 1, kLongest))) {}
   // The declarations of the two, for the schemas of the methods that read them.
   static std::vector<Parameter> Parameters() {
     return {
-        Parameter::Int("max_depth").Default(-1).Min(-1).Doc(
+        Parameter::Int("max_depth").Default(-1).Range(-1, double(kLongest)).Doc(
             "longest path in segments (Mitsuba's: 1 emitters only, 2 direct light); -1 unbounded"),
-        Parameter::Int("rr_depth").Default(5).Min(1).Doc("depth from which Russian roulette may end paths"),
+        Parameter::Int("rr_depth")
+            .Default(5)
+            .Range(1, double(kLongest))
+            .Doc("depth from which Russian roulette may end paths"),
     };
   }
   // Bounces to reserve primary-sample dimensions for: 64 when unbounded.
