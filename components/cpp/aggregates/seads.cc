@@ -73,6 +73,7 @@ class Seads final : public yarf::Aggregate {
     lower_ = lower_ - Vec3(pad, pad, pad);
     upper_ += Vec3(pad, pad, pad);
     ChooseResolution();
+    FitBinningBudget();
     Bin();
   }
 
@@ -143,6 +144,32 @@ class Seads final : public yarf::Aggregate {
       cell_size_[axis] = extent[axis] / float(resolution_[axis]);
       inverse_cell_size_[axis] = 1.0f / cell_size_[axis];
     }
+  }
+
+  // Bin visits every cell of each triangle's box: triangles that span the
+  // scene make that triangles × cells, quadratic in the triangles (40 000
+  // took a minute). Past kMaxBoxCells in all the grid is made coarser,
+  // halving every axis, until the visits fit: a finer grid would not
+  // separate such triangles anyway.
+  static constexpr uint64_t kMaxBoxCells = uint64_t(1) << 26;
+  uint64_t BoxCells() const {
+    uint64_t total = 0;
+    for (const Triangle& t : triangles_) {
+      const auto [lo, hi] = BoxOf(t);
+      uint64_t cells = 1;
+      for (int axis = 0; axis < 3; ++axis) cells *= uint64_t(CellOf(hi[axis], axis) - CellOf(lo[axis], axis) + 1);
+      total += cells;
+    }
+    return total;
+  }
+  void FitBinningBudget() {
+    const Vec3 extent = upper_ - lower_;
+    while (BoxCells() > kMaxBoxCells && std::max({resolution_[0], resolution_[1], resolution_[2]}) > 1)
+      for (int axis = 0; axis < 3; ++axis) {
+        resolution_[axis] = std::max(1, resolution_[axis] / 2);
+        cell_size_[axis] = extent[axis] / float(resolution_[axis]);
+        inverse_cell_size_[axis] = 1.0f / cell_size_[axis];
+      }
   }
 
   int CellOf(float coordinate, int axis) const {
