@@ -90,7 +90,8 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
       }
     }
     const std::vector<float> positions(mesh_arrays.positions.begin(), mesh_arrays.positions.end());
-    v1::Mesh& mesh = *shape.mutable_mesh() = InlineMesh(positions, mesh_arrays.indices);
+    v1::Mesh inline_mesh = InlineMesh(positions, mesh_arrays.indices);
+    v1::Mesh& mesh = *shape.mutable_mesh() = patches ? assembly_.Made(std::move(inline_mesh), where) : inline_mesh;
     mesh.mutable_normals()->Add(mesh_arrays.normals.begin(), mesh_arrays.normals.end());
     mesh.mutable_uvs()->Add(mesh_arrays.uvs.begin(), mesh_arrays.uvs.end());
     if (params.Has("S")) {
@@ -138,7 +139,7 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     if (inner > 0 || phimax < 360)
       Warn(where, "partial-disk", "partial disks (innerradius, phimax) are rendered whole");
     light_areas.push_back(phimax * M_PI / 180 / 2 * (radius * radius - inner * inner));
-    *shape.mutable_mesh() = DiskMesh(DiskUv::kPbrt);
+    *shape.mutable_mesh() = assembly_.Made(DiskMesh(DiskUv::kPbrt), where);
     to_world = to_world * Matrix4::Translate({0, 0, height}) * Matrix4::Scale({radius, radius, 1});
     Warn(where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
   } else if (type == "cylinder") {
@@ -147,7 +148,7 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "cylinder radius must be positive");
     if (!(zmax > zmin && zmax - zmin < 1e30)) Fail(params.WhereIs("zmax", where), "cylinder zmax must exceed zmin");
     if (!(phimax > 0 && phimax <= 360)) Fail(params.WhereIs("phimax", where), "cylinder phimax must lie in (0, 360]");
-    *shape.mutable_mesh() = CylinderMesh(phimax);
+    *shape.mutable_mesh() = assembly_.Made(CylinderMesh(phimax), where);
     light_areas.push_back((zmax - zmin) * radius * phimax * M_PI / 180);
     to_world = to_world * Matrix4::Translate({0, 0, zmin}) * Matrix4::Scale({radius, radius, zmax - zmin});
     Warn(where, "cylinder",

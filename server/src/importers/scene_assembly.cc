@@ -90,6 +90,14 @@ std::string SceneAssembly::AddMedium(const std::string& name, v1::ComponentSpec 
   return m.name();
 }
 
+v1::Mesh SceneAssembly::Made(v1::Mesh mesh, const SourceLocation& where) {
+  made_triangles_ += uint64_t(mesh.indices_size()) / 3;
+  if (made_triangles_ > kMaxMadeTriangles)
+    Fail(where, "the disks, cylinders and patches made into triangles pass " + std::to_string(kMaxMadeTriangles) +
+                    " triangles in all");
+  return mesh;
+}
+
 void SceneAssembly::AddShape(v1::SceneShape shape, const Matrix4& to_world, bool flip, NormalRule rule,
                              const SourceLocation& where, const std::string& group) {
   CheckTransform(to_world, where, "shape");

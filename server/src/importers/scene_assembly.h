@@ -55,6 +55,12 @@ class SceneAssembly {
   // Adds a shape to the world (empty `group`) or to a group. `flip` is the
   // source's own "flip normals" / "reverse orientation" state. Fails at
   // `where` when to_world is singular or not finite.
+  // A mesh made for a shape yarf has no primitive for (a disk, a cylinder,
+  // a bilinear patch), counted against kMaxMadeTriangles in all: a few
+  // bytes of a cylinder become 256 triangles, and a file that included
+  // another of 200 cylinders ten thousand times asked for half a billion.
+  static constexpr uint64_t kMaxMadeTriangles = uint64_t(1) << 24;
+  v1::Mesh Made(v1::Mesh mesh, const SourceLocation& where);
   void AddShape(v1::SceneShape shape, const Matrix4& to_world, bool flip, NormalRule rule,
                 const SourceLocation& where, const std::string& group = "");
   // Creates the group on first use.
@@ -122,6 +128,8 @@ class SceneAssembly {
   std::vector<Matrix4> instance_transforms_;
   Matrix4 mirror_;
   bool mirrored_ = false;
+  // Triangles of the meshes Made so far.
+  uint64_t made_triangles_ = 0;
 };
 
 }  // namespace yarf::importers

@@ -69,7 +69,7 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     *shape.mutable_mesh() = CubeMesh();
   } else if (type == "disk") {
     rule = NormalRule::kTransformed;
-    *shape.mutable_mesh() = DiskMesh(DiskUv::kMitsuba);
+    *shape.mutable_mesh() = assembly_.Made(DiskMesh(DiskUv::kMitsuba), e.where);
     Warn(e.where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
   } else if (type == "cylinder") {
     rule = NormalRule::kTransformed;
@@ -79,7 +79,7 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     const Vec3d axis = p1 - p0;
     const auto frame = Matrix4::LookAt(p0, p1, std::abs(axis.y) < 0.9 * Length(axis) ? Vec3d{0, 1, 0} : Vec3d{1, 0, 0});
     if (!frame) Fail(e.where, "cylinder: p0 and p1 must differ");
-    *shape.mutable_mesh() = CylinderMesh(360);
+    *shape.mutable_mesh() = assembly_.Made(CylinderMesh(360), e.where);
     cylinder_frame = *frame * Matrix4::Scale({radius, radius, Length(axis)});
     Warn(e.where, "cylinder",
          "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads");
