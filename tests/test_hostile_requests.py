@@ -431,11 +431,12 @@ def test_whitted_between_glass_and_mirrors_keeps_its_branches_bounded(client: Cl
     assert np.isfinite(client.image(job)).all()
 
 
-def resident_megabytes(pid: int) -> float:
+def memory_megabytes(pid: int, field: str) -> float:
+    """A process's memory figure from /proc: VmRSS (now) or VmHWM (its peak)."""
     for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
+        if line.startswith(field + ":"):
             return int(line.split()[1]) / 1024
-    raise AssertionError("no VmRSS")
+    raise AssertionError(f"no {field}")
 
 
 def test_a_path_that_never_ends_between_mirrors_keeps_its_memory_bounded() -> None:
@@ -451,29 +452,24 @@ def test_a_path_that_never_ends_between_mirrors_keeps_its_memory_bounded() -> No
     with LocalServer() as local, local.client() as own:
         job = own.submit(scene, spp=1, transport=transport, name="endless")
         time.sleep(1)
-        start = resident_megabytes(local.pid)
+        start = memory_megabytes(local.pid, "VmRSS")
         time.sleep(4)
-        grown = resident_megabytes(local.pid) - start
+        grown = memory_megabytes(local.pid, "VmRSS") - start
         assert own.status(job).state == render_pb2.RUNNING
         own.cancel(job)
         assert own.wait(job, timeout=10).state == render_pb2.CANCELLED
         assert grown < 50, f"{grown:.0f} MB more in 4 s"
 
 
-def test_a_batch_of_more_points_than_the_integrator_allows_fails_its_job_saying_so(client: Client) -> None:
+def test_a_batch_of_more_points_than_the_integrator_allows_fails_its_job_saying_so(
+    client: Client,
+) -> None:
     """A tile of 1024² pixels at 1024 samples a pass is 2^30 paths in one
     batch: gigabytes of path state the memory estimate never saw."""
     integrator = component("mean_sample", tile_size=1024, samples_per_pass=1024)
     status = client.wait(client.submit(small_scene(), spp=1024, integrator=integrator), timeout=60)
     assert status.state == render_pb2.FAILED
     assert "1073741824 points a batch, above 262144" in status.error, status.error
-
-
-def peak_megabytes(pid: int) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmHWM:"):
-            return int(line.split()[1]) / 1024
-    raise AssertionError("no VmHWM")
 
 
 def test_an_sppm_radius_that_covers_the_scene_is_estimated_in_bounded_memory() -> None:
@@ -489,7 +485,7 @@ def test_an_sppm_radius_that_covers_the_scene_is_estimated_in_bounded_memory() -
         status = own.wait(job, timeout=300)
         assert status.state == render_pb2.SUCCEEDED, status.error
         assert np.isfinite(own.image(job)).all()
-        assert peak_megabytes(local.pid) < 1500
+        assert memory_megabytes(local.pid, "VmHWM") < 1500
 
 
 def test_a_bdpt_deeper_than_its_limit_is_refused_at_submit(client: Client) -> None:
