@@ -560,6 +560,33 @@ def test_a_job_that_would_need_more_memory_than_the_server_allows_is_refused(
         assert client.wait(client.submit(scene, spp=1), timeout=60).state == render_pb2.SUCCEEDED
 
 
+def test_textures_count_as_the_images_they_decode(limited: LocalServer, tmp_path: Path) -> None:
+    """Each bitmap texture decodes its own copy of its image: two textures
+    of one 2048² RGB image (a file of a few kilobytes) are 96 MiB of
+    texels, past this server's 64 MiB. Eight of an 8192² one took 5.6 GB
+    before the job failed."""
+    import OpenImageIO as oiio
+
+    path = tmp_path / "flat.png"
+    flat = oiio.ImageBuf(oiio.ImageSpec(2048, 2048, 3, oiio.UINT8))
+    oiio.ImageBufAlgo.fill(flat, (0.5, 0.5, 0.5))
+    assert flat.write(str(path)), flat.geterror()
+    with limited.client() as client:
+        digest = client.upload_asset(path)
+        scene = small_scene()
+        scene.film.width = scene.film.height = 16
+        for name in ("first", "second"):
+            texture = scene.textures.add(name=name)
+            texture.texture.class_name = "bitmap"
+            texture.texture.properties.values["asset"].string_value = digest
+        with pytest.raises(grpc.RpcError) as caught:
+            client.submit(scene, spp=1, name="two decoded images")
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED
+        assert "images" in caught.value.details(), caught.value.details()
+        del scene.textures[1]
+        assert client.wait(client.submit(scene, spp=1), timeout=60).state == render_pb2.SUCCEEDED
+
+
 def test_a_user_may_hold_only_so_many_instances(limited: LocalServer) -> None:
     with limited.client() as client:
         handles = [client.create("independent").handle for _ in range(3)]

@@ -573,6 +573,23 @@ std::vector<std::string> SceneAssets(const v1::Scene& scene) {
   return hashes;
 }
 
+std::vector<std::filesystem::path> ComponentFiles(const v1::Scene& scene, const std::filesystem::path& asset_root,
+                                                  const AssetSource* assets) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& [what, spec] : FileComponents(scene))
+    for (const auto& [key, value] : spec->properties().values()) {
+      if (value.value_case() != v1::Property::kStringValue) continue;
+      try {
+        if (IsFileKey(key)) files.push_back(ConfinedPath(asset_root, value.string_value(), "file", what));
+        if (IsAssetKey(key) && assets && IsSha256(value.string_value()) && assets->Has(value.string_value()))
+          files.push_back(assets->FileOf(value.string_value()));
+      } catch (const Error&) {
+        // Not resolvable: the build says so.
+      }
+    }
+  return files;
+}
+
 bool IsSha256(const std::string& text) {
   const auto hex = [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); };
   return text.size() == 64 && std::all_of(text.begin(), text.end(), hex);

@@ -42,6 +42,14 @@ class AssetSource {
 // meshes, its textures' files.
 std::vector<std::string> SceneAssets(const v1::Scene& scene);
 
+// The files the scene's components read themselves (textures' images,
+// environment maps, media's grids), one entry per component that names
+// one, resolved as the build resolves them: a `filename` under
+// `asset_root`, an `asset` in `assets`. Those that would not resolve are
+// left out: the build refuses them, naming them.
+std::vector<std::filesystem::path> ComponentFiles(const v1::Scene& scene, const std::filesystem::path& asset_root,
+                                                  const AssetSource* assets);
+
 // Whether `text` is a SHA-256 as assets are named: 64 lowercase hex digits.
 bool IsSha256(const std::string& text);
 

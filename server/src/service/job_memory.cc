@@ -2,11 +2,15 @@
 
 #include <unistd.h>
 
+#include <OpenImageIO/imageio.h>
+
 #include <algorithm>
 #include <functional>
 #include <map>
 #include <string>
 #include <system_error>
+
+#include "components/scene_builder.h"
 
 namespace yarf {
 namespace {
@@ -94,6 +98,35 @@ uint64_t ShapesBytes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& s
   return bytes;
 }
 
+// An image file a component decodes (a texture, an environment map): its
+// texels as linear floats, grey or RGB, from its header alone. A file
+// that is no image (a volume grid) counts 0 here.
+uint64_t DecodedImageBytes(const std::filesystem::path& file) {
+  const auto input = OIIO::ImageInput::open(file.string());
+  if (!input) {
+    OIIO::geterror();  // clears the message the failed open left
+    return 0;
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  const uint64_t channels = spec.nchannels >= 3 ? 3 : 1;
+  return uint64_t(std::max(spec.width, 0)) * uint64_t(std::max(spec.height, 0)) *
+         uint64_t(std::max(spec.depth, 1)) * channels * sizeof(float);
+}
+
+// Every component that names an image decodes its own copy of it: eight
+// textures of one 8192² image are eight of them.
+uint64_t ComponentImageBytes(const v1::Scene& scene, const AssetStore* assets,
+                             const std::filesystem::path& asset_root) {
+  std::map<std::filesystem::path, uint64_t> decoded;
+  uint64_t bytes = 0;
+  for (const std::filesystem::path& file : ComponentFiles(scene, asset_root, assets)) {
+    const auto [it, added] = decoded.try_emplace(file, 0);
+    if (added) it->second = DecodedImageBytes(file);
+    bytes = Saturating(bytes, it->second);
+  }
+  return bytes;
+}
+
 }  // namespace
 
 uint64_t EstimateJobBytes(const v1::SubmitRequest& request, const AssetStore* assets,
@@ -105,6 +138,7 @@ uint64_t EstimateJobBytes(const v1::SubmitRequest& request, const AssetStore* as
   const Expansion placed = Expand(scene);
   bytes = Saturating(bytes, placed.placements, kBytesPerPlacement);
   bytes = Saturating(bytes, placed.shapes, kBytesPerPlacedShape);
+  bytes = Saturating(bytes, ComponentImageBytes(scene, assets, asset_root));
   // The request itself, kept with the job.
   return bytes + request.ByteSizeLong();
 }

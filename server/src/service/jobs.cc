@@ -192,8 +192,9 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
   CheckShare(*accepted, SplitsOf(*accepted, known));
   if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root);
       bytes > options_.max_job_bytes)
-    throw LimitReached("the job would need about " + std::to_string(bytes >> 20) + " MiB (its film, meshes and " +
-                       "placements), more than the " + std::to_string(options_.max_job_bytes >> 20) +
+    throw LimitReached("the job would need about " + std::to_string(bytes >> 20) +
+                       " MiB (its film, meshes, images and placements), more than the " +
+                       std::to_string(options_.max_job_bytes >> 20) +
                        " MiB a job may on this server (yarfd --max-job-memory)");
   JobRecord row;
   row.request = accepted->SerializeAsString();
