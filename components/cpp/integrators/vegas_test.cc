@@ -194,9 +194,9 @@ TEST_F(VegasTest, AnIterationWhosePointsAllAgreeDoesNotDecideTheResult) {
         const bool flagged = r.chi2_per_dof[0] > 3;
         const bool unseen = estimate == 0 && error == 0;
         const bool plausible = error > 1e-9 * f.Exact();
-        EXPECT_TRUE((within || flagged) && plausible || unseen) << name << ", " << f.InputDimensions() << "-D box, " << evaluations << " points, seed " << seed
-                                                 << ": " << estimate << " ± " << error << " against " << f.Exact()
-                                                 << ", chi2/dof " << r.chi2_per_dof[0];
+        EXPECT_TRUE(((within || flagged) && plausible) || unseen)
+            << name << ", " << f.InputDimensions() << "-D box, " << evaluations << " points, seed " << seed << ": "
+            << estimate << " ± " << error << " against " << f.Exact() << ", chi2/dof " << r.chi2_per_dof[0];
       }
     }
   }

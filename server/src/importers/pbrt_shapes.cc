@@ -51,7 +51,10 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     const std::vector<double> n = params.Numbers("N", {"normal3"});
     if (p.empty() || p.size() % 3 != 0) Fail(params.WhereIs("P", where), what + ": P needs xyz triples");
     const size_t vertices = p.size() / 3;
-    if (raw.empty() && vertices == corners) raw = patches ? std::vector<double>{0, 1, 2, 3} : std::vector<double>{0, 1, 2};
+    if (raw.empty() && vertices == corners) {
+      raw = {0, 1, 2};
+      if (patches) raw.push_back(3);
+    }
     if (raw.empty() || raw.size() % corners != 0)
       Fail(params.WhereIs("indices", where),
            what + (patches ? ": indices needs four per patch" : ": indices needs triples"));
@@ -91,7 +94,8 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     }
     const std::vector<float> positions(mesh_arrays.positions.begin(), mesh_arrays.positions.end());
     v1::Mesh inline_mesh = InlineMesh(positions, mesh_arrays.indices);
-    v1::Mesh& mesh = *shape.mutable_mesh() = patches ? assembly_.Made(std::move(inline_mesh), where) : inline_mesh;
+    v1::Mesh& mesh = *shape.mutable_mesh() =
+        patches ? assembly_.Made(std::move(inline_mesh), where) : std::move(inline_mesh);
     mesh.mutable_normals()->Add(mesh_arrays.normals.begin(), mesh_arrays.normals.end());
     mesh.mutable_uvs()->Add(mesh_arrays.uvs.begin(), mesh_arrays.uvs.end());
     if (params.Has("S")) {

@@ -157,7 +157,8 @@ struct PathLength {
   // Both are ints: a larger value would wrap.
   static constexpr int64_t kLongest = std::numeric_limits<int32_t>::max();
   explicit PathLength(const Properties& props)
-      : max_depth(int(props.Int("max_depth", -1, -1, kLongest))), rr_depth(int(props.Int("rr_depth", 5, 1, kLongest))) {}
+      : max_depth(int(props.Int("max_depth", -1, -1, kLongest))),
+        rr_depth(int(props.Int("rr_depth", 5, 1, kLongest))) {}
   // The declarations of the two, for the schemas of the methods that read them.
   static std::vector<Parameter> Parameters() {
     return {
