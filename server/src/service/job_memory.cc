@@ -98,9 +98,10 @@ uint64_t ShapesBytes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& s
   return bytes;
 }
 
-// An image file a component decodes (a texture, an environment map): its
-// texels as linear floats, grey or RGB, from its header alone. A file
-// that is no image (a volume grid) counts 0 here.
+// A file a component decodes (a texture's or an environment map's image,
+// a medium's OpenVDB grid, which OpenImageIO reads as a volume): its
+// texels or voxels as floats, grey or RGB, from its header alone. A file
+// OpenImageIO cannot read counts 0 here.
 uint64_t DecodedImageBytes(const std::filesystem::path& file) {
   const auto input = OIIO::ImageInput::open(file.string());
   if (!input) {
@@ -113,7 +114,7 @@ uint64_t DecodedImageBytes(const std::filesystem::path& file) {
          uint64_t(std::max(spec.depth, 1)) * channels * sizeof(float);
 }
 
-// Every component that names an image decodes its own copy of it: eight
+// Every component that names a file decodes its own copy of it: eight
 // textures of one 8192² image are eight of them.
 uint64_t ComponentImageBytes(const v1::Scene& scene, const AssetStore* assets,
                              const std::filesystem::path& asset_root) {

@@ -14,9 +14,9 @@ namespace yarf {
 
 // Bytes the film (its accumulators, splats, snapshots and checkpoint
 // buffers), the meshes (parsed, and Embree's BVH over them), the
-// placements of `request` and the images its components decode (from
-// their headers) will need; asset meshes and images are sized from
-// `assets`, files from `asset_root`, where they are. Components' own
+// placements of `request` and the images and volume grids its components
+// decode (from the files' headers) will need; asset files are sized from
+// `assets`, others from `asset_root`, where they are. Components' own
 // memory (a photon map) is theirs to bound through their parameters.
 uint64_t EstimateJobBytes(const v1::SubmitRequest& request, const AssetStore* assets,
                           const std::filesystem::path& asset_root);
