@@ -23,6 +23,13 @@ inline void CheckBoxDimensions(std::span<const double> lower, std::span<const do
                 std::to_string(dimensions));
 }
 
+// Throws unless every bound is finite (lower > upper is allowed: the
+// signed integral, for the rules that give it).
+inline void CheckFiniteBounds(std::span<const double> lower, std::span<const double> upper) {
+  for (size_t j = 0; j < lower.size(); ++j)
+    if (!std::isfinite(lower[j]) || !std::isfinite(upper[j])) throw Error("integration box bounds must be finite");
+}
+
 // The checks of a rule that needs a proper box: the dimension, at least
 // one input, and finite bounds with lower ≤ upper.
 inline void CheckProperBox(std::span<const double> lower, std::span<const double> upper,

@@ -59,9 +59,7 @@ class MeanSampleIntegrator final : public Integrator {
                               const Sampler& sampler) override {
     const uint32_t d = f.InputDimensions(), k = f.OutputDimensions();
     CheckBoxDimensions(lower, upper, d);
-    for (uint32_t j = 0; j < d; ++j)
-      if (!std::isfinite(lower[j]) || !std::isfinite(upper[j]))
-        throw Error("integration box bounds must be finite");
+    CheckFiniteBounds(lower, upper);
     if (evaluations < 2) throw Error("need at least 2 evaluations");
     // Negative when lower > upper in an odd number of dimensions: the
     // signed integral, as vegas gives it; its error is positive.

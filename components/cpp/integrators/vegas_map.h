@@ -456,9 +456,7 @@ inline uint64_t PointsOfIteration(uint64_t evaluations, uint64_t iterations, uin
 inline void CheckVegasJob(const std::string& name, uint32_t d, uint32_t k, std::span<const double> lower,
                           std::span<const double> upper, uint64_t evaluations) {
   CheckBoxDimensions(lower, upper, d);
-  for (uint32_t j = 0; j < d; ++j)
-    if (!std::isfinite(lower[j]) || !std::isfinite(upper[j]))
-      throw Error("integration box bounds must be finite");
+  CheckFiniteBounds(lower, upper);
   if (d == 0 || k == 0) throw Error(name + " needs a function with at least one input and one output");
   if (evaluations < 2) throw Error("need at least 2 evaluations");
 }
