@@ -136,16 +136,6 @@ std::filesystem::path ConfinedPath(const std::filesystem::path& root, const std:
   return path;
 }
 
-std::string ReadAsset(const std::filesystem::path& root, const std::string& file,
-                      const std::string& what) {
-  const std::filesystem::path path = ConfinedPath(root, file, "mesh file", what);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(what + ": mesh file '" + file + "' not found");
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
-
 std::string TextureName(const v1::SceneTexture& texture) {
   return "texture '" + texture.name() + "' (" + texture.texture().class_name() + ")";
 }
@@ -423,20 +413,14 @@ class Builder {
   TriangleMesh ReadMesh(const v1::Mesh& mesh, const std::string& what) {
     const MeshOptions options{mesh.has_flip_tex_coords() ? mesh.flip_tex_coords() : true, mesh.face_normals()};
     switch (mesh.source_case()) {
-      case v1::Mesh::kFile: {
-        std::string format = mesh.format();
-        if (format.empty()) {
-          const std::string ext = std::filesystem::path(mesh.file()).extension().string();
-          format = ext.empty() ? ext : ext.substr(1);
-        }
-        return ParseMesh(ReadAsset(sources_.asset_root, mesh.file(), what), format, mesh.file(), options);
-      }
+      case v1::Mesh::kFile:
+        return ParseMesh(ReadMeshBytes(mesh, sources_.asset_root, sources_.assets, what), MeshFormat(mesh),
+                         mesh.file(), options);
       case v1::Mesh::kData:
         return ParseMesh(mesh.data(), mesh.format(), what, options);
       case v1::Mesh::kAsset:
-        if (!sources_.assets)
-          throw Error(what + ": mesh asset " + mesh.asset() + ": this server keeps no assets");
-        return ParseMesh(sources_.assets->Read(mesh.asset()), mesh.format(), what, options);
+        return ParseMesh(ReadMeshBytes(mesh, sources_.asset_root, sources_.assets, what), mesh.format(), what,
+                         options);
       default:
         return InlineMesh(mesh, what);
     }
@@ -571,6 +555,26 @@ std::vector<std::string> SceneAssets(const v1::Scene& scene) {
   collect(scene.shapes());
   for (const v1::Group& group : scene.groups()) collect(group.shapes());
   return hashes;
+}
+
+std::string MeshFormat(const v1::Mesh& mesh) {
+  if (!mesh.format().empty() || mesh.source_case() != v1::Mesh::kFile) return mesh.format();
+  const std::string ext = std::filesystem::path(mesh.file()).extension().string();
+  return ext.empty() ? ext : ext.substr(1);
+}
+
+std::string ReadMeshBytes(const v1::Mesh& mesh, const std::filesystem::path& asset_root, const AssetSource* assets,
+                          const std::string& what) {
+  if (mesh.source_case() == v1::Mesh::kAsset) {
+    if (!assets) throw Error(what + ": mesh asset " + mesh.asset() + ": this server keeps no assets");
+    return assets->Read(mesh.asset());
+  }
+  const std::filesystem::path path = ConfinedPath(asset_root, mesh.file(), "mesh file", what);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(what + ": mesh file '" + mesh.file() + "' not found");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
 }
 
 std::vector<std::filesystem::path> ComponentFiles(const v1::Scene& scene, const std::filesystem::path& asset_root,

@@ -50,6 +50,16 @@ std::vector<std::string> SceneAssets(const v1::Scene& scene);
 std::vector<std::filesystem::path> ComponentFiles(const v1::Scene& scene, const std::filesystem::path& asset_root,
                                                   const AssetSource* assets);
 
+// The format of a mesh given as bytes: its `format`, else its file's
+// extension.
+std::string MeshFormat(const v1::Mesh& mesh);
+
+// The bytes of a mesh given as a `file` under `asset_root` (confined to
+// it) or an `asset` in `assets`; throws Error naming `what` when they
+// cannot be read.
+std::string ReadMeshBytes(const v1::Mesh& mesh, const std::filesystem::path& asset_root, const AssetSource* assets,
+                          const std::string& what);
+
 // Whether `text` is a SHA-256 as assets are named: 64 lowercase hex digits.
 bool IsSha256(const std::string& text);
 

@@ -23,8 +23,11 @@ namespace {
 // twenty bytes, converts out-of-range `vw` weights with undefined
 // behaviour, and keeps groups and materials yarf does not use.
 struct ObjGeometry {
-  std::string text;
-  uint64_t vertices = 0, faces = 0, face_vertices = 0;
+  // `vertices` counts `v`, `vt` and `vn` lines; `corner_data` the last two.
+  uint64_t vertices = 0, corner_data = 0, faces = 0, face_vertices = 0;
+
+  // tinyobjloader's memory for what it parses.
+  uint64_t ParseBytes() const;
 };
 
 // Whether a `v`, `vt` or `vn` line has a word where a number goes
@@ -39,7 +42,8 @@ bool HasWordForNumber(std::string_view line) {
   return false;
 }
 
-ObjGeometry ObjGeometryLines(std::string_view bytes, const std::string& name) {
+// Counts the lines; with `text`, appends them to it.
+ObjGeometry ObjGeometryLines(std::string_view bytes, const std::string& name, std::string* text) {
   ObjGeometry geometry;
   size_t at = 0;
   while (at < bytes.size()) {
@@ -56,12 +60,13 @@ ObjGeometry ObjGeometryLines(std::string_view bytes, const std::string& name) {
       if (HasWordForNumber(line))
         throw Error("mesh '" + name + "': '" + std::string(line.substr(0, 80)) + "': not a finite number");
       ++geometry.vertices;
+      geometry.corner_data += attribute;
     } else {
       ++geometry.faces;
       for (size_t k = 1; k < line.size(); ++k)
         if ((line[k - 1] == ' ' || line[k - 1] == '\t') && line[k] != ' ' && line[k] != '\t') ++geometry.face_vertices;
     }
-    geometry.text.append(line).push_back('\n');
+    if (text) text->append(line).push_back('\n');
   }
   return geometry;
 }
@@ -74,6 +79,13 @@ ObjGeometry ObjGeometryLines(std::string_view bytes, const std::string& name) {
 // checked before parsing.
 constexpr uint64_t kObjBytesPerVertex = 40, kObjBytesPerFaceVertex = 64, kObjBytesPerFace = 96;
 constexpr uint64_t kMaxObjParseBytes = uint64_t(16) << 30;
+
+// An entry of ParseObj's table of shared corners (key, value, node, bucket).
+constexpr uint64_t kCornerTableBytes = 48;
+
+uint64_t ObjGeometry::ParseBytes() const {
+  return vertices * kObjBytesPerVertex + face_vertices * kObjBytesPerFaceVertex + faces * kObjBytesPerFace;
+}
 
 std::string FirstLine(const std::string& text) { return text.substr(0, std::min(text.find('\n'), size_t(1024))); }
 
@@ -110,15 +122,15 @@ struct ObjCornerHash {
 };
 
 TriangleMesh ParseObj(std::string_view bytes, const std::string& name, const MeshOptions& options) {
-  ObjGeometry geometry = ObjGeometryLines(bytes, name);
-  const uint64_t parse_bytes = geometry.vertices * kObjBytesPerVertex +
-                               geometry.face_vertices * kObjBytesPerFaceVertex + geometry.faces * kObjBytesPerFace;
+  std::string text;
+  const ObjGeometry geometry = ObjGeometryLines(bytes, name, &text);
+  const uint64_t parse_bytes = geometry.ParseBytes();
   if (parse_bytes > kMaxObjParseBytes)
     throw Error("mesh '" + name + "': OBJ file too large to parse (" + std::to_string(geometry.vertices) +
                 " vertices, " + std::to_string(geometry.faces) + " faces would need about " +
                 std::to_string(parse_bytes >> 20) + " MiB; at most " + std::to_string(kMaxObjParseBytes >> 20) +
                 "; a binary PLY file needs far less)");
-  std::istringstream stream(std::move(geometry.text));
+  std::istringstream stream(std::move(text));
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
@@ -206,8 +218,24 @@ class PlyReader {
       : bytes_(bytes), name_(name), options_(options) {}
 
   TriangleMesh Read() {
-    ReadHeader();
     TriangleMesh mesh;
+    ReadInto(mesh);
+    if (options_.face_normals) mesh.normals.clear();
+    return mesh;
+  }
+
+  // Reads the whole file, checking it as Read does, but keeps only counts.
+  MeshCounts Count() {
+    counting_ = true;
+    TriangleMesh attributes_only;
+    ReadInto(attributes_only);
+    counts_.attribute_values = attribute_values_;
+    return counts_;
+  }
+
+ private:
+  void ReadInto(TriangleMesh& mesh) {
+    ReadHeader();
     for (const Element& element : elements_) {
       // Entries without properties take no bytes and carry nothing.
       if (element.properties.empty()) continue;
@@ -222,7 +250,7 @@ class PlyReader {
       const size_t first_attribute = mesh.attributes.size();
       for (const auto& [name, channels] : element.attributes) mesh.attributes.push_back({name, channels, {}});
       // Safe after the check: at most one vertex per `least` bytes.
-      if (is_vertex) mesh.positions.reserve(mesh.positions.size() + element.count);
+      if (is_vertex && !counting_) mesh.positions.reserve(mesh.positions.size() + element.count);
       std::vector<float> values(element.properties.size());
       for (uint64_t i = 0; i < element.count; ++i) {
         size_t triangles = 0;
@@ -239,16 +267,17 @@ class PlyReader {
             Fail("non-finite value of property '" + p.name + "'");
           values[k] = float(v * p.scale);
         }
-        if (is_vertex) StoreVertex(element, values, mesh);
+        counts_.triangles += triangles;
+        if (is_vertex) {
+          ++counts_.vertices;
+          if (!counting_) StoreVertex(element, values, mesh);
+        }
         StoreAttributes(element, values, is_vertex ? 1 : triangles, first_attribute, mesh);
       }
     }
-    if (mesh.indices.empty()) Fail("no faces");
-    if (options_.face_normals) mesh.normals.clear();
-    return mesh;
+    if (counts_.triangles == 0) Fail("no faces");
   }
 
- private:
   enum class Encoding { kAscii, kLittle, kBig };
   static constexpr int kMaxPolygonVertices = 1024;
   static constexpr size_t kMaxAttributes = 16;
@@ -302,8 +331,9 @@ class PlyReader {
         Fail("face vertex index " + FormatNumber(v) + " is not an index");
       indices_.push_back(uint32_t(v));
     }
-    for (size_t k = 1; k + 1 < indices_.size(); ++k)
-      mesh.indices.insert(mesh.indices.end(), {indices_[0], indices_[k], indices_[k + 1]});
+    if (!counting_)
+      for (size_t k = 1; k + 1 < indices_.size(); ++k)
+        mesh.indices.insert(mesh.indices.end(), {indices_[0], indices_[k], indices_[k + 1]});
     return indices_.size() >= 3 ? indices_.size() - 2 : 0;
   }
 
@@ -334,6 +364,7 @@ class PlyReader {
       attribute_values_ += uint64_t(copies) * channels;
       if (attribute_values_ > kMaxAttributeValues)
         Fail("attributes would hold more than " + std::to_string(kMaxAttributeValues) + " values");
+      if (counting_) continue;
       std::vector<float>& out = mesh.attributes[first_attribute + a].values;
       for (size_t c = 0; c < copies; ++c) out.insert(out.end(), tuple, tuple + channels);
     }
@@ -547,7 +578,14 @@ class PlyReader {
   std::vector<float> entry_;  // the current entry's values, by slot
   uint64_t attribute_values_ = 0;
   size_t pos_ = 0;
+  // Counting keeps no vertices, indices or attribute values.
+  bool counting_ = false;
+  MeshCounts counts_;
 };
+
+std::string UnknownFormat(const std::string& name, std::string_view format) {
+  return "mesh '" + name + "': unknown format '" + std::string(format) + "' (obj or ply)";
+}
 
 }  // namespace
 
@@ -556,9 +594,24 @@ TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const st
   TriangleMesh mesh;
   if (format == "obj") mesh = ParseObj(bytes, name, options);
   else if (format == "ply") mesh = PlyReader(bytes, name, options).Read();
-  else throw Error("mesh '" + name + "': unknown format '" + std::string(format) + "' (obj or ply)");
+  else throw Error(UnknownFormat(name, format));
   ValidateMesh(mesh, name);
   return mesh;
+}
+
+MeshCounts CountMesh(std::string_view bytes, std::string_view format, const std::string& name) {
+  if (format == "ply") return PlyReader(bytes, name, {}).Count();
+  if (format != "obj") throw Error(UnknownFormat(name, format));
+  const ObjGeometry geometry = ObjGeometryLines(bytes, name, nullptr);
+  MeshCounts counts;
+  // A vertex per distinct corner: per position when corners are positions alone.
+  counts.vertices = geometry.corner_data == 0 ? std::min(geometry.vertices, geometry.face_vertices)
+                                              : geometry.face_vertices;
+  counts.triangles = geometry.face_vertices > 2 * geometry.faces ? geometry.face_vertices - 2 * geometry.faces : 0;
+  // The filtered text tinyobjloader reads is another copy of the file; the
+  // table of shared corners an entry per vertex.
+  counts.parse_bytes = geometry.ParseBytes() + bytes.size() + counts.vertices * kCornerTableBytes;
+  return counts;
 }
 
 namespace {

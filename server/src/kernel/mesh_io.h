@@ -61,6 +61,22 @@ struct MeshOptions {
 TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name,
                        const MeshOptions& options = {});
 
+// What a mesh file makes, counted without keeping it: the memory a job
+// needs for a mesh follows from these, not from the file's size (an OBJ
+// or PLY of long fans is a triangle every few bytes).
+struct MeshCounts {
+  // Vertices (at most; OBJ corners sharing a triple share one) and triangles.
+  uint64_t vertices = 0, triangles = 0;
+  // Floats of per-vertex and per-triangle attributes.
+  uint64_t attribute_values = 0;
+  // The parser's peak memory, while it reads.
+  uint64_t parse_bytes = 0;
+};
+
+// Counts what ParseMesh would make of `bytes`, throwing Error where its
+// reading of the file would (index ranges and values are not checked).
+MeshCounts CountMesh(std::string_view bytes, std::string_view format, const std::string& name);
+
 // Throws Error unless every index is in range, every position finite, and
 // normals, uvs and attributes (finite) have one entry per vertex or face.
 // Zero or non-finite normals are replaced by the face's; the rest are

@@ -298,6 +298,68 @@ TEST(ObjReader, IgnoresLinesItDoesNotUse) {
   EXPECT_EQ(ParseMesh(obj, "obj", "x.obj").indices, (std::vector<uint32_t>{0, 1, 2}));
 }
 
+// --- counting what a file makes ------------------------------------------
+
+// A binary PLY of `fans` faces of 255 indices each, uchar counts and
+// indices: a triangle per byte.
+std::string PlyOfFans(int fans) {
+  Bytes data(false);
+  for (int i = 0; i < 255; ++i) data.Put<float>(std::cos(i * 0.0246f)).Put<float>(std::sin(i * 0.0246f)).Put<float>(0);
+  for (int f = 0; f < fans; ++f) {
+    data.Put<uint8_t>(255);
+    for (int i = 0; i < 255; ++i) data.Put<uint8_t>(uint8_t(i));
+  }
+  return "ply\nformat binary_little_endian 1.0\nelement vertex 255\nproperty float x\nproperty float y\n"
+         "property float z\nelement face " + std::to_string(fans) +
+         "\nproperty list uchar uchar vertex_indices\nproperty float weight\nend_header\n" + data.text;
+}
+
+TEST(CountMesh, CountsTheTrianglesAndVerticesParseMeshMakes) {
+  // Fans, a face attribute stored once per triangle, and the PLY's bytes.
+  std::string ply = PlyOfFans(40);
+  // The weight each face ends with.
+  for (size_t at = ply.find("end_header\n") + 11 + 255 * 12 + 256; at <= ply.size(); at += 256 + 4)
+    ply.insert(at, std::string(4, '\0'));
+  const TriangleMesh parsed = ParseMesh(ply, "ply", "fans.ply");
+  const MeshCounts counted = CountMesh(ply, "ply", "fans.ply");
+  EXPECT_EQ(counted.triangles, 40u * 253);
+  EXPECT_EQ(counted.triangles, parsed.TriangleCount());
+  EXPECT_EQ(counted.vertices, parsed.positions.size());
+  EXPECT_EQ(counted.attribute_values, 40u * 253);
+
+  // OBJ: corners of positions alone are the positions; with uvs, each
+  // corner may be a vertex of its own (an upper bound).
+  const std::string quad_and_pentagon = kObjVertices + "v 3 3 3\nf 1 2 3 4\nf 1 2 3 4 5\n";
+  const MeshCounts obj = CountMesh(quad_and_pentagon, "obj", "x.obj");
+  EXPECT_EQ(obj.triangles, 5u);
+  EXPECT_EQ(obj.triangles, ParseMesh(quad_and_pentagon, "obj", "x.obj").TriangleCount());
+  EXPECT_EQ(obj.vertices, 5u);
+  const std::string with_uvs = kObjVertices + "vt 0 0\nvt 1 0\nf 1/1 2/2 3/1\nf 1/2 3/1 4/2\n";
+  EXPECT_EQ(CountMesh(with_uvs, "obj", "x.obj").vertices, 6u);
+  EXPECT_GE(CountMesh(with_uvs, "obj", "x.obj").vertices, ParseMesh(with_uvs, "obj", "x.obj").positions.size());
+  // The reader's memory grows with the faces, not only the file.
+  EXPECT_GT(obj.parse_bytes, quad_and_pentagon.size());
+}
+
+TEST(CountMesh, RefusesWhatParseMeshRefuses) {
+  const auto count_error = [](const std::string& bytes, const std::string& format) -> std::string {
+    try {
+      CountMesh(bytes, format, "x." + format);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  // Faces without their weights, the last cut short.
+  std::string truncated = PlyOfFans(3);
+  truncated.erase(truncated.find("property float weight\n"), 22);
+  truncated.resize(truncated.size() - 100);
+  EXPECT_EQ(count_error(truncated, "ply"), ErrorOf(truncated, "ply"));
+  EXPECT_NE(count_error(truncated, "ply"), "");
+  EXPECT_EQ(count_error("v nan 0 0\nf 1 1 1\n", "obj"), ErrorOf("v nan 0 0\nf 1 1 1\n", "obj"));
+  EXPECT_EQ(count_error("v 0 0 0\n", "stl"), ErrorOf("v 0 0 0\n", "stl"));
+}
+
 TEST(MeshReader, NamesTheFormatItDoesNotKnow) {
   EXPECT_EQ(ErrorOf("", "stl"), "mesh 'x.stl': unknown format 'stl' (obj or ply)");
 }
