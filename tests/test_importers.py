@@ -25,7 +25,7 @@ from imagestats import block_z_test
 from yarf import Client, LocalServer, RenderResult
 from yarf.assets import upload_scene_assets
 from yarf.cli import main
-from yarf.scene import ImportedScene, import_scene, load_scene
+from yarf.scene import ImportedScene, SceneError, import_scene, load_scene
 from yarf.v1 import render_pb2, scene_pb2
 
 PBRT_CBOX = SHARED / "scenes" / "pbrt-cornell-box" / "scene-v4.pbrt"
@@ -259,3 +259,19 @@ def test_a_pbrt_image_area_light_shows_its_image_the_right_way_up(
     pixels = client.render(imported.scene, spp=4, seed=1, timeout=60).pixels
     np.testing.assert_allclose(pixels[:2].reshape(-1, 3), [[1.5, 0, 0]] * 32, rtol=1e-4, atol=1e-5)
     np.testing.assert_allclose(pixels[-2:].reshape(-1, 3), [[0, 0, 1]] * 32, rtol=1e-4, atol=1e-5)
+
+
+def test_a_conversion_that_takes_too_long_is_stopped_and_named(tmp_path: Path) -> None:
+    """A 250 KB pbrt file including 200 cylinders 10 000 times asks for two
+    million shapes (the importer stops at 2^24 triangles, after 1.5 s and
+    1.2 GB); with a time limit, as the dashboard sets for uploads, it is
+    stopped at the limit and the error says so."""
+    cylinders = tmp_path / "cylinders.pbrt"
+    cylinders.write_text('Shape "cylinder" "float radius" 0.1 "float zmax" 1\n' * 200)
+    scene = tmp_path / "many.pbrt"
+    scene.write_text(
+        'Camera "perspective"\nFilm "rgb" "integer xresolution" 8 "integer yresolution" 8\n'
+        "WorldBegin\n" + 'Include "cylinders.pbrt"\n' * 10_000
+    )
+    with pytest.raises(SceneError, match=r"many\.pbrt: reading the scene took more than 0\.3 s"):
+        import_scene(scene, confine=True, timeout=0.3)

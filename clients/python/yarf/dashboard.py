@@ -93,6 +93,9 @@ MAX_BODY_BYTES = 4096
 # Uploaded scene files: one file with its geometry inline (meshes belong in
 # asset uploads, which `yarf submit` makes).
 MAX_UPLOAD_BYTES = 16 << 20
+# Seconds an uploaded Mitsuba or pbrt file may take to convert: its
+# includes and shapes may make far more than its bytes.
+IMPORT_SECONDS = 60.0
 # A refused upload's body is read (and dropped) up to this size before the
 # connection closes, so that the browser gets the answer instead of a reset.
 MAX_DRAINED_BYTES = 4 * MAX_UPLOAD_BYTES
@@ -324,7 +327,9 @@ def load_uploaded_scene(data: bytes, file_name: str) -> UploadedScene:
         path.write_bytes(data)
         try:
             if path.suffix.lower() in IMPORTED_SUFFIXES:
-                imported = import_scene(path, inline_files=False, confine=True)
+                imported = import_scene(
+                    path, inline_files=False, confine=True, timeout=IMPORT_SECONDS
+                )
                 scene, spp, warnings = imported.scene, imported.sample_count, imported.warnings
             else:
                 scene, spp, warnings = load_scene(path, inline_files=False), 0, []

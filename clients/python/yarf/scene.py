@@ -94,6 +94,7 @@ def import_scene(
     inline_files: bool = True,
     strict: bool = False,
     confine: bool = False,
+    timeout: float | None = None,
 ) -> ImportedScene:
     """Converts a Mitsuba 3 (.xml) or pbrt-v4 (.pbrt) file with yarf-import.
 
@@ -103,6 +104,7 @@ def import_scene(
     construct that would be ignored or approximated is a SceneError.
     ``confine``: the file may name only files inside its folder (for a
     scene from someone else: nothing else of this machine is read).
+    ``timeout``: seconds the conversion may take, else a SceneError.
     """
     path = Path(path)
     command = [str(find_yarf_import()), str(path)]
@@ -110,9 +112,11 @@ def import_scene(
     for name, value in (parameters or {}).items():
         command += ["-D", f"{name}={value}"]
     try:
-        done = subprocess.run(command, capture_output=True, check=False)
+        done = subprocess.run(command, capture_output=True, check=False, timeout=timeout)
     except OSError as error:
         raise SceneError(f"cannot run {command[0]}: {error}") from None
+    except subprocess.TimeoutExpired:
+        raise SceneError(f"{path}: reading the scene took more than {timeout:g} s") from None
     stderr = done.stderr.decode("utf-8", errors="replace").splitlines()
     if done.returncode != 0:
         prefix = "yarf-import: error: "
