@@ -97,6 +97,7 @@ inline IntegrationResult IntegrateVegas(const std::string& name, const VegasSett
   std::vector<uint32_t> corner(d);
   std::vector<Moments> moments(k);
   std::vector<double> estimate(k), variance(k);
+  std::vector<double> previous(k);  // the variances of the iteration before
   uint64_t first = 0;  // sampler index of the iteration's first point
   for (uint64_t t = 0; t < iterations; ++t) {
     const uint64_t n = PointsOfIteration(evaluations, iterations, t);
@@ -160,7 +161,8 @@ inline IntegrationResult IntegrateVegas(const std::string& name, const VegasSett
       if (!(total > 0) || !std::isfinite(total)) std::fill(weight.begin(), weight.end(), 1.0);
     }
     if (t >= discard)
-      for (uint32_t c = 0; c < k; ++c) combined[c].Add(estimate[c], variance[c]);
+      for (uint32_t c = 0; c < k; ++c) combined[c].Add(estimate[c], variance[c], t == 0 ? variance[c] : previous[c]);
+    previous = variance;
     if (t + 1 < iterations && settings.alpha > 0) map.Refine(settings.alpha);
   }
   return CombinedResult(combined, first);

@@ -202,6 +202,43 @@ TEST_F(VegasTest, AnIterationWhosePointsAllAgreeDoesNotDecideTheResult) {
   }
 }
 
+// f(x) = x^-½ on [0, 1]: ∫ = 2, an integrable pole; J f has infinite
+// variance under any map of finite bins.
+class InverseRoot final : public Function {
+ public:
+  uint32_t InputDimensions() const override { return 1; }
+  uint32_t OutputDimensions() const override { return 1; }
+  void Evaluate(std::span<const float> points, std::span<float> values) override {
+    for (size_t i = 0; i < points.size(); ++i) values[i] = float(1 / std::sqrt(double(points[i])));
+  }
+};
+
+TEST_F(VegasTest, AnIntegrablePoleIsNotUnderestimated) {
+  // Weighed by their own variances, the iterations that came near the pole
+  // (larger estimate, larger σ) counted less: vegas was 10 of its σ low on
+  // average (18 of 20 seeds beyond 3σ), vegas_plus 1.8. Over 40 seeds the
+  // mean of (I − 2)/σ must be above −3, and the mean estimate within 5
+  // standard errors of 2 (from the spread of the 40; J f's tail is heavy,
+  // so a mean of unbiased runs falls short of 2 more often than a normal
+  // spread would say: vegas is 3.3 of them low, vegas_plus 1.2 high).
+  InverseRoot f;
+  for (const char* name : kVegasFamily) {
+    double sum = 0, squares = 0, z = 0;
+    const int seeds = 40;
+    for (int seed = 0; seed < seeds; ++seed) {
+      const IntegrationResult r = Make(name)->Integrate(f, Zeros(1), Ones(1), 10000, uint64_t(seed), *sampler_);
+      sum += r.estimate[0];
+      squares += r.estimate[0] * r.estimate[0];
+      z += (r.estimate[0] - 2) / r.standard_error[0];
+    }
+    const double mean = sum / seeds, spread = std::sqrt((squares - sum * mean) / (seeds - 1));
+    std::printf("%s on x^-1/2, 10^4 points, %d seeds: mean %.5f (spread %.5f), mean z %.2f\n", name, seeds, mean,
+                spread, z / seeds);
+    EXPECT_LT(std::abs(mean - 2), 5 * spread / std::sqrt(double(seeds))) << name;
+    EXPECT_GT(z / seeds, -3) << name;
+  }
+}
+
 TEST_F(VegasTest, RefusesAMapOfMoreBinsThanItKeeps) {
   // bins × axes is the map's size: 2^20 bins on 100 axes were 2.6 GB.
   for (const char* name : kVegasFamily) {
@@ -219,17 +256,28 @@ TEST_F(VegasTest, RefusesAMapOfMoreBinsThanItKeeps) {
 
 TEST(VegasCombination, AnIterationWithoutSpreadTakesTheOthersMeanWeight) {
   Combination c;
-  c.Add(1.0, 0.01);
-  c.Add(0.5, 0.0);
+  c.Add(1.0, 0.01, 0.01);
+  c.Add(0.5, 0.0, 0.0);
   EXPECT_DOUBLE_EQ(c.Estimate(), 0.75);
   EXPECT_DOUBLE_EQ(c.Error(), 1 / std::sqrt(200.0));
   // None with a spread: equal weights, the error their spread about the mean.
   Combination none;
-  none.Add(1.0, 0.0);
-  none.Add(3.0, 0.0);
+  none.Add(1.0, 0.0, 0.0);
+  none.Add(3.0, 0.0, 0.0);
   EXPECT_DOUBLE_EQ(none.Estimate(), 2.0);
   EXPECT_DOUBLE_EQ(none.Error(), 1.0);
   EXPECT_DOUBLE_EQ(none.ChiSquare(), 0.0);
+}
+
+TEST(VegasCombination, AnIterationIsWeighedByTheVarianceItIsGiven) {
+  // Weights 1/0.04 and 1/0.01; the error of the weighted mean from the
+  // iterations' own variances, χ² too.
+  Combination c;
+  c.Add(1.0, 0.01, 0.04);
+  c.Add(2.0, 0.04, 0.01);
+  EXPECT_DOUBLE_EQ(c.Estimate(), (25 * 1.0 + 100 * 2.0) / 125);
+  EXPECT_DOUBLE_EQ(c.Error(), std::sqrt(25 * 25 * 0.01 + 100 * 100 * 0.04) / 125);
+  EXPECT_DOUBLE_EQ(c.ChiSquare(), 0.8 * 0.8 / 0.01 + 0.2 * 0.2 / 0.04);
 }
 
 TEST_F(VegasTest, ReportsChiSquareAndQPerOutput) {
