@@ -13,6 +13,7 @@ warnings and reports malformed files in one line with file and line.
 
 from __future__ import annotations
 
+import gzip
 import subprocess
 import sys
 from pathlib import Path
@@ -275,3 +276,44 @@ def test_a_conversion_that_takes_too_long_is_stopped_and_named(tmp_path: Path) -
     )
     with pytest.raises(SceneError, match=r"many\.pbrt: reading the scene took more than 0\.3 s"):
         import_scene(scene, confine=True, timeout=0.3)
+
+
+def test_gzip_compressed_pbrt_files_and_ply_meshes_render_as_their_plain_copies(
+    client: Client, tmp_path: Path
+) -> None:
+    """pbrt-v4 reads `Include "x.pbrt.gz"`, scene.pbrt.gz itself and `plymesh`
+    files named .ply.gz; the importer inflates scene text and yarfd inflates
+    meshes. The same scene, compressed and not, renders the same image."""
+    ply = (
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        "-1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n4 0 1 2 3\n"
+    )
+    lamp = 'AreaLightSource "diffuse" "rgb L" [2 1 0.5]\nShape "plymesh" "string filename" "{}"\n'
+    head = (
+        'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective" "float fov" 30\n'
+        'Film "rgb" "integer xresolution" 16 "integer yresolution" 16\nWorldBegin\n'
+        'Include "{}"\nShape "sphere" "float radius" 0.3\n'
+    )
+    for folder, packed in (("plain", False), ("packed", True)):
+        (tmp_path / folder).mkdir()
+        pack = gzip.compress if packed else (lambda data: data)
+        suffix = ".gz" if packed else ""
+        (tmp_path / folder / f"quad.ply{suffix}").write_bytes(pack(ply.encode()))
+        lamp_text = lamp.format(f"quad.ply{suffix}").encode()
+        (tmp_path / folder / f"lamp.pbrt{suffix}").write_bytes(pack(lamp_text))
+        scene_text = head.format(f"lamp.pbrt{suffix}").encode()
+        (tmp_path / folder / f"scene.pbrt{suffix}").write_bytes(pack(scene_text))
+    plain = import_scene(tmp_path / "plain" / "scene.pbrt")
+    packed = import_scene(tmp_path / "packed" / "scene.pbrt.gz")
+    assert plain.warnings == packed.warnings == []
+    (quad,) = [s.mesh for s in packed.scene.shapes if s.HasField("mesh")]
+    assert quad.data[:2] == b"\x1f\x8b" and quad.format == "ply"  # sent compressed
+    images = [client.render(s.scene, spp=4, seed=3, timeout=60).pixels for s in (plain, packed)]
+    assert images[0].mean() > 0.1
+    np.testing.assert_array_equal(images[0], images[1])
+    # The command line takes scene.pbrt.gz as a pbrt scene too.
+    assert (
+        main(["convert", str(tmp_path / "packed" / "scene.pbrt.gz"), str(tmp_path / "out.json")])
+        == 0
+    )

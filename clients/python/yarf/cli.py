@@ -53,13 +53,13 @@ from yarf.render_options import (
     render_settings,
 )
 from yarf.scene import (
-    IMPORTED_SUFFIXES,
     JSON_SUFFIXES,
     TEXT_SUFFIXES,
     ImportedScene,
     SceneError,
     import_scene,
     inline_mesh_files,
+    is_imported_scene,
     load_scene,
     write_scene,
 )
@@ -200,7 +200,7 @@ def load_scene_file(args: argparse.Namespace) -> tuple[scene_pb2.Scene, int]:
     """The scene file of ``args.scene`` (mesh files still files), and the spp it asks
     for (0: none)."""
     path = Path(args.scene)
-    if path.suffix.lower() in IMPORTED_SUFFIXES:
+    if is_imported_scene(path):
         imported = _import(path, args.define, inline_files=False, strict=args.strict)
         return imported.scene, imported.sample_count
     if args.define:
@@ -381,7 +381,7 @@ def convert_command(args: argparse.Namespace) -> int:
     # Mesh files stay files when the output sits beside the input (their
     # names are relative to its folder); elsewhere they are inlined.
     same_folder = source.resolve().parent == target.resolve().parent
-    if source.suffix.lower() in IMPORTED_SUFFIXES:
+    if is_imported_scene(source):
         imported = _import(source, args.define, inline_files=not same_folder, strict=args.strict)
         scene, sample_count = imported.scene, imported.sample_count
     else:

@@ -28,6 +28,16 @@ TEXT_SUFFIXES = (".textproto", ".pbtxt", ".txtpb")
 # Scenes of other renderers, converted by yarf-import.
 IMPORTED_SUFFIXES = (".xml", ".pbrt")
 
+
+def is_imported_scene(path: Path) -> bool:
+    """Whether yarf-import converts the file: Mitsuba's .xml or pbrt's .pbrt, either
+    one also gzip-compressed (.pbrt.gz)."""
+    suffixes = [suffix.lower() for suffix in path.suffixes[-2:]]
+    if suffixes[-1:] == [".gz"]:
+        suffixes = suffixes[:-1]
+    return bool(suffixes) and suffixes[-1] in IMPORTED_SUFFIXES
+
+
 YARF_IMPORT_ENV = "YARF_IMPORT"
 # Where a build of this repository puts the importer: <repo>/build/bin/yarf-import.
 REPO_YARF_IMPORT = Path(__file__).resolve().parents[3] / "build" / "bin" / "yarf-import"
@@ -147,7 +157,7 @@ def load_scene(
     file's sample count.
     """
     path = Path(path)
-    if path.suffix.lower() in IMPORTED_SUFFIXES:
+    if is_imported_scene(path):
         return import_scene(path, parameters=parameters, inline_files=inline_files).scene
     try:
         text = path.read_text(encoding="utf-8")

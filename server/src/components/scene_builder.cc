@@ -559,7 +559,9 @@ std::vector<std::string> SceneAssets(const v1::Scene& scene) {
 
 std::string MeshFormat(const v1::Mesh& mesh) {
   if (!mesh.format().empty() || mesh.source_case() != v1::Mesh::kFile) return mesh.format();
-  const std::string ext = std::filesystem::path(mesh.file()).extension().string();
+  std::filesystem::path file = mesh.file();
+  if (file.extension() == ".gz") file = file.stem();  // x.ply.gz: a compressed x.ply
+  const std::string ext = file.extension().string();
   return ext.empty() ? ext : ext.substr(1);
 }
 

@@ -51,7 +51,7 @@ std::vector<std::filesystem::path> ComponentFiles(const v1::Scene& scene, const 
                                                   const AssetSource* assets);
 
 // The format of a mesh given as bytes: its `format`, else its file's
-// extension.
+// extension (before .gz: a gzip file is read inflated).
 std::string MeshFormat(const v1::Mesh& mesh);
 
 // The bytes of a mesh given as a `file` under `asset_root` (confined to

@@ -9,7 +9,9 @@ namespace yarf::importers {
 namespace fs = std::filesystem;
 
 ImportResult ImportSceneFile(const fs::path& file, const ImportOptions& options) {
-  std::string extension = file.extension().string();
+  // scene.pbrt.gz: a compressed scene.pbrt (ReadTextFile inflates it).
+  const fs::path named = file.extension() == ".gz" ? file.stem() : file;
+  std::string extension = named.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
   const SourceLocation where{file.string(), 0};
   if (extension == ".xml") return ImportMitsuba(ReadTextFile(file, where), file, options);

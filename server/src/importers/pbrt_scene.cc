@@ -264,7 +264,6 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
     if (depth >= kMaxIncludeDepth) Fail(where, "includes nested deeper than " + std::to_string(kMaxIncludeDepth));
     if (++includes_ > kMaxIncludes) Fail(where, "more than " + std::to_string(kMaxIncludes) + " includes");
     const fs::path target = folder_.Resolve(included, file, where);
-    if (target.extension() == ".gz") Fail(where, "compressed scene files are not supported: '" + included + "'");
     if (std::find(files_.begin(), files_.end(), target) != files_.end())
       Fail(where, "include cycle: '" + included + "' includes itself");
     const std::string text = ReadTextFile(target, where);

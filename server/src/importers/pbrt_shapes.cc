@@ -108,9 +108,12 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
   } else if (type == "plymesh") {
     const std::string name = params.String("filename", "");
     const auto file = folder_.Resolve(name, origin_.file, params.WhereIs("filename", where));
-    if (file.extension() != ".ply") {
-      Warn(params.WhereIs("filename", where), "plymesh-compressed",
-           "plymesh: only uncompressed .ply files are supported: '" + name + "' ignored");
+    // pbrt reads .ply and gzip-compressed .ply.gz files; yarf's mesh reader
+    // inflates the latter itself.
+    const std::string ending = file.extension() == ".gz" ? file.stem().extension().string() : file.extension().string();
+    if (ending != ".ply") {
+      Warn(params.WhereIs("filename", where), "plymesh-format",
+           "plymesh: '" + name + "' is not a .ply or .ply.gz file: ignored");
       return;
     }
     shape.mutable_mesh()->set_file(folder_.Relative(file));

@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <system_error>
 #include <vector>
+
+#include "kernel/inflate.h"
 
 namespace yarf::importers {
 
@@ -78,7 +81,15 @@ std::string ReadTextFile(const fs::path& file, const SourceLocation& where) {
     if (in && fs::file_size(file, error) == 0) return {};
     Fail(where, "cannot read '" + file.string() + "'");
   }
-  return text.str();
+  if (!IsGzip(text.view())) return text.str();
+  Inflated inflated;
+  try {
+    inflated = Inflate(text.view(), kMaxSceneBytes);
+  } catch (const std::runtime_error& e) {
+    Fail(where, "gzip file '" + file.string() + "': " + e.what());
+  }
+  if (!inflated.complete) Fail(where, "file '" + file.string() + "' inflates to more than 1 GiB");
+  return std::move(inflated.bytes);
 }
 
 }  // namespace yarf::importers

@@ -49,7 +49,8 @@ class SceneFolder {
   std::vector<std::filesystem::path> search_;  // absolute
 };
 
-// The bytes of a scene file (at most 1 GiB); fails at `where` otherwise.
+// The bytes of a scene file (at most 1 GiB), inflated when it is a gzip
+// file (to at most 1 GiB); fails at `where` otherwise.
 std::string ReadTextFile(const std::filesystem::path& file, const SourceLocation& where);
 
 }  // namespace yarf::importers

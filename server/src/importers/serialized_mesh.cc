@@ -1,11 +1,12 @@
 #include "importers/serialized_mesh.h"
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
+
+#include "kernel/inflate.h"
 
 namespace yarf::importers {
 namespace {
@@ -61,27 +62,12 @@ class Reader {
 
 // The first `limit` bytes the zlib stream `compressed` inflates to (all of
 // them when it holds fewer); fails on a damaged stream.
-std::string Inflate(std::string_view compressed, uint64_t limit, const SourceLocation& where) {
-  z_stream stream{};
-  if (inflateInit(&stream) != Z_OK) Fail(where, "serialized mesh: cannot start zlib");
-  std::string out;
-  char buffer[1 << 16];
-  stream.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data()));
-  stream.avail_in = uInt(std::min<size_t>(compressed.size(), UINT32_MAX));
-  int status = Z_OK;
-  while (status == Z_OK && out.size() < limit) {
-    stream.next_out = reinterpret_cast<Bytef*>(buffer);
-    stream.avail_out = uInt(std::min<uint64_t>(sizeof(buffer), limit - out.size()));
-    const uInt asked = stream.avail_out;
-    status = inflate(&stream, Z_NO_FLUSH);
-    out.append(buffer, asked - stream.avail_out);
-    // No input left and no output made: the stream is cut short.
-    if (status == Z_OK && stream.avail_in == 0 && stream.avail_out != 0) status = Z_BUF_ERROR;
+std::string InflateShape(std::string_view compressed, uint64_t limit, const SourceLocation& where) {
+  try {
+    return Inflate(compressed, limit).bytes;
+  } catch (const std::runtime_error& e) {
+    Fail(where, std::string("serialized mesh: ") + e.what());
   }
-  inflateEnd(&stream);
-  if (status != Z_STREAM_END && out.size() < limit)
-    Fail(where, "serialized mesh: corrupt or truncated zlib data");
-  return out;
 }
 
 // What a shape's data starts with.
@@ -137,7 +123,7 @@ SerializedMesh DecodeSerializedMesh(std::string_view bytes, uint64_t shape_index
 
   const std::string_view compressed = bytes.substr(offset + 4);
   const ShapeHeader header =
-      ReadShapeHeader(Inflate(compressed, 4 + kMaxNameBytes + 1 + 16, where), version, where);
+      ReadShapeHeader(InflateShape(compressed, 4 + kMaxNameBytes + 1 + 16, where), version, where);
   const uint64_t vertices = header.vertices, triangles = header.triangles;
   const uint64_t real = header.flags & kDoublePrecision ? 8 : 4;
   // Check the counts against the limits and the bytes present before
@@ -156,7 +142,7 @@ SerializedMesh DecodeSerializedMesh(std::string_view bytes, uint64_t shape_index
     Fail(where, "serialized mesh: the shape declares " + std::to_string(vertices) + " vertices and " +
                     std::to_string(triangles) + " triangles, but its " + std::to_string(compressed.size()) +
                     " bytes of zlib data cannot hold them");
-  const std::string data = Inflate(compressed, size, where);
+  const std::string data = InflateShape(compressed, size, where);
   if (data.size() < size)
     Fail(where, "serialized mesh: data ends early (" + std::to_string(data.size()) + " of " +
                     std::to_string(size) + " bytes)");

@@ -10,8 +10,10 @@
 #include <limits>
 #include <span>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 
+#include "kernel/inflate.h"
 #include "yarf/error.h"
 
 namespace yarf {
@@ -587,10 +589,29 @@ std::string UnknownFormat(const std::string& name, std::string_view format) {
   return "mesh '" + name + "': unknown format '" + std::string(format) + "' (obj or ply)";
 }
 
+// A gzip-compressed mesh file (pbrt's .ply.gz) inflates to at most this.
+constexpr uint64_t kMaxInflatedMeshBytes = uint64_t(4) << 30;
+
+// The file a gzip-compressed mesh file holds.
+std::string InflatedMesh(std::string_view bytes, const std::string& name) {
+  Inflated inflated;
+  try {
+    inflated = Inflate(bytes, kMaxInflatedMeshBytes);
+  } catch (const std::runtime_error& e) {
+    throw Error("mesh '" + name + "': gzip file: " + e.what());
+  }
+  if (!inflated.complete)
+    throw Error("mesh '" + name + "': gzip file inflates to more than " +
+                std::to_string(kMaxInflatedMeshBytes >> 20) + " MiB");
+  if (IsGzip(inflated.bytes)) throw Error("mesh '" + name + "': a gzip file inside a gzip file");
+  return std::move(inflated.bytes);
+}
+
 }  // namespace
 
 TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name,
                        const MeshOptions& options) {
+  if (IsGzip(bytes)) return ParseMesh(InflatedMesh(bytes, name), format, name, options);
   TriangleMesh mesh;
   if (format == "obj") mesh = ParseObj(bytes, name, options);
   else if (format == "ply") mesh = PlyReader(bytes, name, options).Read();
@@ -600,6 +621,12 @@ TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const st
 }
 
 MeshCounts CountMesh(std::string_view bytes, std::string_view format, const std::string& name) {
+  if (IsGzip(bytes)) {
+    const std::string inflated = InflatedMesh(bytes, name);
+    MeshCounts counts = CountMesh(inflated, format, name);
+    counts.parse_bytes += inflated.size();
+    return counts;
+  }
   if (format == "ply") return PlyReader(bytes, name, {}).Count();
   if (format != "obj") throw Error(UnknownFormat(name, format));
   const ObjGeometry geometry = ObjGeometryLines(bytes, name, nullptr);

@@ -56,8 +56,9 @@ struct MeshOptions {
   bool face_normals = false;
 };
 
-// Parses `bytes` as `format` ("obj" or "ply"); throws Error naming `name`
-// on malformed input. Polygons are split into triangles.
+// Parses `bytes` as `format` ("obj" or "ply"), inflated first when they
+// are a gzip file (pbrt's .ply.gz); throws Error naming `name` on
+// malformed input. Polygons are split into triangles.
 TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name,
                        const MeshOptions& options = {});
 
