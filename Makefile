@@ -21,7 +21,7 @@ APT_PACKAGES := g++ cmake ninja-build pkg-config python3 python3-venv \
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc \
   libgtest-dev libtinyobjloader-dev libpugixml-dev zlib1g-dev clang-14 libclang-rt-14-dev \
   curl ca-certificates libnanoflann-dev libsqlite3-dev libssl-dev openssl nats-server chromium \
-  libopenvdb-dev libboost-dev libxsimd-dev
+  libopenvdb-dev libboost-dev libxsimd-dev libosd-dev
 # Mitsuba's LLVM variant and perf (bench/profile.py), for the benchmarks only.
 BENCH_APT_PACKAGES := libllvm19 linux-perf
 

@@ -12,6 +12,7 @@
 
 #include "importers/diagnostics.h"
 #include "importers/import.h"
+#include "importers/mesh_shapes.h"
 #include "importers/pbrt_params.h"
 #include "importers/pbrt_tokenizer.h"
 #include "importers/properties_util.h"
@@ -88,6 +89,9 @@ class PbrtImporter {
 
   // pbrt_shapes.cc
   void Shape(const std::string& type, PbrtParams& params, const SourceLocation& where);
+  // A loopsubdiv shape's refined mesh from its control mesh and levels.
+  TriangleArrays Subdivided(const std::vector<double>& p, const std::vector<uint32_t>& indices, PbrtParams& params,
+                            const SourceLocation& where);
 
   // pbrt_media.cc: MakeNamedMedium, and the media shapes and the camera
   // name, resolved once every medium is known (pbrt-v4 resolves them at

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "importers/importer_test_support.h"
+#include "importers/loop_subdivision.h"
 #include "importers/mesh_shapes.h"
 
 namespace yarf::importers {
@@ -380,7 +381,8 @@ TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {
 TEST(PbrtImport, NormalMapsCutOutsCylindersAndMeshAttributes) {
   const ImportResult result = Import("pbrt_surfaces.pbrt");
   const v1::Scene& scene = result.scene;
-  ASSERT_EQ(scene.shapes_size(), 2);
+  ASSERT_EQ(scene.shapes_size(), 3);
+  EXPECT_EQ(scene.shapes(2).mesh().indices_size(), 3 * 8 * 16);  // the octahedron refined twice
   // The normal-mapped diffuse: a normalmap wrapper of the diffuse, its
   // map a linear bitmap with v flipped.
   const v1::Material& wrapped = MaterialOf(scene, scene.shapes(0));
@@ -496,6 +498,47 @@ TEST(PbrtImport, ATwistedBilinearPatchIsCutIntoFacetsOnItsSurfaceWithItsNormals)
   EXPECT_GT(mesh.indices_size(), 6);
   EXPECT_LE(off, kBilinearTolerance * std::sqrt(3.0));
   EXPECT_NEAR(area, exact, 1e-3 * exact);
+}
+
+TEST(PbrtImport, ALoopSubdivisionSurfaceIsRefinedOntoItsLimitSurface) {
+  // An octahedron refined 3 times (pbrt-v3's "nlevels"): 8 · 4³ triangles,
+  // every vertex inside the control hull |x| + |y| + |z| ≤ 1, normals unit
+  // and outward, triangles wound as the control mesh. A control vertex of
+  // valence n goes to (1 − nχ) v + χ Σ ring, χ = 1 / (n + 3 / (8β)) with
+  // Loop's β = (5/8 − (3/8 + cos(2π/n)/4)²) / n: (1, 0, 0) to (0.43636…, 0, 0).
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\nShape \"loopsubdiv\" \"integer nlevels\" 3 \"point3 P\" "
+      "[1 0 0  -1 0 0  0 1 0  0 -1 0  0 0 1  0 0 -1] \"integer indices\" "
+      "[0 2 4  2 1 4  1 3 4  3 0 4  2 0 5  1 2 5  3 1 5  0 3 5]\n",
+      "octahedron.pbrt");
+  EXPECT_TRUE(result.warnings.empty());
+  ASSERT_EQ(result.scene.shapes_size(), 1);
+  const v1::Mesh& mesh = result.scene.shapes(0).mesh();
+  EXPECT_EQ(mesh.indices_size(), 3 * 8 * 64);
+  ASSERT_EQ(mesh.normals_size(), mesh.positions_size());
+  double nearest = 1;
+  for (int i = 0; i < mesh.positions_size() / 3; ++i) {
+    const Vec3d p = Vertex(mesh, i), n = NormalOf(mesh, i);
+    EXPECT_LE(std::abs(p.x) + std::abs(p.y) + std::abs(p.z), 1 + 1e-6);
+    EXPECT_NEAR(Length(n), 1, 1e-5);
+    EXPECT_GT(Dot(n, p), 0);
+    nearest = std::min(nearest, Length(p - Vec3d{1, 0, 0}));
+  }
+  const double beta = (5.0 / 8 - (3.0 / 8) * (3.0 / 8)) / 4, chi = 1 / (4 + 3 / (8 * beta));
+  bool found = false;
+  for (int i = 0; i < mesh.positions_size() / 3; ++i)
+    found = found || Length(Vertex(mesh, i) - Vec3d{1 - 4 * chi, 0, 0}) < 1e-5;
+  EXPECT_TRUE(found) << "no vertex at the limit of (1, 0, 0), " << 1 - 4 * chi;
+  for (const auto& [a, b, c] : Triangles(mesh)) EXPECT_GT(Dot(Cross(b - a, c - a), a + b + c), 0);
+  // pbrt-v4's "levels" too; levels past the triangle limit are cut.
+  const ImportResult once = ImportPbrt(
+      "WorldBegin\nShape \"loopsubdiv\" \"integer levels\" 1 \"point3 P\" [0 0 0  1 0 0  0 1 0]"
+      " \"integer indices\" [0 1 2]\n",
+      "once.pbrt");
+  EXPECT_EQ(once.scene.shapes(0).mesh().indices_size(), 3 * 4);
+  EXPECT_EQ(LoopLevels(1, 12), 11);  // 4^11 = 2^22 triangles
+  EXPECT_EQ(LoopLevels(size_t(1) << 22, 1), 0);
+  EXPECT_EQ(LoopLevels(8, 3), 3);
 }
 
 TEST(PbrtImport, AnAreaLightOnBilinearPatchesEmitsItsPowerOverTheirArea) {

@@ -2,7 +2,9 @@
 // object being defined.
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
+#include "importers/loop_subdivision.h"
 #include "importers/mesh_shapes.h"
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
@@ -24,6 +26,24 @@ void OrientByNormals(const std::vector<double>& p, const std::vector<double>& n,
 
 }  // namespace
 
+TriangleArrays PbrtImporter::Subdivided(const std::vector<double>& p, const std::vector<uint32_t>& indices,
+                                        PbrtParams& params, const SourceLocation& where) {
+  // pbrt-v4 names the levels "levels"; pbrt-v3 (and its scenes) "nlevels".
+  const char* key = params.Has("nlevels") && !params.Has("levels") ? "nlevels" : "levels";
+  const int64_t asked = params.Integer(key, 3);
+  if (asked < 0 || asked > 16) Fail(params.WhereIs(key, where), "loopsubdiv: levels must be 0 to 16");
+  const int levels = LoopLevels(indices.size() / 3, int(asked));
+  if (levels < asked)
+    Warn(params.WhereIs(key, where), "loopsubdiv-levels",
+         "loopsubdiv: " + std::to_string(levels) + " levels instead of " + std::to_string(asked) + " (at most " +
+             std::to_string(kLoopTriangles) + " triangles)");
+  try {
+    return LoopSubdivision(p, indices, levels);
+  } catch (const std::runtime_error& e) {
+    Fail(where, std::string("loopsubdiv: ") + e.what());
+  }
+}
+
 void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const SourceLocation& where) {
   // pbrt-v4 skips surfaces of the interface material where no medium changes.
   const bool interface = state_.material == kInterface;
@@ -42,13 +62,14 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
   // light's power: a triangle mesh's triangles after the CTM, the
   // quadrics' as pbrt-v4 gives them (in object space, partial as given).
   std::vector<double> light_areas;
-  if (type == "trianglemesh" || type == "bilinearmesh") {
-    // A bilinear patch has four corners where a triangle has three.
-    const bool patches = type == "bilinearmesh";
+  if (type == "trianglemesh" || type == "bilinearmesh" || type == "loopsubdiv") {
+    // A bilinear patch has four corners where a triangle has three; a
+    // subdivision surface's control mesh has neither normals nor uv.
+    const bool patches = type == "bilinearmesh", subdivided = type == "loopsubdiv";
     const size_t corners = patches ? 4 : 3;
     const std::vector<double> p = params.Numbers("P", {"point3"});
     std::vector<double> raw = params.Numbers("indices", {"integer"});
-    const std::vector<double> n = params.Numbers("N", {"normal3"});
+    const std::vector<double> n = subdivided ? std::vector<double>() : params.Numbers("N", {"normal3"});
     if (p.empty() || p.size() % 3 != 0) Fail(params.WhereIs("P", where), what + ": P needs xyz triples");
     const size_t vertices = p.size() / 3;
     if (raw.empty() && vertices == corners) {
@@ -67,12 +88,13 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
       indices.push_back(uint32_t(i));
     }
     if (!n.empty() && n.size() != p.size()) Fail(params.WhereIs("N", where), what + ": N needs one normal per vertex");
-    std::vector<double> uv = params.Numbers("uv", {"point2", "float"});
-    if (uv.empty()) uv = params.Numbers("st", {"point2", "float"});
+    std::vector<double> uv = subdivided ? std::vector<double>() : params.Numbers("uv", {"point2", "float"});
+    if (uv.empty() && !subdivided) uv = params.Numbers("st", {"point2", "float"});
     if (!uv.empty() && uv.size() != 2 * vertices)
       Fail(params.WhereIs(params.Has("uv") ? "uv" : "st", where), what + ": uv needs one (u, v) per vertex");
-    TriangleArrays mesh_arrays =
-        patches ? BilinearPatches(p, indices, n, uv) : TriangleArrays{p, n, uv, std::move(indices)};
+    TriangleArrays mesh_arrays = patches      ? BilinearPatches(p, indices, n, uv)
+                                 : subdivided ? Subdivided(p, indices, params, where)
+                                              : TriangleArrays{p, n, uv, std::move(indices)};
     if (!mesh_arrays.normals.empty()) OrientByNormals(mesh_arrays.positions, mesh_arrays.normals, mesh_arrays.indices);
     if (state_.area_light) {
       // pbrt-v4 makes a light of each triangle, and of each patch.
@@ -95,7 +117,7 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     const std::vector<float> positions(mesh_arrays.positions.begin(), mesh_arrays.positions.end());
     v1::Mesh inline_mesh = InlineMesh(positions, mesh_arrays.indices);
     v1::Mesh& mesh = *shape.mutable_mesh() =
-        patches ? assembly_.Made(std::move(inline_mesh), where) : std::move(inline_mesh);
+        patches || subdivided ? assembly_.Made(std::move(inline_mesh), where) : std::move(inline_mesh);
     mesh.mutable_normals()->Add(mesh_arrays.normals.begin(), mesh_arrays.normals.end());
     mesh.mutable_uvs()->Add(mesh_arrays.uvs.begin(), mesh_arrays.uvs.end());
     if (params.Has("S")) {

@@ -3,6 +3,7 @@
 set(YARF_IMPORTER_SOURCES
   diagnostics.cc
   import.cc
+  loop_subdivision.cc
   matrix.cc
   measured_media.cc
   mesh_shapes.cc
