@@ -84,6 +84,22 @@ def test_a_failing_function_fails_the_call_with_its_own_message(client: Client) 
     assert client.is_serving()
 
 
+def test_values_float32_cannot_hold_are_refused_not_changed(client: Client) -> None:
+    """The server integrates float32 values: a complex value lost its
+    imaginary part and 1e39 became inf, silently."""
+    with pytest.raises(TypeError, match="complex values"):
+        integrate(lambda x: np.exp(1j * x[:, 0]), [0], [1], evaluations=1000, server=client)
+
+    def huge_near_one(x: np.ndarray) -> np.ndarray:
+        return np.where(x[:, 0] > 0.9, 1e39, 1.0)
+
+    with pytest.raises(grpc.RpcError) as beyond:
+        integrate(huge_near_one, [0], [1], method="mean_sample", evaluations=1000, server=client)
+    assert "beyond float32's range" in beyond.value.details()
+    with pytest.raises(TypeError, match="not numbers"):
+        integrate(lambda x: np.array(["a"] * len(x)), [0], [1], evaluations=1000, server=client)
+
+
 def test_vegas_plus_finds_a_narrow_peak_that_mean_sample_misses(client: Client) -> None:
     centre, width = 0.3, 0.02
 

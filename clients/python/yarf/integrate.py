@@ -139,7 +139,23 @@ class FunctionService(math_pb2_grpc.FunctionServicer):
         self.output_dimensions = probe.shape[1]
 
     def _call(self, points: np.ndarray) -> np.ndarray:
-        values = np.asarray(self.f(points), dtype=np.float32)
+        """f's values as float32, the type the server integrates; values that
+        float32 would change beyond rounding are refused, not changed."""
+        returned = np.asarray(self.f(points))
+        if np.iscomplexobj(returned):
+            raise TypeError(
+                "the function returned complex values: return the real and imaginary "
+                "parts as two outputs"
+            )
+        if returned.dtype.kind not in "biuf":
+            raise TypeError(f"the function returned {returned.dtype} values, not numbers")
+        with np.errstate(over="ignore"):  # overflow is checked next
+            values = returned.astype(np.float32)
+        if np.any(np.isinf(values) & np.isfinite(returned)):
+            raise ValueError(
+                "the function returned a value beyond float32's range (3.4e38), "
+                "which the server integrates in: scale it down"
+            )
         if values.ndim == 1:
             values = values[:, None]
         if values.ndim != 2 or values.shape[0] != points.shape[0]:
