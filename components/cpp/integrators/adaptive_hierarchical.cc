@@ -28,8 +28,8 @@
 //
 // The iterations after the first "discard" (default 1, the plain Monte
 // Carlo one) are averaged with equal weights, the variance of the average
-// being Σ σ_t² / T'², with χ²/dof and Q about that average saying whether
-// they agree. Unlike vegas, yarf does not weight them by their inverse
+// being Σ σ_t² / T'², with χ²/dof and Q saying whether they agree (about
+// their inverse-variance-weighted mean: see EqualWeights). Unlike vegas, yarf does not weight them by their inverse
 // variances: on a feature smaller than the leaves, an iteration that
 // missed part of it is low and has a small σ together, and weighting by
 // 1/σ² would pull the average down and shrink its error bar (on a 4-D
@@ -81,10 +81,21 @@ class EqualWeights {
     for (double v : variances_) sum += v;
     return std::sqrt(sum) / double(estimates_.size());
   }
-  // Σ_t (I_t − Ī)² / σ_t², about the average; iterations without spread
-  // (a constant f) count as agreeing.
+  // Σ_t (I_t − c)² / σ_t² about c = Σ I_t/σ_t² / Σ 1/σ_t², the centre
+  // that makes it χ² of T − 1 degrees of freedom when the iterations
+  // agree; about the equal-weight average it is larger, by the early
+  // iterations' noise over the later ones' small σ_t (Q < 0.05 in 12 to 18
+  // of 20 runs on a step whose errors were right). Iterations without
+  // spread (a constant f) count as agreeing.
   double ChiSquare() const {
-    const double mean = Estimate();
+    double weights = 0, weighted = 0;
+    for (size_t t = 0; t < estimates_.size(); ++t)
+      if (variances_[t] > 0) {
+        weights += 1 / variances_[t];
+        weighted += estimates_[t] / variances_[t];
+      }
+    if (weights == 0) return 0;
+    const double mean = weighted / weights;
     double chi2 = 0;
     for (size_t t = 0; t < estimates_.size(); ++t)
       if (variances_[t] > 0) chi2 += (estimates_[t] - mean) * (estimates_[t] - mean) / variances_[t];
