@@ -15,6 +15,7 @@ import sqlite3
 import subprocess
 import threading
 import time
+import zlib
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -757,6 +758,27 @@ def test_a_small_mesh_file_of_many_triangles_is_measured_by_its_triangles(
         assert "--max-job-memory" in caught.value.details(), caught.value.details()
         fans.mesh.data = fan_mesh(100, format)
         assert client.wait(client.submit(scene, spp=1), timeout=60).state == render_pb2.SUCCEEDED
+
+
+def test_a_gzip_mesh_is_inflated_at_submit_no_further_than_a_job_may_take(
+    limited: LocalServer,
+) -> None:
+    """1 MB of gzip inflates to 1 GiB: counting its triangles at Submit
+    stops at the job limit (64 MiB here), and the job is refused."""
+    packer = zlib.compressobj(9, zlib.DEFLATED, 16 + 15)
+    zeros = bytes(1 << 20)
+    bomb = b"".join(packer.compress(zeros) for _ in range(1024)) + packer.flush()
+    assert len(bomb) < 2 << 20
+    with limited.client() as client:
+        scene = small_scene()
+        shape = scene.shapes.add(name="bomb", material="grey")
+        shape.mesh.format = "ply"
+        shape.mesh.data = bomb
+        before = memory_megabytes(limited.pid, "VmHWM")
+        with pytest.raises(grpc.RpcError) as caught:
+            client.submit(scene, spp=1, name="gzip bomb")
+        assert caught.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED, caught.value.details()
+        assert memory_megabytes(limited.pid, "VmHWM") - before < 300
 
 
 def test_instancing_a_million_copies_of_many_shapes_is_refused_before_it_takes_the_memory(

@@ -592,26 +592,31 @@ std::string UnknownFormat(const std::string& name, std::string_view format) {
 // A gzip-compressed mesh file (pbrt's .ply.gz) inflates to at most this.
 constexpr uint64_t kMaxInflatedMeshBytes = uint64_t(4) << 30;
 
-// The file a gzip-compressed mesh file holds.
-std::string InflatedMesh(std::string_view bytes, const std::string& name) {
+// The file a gzip-compressed mesh file holds, up to `limit` bytes of it
+// (complete says whether that was all); more than kMaxInflatedMeshBytes
+// is refused.
+Inflated InflatedMesh(std::string_view bytes, const std::string& name, uint64_t limit) {
   Inflated inflated;
   try {
-    inflated = Inflate(bytes, kMaxInflatedMeshBytes);
+    inflated = Inflate(bytes, std::min(limit, kMaxInflatedMeshBytes));
   } catch (const std::runtime_error& e) {
     throw Error("mesh '" + name + "': gzip file: " + e.what());
   }
-  if (!inflated.complete)
+  if (!inflated.complete && limit >= kMaxInflatedMeshBytes)
     throw Error("mesh '" + name + "': gzip file inflates to more than " +
                 std::to_string(kMaxInflatedMeshBytes >> 20) + " MiB");
   if (IsGzip(inflated.bytes)) throw Error("mesh '" + name + "': a gzip file inside a gzip file");
-  return std::move(inflated.bytes);
+  return inflated;
 }
 
 }  // namespace
 
 TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const std::string& name,
                        const MeshOptions& options) {
-  if (IsGzip(bytes)) return ParseMesh(InflatedMesh(bytes, name), format, name, options);
+  if (IsGzip(bytes)) {
+    const Inflated inflated = InflatedMesh(bytes, name, kMaxInflatedMeshBytes);
+    return ParseMesh(inflated.bytes, format, name, options);
+  }
   TriangleMesh mesh;
   if (format == "obj") mesh = ParseObj(bytes, name, options);
   else if (format == "ply") mesh = PlyReader(bytes, name, options).Read();
@@ -620,11 +625,13 @@ TriangleMesh ParseMesh(std::string_view bytes, std::string_view format, const st
   return mesh;
 }
 
-MeshCounts CountMesh(std::string_view bytes, std::string_view format, const std::string& name) {
+MeshCounts CountMesh(std::string_view bytes, std::string_view format, const std::string& name,
+                     uint64_t max_inflated) {
   if (IsGzip(bytes)) {
-    const std::string inflated = InflatedMesh(bytes, name);
-    MeshCounts counts = CountMesh(inflated, format, name);
-    counts.parse_bytes += inflated.size();
+    const Inflated inflated = InflatedMesh(bytes, name, max_inflated);
+    if (!inflated.complete) return {.parse_bytes = max_inflated + 1};
+    MeshCounts counts = CountMesh(inflated.bytes, format, name, max_inflated);
+    counts.parse_bytes += inflated.bytes.size();
     return counts;
   }
   if (format == "ply") return PlyReader(bytes, name, {}).Count();

@@ -75,8 +75,11 @@ struct MeshCounts {
 };
 
 // Counts what ParseMesh would make of `bytes`, throwing Error where its
-// reading of the file would (index ranges and values are not checked).
-MeshCounts CountMesh(std::string_view bytes, std::string_view format, const std::string& name);
+// reading of the file would (index ranges and values are not checked). A
+// gzip file is inflated to at most `max_inflated` bytes: one that holds
+// more counts as a parse of more than that, its mesh not counted.
+MeshCounts CountMesh(std::string_view bytes, std::string_view format, const std::string& name,
+                     uint64_t max_inflated = uint64_t(1) << 62);
 
 // Throws Error unless every index is in range, every position finite, and
 // normals, uvs and attributes (finite) have one entry per vertex or face.

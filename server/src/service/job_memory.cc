@@ -82,26 +82,39 @@ uint64_t CountedMeshBytes(const MeshCounts& counts) {
 
 // Mesh files are counted, not sized: an OBJ or PLY of long fans makes a
 // triangle every byte or two. A file that cannot be read or counted counts
-// its size: the build refuses it, naming it.
-uint64_t FileMeshBytes(std::string_view bytes, const std::string& format) {
+// its size: the build refuses it, naming it. Past `limit` nothing more is
+// read or inflated: the job is refused anyway.
+uint64_t FileMeshBytes(std::string_view bytes, const std::string& format, uint64_t limit) {
   try {
-    return Saturating(bytes.size(), CountedMeshBytes(CountMesh(bytes, format, "")));
+    return Saturating(bytes.size(), CountedMeshBytes(CountMesh(bytes, format, "", limit)));
   } catch (const Error&) {
     return bytes.size();
   }
 }
 
-uint64_t MeshBytes(const v1::Mesh& mesh, const AssetStore* assets, const std::filesystem::path& asset_root) {
+uint64_t FileSize(const std::filesystem::path& path) {
+  std::error_code error;
+  const uintmax_t size = std::filesystem::file_size(path, error);
+  return error ? 0 : uint64_t(size);
+}
+
+uint64_t MeshBytes(const v1::Mesh& mesh, const AssetStore* assets, const std::filesystem::path& asset_root,
+                   uint64_t limit) {
   switch (mesh.source_case()) {
     case v1::Mesh::kData:
-      return FileMeshBytes(mesh.data(), mesh.format());
+      return FileMeshBytes(mesh.data(), mesh.format(), limit);
     case v1::Mesh::kAsset:
-    case v1::Mesh::kFile:
+    case v1::Mesh::kFile: {
+      const uint64_t size = mesh.source_case() == v1::Mesh::kAsset
+                                ? (assets && assets->Has(mesh.asset()) ? FileSize(assets->PathOf(mesh.asset())) : 0)
+                                : (asset_root.empty() ? 0 : FileSize(asset_root / mesh.file()));
+      if (size > limit) return size;
       try {
-        return FileMeshBytes(ReadMeshBytes(mesh, asset_root, assets, ""), MeshFormat(mesh));
+        return FileMeshBytes(ReadMeshBytes(mesh, asset_root, assets, ""), MeshFormat(mesh), limit);
       } catch (const Error&) {
         return 0;  // not held, or outside the folder: the build refuses it
       }
+    }
     default:
       return CountedMeshBytes({.vertices = uint64_t(mesh.positions_size() / 3),
                                .triangles = uint64_t(mesh.indices_size() / 3)});
@@ -109,10 +122,10 @@ uint64_t MeshBytes(const v1::Mesh& mesh, const AssetStore* assets, const std::fi
 }
 
 uint64_t ShapesBytes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes, const AssetStore* assets,
-                     const std::filesystem::path& asset_root) {
+                     const std::filesystem::path& asset_root, uint64_t limit) {
   uint64_t bytes = 0;
   for (const v1::SceneShape& shape : shapes)
-    if (shape.has_mesh()) bytes += MeshBytes(shape.mesh(), assets, asset_root);
+    if (shape.has_mesh()) bytes = Saturating(bytes, MeshBytes(shape.mesh(), assets, asset_root, limit));
   return bytes;
 }
 
@@ -149,11 +162,12 @@ uint64_t ComponentImageBytes(const v1::Scene& scene, const AssetStore* assets,
 }  // namespace
 
 uint64_t EstimateJobBytes(const v1::SubmitRequest& request, const AssetStore* assets,
-                          const std::filesystem::path& asset_root) {
+                          const std::filesystem::path& asset_root, uint64_t limit) {
   const v1::Scene& scene = request.scene();
   uint64_t bytes = uint64_t(scene.film().width()) * scene.film().height() * kBytesPerPixel;
-  bytes += ShapesBytes(scene.shapes(), assets, asset_root);
-  for (const v1::Group& group : scene.groups()) bytes += ShapesBytes(group.shapes(), assets, asset_root);
+  bytes = Saturating(bytes, ShapesBytes(scene.shapes(), assets, asset_root, limit));
+  for (const v1::Group& group : scene.groups())
+    bytes = Saturating(bytes, ShapesBytes(group.shapes(), assets, asset_root, limit));
   const Expansion placed = Expand(scene);
   bytes = Saturating(bytes, placed.placements, kBytesPerPlacement);
   bytes = Saturating(bytes, placed.shapes, kBytesPerPlacedShape);

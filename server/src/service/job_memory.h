@@ -17,9 +17,11 @@ namespace yarf {
 // placements of `request` and the images and volume grids its components
 // decode (from the files' headers) will need; asset files are sized from
 // `assets`, others from `asset_root`, where they are. Components' own
-// memory (a photon map) is theirs to bound through their parameters.
+// memory (a photon map) is theirs to bound through their parameters. Mesh
+// files are read and counted (gzip ones inflated) up to `limit` bytes: a
+// larger one is not read, since the job cannot be accepted.
 uint64_t EstimateJobBytes(const v1::SubmitRequest& request, const AssetStore* assets,
-                          const std::filesystem::path& asset_root);
+                          const std::filesystem::path& asset_root, uint64_t limit);
 
 // A default for --max-job-memory: half the machine's memory.
 uint64_t DefaultMaxJobBytes();

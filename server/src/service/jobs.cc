@@ -190,7 +190,8 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
   const std::vector<ComponentInfo> known = KnownClasses(resources_);
   CheckComponents(*accepted, known);
   CheckShare(*accepted, SplitsOf(*accepted, known));
-  if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root);
+  if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root,
+                                                options_.max_job_bytes);
       bytes > options_.max_job_bytes)
     throw LimitReached("the job would need about " + std::to_string(bytes >> 20) +
                        " MiB (its film, meshes, images and placements), more than the " +
