@@ -26,7 +26,7 @@ from imagestats import block_z_test
 from yarf import Client, LocalServer, RenderResult
 from yarf.assets import upload_scene_assets
 from yarf.cli import main
-from yarf.scene import ImportedScene, SceneError, import_scene, load_scene
+from yarf.scene import ImportedScene, SceneError, import_scene, inline_mesh_files, load_scene
 from yarf.v1 import render_pb2, scene_pb2
 
 PBRT_CBOX = SHARED / "scenes" / "pbrt-cornell-box" / "scene-v4.pbrt"
@@ -312,6 +312,11 @@ def test_gzip_compressed_pbrt_files_and_ply_meshes_render_as_their_plain_copies(
     images = [client.render(s.scene, spp=4, seed=3, timeout=60).pixels for s in (plain, packed)]
     assert images[0].mean() > 0.1
     np.testing.assert_array_equal(images[0], images[1])
+    # A mesh file named .ply.gz is a PLY file to the client too.
+    named = scene_pb2.Scene()
+    named.shapes.add(name="quad").mesh.file = "quad.ply.gz"
+    inline_mesh_files(named, tmp_path / "packed")
+    assert named.shapes[0].mesh.format == "ply" and named.shapes[0].mesh.data[:2] == b"\x1f\x8b"
     # The command line takes scene.pbrt.gz as a pbrt scene too.
     assert (
         main(["convert", str(tmp_path / "packed" / "scene.pbrt.gz"), str(tmp_path / "out.json")])

@@ -243,7 +243,12 @@ def _label(position: str, name: str) -> str:
 
 
 def _mesh_format(where: str, name: str, declared: str) -> str:
-    mesh_format = (declared or PurePath(name).suffix.lstrip(".")).lower()
+    """The declared format, else the file's extension (before .gz: yarfd inflates
+    gzip-compressed meshes)."""
+    path = PurePath(name)
+    if path.suffix.lower() == ".gz":
+        path = PurePath(path.stem)
+    mesh_format = (declared or path.suffix.lstrip(".")).lower()
     if mesh_format not in MESH_FORMATS:
         raise SceneError(
             f"{where}: mesh file {name!r}: unknown mesh format {mesh_format!r} "

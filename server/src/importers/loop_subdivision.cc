@@ -52,9 +52,9 @@ TriangleArrays LoopSubdivision(const std::vector<double>& positions, const std::
     const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
     if (a != b && b != c && a != c) corners.insert(corners.end(), {int(a), int(b), int(c)});
   }
+  if (corners.empty()) throw std::runtime_error("no triangle has three different corners");
   levels = LoopLevels(corners.size() / 3, levels);
   TriangleArrays out;
-  if (corners.empty()) return out;
 
   osd::Far::TopologyDescriptor control;
   control.numVertices = int(positions.size() / 3);

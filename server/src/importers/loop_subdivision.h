@@ -18,7 +18,8 @@ constexpr size_t kLoopTriangles = size_t(1) << 22;
 // (pbrt's boundary rule), every vertex then moved to its limit position,
 // with the limit surface's normal, turned to the side the triangles'
 // winding gives. Triangles with a repeated corner are left out. Throws
-// std::runtime_error for a control mesh OpenSubdiv cannot take.
+// std::runtime_error when none is left, or for a control mesh OpenSubdiv
+// cannot take.
 TriangleArrays LoopSubdivision(const std::vector<double>& positions, const std::vector<uint32_t>& indices,
                                int levels);
 

@@ -536,6 +536,15 @@ TEST(PbrtImport, ALoopSubdivisionSurfaceIsRefinedOntoItsLimitSurface) {
       " \"integer indices\" [0 1 2]\n",
       "once.pbrt");
   EXPECT_EQ(once.scene.shapes(0).mesh().indices_size(), 3 * 4);
+  try {
+    ImportPbrt("WorldBegin\nShape \"loopsubdiv\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"integer indices\" [0 0 1]\n",
+               "degenerate.pbrt");
+    ADD_FAILURE() << "a control mesh without a triangle imported";
+  } catch (const ImportError& e) {
+    EXPECT_NE(std::string(e.what()).find("degenerate.pbrt:2: loopsubdiv: no triangle has three different corners"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_EQ(LoopLevels(1, 12), 11);  // 4^11 = 2^22 triangles
   EXPECT_EQ(LoopLevels(size_t(1) << 22, 1), 0);
   EXPECT_EQ(LoopLevels(8, 3), 3);
