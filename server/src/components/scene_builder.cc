@@ -414,13 +414,11 @@ class Builder {
     const MeshOptions options{mesh.has_flip_tex_coords() ? mesh.flip_tex_coords() : true, mesh.face_normals()};
     switch (mesh.source_case()) {
       case v1::Mesh::kFile:
+      case v1::Mesh::kAsset:
         return ParseMesh(ReadMeshBytes(mesh, sources_.asset_root, sources_.assets, what), MeshFormat(mesh),
-                         mesh.file(), options);
+                         mesh.source_case() == v1::Mesh::kFile ? mesh.file() : what, options);
       case v1::Mesh::kData:
         return ParseMesh(mesh.data(), mesh.format(), what, options);
-      case v1::Mesh::kAsset:
-        return ParseMesh(ReadMeshBytes(mesh, sources_.asset_root, sources_.assets, what), mesh.format(), what,
-                         options);
       default:
         return InlineMesh(mesh, what);
     }

@@ -53,7 +53,6 @@ TriangleArrays LoopSubdivision(const std::vector<double>& positions, const std::
     if (a != b && b != c && a != c) corners.insert(corners.end(), {int(a), int(b), int(c)});
   }
   if (corners.empty()) throw std::runtime_error("no triangle has three different corners");
-  levels = LoopLevels(corners.size() / 3, levels);
   TriangleArrays out;
 
   osd::Far::TopologyDescriptor control;

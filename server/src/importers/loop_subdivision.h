@@ -13,8 +13,8 @@ namespace yarf::importers {
 constexpr size_t kLoopTriangles = size_t(1) << 22;
 
 // The control mesh (xyz triples, index triples) refined `levels` times
-// (each level cuts a triangle in four; fewer levels when that would pass
-// kLoopTriangles), as pbrt-v4 does: Loop's rules, boundary edges as creases
+// (each level cuts a triangle in four; LoopLevels says how many stay
+// within kLoopTriangles), as pbrt-v4 does: Loop's rules, boundary edges as creases
 // (pbrt's boundary rule), every vertex then moved to its limit position,
 // with the limit surface's normal, turned to the side the triangles'
 // winding gives. Triangles with a repeated corner are left out. Throws

@@ -48,14 +48,15 @@ Inflated Inflate(std::string_view compressed, uint64_t limit) {
     compressed.remove_prefix(piece);
   };
   feed();
+  // The input not yet inflated, in the piece zlib holds.
+  const auto rest = [&] { return std::string_view(reinterpret_cast<const char*>(stream->next_in), stream->avail_in); };
   for (;;) {
     if (out.bytes.size() == limit) {
       // Full: complete only if nothing is left to inflate.
       stream->next_out = reinterpret_cast<Bytef*>(buffer);
       stream->avail_out = 1;
       const int status = inflate(stream.get(), Z_NO_FLUSH);
-      const std::string_view rest(reinterpret_cast<const char*>(stream->next_in), stream->avail_in);
-      const bool more_members = gzip && (IsGzip(rest) || !compressed.empty());
+      const bool more_members = gzip && (IsGzip(rest()) || !compressed.empty());
       out.complete = status == Z_STREAM_END && stream->avail_out == 1 && !more_members;
       return out;
     }
@@ -67,8 +68,7 @@ Inflated Inflate(std::string_view compressed, uint64_t limit) {
     if (status == Z_STREAM_END) {
       // Another gzip member may follow; what follows a zlib stream is not its own.
       if (stream->avail_in == 0 && !compressed.empty()) feed();
-      const std::string_view rest(reinterpret_cast<const char*>(stream->next_in), stream->avail_in);
-      if (!gzip || !IsGzip(rest)) return out;
+      if (!gzip || !IsGzip(rest())) return out;
       if (inflateReset(stream.get()) != Z_OK) throw std::runtime_error("corrupt compressed data");
       continue;
     }
