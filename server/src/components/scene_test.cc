@@ -470,16 +470,35 @@ TEST_F(SceneTest, RaysEmbreeCannotTraceFailWithAnErrorInsteadOfAborting) {
   AddTriangle(scene.mutable_shapes())->mutable_to_world()->CopyFrom(Translation(0, 0, 5));
   const auto kernel = Build(scene);
   const float nan = std::numeric_limits<float>::quiet_NaN();
+  const auto at_time = [](float time) {
+    Ray ray{{0, 0, 0}, 0, {0, 0, 1}, kInfinity};
+    ray.time = time;
+    return ray;
+  };
+  const Ray good{{0, 0, 0}, 0, {0, 0, 1}, kInfinity};
   for (const Ray& bad : {Ray{{nan, 0, 0}, 0, {0, 0, 1}, kInfinity}, Ray{{0, 0, 0}, 0, {0, 0, 1e30f}, kInfinity},
-                         Ray{{0, 0, 0}, nan, {0, 0, 1}, kInfinity}, Ray{{0, 0, 0}, -1, {0, 0, 1}, kInfinity},
-                         Ray{{0, 0, 0}, 0, {0, 0, 1}, nan}}) {
-    std::vector<Ray> rays(9, Ray{{0, 0, 0}, 0, {0, 0, 1}, kInfinity});
-    rays[5] = bad;  // in the second packet of eight
-    std::vector<Hit> hits(rays.size());
-    std::vector<uint8_t> occluded(rays.size());
-    EXPECT_THROW(kernel->Intersect(rays, hits), Error);
-    EXPECT_THROW(kernel->Occluded(rays, occluded), Error);
-  }
+                         Ray{{0, -kInfinity, 0}, 0, {0, 0, 1}, kInfinity}, Ray{{0, 0, 0}, nan, {0, 0, 1}, kInfinity},
+                         Ray{{0, 0, 0}, -1, {0, 0, 1}, kInfinity}, Ray{{0, 0, 0}, 0, {0, 0, 1}, nan}, at_time(nan),
+                         at_time(-0.5f), at_time(1.5f)})
+    // In the first packet, in the last lane of a packet of eight, and in
+    // a later packet whatever the width (8 or 16).
+    for (const size_t place : {0, 7, 17}) {
+      std::vector<Ray> rays(20, good);
+      rays[place] = bad;
+      std::vector<Hit> hits(rays.size());
+      std::vector<uint8_t> occluded(rays.size());
+      EXPECT_THROW(kernel->Intersect(rays, hits), Error) << place;
+      EXPECT_THROW(kernel->Occluded(rays, occluded), Error) << place;
+    }
+  // The edges of the valid ranges pass: -0 and +inf where 0 and +inf may be.
+  std::vector<Ray> edges{Ray{{0, 0, 0}, -0.0f, {0, 0, 1}, kInfinity}, Ray{{0, 0, 0}, kInfinity, {0, 0, 1}, kInfinity},
+                         Ray{{0, 0, 0}, 0, {0, 0, 1}, -1}, at_time(-0.0f), at_time(1), Ray{{1e18f, 0, 0}, 0, {-1, 0, 0}, 1}};
+  std::vector<Hit> hits(edges.size());
+  std::vector<uint8_t> occluded(edges.size());
+  EXPECT_NO_THROW(kernel->Intersect(edges, hits));
+  EXPECT_NO_THROW(kernel->Occluded(edges, occluded));
+  EXPECT_NEAR(hits[0].t, 5.0f, 1e-5f);
+  EXPECT_FALSE(hits[1].Found());
   EXPECT_NEAR(Trace(*kernel, {0, 0, 0}, {0, 0, 1}).t, 5.0f, 1e-5f);  // rounded differently by Embree on some CPUs
 }
 

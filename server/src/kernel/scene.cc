@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <type_traits>
 
 #include "yarf/error.h"
 #include "yarf/support/warps.h"
@@ -39,7 +41,11 @@ Frame FrameOf(const Transform& to_world) {
 
 KernelScene::KernelScene(const EmbreeDevice& device, const Camera& camera, uint32_t width,
                          uint32_t height)
-    : device_(device), camera_(camera), width_(width), height_(height) {
+    : device_(device),
+      wide_packets_(rtcGetDeviceProperty(device.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0),
+      camera_(camera),
+      width_(width),
+      height_(height) {
   groups_.push_back({rtcNewScene(device.get()), {}});  // kWorld
 }
 
@@ -528,27 +534,33 @@ void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit
 
 namespace {
 
-// Rays go to Embree eight at a time: its 8-wide packet kernels are the
-// fastest on incoherent rays here (bench/embree_ceiling measures them all).
-constexpr size_t kPacket = 8;
-
 // Embree asserts (and so aborts the server) on a ray outside its valid
-// range: coordinates beyond ~1.8e18, NaNs, a NaN interval.
-bool Traceable(const Ray& r) {
-  constexpr float kLargest = 1e18f;
-  const auto in_range = [](Vec3 v) {
-    return std::abs(v.x) <= kLargest && std::abs(v.y) <= kLargest && std::abs(v.z) <= kLargest;
-  };
-  return in_range(r.origin) && in_range(r.direction) && r.tnear >= 0 && r.tnear <= kInfinity &&
-         !std::isnan(r.tfar) && r.time >= 0 && r.time <= 1;
+// range: coordinates beyond ~1.8e18, NaNs, a NaN interval. The test is
+// on the floats' bits, as integers, so that a packet's lanes take it in
+// one vectorised pass: a float's magnitude orders as its bits do, NaNs
+// above infinity, and a value in [0, most] has bits in [0, most's] or is
+// -0.
+constexpr float kLargestCoordinate = 1e18f;
+inline uint32_t Above(float x, float most) {
+  return (std::bit_cast<uint32_t>(x) & 0x7FFFFFFFu) > std::bit_cast<uint32_t>(most);
+}
+inline uint32_t Outside(float x, float most) {
+  const uint32_t bits = std::bit_cast<uint32_t>(x);
+  return (bits > std::bit_cast<uint32_t>(most)) & (bits != 0x80000000u);
+}
+inline uint32_t Untraceable(float ox, float oy, float oz, float dx, float dy, float dz, float tnear, float tfar,
+                            float time) {
+  return Above(ox, kLargestCoordinate) | Above(oy, kLargestCoordinate) | Above(oz, kLargestCoordinate) |
+         Above(dx, kLargestCoordinate) | Above(dy, kLargestCoordinate) | Above(dz, kLargestCoordinate) |
+         Outside(tnear, kInfinity) | Above(tfar, kInfinity) | Outside(time, 1.0f);
 }
 
 // Rays a component made are untrusted: one that Embree cannot trace fails
 // the job, never the server.
 void CheckTraceable(std::span<const Ray> rays, size_t first, size_t count) {
   for (size_t k = first; k < first + count; ++k)
-    if (!Traceable(rays[k])) [[unlikely]] {
-      const Ray& r = rays[k];
+    if (const Ray& r = rays[k]; Untraceable(r.origin.x, r.origin.y, r.origin.z, r.direction.x, r.direction.y,
+                                            r.direction.z, r.tnear, r.tfar, r.time)) [[unlikely]] {
       throw Error("a ray Embree cannot trace (origin " + std::to_string(r.origin.x) + ", " +
                   std::to_string(r.origin.y) + ", " + std::to_string(r.origin.z) + "; direction " +
                   std::to_string(r.direction.x) + ", " + std::to_string(r.direction.y) + ", " +
@@ -558,10 +570,36 @@ void CheckTraceable(std::span<const Ray> rays, size_t first, size_t count) {
     }
 }
 
-template <typename Packet>
+// Embree's packet types and calls of one width: 16 rays where the CPU
+// runs Embree's AVX-512 kernels, else 8 (bench/embree_ceiling measures
+// every width).
+template <size_t N>
+struct Packets {
+  static_assert(N == 8 || N == 16);
+  static constexpr bool kWide = N == 16;
+  using RayHit = std::conditional_t<kWide, RTCRayHit16, RTCRayHit8>;
+  using Ray = std::conditional_t<kWide, RTCRay16, RTCRay8>;
+  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, RayHit* packet) {
+    if constexpr (kWide)
+      rtcIntersect16(valid, scene, context, packet);
+    else
+      rtcIntersect8(valid, scene, context, packet);
+  }
+  static void Occluded(const int* valid, RTCScene scene, RTCIntersectContext* context, Ray* packet) {
+    if constexpr (kWide)
+      rtcOccluded16(valid, scene, context, packet);
+    else
+      rtcOccluded8(valid, scene, context, packet);
+  }
+};
+
+// Loads rays [first, first + count) into a packet of N lanes (the unused
+// lanes repeat the last ray, masked off by `valid`) and checks them there,
+// lane by lane in one vectorisable pass; only a packet with a ray Embree
+// cannot trace goes back to the rays to say which.
+template <size_t N, typename Packet>
 void LoadPacket(std::span<const Ray> rays, size_t first, size_t count, Packet& ray, int* valid) {
-  CheckTraceable(rays, first, count);
-  for (size_t k = 0; k < kPacket; ++k) {
+  for (size_t k = 0; k < N; ++k) {
     const Ray& r = rays[first + std::min(k, count - 1)];
     valid[k] = k < count ? -1 : 0;
     ray.org_x[k] = r.origin.x;
@@ -577,6 +615,12 @@ void LoadPacket(std::span<const Ray> rays, size_t first, size_t count, Packet& r
     ray.id[k] = 0;
     ray.flags[k] = 0;
   }
+  uint32_t untraceable = 0;
+  for (size_t k = 0; k < N; ++k)
+    untraceable |= Untraceable(ray.org_x[k], ray.org_y[k], ray.org_z[k], ray.dir_x[k], ray.dir_y[k], ray.dir_z[k],
+                               ray.tnear[k], ray.tfar[k], ray.time[k]);
+  if (untraceable) [[unlikely]]
+    CheckTraceable(rays, first, count);
 }
 
 RTCIntersectContext IncoherentContext() {
@@ -596,18 +640,36 @@ void KernelScene::ThrowIfStopped() const {
 
 void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   ThrowIfStopped();
+  if (wide_packets_)
+    IntersectPackets<16>(rays, hits);
+  else
+    IntersectPackets<8>(rays, hits);
+  closest_hit_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
+}
+
+void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  ThrowIfStopped();
+  if (wide_packets_)
+    OccludedPackets<16>(rays, occluded);
+  else
+    OccludedPackets<8>(rays, occluded);
+  shadow_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
+}
+
+template <size_t N>
+void KernelScene::IntersectPackets(std::span<const Ray> rays, std::span<Hit> hits) const {
   RTCIntersectContext context = IncoherentContext();
   const RTCScene world = groups_[kWorld].scene;
-  for (size_t first = 0; first < rays.size(); first += kPacket) {
-    const size_t count = std::min(kPacket, rays.size() - first);
-    alignas(32) RTCRayHit8 packet;
-    alignas(32) int valid[kPacket];
-    LoadPacket(rays, first, count, packet.ray, valid);
-    for (size_t k = 0; k < kPacket; ++k) {
+  for (size_t first = 0; first < rays.size(); first += N) {
+    const size_t count = std::min(N, rays.size() - first);
+    alignas(64) typename Packets<N>::RayHit packet;
+    alignas(64) int valid[N];
+    LoadPacket<N>(rays, first, count, packet.ray, valid);
+    for (size_t k = 0; k < N; ++k) {
       packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
       packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
-    rtcIntersect8(valid, world, &context, &packet);
+    Packets<N>::Intersect(valid, world, &context, &packet);
     for (size_t k = 0; k < count; ++k) {
       Hit& hit = hits[first + k];
       if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
@@ -629,22 +691,20 @@ void KernelScene::Intersect(std::span<const Ray> rays, std::span<Hit> hits) cons
       Shade(shape, position, ray.time, hit);
     }
   }
-  closest_hit_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
 }
 
-void KernelScene::Occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
-  ThrowIfStopped();
+template <size_t N>
+void KernelScene::OccludedPackets(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
   RTCIntersectContext context = IncoherentContext();
   const RTCScene world = groups_[kWorld].scene;
-  for (size_t first = 0; first < rays.size(); first += kPacket) {
-    const size_t count = std::min(kPacket, rays.size() - first);
-    alignas(32) RTCRay8 packet;
-    alignas(32) int valid[kPacket];
-    LoadPacket(rays, first, count, packet, valid);
-    rtcOccluded8(valid, world, &context, &packet);
+  for (size_t first = 0; first < rays.size(); first += N) {
+    const size_t count = std::min(N, rays.size() - first);
+    alignas(64) typename Packets<N>::Ray packet;
+    alignas(64) int valid[N];
+    LoadPacket<N>(rays, first, count, packet, valid);
+    Packets<N>::Occluded(valid, world, &context, &packet);
     for (size_t k = 0; k < count; ++k) occluded[first + k] = packet.tfar[k] < 0 ? 1 : 0;
   }
-  shadow_rays_.fetch_add(rays.size(), std::memory_order_relaxed);
 }
 
 uint32_t KernelScene::PickLight(float u_choice, float& u_rest) const {

@@ -210,6 +210,11 @@ class KernelScene final : public SceneView {
   // Fills hit's uv, shading normal and ∂p/∂u, ∂p/∂v (its shape, primitive,
   // barycentrics and geometric normal set) at `position`.
   void Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const;
+  // Intersect and Occluded in packets of N rays (8 or 16).
+  template <size_t N>
+  void IntersectPackets(std::span<const Ray> rays, std::span<Hit> hits) const;
+  template <size_t N>
+  void OccludedPackets(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
   // The lights of the emitting shapes, after the point and infinite ones.
   void AddSurfaceLights();
   // Each light's power estimated from its emitter, and the probabilities
@@ -245,6 +250,9 @@ class KernelScene final : public SceneView {
   float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
 
   const EmbreeDevice& device_;
+  // Whether Embree runs 16-ray packets natively (AVX-512) on this CPU;
+  // else rays go 8 at a time.
+  bool wide_packets_;
   Camera camera_;
   uint64_t service_handle_ = 0;
   float sample_spacing_ = 1;

@@ -200,23 +200,21 @@ bool MeshSurface::BySolidAngle(uint32_t t, Vec3 p, SphericalTriangle& seen) cons
   return SampledBySolidAngle(seen.area);
 }
 
-SurfaceSample MeshSurface::At(uint32_t t, const std::array<float, 3>& b) const {
-  SurfaceSample s;
+void MeshSurface::At(uint32_t t, const std::array<float, 3>& b, SurfaceSample& out) const {
   const auto& v = corners_[t];
-  s.position = v[0] * b[0] + v[1] * b[1] + v[2] * b[2];
-  s.normal = normals_[t];
-  s.primitive = t;
+  out.position = v[0] * b[0] + v[1] * b[1] + v[2] * b[2];
+  out.normal = normals_[t];
+  out.primitive = t;
   float uv[2];
   TriangleUvAt(mesh_->indices, mesh_->uvs, t, b[1], b[2], uv);
-  s.u = uv[0], s.v = uv[1];
-  return s;
+  out.u = uv[0], out.v = uv[1];
 }
 
 void MeshSurface::Sample(std::span<const float> uniform, std::span<SurfaceSample> out) const {
   for (size_t k = 0; k < out.size(); ++k) {
     float share = 0;
     const uint32_t t = Pick(uniform[3 * k], share);
-    out[k] = At(t, SampleUniformTriangle(uniform[3 * k + 1], uniform[3 * k + 2]));
+    At(t, SampleUniformTriangle(uniform[3 * k + 1], uniform[3 * k + 2]), out[k]);
     out[k].pdf = 1 / area_;
   }
 }
@@ -232,7 +230,7 @@ void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> unif
     std::array<float, 3> b;
     SphericalTriangle seen;
     if (BySolidAngle(t, p, seen) && SampleSphericalTriangle(corners_[t].data(), p, seen, u0, u1, b)) {
-      out[k] = At(t, b);
+      At(t, b, out[k]);
       out[k].pdf = share / seen.area;
       continue;
     }
@@ -251,7 +249,7 @@ void MeshSurface::SampleBatched(std::span<const Vec3> from, std::span<const floa
   for (size_t k = 0; k < n; ++k) {
     const SphericalTriangleSample& s = seen[k];
     if (s.sampled && SampledBySolidAngle(s.solid_angle)) {
-      out[k] = At(triangle[k], {1 - s.b1 - s.b2, s.b1, s.b2});
+      At(triangle[k], {1 - s.b1 - s.b2, s.b1, s.b2}, out[k]);
       out[k].pdf = share[k] / s.solid_angle;
       continue;
     }
@@ -260,7 +258,7 @@ void MeshSurface::SampleBatched(std::span<const Vec3> from, std::span<const floa
 }
 
 void MeshSurface::SampleByArea(uint32_t t, Vec3 p, float u0, float u1, SurfaceSample& out) const {
-  out = At(t, SampleUniformTriangle(u0, u1));
+  At(t, SampleUniformTriangle(u0, u1), out);
   out.pdf = AreaToSolidAngle(1 / area_, p, out);
 }
 
@@ -289,7 +287,8 @@ SurfaceSample MeshSurface::SamplePoint(float u0, float u1) const {
   // to [0,1); a float keeps fewer bits of it the more triangles there are.
   const float below = t > 0 ? cdf_[t - 1] : 0.0f, width = cdf_[t] - below;
   const float rest = width > 0 ? std::clamp((u0 * area_ - below) / width, 0.0f, std::nextafter(1.0f, 0.0f)) : 0.5f;
-  SurfaceSample s = At(t, SampleUniformTriangle(rest, u1));
+  SurfaceSample s;
+  At(t, SampleUniformTriangle(rest, u1), s);
   s.pdf = 1 / area_;
   return s;
 }

@@ -116,8 +116,11 @@ class MeshSurface final : public ShapeSurface {
   // A point of triangle t uniform in its area, with the density per solid
   // angle at p that Sample gives it.
   void SampleByArea(uint32_t t, Vec3 p, float u0, float u1, SurfaceSample& out) const;
-  // The point of triangle t at barycentrics b, with its uv.
-  SurfaceSample At(uint32_t t, const std::array<float, 3>& b) const;
+  // Sets all but the density of `out` to the point of triangle t at
+  // barycentrics b, with its uv. In place, field by field: a sample built
+  // apart and copied in was reloaded whole before its fields had been
+  // stored, a stall on every sample.
+  void At(uint32_t t, const std::array<float, 3>& b, SurfaceSample& out) const;
 
   std::vector<std::array<Vec3, 3>> corners_;
   std::vector<Vec3> normals_;
