@@ -470,12 +470,13 @@ Transform KernelScene::PlacementAt(const ShapeRecord& shape, float time) {
 
 Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position,
                          float time) const {
-  const Transform to_world = PlacementAt(shape, time);
+  // The placement is made (16 numbers, interpolated if moving) only for
+  // a placed shape: most hits are on shapes that have none.
   if (shape.kind == Kind::kTriangles) {
     const Vec3 n = face_normals_[shape.mesh][primitive];  // flipped already
-    return shape.placed ? Normalize(to_world.Normal(n)) : n;
+    return shape.placed ? Normalize(PlacementAt(shape, time).Normal(n)) : n;
   }
-  const Vec3 center = shape.placed ? to_world.Point(shape.center) : shape.center;
+  const Vec3 center = shape.placed ? PlacementAt(shape, time).Point(shape.center) : shape.center;
   const Vec3 n = Normalize(position - center);
   return shape.look.flip_normals ? -n : n;
 }
