@@ -138,7 +138,7 @@ class PathTracer final : public Transport {
     std::vector<Ray>& rays = w.rays;
     std::vector<Hit>& hits = w.hits;
     rays.resize(active.size());
-    hits.assign(active.size(), Hit{});
+    hits.resize(active.size());  // every hit written by Intersect
     for (size_t k = 0; k < active.size(); ++k) rays[k] = paths[active[k]].ray;
     scene.Intersect(rays, hits);
 

@@ -59,8 +59,9 @@ class Intersector {
   static constexpr const char* kInterface = "yarf.v1.Intersect";
 
   virtual ~Intersector() = default;
-  // Closest hit of each ray. The server answers CrossSection (every hit
-  // along each ray) by intersecting again from just past each hit.
+  // Closest hit of each ray, every field of every hit written (a miss is
+  // Hit{}). The server answers CrossSection (every hit along each ray) by
+  // intersecting again from just past each hit.
   // rpc: Intersect, CrossSection
   virtual void Intersect(std::span<const Ray> rays, std::span<Hit> hits) const = 0;
   // occluded[i] = 1 when something lies on ray i within its interval.
@@ -81,16 +82,16 @@ inline Vec3 OffsetRayOrigin(Vec3 p, Vec3 n, Vec3 d) {
 }
 
 // The shadow ray from surface point p (normal n) to the point `to`: it
-// leaves p's surface and stops short of `to`'s, whatever the offsets do to
-// its length.
-inline Ray ShadowRay(Vec3 p, Vec3 n, Vec3 to) {
-  Ray ray;
-  ray.origin = OffsetRayOrigin(p, n, to - p);
-  const Vec3 d = to - ray.origin;
+// leaves p's surface and stops `margin` short of `to`, whatever the
+// offsets do to its length. Made in one expression, so that a caller
+// copying it does not reread fields just stored one by one (a stall).
+inline Ray ShadowRay(Vec3 p, Vec3 n, Vec3 to, float margin, float time = 0) {
+  const Vec3 origin = OffsetRayOrigin(p, n, to - p);
+  const Vec3 d = to - origin;
   const float length = Length(d);
-  ray.direction = length > 0 ? d / length : n;
-  ray.tfar = std::max(0.0f, length - SurfaceOffset(to));
-  return ray;
+  return {origin, 0, length > 0 ? d / length : n, std::max(0.0f, length - margin), time};
 }
+// The same stopping short of `to`'s surface.
+inline Ray ShadowRay(Vec3 p, Vec3 n, Vec3 to) { return ShadowRay(p, n, to, SurfaceOffset(to)); }
 
 }  // namespace yarf

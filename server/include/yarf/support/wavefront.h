@@ -637,16 +637,9 @@ namespace yarf {
 // light seen from it: unbounded toward a light at infinity, up to a point
 // light itself, short of a surface light's surface.
 inline Ray ShadowRayToLight(Vec3 p, Vec3 ng, const LightDirection& light, float time) {
-  Ray ray;
-  if (light.AtInfinity()) {
-    ray.origin = OffsetRayOrigin(p, ng, light.direction);
-    ray.direction = light.direction;
-  } else {
-    ray = ShadowRay(p, ng, light.position);
-    if (light.delta) ray.tfar = std::max(0.0f, Length(light.position - ray.origin));
-  }
-  ray.time = time;
-  return ray;
+  if (light.AtInfinity()) return {OffsetRayOrigin(p, ng, light.direction), 0, light.direction, kInfinity, time};
+  // A point light has no surface to stop short of.
+  return ShadowRay(p, ng, light.position, light.delta ? 0.0f : SurfaceOffset(light.position), time);
 }
 
 // A surface point joined to a light seen from it (next-event estimation
