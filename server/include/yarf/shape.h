@@ -44,7 +44,10 @@ class SurfaceAreaSampler {
 
   virtual ~SurfaceAreaSampler() = default;
   // uniform: [N,3], the primitive's choice (in proportion to its area)
-  // and then the point on it.
+  // and then the point on it. A mesh picks its triangle with the point's
+  // first number instead, rescaled within the triangle's share, so that
+  // pairs stratified over the square stay stratified over the whole mesh
+  // (the choice's number is then unused).
   virtual void Sample(std::span<const float> uniform, std::span<SurfaceSample> out) const = 0;
 };
 

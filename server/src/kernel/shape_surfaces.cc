@@ -180,10 +180,14 @@ float MeshSurface::Share(uint32_t t) const {
   return area_ > 0 ? (cdf_[t] - (t > 0 ? cdf_[t - 1] : 0.0f)) / area_ : 0.0f;
 }
 
-uint32_t MeshSurface::Pick(float u, float& share) const {
+uint32_t MeshSurface::Pick(float& u, float& share) const {
   const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u * area_);
   const uint32_t t = uint32_t((it == cdf_.end() ? cdf_.end() - 1 : it) - cdf_.begin());
   share = Share(t);
+  // u's place within triangle t's stretch of the running sum, rescaled
+  // to [0,1); a float keeps fewer bits of it the more triangles there are.
+  const float below = t > 0 ? cdf_[t - 1] : 0.0f, width = cdf_[t] - below;
+  u = width > 0 ? std::clamp((u * area_ - below) / width, 0.0f, std::nextafter(1.0f, 0.0f)) : 0.5f;
   return t;
 }
 
@@ -211,12 +215,7 @@ void MeshSurface::At(uint32_t t, const std::array<float, 3>& b, SurfaceSample& o
 }
 
 void MeshSurface::Sample(std::span<const float> uniform, std::span<SurfaceSample> out) const {
-  for (size_t k = 0; k < out.size(); ++k) {
-    float share = 0;
-    const uint32_t t = Pick(uniform[3 * k], share);
-    At(t, SampleUniformTriangle(uniform[3 * k + 1], uniform[3 * k + 2]), out[k]);
-    out[k].pdf = 1 / area_;
-  }
+  for (size_t k = 0; k < out.size(); ++k) out[k] = SamplePoint(uniform[3 * k + 1], uniform[3 * k + 2]);
 }
 
 void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> uniform,
@@ -224,9 +223,9 @@ void MeshSurface::Sample(std::span<const Vec3> from, std::span<const float> unif
   if (by_solid_angle_ && LightPointKernelsAvailable()) return SampleBatched(from, uniform, out);
   for (size_t k = 0; k < out.size(); ++k) {
     const Vec3 p = from[k];
-    const float u0 = uniform[3 * k + 1], u1 = uniform[3 * k + 2];
-    float share = 0;
-    const uint32_t t = Pick(uniform[3 * k], share);
+    float u0 = uniform[3 * k + 1], share = 0;
+    const float u1 = uniform[3 * k + 2];
+    const uint32_t t = Pick(u0, share);
     std::array<float, 3> b;
     SphericalTriangle seen;
     if (BySolidAngle(t, p, seen) && SampleSphericalTriangle(corners_[t].data(), p, seen, u0, u1, b)) {
@@ -242,10 +241,10 @@ void MeshSurface::SampleBatched(std::span<const Vec3> from, std::span<const floa
                                 std::span<SurfaceSample> out) const {
   const size_t n = out.size();
   std::vector<uint32_t> triangle(n);
-  std::vector<float> share(n);
-  for (size_t k = 0; k < n; ++k) triangle[k] = Pick(uniform[3 * k], share[k]);
+  std::vector<float> share(n), u(uniform.begin(), uniform.begin() + 3 * n);
+  for (size_t k = 0; k < n; ++k) triangle[k] = Pick(u[3 * k + 1], share[k]);
   std::vector<SphericalTriangleSample> seen(n);
-  SampleSphericalTriangles(corners_, triangle, from.first(n), uniform, seen);
+  SampleSphericalTriangles(corners_, triangle, from.first(n), u, seen);
   for (size_t k = 0; k < n; ++k) {
     const SphericalTriangleSample& s = seen[k];
     if (s.sampled && SampledBySolidAngle(s.solid_angle)) {
@@ -253,7 +252,7 @@ void MeshSurface::SampleBatched(std::span<const Vec3> from, std::span<const floa
       out[k].pdf = share[k] / s.solid_angle;
       continue;
     }
-    SampleByArea(triangle[k], from[k], uniform[3 * k + 1], uniform[3 * k + 2], out[k]);
+    SampleByArea(triangle[k], from[k], u[3 * k + 1], u[3 * k + 2], out[k]);
   }
 }
 
@@ -283,12 +282,8 @@ void MeshSurface::Pdf(std::span<const Vec3> from, std::span<const SurfaceSample>
 SurfaceSample MeshSurface::SamplePoint(float u0, float u1) const {
   float share = 0;
   const uint32_t t = Pick(u0, share);
-  // u0's place within triangle t's stretch of the running sum, rescaled
-  // to [0,1); a float keeps fewer bits of it the more triangles there are.
-  const float below = t > 0 ? cdf_[t - 1] : 0.0f, width = cdf_[t] - below;
-  const float rest = width > 0 ? std::clamp((u0 * area_ - below) / width, 0.0f, std::nextafter(1.0f, 0.0f)) : 0.5f;
   SurfaceSample s;
-  At(t, SampleUniformTriangle(rest, u1), s);
+  At(t, SampleUniformTriangle(u0, u1), s);
   s.pdf = 1 / area_;
   return s;
 }

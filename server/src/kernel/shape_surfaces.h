@@ -101,8 +101,11 @@ class MeshSurface final : public ShapeSurface {
   SurfaceSample SamplePoint(float u0, float u1) const override;
 
  private:
-  // The triangle u picks in proportion to area, and its share of the area.
-  uint32_t Pick(float u, float& share) const;
+  // The triangle u picks in proportion to area, and its share of the
+  // area; u becomes its place within the triangle's share, uniform on
+  // [0,1) again, so that a pair of numbers stratified over the square
+  // stays stratified over the whole mesh (as Mitsuba's meshes do).
+  uint32_t Pick(float& u, float& share) const;
   float Share(uint32_t triangle) const;
   // Whether a triangle that subtends `solid_angle` is sampled by it.
   static bool SampledBySolidAngle(float solid_angle);

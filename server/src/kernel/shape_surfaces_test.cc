@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "yarf/support/warps.h"
@@ -128,6 +129,39 @@ TEST(ShapeSurfaces, TrianglesFarAwayAreSampledByArea) {
   quad.Sample({&p, 1}, u, {&s, 1});
   const Vec3 d = s.position - p;
   EXPECT_NEAR(s.pdf, Dot(d, d) / std::abs(d.z / Length(d)) / quad.Area(), 1e-3 * s.pdf);
+}
+
+TEST(ShapeSurfaces, AMeshKeepsThePointPairsStratification) {
+  // The pair (u0, u1) picks the triangle too, u0 rescaled within its
+  // share: a 16 × 16 grid of pairs puts exactly half its points in each of
+  // a quad's two equal triangles, the same points whatever the first
+  // number is. Picked by that number, the split would be binomial.
+  const TriangleMesh mesh = Quad(1);
+  const Vec3 p(0.3f, 0.4f, 0.5f);
+  constexpr size_t kSide = 16, kCount = kSide * kSide;
+  std::vector<float> grid = Uniform(kCount, 4), regridded = Uniform(kCount, 5);
+  for (size_t i = 0; i < kSide; ++i)
+    for (size_t j = 0; j < kSide; ++j)
+      for (std::vector<float>* u : {&grid, &regridded}) {
+        (*u)[3 * (i * kSide + j) + 1] = (i + 0.5f) / kSide;
+        (*u)[3 * (i * kSide + j) + 2] = (j + 0.5f) / kSide;
+      }
+  for (bool by_solid_angle : {false, true}) {
+    const MeshSurface quad = QuadSurface(mesh, by_solid_angle);
+    std::vector<SurfaceSample> seen(kCount), reseen(kCount), by_area(kCount);
+    quad.Sample(std::vector<Vec3>(kCount, p), grid, seen);
+    quad.Sample(std::vector<Vec3>(kCount, p), regridded, reseen);
+    quad.Sample(grid, by_area);
+    for (const std::vector<SurfaceSample>* samples : {&seen, &by_area}) {
+      const auto first = std::count_if(samples->begin(), samples->end(),
+                                       [](const SurfaceSample& s) { return s.primitive == 0; });
+      EXPECT_EQ(first, kCount / 2) << "by solid angle " << by_solid_angle;
+    }
+    for (size_t k = 0; k < kCount; ++k) {
+      EXPECT_EQ(seen[k].primitive, reseen[k].primitive);
+      EXPECT_EQ(Length(seen[k].position - reseen[k].position), 0);
+    }
+  }
 }
 
 TEST(ShapeSurfaces, MeshSamplesCarryTheirTextureCoordinates) {
