@@ -14,10 +14,14 @@ three sets of pixels: the whole image; its hardest pixels, the 5% where
 the path tracer's own variance is largest (the caustic, the small
 lights' reflections); and the image off its lamps, without the pixels
 that see a lamp directly or in a mirror (above LAMP_LEVEL in the
-reference or in a short bidirectional render). A lamp much smaller than
-a pixel, as the water caustic's, is seen by camera paths only when one
-happens to hit it: its few pixels' error, the same for every method that
-starts at the camera, would hide the rest of the image's.
+reference, or lit at all in a render of the scene whose materials, but
+those that only reflect and refract through delta lobes, are made
+black: lamps_only). A lamp much smaller than a pixel, as the water
+caustic's, or its glint in a glass, as veach-bidir's bulb in the egg on
+the table, is seen by camera paths only when one happens to hit it (no
+other strategy samples a lamp seen through delta surfaces): its few
+pixels' error, the same for every method that starts at the camera,
+would hide the rest of the image's.
 Each scene's reference is rendered by the methods that converge fastest
 there, far longer than any method's run: on the boxes and the MIS scene
 the mean of a path-traced and a bidirectional render; on veach-bidir,
@@ -74,6 +78,10 @@ SCENES = {
 }
 REFERENCE_SCALE = float(os.environ.get("YARF_BENCH_REFERENCE_SCALE", "1"))
 UNBIASED_REFERENCE = {"path": 4096, "bdpt": 1024}
+# Materials that scatter through delta lobes alone (null: a boundary): a
+# lamp seen through them is seen as in a mirror.
+DELTA_MATERIALS = {"conductor", "dielectric", "mirror", "thindielectric", "null"}
+LAMPS_ONLY_SPP = 16384
 # A pixel above this (any channel) sees a lamp, directly or in a mirror:
 # light reflected off surfaces stays below 2 in these scenes.
 LAMP_LEVEL = 10.0
@@ -112,6 +120,22 @@ def render(
     if status.state != render_pb2.SUCCEEDED:
         raise Refused(f"{method} failed: {status.error}")
     return client.image(job).astype(np.float64), status.elapsed_seconds, job
+
+
+def lamps_only(scene: scene_pb2.Scene) -> scene_pb2.Scene:
+    """`scene` with every material but the delta ones (DELTA_MATERIALS)
+    black: its light reaches the camera from the lamps directly or through
+    mirrors and glass alone, so its image is lit exactly where a pixel sees
+    a lamp so."""
+    lamps = scene_pb2.Scene()
+    lamps.CopyFrom(scene)
+    for material in lamps.materials:
+        if material.class_name in DELTA_MATERIALS:
+            continue
+        material.class_name = "lambertian"
+        material.properties.Clear()
+        material.properties.values["reflectance"].rgb_value.SetInParent()
+    return lamps
 
 
 def reference_half(client: Client, scene: scene_pb2.Scene, name: str, seed: int) -> np.ndarray:
@@ -170,9 +194,9 @@ def main() -> None:
             first, second = (reference_half(client, scene, name, seed) for seed in (99, 100))
             _, _, path_job = render(client, scene, "path", 256, 98)
             path_variance = client.variance(path_job).sum(axis=2)
-            lamp_finder, _, _ = render(client, scene, "bdpt", 16, 97)
-            lamps = np.zeros(path_variance.shape, dtype=bool)
-            for image in (lamp_finder, first, second):
+            seen, _, _ = render(client, lamps_only(scene), "path", LAMPS_ONLY_SPP, 97)
+            lamps = seen.max(axis=2) > 0
+            for image in (first, second):
                 lamps |= image.max(axis=2) > LAMP_LEVEL
             regions = {
                 "equal_time_rmse": np.ones(path_variance.shape, dtype=bool),
