@@ -80,8 +80,6 @@ struct Vertex {
   // The geometric normal; a point light's or the camera's axis; at
   // infinity, the direction its light travels toward the scene.
   Vec3 n;
-  // Surfaces: the shading frame the surface model sees (ShadingFrame).
-  Frame frame{Vec3(0, 0, 1)};
   // Toward the previous vertex of its subpath, world space.
   Vec3 wi;
   Vec3 beta;
@@ -94,7 +92,6 @@ struct Vertex {
   // The medium the vertex lies in; on a surface, the one on the side its
   // subpath arrived from.
   uint32_t medium = kNoMedium;
-  SurfaceSite site;
   const Emitter* emitter = nullptr;
 
   bool OnSurface() const {
@@ -122,14 +119,31 @@ struct Vertex {
   }
 };
 
+// What the surface models and emitters are told of a vertex on a surface:
+// its shading frame (ShadingFrame; a light at infinity: its frame) and
+// where it lies. Kept apart from the Vertex, which the strategy weights
+// read many times over, so that those reads stay dense.
+struct VertexSurface {
+  Frame frame{Vec3(0, 0, 1)};
+  SurfaceSite site;
+};
+
 // Subpaths of a batch: room for `capacity` vertices per point, each made
-// when its subpath reaches it (most end long before a deep max_depth).
+// when its subpath reaches it (most end long before a deep max_depth), and
+// beside each its surface record, written only where there is a surface.
 struct Subpaths {
   std::vector<uint32_t> count;
   uint32_t capacity = 0;
   Subpaths(size_t n, uint32_t capacity_)
-      : count(n, 0), capacity(capacity_), room_(n * capacity_), vertices_(Room().allocate(room_)) {}
-  ~Subpaths() { Room().deallocate(vertices_, room_); }
+      : count(n, 0),
+        capacity(capacity_),
+        room_(n * capacity_),
+        vertices_(std::allocator<Vertex>().allocate(room_)),
+        surfaces_(std::allocator<VertexSurface>().allocate(room_)) {}
+  ~Subpaths() {
+    std::allocator<Vertex>().deallocate(vertices_, room_);
+    std::allocator<VertexSurface>().deallocate(surfaces_, room_);
+  }
   Subpaths(const Subpaths&) = delete;
   Subpaths& operator=(const Subpaths&) = delete;
 
@@ -137,12 +151,18 @@ struct Subpaths {
   Vertex& Append(size_t path) { return *std::construct_at(vertices_ + path * capacity + count[path]++); }
   Vertex& at(size_t path, uint32_t k) { return vertices_[path * capacity + k]; }
   const Vertex& at(size_t path, uint32_t k) const { return vertices_[path * capacity + k]; }
+  // The surface record of vertex k, made by SetSurface.
+  void SetSurface(size_t path, uint32_t k, const Frame& frame, const SurfaceSite& site) {
+    std::construct_at(surfaces_ + path * capacity + k, VertexSurface{frame, site});
+  }
+  const VertexSurface& surface(size_t path, uint32_t k) const { return surfaces_[path * capacity + k]; }
 
  private:
-  static_assert(std::is_trivially_destructible_v<Vertex>, "vertices are left without destruction");
-  static std::allocator<Vertex> Room() { return {}; }
+  static_assert(std::is_trivially_destructible_v<Vertex> && std::is_trivially_destructible_v<VertexSurface>,
+                "vertices are left without destruction");
   size_t room_;
   Vertex* vertices_;
+  VertexSurface* surfaces_;
 };
 
 // A walk in progress: its weight, channel ratios, hero and walk numbers;
@@ -321,8 +341,10 @@ class Bdpt final : public Transport {
         l.pdf_fwd = s.light.pdf;
         l.shape = s.light.shape;
         l.medium = media[i];
-        l.site = SurfaceSite::Uv(s.light.u, s.light.v);
         l.emitter = s.light.emitter;
+        // The emitter sees directions in the light's own frame at
+        // infinity, else in the geometric one.
+        light.SetSurface(i, 0, l.infinite ? s.light.frame : Frame(l.n), SurfaceSite::Uv(s.light.u, s.light.v));
         if (!s.Valid()) continue;
         Walker& walker = walkers[i];
         walker = Walker{};
@@ -340,7 +362,6 @@ class Bdpt final : public Transport {
           const float disk = DiskPdf(scene);
           l.pdf_fwd = s.light.pdf / disk * s.pdf_direction;
           l.beta = Vec3(1, 1, 1) * (1.0f / l.pdf_fwd);
-          l.frame = s.light.frame;
           walker.pdf_dir = disk;
         }
         if (MaxComponent(walker.beta) > 0) active.push_back(i);
@@ -427,8 +448,7 @@ class Bdpt final : public Transport {
         const ShadingPoint at(scene, hits[k], rays[k]);
         v.p = at.position;
         v.n = hits[k].normal;
-        v.frame = at.frame;
-        v.site = at.site;
+        paths.SetSurface(i, paths.count[i] - 1, at.frame, at.site);
         v.wi = -rays[k].direction;
         v.beta = walker.beta;
         v.r_u = walker.r_u;
@@ -438,7 +458,7 @@ class Bdpt final : public Transport {
         v.medium = walker.medium;
         v.emitter = scene.EmitterOf(hits[k].shape);
         if (paths.count[i] == paths.capacity) continue;
-        ScatterQuery& q = queries.emplace_back(v.material, v.frame.ToLocal(v.wi), v.site);
+        ScatterQuery& q = queries.emplace_back(v.material, at.wi, at.site);
         q.uniform[0] = points.Get(i, base(i) + 2);
         q.uniform[1] = points.Get(i, base(i));
         q.uniform[2] = points.Get(i, base(i) + 1);
@@ -449,10 +469,11 @@ class Bdpt final : public Transport {
         const uint32_t i = scattering[q];
         const ScatterAnswer& a = sampled[q];
         Vertex& v = paths.at(i, paths.count[i] - 1);
-        const Vec3 weight = a.weight * ShadingWeight(v.frame, v.n, queries[q].wi, a.wo, mode);
+        const Frame& frame = paths.surface(i, paths.count[i] - 1).frame;
+        const Vec3 weight = a.weight * ShadingWeight(frame, v.n, queries[q].wi, a.wo, mode);
         if (!(a.pdf > 0) || !(MaxComponent(weight) > 0)) continue;
         Vertex& prev = paths.at(i, paths.count[i] - 2);
-        const Vec3 dir = Normalize(v.frame.ToWorld(a.wo));
+        const Vec3 dir = Normalize(frame.ToWorld(a.wo));
         Walker& walker = walkers[i];
         walker.beta *= weight;
         walker.pdf_dir = a.pdf;
@@ -565,11 +586,11 @@ class Bdpt final : public Transport {
     light_queries.reserve(most);
     camera_queries.reserve(most);
     emitter_queries.reserve(most);
-    // Surface models see a surface vertex's shading frame; emitters the
-    // geometric one.
-    const auto local = [](const Vertex& v, Vec3 w) { return v.frame.ToLocal(w); };
-    const auto emitter_local = [](const Vertex& v, Vec3 w) { return Frame(v.n).ToLocal(w); };
-    for (uint32_t i = 0; i < camera.count.size(); ++i)
+    // Surface models see a surface vertex's shading frame; an emitter hit
+    // by a camera path the geometric one (a light path's start keeps its
+    // emitter's frame in its surface record).
+    for (uint32_t i = 0; i < camera.count.size(); ++i) {
+      const float lens_u = points.Get(i, kLensDimension), lens_v = points.Get(i, kLensDimension + 1);
       for (uint32_t t = 1; t <= camera.count[i]; ++t)
         for (uint32_t s = 0; s <= light.count[i]; ++s) {
           if (s + t < 2 || int(s + t) - 1 > max_depth_) continue;
@@ -589,7 +610,7 @@ class Bdpt final : public Transport {
           if (s == 0) {
             if (!pt.emitter) continue;
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.emplace_back(pt.emitter, emitter_local(pt, pt.wi), pt.site);
+            emitter_queries.emplace_back(pt.emitter, Frame(pt.n).ToLocal(pt.wi), camera.surface(i, t - 1).site);
             joins.push_back(j);
             continue;
           }
@@ -599,9 +620,7 @@ class Bdpt final : public Transport {
           // light at infinity is seen by the camera paths that leave.
           if (s == 1 && t == 1 && (qs.delta_position || qs.infinite)) continue;
           if (t == 1) {
-            if (!scene.ConnectToCamera(qs.p, points.Get(i, kLensDimension), points.Get(i, kLensDimension + 1),
-                                       j.camera))
-              continue;
+            if (!scene.ConnectToCamera(qs.p, lens_u, lens_v, j.camera)) continue;
           } else if (pt.delta) {
             continue;
           }
@@ -612,24 +631,27 @@ class Bdpt final : public Transport {
           const Vec3 to_pt = qs.infinite ? qs.n : Normalize(d);
           if (s == 1) {
             j.emitter = uint32_t(emitter_queries.size());
-            emitter_queries.emplace_back(qs.emitter, qs.infinite ? qs.frame.ToLocal(to_pt) : emitter_local(qs, to_pt),
-                                         qs.site);
+            const VertexSurface& start = light.surface(i, 0);
+            emitter_queries.emplace_back(qs.emitter, start.frame.ToLocal(to_pt), start.site);
           } else if (qs.kind == Vertex::Kind::kMedium) {
             j.light_phase = uint32_t(light_phases.size());
             light_phases.push_back({qs.medium, qs.wi, to_pt, qs.p});
           } else {
             j.light_surface = uint32_t(light_queries.size());
-            light_queries.emplace_back(qs.material, local(qs, qs.wi), local(qs, to_pt), qs.site);
+            const VertexSurface& at = light.surface(i, s - 1);
+            light_queries.emplace_back(qs.material, at.frame.ToLocal(qs.wi), at.frame.ToLocal(to_pt), at.site);
           }
           if (t > 1 && pt.kind == Vertex::Kind::kMedium) {
             j.camera_phase = uint32_t(camera_phases.size());
             camera_phases.push_back({pt.medium, pt.wi, -to_pt, pt.p});
           } else if (t > 1) {
             j.camera_surface = uint32_t(camera_queries.size());
-            camera_queries.emplace_back(pt.material, local(pt, pt.wi), local(pt, -to_pt), pt.site);
+            const VertexSurface& at = camera.surface(i, t - 1);
+            camera_queries.emplace_back(pt.material, at.frame.ToLocal(pt.wi), at.frame.ToLocal(-to_pt), at.site);
           }
           joins.push_back(j);
         }
+    }
     const std::vector<SurfaceAnswer> at_light = EvaluateSurfaces(scene, TransportMode::kImportance, light_queries);
     const std::vector<SurfaceAnswer> at_camera = EvaluateSurfaces(scene, TransportMode::kRadiance, camera_queries);
     const std::vector<SurfaceAnswer> phase_at_light = EvaluatePhases(scene, light_phases);
@@ -687,7 +709,8 @@ class Bdpt final : public Transport {
         const SurfaceQuery& q = light_queries[j.light_surface];
         light_answer = &at_light[j.light_surface];
         value *= light_answer->f *
-                 (std::abs(q.wo.z) * ShadingWeight(qs.frame, qs.n, q.wi, q.wo, TransportMode::kImportance));
+                 (std::abs(q.wo.z) *
+                  ShadingWeight(light.surface(j.path, j.s - 1).frame, qs.n, q.wi, q.wo, TransportMode::kImportance));
       }
       const SurfaceAnswer* camera_answer = nullptr;
       if (j.t == 1) {
@@ -701,7 +724,9 @@ class Bdpt final : public Transport {
         const SurfaceQuery& q = camera_queries[j.camera_surface];
         camera_answer = &at_camera[j.camera_surface];
         value *= pt.beta * camera_answer->f *
-                 (std::abs(q.wo.z) * ShadingWeight(pt.frame, pt.n, q.wi, q.wo, TransportMode::kRadiance) / dist2);
+                 (std::abs(q.wo.z) *
+                  ShadingWeight(camera.surface(j.path, j.t - 1).frame, pt.n, q.wi, q.wo, TransportMode::kRadiance) /
+                  dist2);
       }
       if (!(MaxComponent(value) > 0)) continue;
       const float weight =
