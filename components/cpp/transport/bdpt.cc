@@ -392,15 +392,21 @@ class Bdpt final : public Transport {
               std::vector<Vec3>* emitted) const {
     // The dimensions of the vertex a subpath has just reached.
     const auto base = [&](uint32_t i) { return first_dimension + kPerBounce * (paths.count[i] - 2); };
+    // Each bounce's lists, their room kept from one bounce to the next.
+    std::vector<Ray> rays;
+    std::vector<Hit> hits;  // Intersect writes every field
+    std::vector<std::pair<uint32_t, Vec3>> scattered;  // path, point
+    std::vector<uint32_t> next, scattering;
+    std::vector<ScatterQuery> queries;
     while (!active.empty()) {
       const size_t count = active.size();
-      std::vector<Ray> rays(count);
-      std::vector<Hit> hits(count);
+      rays.resize(count);
+      hits.resize(count);
       for (size_t k = 0; k < count; ++k) rays[k] = walkers[active[k]].ray;
       scene.Intersect(rays, hits);
 
       // Through the media: each walk scatters, is absorbed or reaches its hit.
-      std::vector<std::pair<uint32_t, Vec3>> scattered;  // path, point
+      scattered.clear();
       const std::vector<uint8_t> at_surface = WalkToHits(
           scene, active, hits, [&](uint32_t i) { return WalkStateOf(walkers[i]); },
           [&](uint32_t i, const Collision& c) {
@@ -408,11 +414,11 @@ class Bdpt final : public Transport {
           },
           [&](uint32_t i, const Collision& c) { scattered.emplace_back(i, c.position); });
 
-      std::vector<uint32_t> next;
+      next.clear();
       ScatterInMedia(scene, points, paths, walkers, scattered, base, next);
 
-      std::vector<ScatterQuery> queries;
-      std::vector<uint32_t> scattering;
+      queries.clear();
+      scattering.clear();
       queries.reserve(count);
       scattering.reserve(count);
       for (size_t k = 0; k < count; ++k) {
@@ -490,7 +496,7 @@ class Bdpt final : public Transport {
           continue;
         next.push_back(i);
       }
-      active = std::move(next);
+      active.swap(next);
     }
   }
 
@@ -566,6 +572,8 @@ class Bdpt final : public Transport {
     uint32_t emitter = kNone;
     // s = 0 at a vertex at infinity: into the environment queries.
     uint32_t environment = kNone;
+    // The surface ends' ShadingWeight.
+    float light_shading = 1, camera_shading = 1;
     CameraConnection camera;  // t = 1
     static constexpr uint32_t kNone = 0xFFFFFFFFu;
   };
@@ -629,25 +637,43 @@ class Bdpt final : public Transport {
           if (!(Dot(d, d) > 0)) continue;
           // From infinity, along the light path's own direction.
           const Vec3 to_pt = qs.infinite ? qs.n : Normalize(d);
+          // The surface ends' directions in their frames, and their
+          // ShadingWeight: where the normals disagree on the side, nothing
+          // crosses the join.
+          const bool light_surface = s > 1 && qs.kind != Vertex::Kind::kMedium;
+          const bool camera_surface = t > 1 && pt.kind != Vertex::Kind::kMedium;
+          Vec3 light_wi, light_wo, camera_wi, camera_wo;
+          if (light_surface) {
+            const Frame& frame = light.surface(i, s - 1).frame;
+            light_wi = frame.ToLocal(qs.wi);
+            light_wo = frame.ToLocal(to_pt);
+            j.light_shading = ShadingWeight(frame, qs.n, light_wi, light_wo, TransportMode::kImportance);
+            if (!(j.light_shading > 0)) continue;
+          }
+          if (camera_surface) {
+            const Frame& frame = camera.surface(i, t - 1).frame;
+            camera_wi = frame.ToLocal(pt.wi);
+            camera_wo = frame.ToLocal(-to_pt);
+            j.camera_shading = ShadingWeight(frame, pt.n, camera_wi, camera_wo, TransportMode::kRadiance);
+            if (!(j.camera_shading > 0)) continue;
+          }
           if (s == 1) {
             j.emitter = uint32_t(emitter_queries.size());
             const VertexSurface& start = light.surface(i, 0);
             emitter_queries.emplace_back(qs.emitter, start.frame.ToLocal(to_pt), start.site);
-          } else if (qs.kind == Vertex::Kind::kMedium) {
+          } else if (light_surface) {
+            j.light_surface = uint32_t(light_queries.size());
+            light_queries.emplace_back(qs.material, light_wi, light_wo, light.surface(i, s - 1).site);
+          } else {
             j.light_phase = uint32_t(light_phases.size());
             light_phases.push_back({qs.medium, qs.wi, to_pt, qs.p});
-          } else {
-            j.light_surface = uint32_t(light_queries.size());
-            const VertexSurface& at = light.surface(i, s - 1);
-            light_queries.emplace_back(qs.material, at.frame.ToLocal(qs.wi), at.frame.ToLocal(to_pt), at.site);
           }
-          if (t > 1 && pt.kind == Vertex::Kind::kMedium) {
+          if (camera_surface) {
+            j.camera_surface = uint32_t(camera_queries.size());
+            camera_queries.emplace_back(pt.material, camera_wi, camera_wo, camera.surface(i, t - 1).site);
+          } else if (t > 1) {
             j.camera_phase = uint32_t(camera_phases.size());
             camera_phases.push_back({pt.medium, pt.wi, -to_pt, pt.p});
-          } else if (t > 1) {
-            j.camera_surface = uint32_t(camera_queries.size());
-            const VertexSurface& at = camera.surface(i, t - 1);
-            camera_queries.emplace_back(pt.material, at.frame.ToLocal(pt.wi), at.frame.ToLocal(-to_pt), at.site);
           }
           joins.push_back(j);
         }
@@ -709,8 +735,7 @@ class Bdpt final : public Transport {
         const SurfaceQuery& q = light_queries[j.light_surface];
         light_answer = &at_light[j.light_surface];
         value *= light_answer->f *
-                 (std::abs(q.wo.z) *
-                  ShadingWeight(light.surface(j.path, j.s - 1).frame, qs.n, q.wi, q.wo, TransportMode::kImportance));
+                 (std::abs(q.wo.z) * j.light_shading);
       }
       const SurfaceAnswer* camera_answer = nullptr;
       if (j.t == 1) {
@@ -724,9 +749,7 @@ class Bdpt final : public Transport {
         const SurfaceQuery& q = camera_queries[j.camera_surface];
         camera_answer = &at_camera[j.camera_surface];
         value *= pt.beta * camera_answer->f *
-                 (std::abs(q.wo.z) *
-                  ShadingWeight(camera.surface(j.path, j.t - 1).frame, pt.n, q.wi, q.wo, TransportMode::kRadiance) /
-                  dist2);
+                 (std::abs(q.wo.z) * j.camera_shading / dist2);
       }
       if (!(MaxComponent(value) > 0)) continue;
       const float weight =
