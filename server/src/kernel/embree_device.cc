@@ -11,7 +11,7 @@ void ReportError(void*, RTCError code, const char* message) {
 }
 }  // namespace
 
-EmbreeDevice::EmbreeDevice() : device_(rtcNewDevice(nullptr)) {
+EmbreeDevice::EmbreeDevice(const char* config) : device_(rtcNewDevice(config)) {
   if (!device_) throw Error("cannot create the Embree device");
   rtcSetDeviceErrorFunction(device_, ReportError, nullptr);
 }

@@ -9,7 +9,9 @@ namespace yarf {
 
 class EmbreeDevice {
  public:
-  EmbreeDevice();
+  // `config`: Embree's device configuration ("isa=avx2" caps the
+  // instruction set, as tests do to run the 8-wide packets anywhere).
+  explicit EmbreeDevice(const char* config = nullptr);
   ~EmbreeDevice();
   EmbreeDevice(const EmbreeDevice&) = delete;
   EmbreeDevice& operator=(const EmbreeDevice&) = delete;
