@@ -640,17 +640,17 @@ class Bdpt final : public Transport {
           // The surface ends' directions in their frames, and their
           // ShadingWeight: where the normals disagree on the side, nothing
           // crosses the join.
-          const bool light_surface = s > 1 && qs.kind != Vertex::Kind::kMedium;
-          const bool camera_surface = t > 1 && pt.kind != Vertex::Kind::kMedium;
+          const bool light_on_surface = s > 1 && qs.kind != Vertex::Kind::kMedium;
+          const bool camera_on_surface = t > 1 && pt.kind != Vertex::Kind::kMedium;
           Vec3 light_wi, light_wo, camera_wi, camera_wo;
-          if (light_surface) {
+          if (light_on_surface) {
             const Frame& frame = light.surface(i, s - 1).frame;
             light_wi = frame.ToLocal(qs.wi);
             light_wo = frame.ToLocal(to_pt);
             j.light_shading = ShadingWeight(frame, qs.n, light_wi, light_wo, TransportMode::kImportance);
             if (!(j.light_shading > 0)) continue;
           }
-          if (camera_surface) {
+          if (camera_on_surface) {
             const Frame& frame = camera.surface(i, t - 1).frame;
             camera_wi = frame.ToLocal(pt.wi);
             camera_wo = frame.ToLocal(-to_pt);
@@ -661,14 +661,14 @@ class Bdpt final : public Transport {
             j.emitter = uint32_t(emitter_queries.size());
             const VertexSurface& start = light.surface(i, 0);
             emitter_queries.emplace_back(qs.emitter, start.frame.ToLocal(to_pt), start.site);
-          } else if (light_surface) {
+          } else if (light_on_surface) {
             j.light_surface = uint32_t(light_queries.size());
             light_queries.emplace_back(qs.material, light_wi, light_wo, light.surface(i, s - 1).site);
           } else {
             j.light_phase = uint32_t(light_phases.size());
             light_phases.push_back({qs.medium, qs.wi, to_pt, qs.p});
           }
-          if (camera_surface) {
+          if (camera_on_surface) {
             j.camera_surface = uint32_t(camera_queries.size());
             camera_queries.emplace_back(pt.material, camera_wi, camera_wo, camera.surface(i, t - 1).site);
           } else if (t > 1) {
@@ -734,8 +734,7 @@ class Bdpt final : public Transport {
       } else {
         const SurfaceQuery& q = light_queries[j.light_surface];
         light_answer = &at_light[j.light_surface];
-        value *= light_answer->f *
-                 (std::abs(q.wo.z) * j.light_shading);
+        value *= light_answer->f * (std::abs(q.wo.z) * j.light_shading);
       }
       const SurfaceAnswer* camera_answer = nullptr;
       if (j.t == 1) {
@@ -748,8 +747,7 @@ class Bdpt final : public Transport {
       } else {
         const SurfaceQuery& q = camera_queries[j.camera_surface];
         camera_answer = &at_camera[j.camera_surface];
-        value *= pt.beta * camera_answer->f *
-                 (std::abs(q.wo.z) * j.camera_shading / dist2);
+        value *= pt.beta * camera_answer->f * (std::abs(q.wo.z) * j.camera_shading / dist2);
       }
       if (!(MaxComponent(value) > 0)) continue;
       const float weight =
