@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -226,6 +227,14 @@ inline float PowerHeuristic(float a, float b) {
 template <typename Key>
 std::vector<std::pair<Key, std::vector<uint32_t>>> GroupBy(const std::vector<Key>& keys) {
   std::vector<std::pair<Key, std::vector<uint32_t>>> groups;
+  // One key for all, as a scene with one light or a batch of one material
+  // often has: a scan that vectorises, not a search per index.
+  if (!keys.empty() && std::all_of(keys.begin(), keys.end(), [&](const Key& key) { return key == keys[0]; })) {
+    std::vector<uint32_t> all(keys.size());
+    std::iota(all.begin(), all.end(), 0u);
+    groups.emplace_back(keys[0], std::move(all));
+    return groups;
+  }
   std::unordered_map<Key, size_t> index;  // used once groups are many
   constexpr size_t kLinearSearch = 16;
   for (uint32_t i = 0; i < keys.size(); ++i) {
@@ -260,7 +269,9 @@ class DirectedRows {
     directions_.reserve(3 * capacity);
   }
   void Add(Vec3 direction, const SurfaceSite& site) {
-    directions_.insert(directions_.end(), {direction.x, direction.y, direction.z});
+    directions_.push_back(direction.x);
+    directions_.push_back(direction.y);
+    directions_.push_back(direction.z);
     rows_.Add(site);
   }
   size_t Size() const { return directions_.size() / 3; }
