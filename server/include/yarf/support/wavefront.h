@@ -442,13 +442,24 @@ struct EmitterAnswer {
 template <typename AddRow, typename TakeAnswer>
 void CallEmitters(const SceneView& scene, const std::vector<const Emitter*>& emitters, Densities densities,
                   AddRow&& add, TakeAnswer&& take) {
+  // The rows with an emitter, grouped apart from the rest: light samples
+  // that found none (a lamp seen edge-on) would otherwise break up a
+  // scene's one light into two groups.
+  std::vector<uint32_t> rows;
+  std::vector<const Emitter*> keys;
+  rows.reserve(emitters.size());
+  keys.reserve(emitters.size());
+  for (uint32_t k = 0; k < emitters.size(); ++k)
+    if (emitters[k]) {
+      rows.push_back(k);
+      keys.push_back(emitters[k]);
+    }
   std::vector<float> radiance, pdf;
-  for (const auto& [emitter, members] : GroupBy(emitters)) {
-    if (!emitter) continue;
+  for (const auto& [emitter, members] : GroupBy(keys)) {
     EmitterBatch batch(&scene, members.size());
-    for (const uint32_t member : members) add(batch, member);
+    for (const uint32_t member : members) add(batch, rows[member]);
     batch.Radiance(*emitter, densities, radiance, pdf);
-    for (size_t j = 0; j < members.size(); ++j) take(members[j], Vec3::Load(&radiance[3 * j]), pdf[j]);
+    for (size_t j = 0; j < members.size(); ++j) take(rows[members[j]], Vec3::Load(&radiance[3 * j]), pdf[j]);
   }
 }
 
