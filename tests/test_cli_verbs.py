@@ -249,3 +249,16 @@ def test_fetch_refuses_an_image_format_it_cannot_write(yarf: Yarf, tmp_path: Pat
     job_id = submit(yarf, scene_file(tmp_path, film_scene()), "--spp", "1")
     code, _, err = yarf("fetch", job_id, "-o", str(tmp_path / "out.jpg"))
     assert code == 2 and ".exr, .png" in err, err
+
+
+def test_submit_warns_of_a_sample_count_its_sobol_sampler_is_not_best_at(
+    yarf: Yarf, tmp_path: Path
+) -> None:
+    path = scene_file(tmp_path, film_scene())
+    code, out, err = yarf("submit", str(path), "--spp", "12")
+    assert code == 0, err
+    assert out.strip().startswith("job-")
+    assert "warning: sampler 'sobol' works best with a power of two" in err
+    assert "use 8 or 16" in err
+    code, _, err = yarf("submit", str(path), "--spp", "16")
+    assert code == 0 and "warning" not in err, err

@@ -5,12 +5,13 @@ from __future__ import annotations
 import re
 import struct
 import time
+import warnings
 
 import grpc
 import pytest
 from conftest import ASSET_MESH, small_scene
 
-from yarf import Client, properties, rgb
+from yarf import Client, SubmitWarning, component, properties, rgb
 from yarf.v1 import render_pb2
 
 SEMANTIC_VERSION = re.compile(r"^\d+\.\d+\.\d+")
@@ -122,3 +123,15 @@ def test_a_raw_result_too_large_to_send_is_refused_before_it_is_copied(client: C
     png = client.result(job_id, render_pb2.GetResultRequest.PNG)
     assert png.image.startswith(b"\x89PNG")
     assert struct.unpack(">II", png.image[16:24]) == (width, height)
+
+
+def test_submit_warns_of_sobol_at_a_count_between_powers_of_two(client: Client) -> None:
+    """Sobol's points are best in powers of two; the reply says so, and
+    the job runs as asked all the same."""
+    with pytest.warns(SubmitWarning, match=r"'sobol' .* at 100 .* use 64 or 128"):
+        job_id = client.submit(small_scene(4), spp=100)
+    assert client.wait(job_id).state == render_pb2.SUCCEEDED
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SubmitWarning)
+        client.submit(small_scene(4), spp=128)
+        client.submit(small_scene(4), spp=100, sampler=component("independent"))

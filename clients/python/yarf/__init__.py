@@ -17,7 +17,7 @@ except ImportError as error:  # pragma: no cover - depends on the build
         "with grpc_tools.protoc into clients/python (see yarf/__init__.py), e.g. with `make`"
     ) from error
 
-from yarf.client import Client, RenderError, RenderResult, array_to_numpy
+from yarf.client import Client, RenderError, RenderResult, SubmitWarning, array_to_numpy
 from yarf.integrate import Integral, IntegrationWarning, integrate
 from yarf.notebook import Image, Scene, embedded_server, load, render
 from yarf.params import SceneParameters, UnknownParameterError
@@ -47,6 +47,7 @@ __all__ = [
     "SceneError",
     "SceneParameters",
     "ServerError",
+    "SubmitWarning",
     "UnknownParameterError",
     "array_to_numpy",
     "component",

@@ -15,6 +15,7 @@ import argparse
 import os
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -33,6 +34,7 @@ from yarf.client import (
     IMAGE_FORMATS,
     Client,
     RenderError,
+    SubmitWarning,
     check_ended,
 )
 from yarf.credentials import resolve as resolve_credentials
@@ -259,21 +261,27 @@ def submit_job(
     priority: int | None = None,
     max_retries: int | None = None,
 ) -> str:
-    """Submits the prepared job; a request the server refuses is a usage error."""
+    """Submits the prepared job, saying what the server warns of; a request
+    the server refuses is a usage error."""
     try:
-        return client.submit(
-            job.scene,
-            job.spp,
-            settings.seed,
-            name=name,
-            transport=job.transport,
-            crop=job.crop,
-            aovs=job.aovs,
-            threads=job.threads,
-            component_retries=component_retries,
-            priority=priority,
-            max_retries=max_retries,
-        )
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always", SubmitWarning)
+            job_id = client.submit(
+                job.scene,
+                job.spp,
+                settings.seed,
+                name=name,
+                transport=job.transport,
+                crop=job.crop,
+                aovs=job.aovs,
+                threads=job.threads,
+                component_retries=component_retries,
+                priority=priority,
+                max_retries=max_retries,
+            )
+        for warning in said:
+            _say(f"warning: {warning.message}")
+        return job_id
     except grpc.RpcError as error:
         if isinstance(error, grpc.Call) and error.code() == grpc.StatusCode.INVALID_ARGUMENT:
             raise CommandError(f"the server refused the job: {error.details()}", 2) from None

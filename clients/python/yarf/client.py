@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +47,11 @@ _NUMPY_DTYPES: dict[int, np.dtype[Any]] = {
     component_pb2.Array.INT32: np.dtype("<i4"),
     component_pb2.Array.UINT32: np.dtype("<u4"),
 }
+
+
+class SubmitWarning(UserWarning):
+    """What the server runs as asked but not at its best (SubmitReply.warnings),
+    e.g. a Sobol sampler at a sample count that is not a power of two."""
 
 
 class RenderError(RuntimeError):
@@ -243,7 +249,8 @@ class Client:
         aovs: Sequence[str] = (),
         threads: int = 0,
     ) -> str:
-        """Queues a render of ``scene``; returns the job id.
+        """Queues a render of ``scene``; returns the job id. What the server
+        warns of comes as a SubmitWarning each.
 
         ``component_retries`` and ``component_timeout`` (seconds, 0: the
         server's 60) govern calls to components in other processes.
@@ -276,7 +283,10 @@ class Client:
             priority=priority or 0,
             max_retries=max_retries or 0,
         )
-        return str(self.render_service.Submit(request, timeout=self.timeout).job_id)
+        reply = self.render_service.Submit(request, timeout=self.timeout)
+        for warning in reply.warnings:
+            warnings.warn(warning, SubmitWarning, stacklevel=2)
+        return str(reply.job_id)
 
     def watch(self, job_id: str, *, timeout: float | None = None) -> Iterator[render_pb2.JobStatus]:
         """The job's status now, then after every sample pass, until the job ends."""

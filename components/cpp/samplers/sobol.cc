@@ -35,6 +35,7 @@
 #include <cstdint>
 #include <string>
 #include <span>
+#include <vector>
 
 #include "yarf/error.h"
 #include "yarf/support/hash.h"
@@ -121,6 +122,7 @@ void SobolPairs(const uint64_t* indices, const uint64_t* seeds, size_t count, ui
 
 class Sobol final : public yarf::Sampler {
  public:
+  static std::vector<std::string> Capabilities() { return {yarf::kPowerOfTwoSamplesCapability}; }
   static yarf::ParameterSchema Parameters() { return {}; }
 
   explicit Sobol(const yarf::Properties&) {}
@@ -256,6 +258,7 @@ constexpr uint64_t kOddBit = 1, kDigitsShift = 1, kDigitsMask = 0x1f, kSeedShift
 
 class ZSobol final : public yarf::Sampler {
  public:
+  static std::vector<std::string> Capabilities() { return {yarf::kPowerOfTwoSamplesCapability}; }
   static yarf::ParameterSchema Parameters() { return {}; }
 
   explicit ZSobol(const yarf::Properties&) {}

@@ -42,7 +42,12 @@ inline constexpr char kSamplePassesCapability[] = "sample_passes";
 // coordinates put them (it never splats): tiles rendered apart make the
 // whole film.
 inline constexpr char kPixelLocalCapability[] = "pixel_local";
-inline const std::vector<std::string> kCapabilities = {kSamplePassesCapability, kPixelLocalCapability};
+// A Sampler whose points of a pixel are best in counts that are powers of
+// two: a count between two leaves the finer power's pattern part-made
+// (Sobol's nets), so Submit warns of one.
+inline constexpr char kPowerOfTwoSamplesCapability[] = "power_of_two_samples";
+inline const std::vector<std::string> kCapabilities = {kSamplePassesCapability, kPixelLocalCapability,
+                                                       kPowerOfTwoSamplesCapability};
 
 inline bool HasCapability(const ComponentInfo& info, std::string_view capability) {
   for (const std::string& c : info.capabilities)

@@ -1,6 +1,7 @@
 #include "service/job_splits.h"
 
 #include <algorithm>
+#include <bit>
 #include <string>
 
 #include "yarf/error.h"
@@ -52,6 +53,19 @@ void CheckShare(const v1::SubmitRequest& request, const v1::JobSplits& splits) {
               " needs an integrator that renders any range of sample passes (capability '" +
               kSamplePassesCapability + "', as mean_sample), and the job's '" + integrator.class_name() +
               "' does not");
+}
+
+std::vector<std::string> SubmitWarnings(const v1::SubmitRequest& request, const std::vector<ComponentInfo>& known) {
+  std::vector<std::string> warnings;
+  const uint32_t spp = request.options().spp();
+  const v1::ComponentSpec sampler = Chosen(request.options().sampler(), request.scene().sampler(), kDefaultSampler);
+  if (spp > 0 && !std::has_single_bit(spp) && Declares(sampler, known, kPowerOfTwoSamplesCapability))
+    warnings.push_back("sampler '" + sampler.class_name() + "' works best with a power of two samples per pixel: at " +
+                       std::to_string(spp) + " its " + std::to_string(std::bit_ceil(spp)) +
+                       "-point pattern is left incomplete, and the image is noisier than " + std::to_string(spp) +
+                       " samples should make it; use " + std::to_string(std::bit_floor(spp)) + " or " +
+                       std::to_string(std::bit_ceil(spp)));
+  return warnings;
 }
 
 }  // namespace yarf

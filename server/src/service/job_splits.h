@@ -1,7 +1,9 @@
-// Which components a job runs, and how it may be divided: read from the
-// capabilities their classes declare, never from their names.
+// Which components a job runs, how it may be divided and what its
+// submitter is warned of: read from the capabilities their classes
+// declare, never from their names.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "yarf/component.h"
@@ -25,5 +27,10 @@ v1::JobSplits SplitsOf(const v1::SubmitRequest& request, const std::vector<Compo
 // Throws Error when `request` asks for a share of its job (first_sample,
 // crop) that its integrator cannot render alone.
 void CheckShare(const v1::SubmitRequest& request, const v1::JobSplits& splits);
+
+// What the accepted `request` runs as asked but not at its best, for
+// Submit's reply: a sample count that is not a power of two for a sampler
+// whose points want one (kPowerOfTwoSamplesCapability).
+std::vector<std::string> SubmitWarnings(const v1::SubmitRequest& request, const std::vector<ComponentInfo>& known);
 
 }  // namespace yarf

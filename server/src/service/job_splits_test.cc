@@ -19,7 +19,8 @@ ComponentInfo Class(const std::string& name, std::vector<std::string> capabiliti
 const std::vector<ComponentInfo> kKnown = {
     Class("mean_sample", {kSamplePassesCapability}), Class("vegas", {}),
     Class("path", {kPixelLocalCapability}), Class("light", {}),
-    Class("py_path", {kPixelLocalCapability})};
+    Class("py_path", {kPixelLocalCapability}), Class("sobol", {kPowerOfTwoSamplesCapability}),
+    Class("independent", {})};
 
 v1::SubmitRequest Request(const std::string& integrator, const std::string& transport) {
   v1::SubmitRequest request;
@@ -93,6 +94,37 @@ TEST(JobSplits, AnUnknownCapabilityIsRefusedWithTheKnownOnes) {
     EXPECT_NE(std::string(e.what()).find("sample_passes, pixel_local"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(CheckSchema(Class("fine", {kPixelLocalCapability})));
+}
+
+// A request at `spp` whose sampler is named by the options, the scene or
+// neither (the default, sobol).
+v1::SubmitRequest AtSampleCount(uint32_t spp, const std::string& job_sampler, const std::string& scene_sampler) {
+  v1::SubmitRequest request = Request("", "");
+  request.mutable_options()->set_spp(spp);
+  if (!job_sampler.empty()) request.mutable_options()->mutable_sampler()->set_class_name(job_sampler);
+  if (!scene_sampler.empty()) request.mutable_scene()->mutable_sampler()->set_class_name(scene_sampler);
+  return request;
+}
+
+TEST(SubmitWarnings, ASamplerBestAtPowersOfTwoWarnsOfAnyOtherCount) {
+  // The default sampler, at 61: the counts on either side are named.
+  const std::vector<std::string> warnings = SubmitWarnings(AtSampleCount(61, "", ""), kKnown);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("'sobol'"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("use 32 or 64"), std::string::npos) << warnings[0];
+  for (const uint32_t spp : {1u, 2u, 64u, 1u << 20})
+    EXPECT_TRUE(SubmitWarnings(AtSampleCount(spp, "", ""), kKnown).empty()) << spp;
+  for (const uint32_t spp : {3u, 100u, (1u << 20) - 1})
+    EXPECT_EQ(SubmitWarnings(AtSampleCount(spp, "", ""), kKnown).size(), 1u) << spp;
+  // The scene's sampler, and the job's over the scene's.
+  EXPECT_TRUE(SubmitWarnings(AtSampleCount(100, "", "independent"), kKnown).empty());
+  EXPECT_EQ(SubmitWarnings(AtSampleCount(100, "sobol", "independent"), kKnown).size(), 1u);
+  EXPECT_TRUE(SubmitWarnings(AtSampleCount(100, "independent", "sobol"), kKnown).empty());
+  // A sampler that does not declare it, or one by address, warns of nothing.
+  EXPECT_TRUE(SubmitWarnings(AtSampleCount(100, "unknown_sampler", ""), kKnown).empty());
+  v1::SubmitRequest by_address = AtSampleCount(100, "sobol", "");
+  by_address.mutable_options()->mutable_sampler()->set_address("127.0.0.1:1");
+  EXPECT_TRUE(SubmitWarnings(by_address, kKnown).empty());
 }
 
 }  // namespace

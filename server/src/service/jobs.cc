@@ -174,7 +174,8 @@ void JobManager::Restore() {
   }
 }
 
-std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner) {
+std::string JobManager::Submit(const v1::SubmitRequest& request, const std::string& owner,
+                               std::vector<std::string>* warnings) {
   {
     std::lock_guard lock(mutex_);
     const auto pending = std::count_if(jobs_.begin(), jobs_.end(), [&](const auto& entry) {
@@ -190,6 +191,7 @@ std::string JobManager::Submit(const v1::SubmitRequest& request, const std::stri
   const std::vector<ComponentInfo> known = KnownClasses(resources_);
   CheckComponents(*accepted, known);
   CheckShare(*accepted, SplitsOf(*accepted, known));
+  if (warnings) *warnings = SubmitWarnings(*accepted, known);
   if (const uint64_t bytes = EstimateJobBytes(*accepted, resources_.assets, resources_.asset_root,
                                                 options_.max_job_bytes);
       bytes > options_.max_job_bytes)

@@ -65,7 +65,10 @@ class JobManager {
   void StopAll();
   // Validates and stores a job of `owner`, then queues it; throws Error
   // for a scene or options it refuses, StorageError when it cannot store it.
-  std::string Submit(const v1::SubmitRequest& request, const std::string& owner);
+  // What the job runs as asked but not at its best goes to `warnings`
+  // (SubmitWarnings), when given.
+  std::string Submit(const v1::SubmitRequest& request, const std::string& owner,
+                     std::vector<std::string>* warnings = nullptr);
   std::shared_ptr<Job> Find(const std::string& id) const;
   // Newest first.
   std::vector<std::shared_ptr<Job>> List() const;

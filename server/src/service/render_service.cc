@@ -1,6 +1,8 @@
 #include "service/render_service.h"
 
 #include <chrono>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "components/array_codec.h"
@@ -59,7 +61,9 @@ grpc::Status RenderServiceImpl::Submit(grpc::ServerContext* context, const v1::S
   const Caller caller = CallerOf(*context);
   if (grpc::Status allowed = MayNameAddresses(caller, *request); !allowed.ok()) return allowed;
   try {
-    reply->set_job_id(jobs_.Submit(*request, caller.user));
+    std::vector<std::string> warnings;
+    reply->set_job_id(jobs_.Submit(*request, caller.user, &warnings));
+    for (std::string& warning : warnings) reply->add_warnings(std::move(warning));
     return grpc::Status::OK;
   } catch (const LimitReached& e) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};

@@ -209,6 +209,7 @@ int ServeRequestChecks(std::istream& in, std::ostream& out, const std::vector<Co
         const v1::SubmitRequest accepted = AcceptSubmit(request, nullptr);
         *check.mutable_splits() = SplitsOf(accepted, known);
         CheckShare(accepted, check.splits());
+        for (std::string& warning : SubmitWarnings(accepted, known)) check.add_warnings(std::move(warning));
         *check.mutable_accepted() = accepted;
       } catch (const Error& e) {
         check.set_error(SafeText(e.what(), RequestLimits::kMaxErrorBytes));

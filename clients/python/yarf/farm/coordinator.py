@@ -205,8 +205,11 @@ class Coordinator:
 
     # RenderService.
 
-    async def submit(self, request: render_pb2.SubmitRequest, owner: str, *, admin: bool) -> str:
-        """Stores and queues a job of ``owner``; raises InvalidRequest or AddressNotAllowed."""
+    async def submit(
+        self, request: render_pb2.SubmitRequest, owner: str, *, admin: bool
+    ) -> render_pb2.SubmitReply:
+        """Stores and queues a job of ``owner``, and says what yarfd's checks
+        warn of; raises InvalidRequest or AddressNotAllowed."""
         # yarfd's checks, which also fill in its defaults (spp, priority).
         checked = await asyncio.to_thread(self._checker.check, request, admin=admin)
         accepted = checked.accepted
@@ -255,7 +258,7 @@ class Coordinator:
             # The job is stored: it is queued once NATS answers again.
             log.warning("job %s: tasks not published yet: %s", record.id, error)
             self._loops.start(self._publish_until_done(job), name=f"publish {record.id}")
-        return record.id
+        return render_pb2.SubmitReply(job_id=record.id, warnings=checked.warnings)
 
     def job(self, job_id: str) -> Job:
         job = self._jobs.get(job_id)

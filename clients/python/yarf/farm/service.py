@@ -58,7 +58,7 @@ class FarmRenderService(render_pb2_grpc.RenderServiceServicer):
     ) -> render_pb2.SubmitReply:
         caller = await self._caller(context)
         try:
-            job_id = await self._coordinator.submit(
+            reply = await self._coordinator.submit(
                 request, caller.user, admin=caller.role is Role.ADMIN
             )
         except AddressNotAllowed as error:
@@ -67,7 +67,7 @@ class FarmRenderService(render_pb2_grpc.RenderServiceServicer):
         except InvalidRequest as error:
             await context.abort(grpc.StatusCode.INVALID_ARGUMENT, str(error))
             raise
-        return render_pb2.SubmitReply(job_id=job_id)
+        return reply
 
     async def Watch(
         self, request: render_pb2.WatchRequest, context: grpc.aio.ServicerContext
