@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <string_view>
+#include <utility>
 
 #include "service/state_folder.h"
 #include "yarf/error.h"
@@ -98,9 +99,16 @@ void CheckImageOwner(std::string_view body, const JobFileOwner& owner, const std
                 std::to_string(owner.attempt) + ")");
 }
 
+// The size in an image's header, checked: a film has a pixel at least.
+std::pair<uint32_t, uint32_t> ImageSize(uint32_t width, uint32_t height, const std::filesystem::path& path) {
+  if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
+    throw Error(path.string() + " is not a yarf image file");
+  return {width, height};
+}
+
 // The pixels and variances of a `width` x `height` image in `data`.
 JobImage ImageOf(uint32_t width, uint32_t height, std::string_view data, const std::filesystem::path& path) {
-  if (width > kMaxImageSide || height > kMaxImageSide) throw Error(path.string() + " is not a yarf image file");
+  ImageSize(width, height, path);
   JobImage image{width, height, {}, {}};
   const size_t values = size_t(width) * height * 3;
   if (data.size() != 2 * values * sizeof(float))
@@ -171,7 +179,7 @@ std::optional<std::pair<uint32_t, uint32_t>> ReadJobImageSize(const std::filesys
   header.resize(size_t(in.gcount()));
   const std::string_view body = Header(header, kImageTag, kLegacyImageTag, kImageHeader, path);
   CheckImageOwner(body, owner, path);
-  return std::pair(Get<uint32_t>(body, 0), Get<uint32_t>(body, 4));
+  return ImageSize(Get<uint32_t>(body, 0), Get<uint32_t>(body, 4), path);
 }
 
 std::optional<JobImage> ReadJobImage(const std::filesystem::path& path, const JobFileOwner& owner) {

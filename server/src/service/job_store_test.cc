@@ -374,6 +374,16 @@ TEST(JobFiles, AnImageOfAnotherJobOrAttemptOrWithChangedBytesIsRefused) {
   EXPECT_TRUE(Says(RefusalOf([&] { ReadJobImage(path, {7, 2}); }), "fails its checksum"));
 }
 
+TEST(JobFiles, AnImageWithoutPixelsIsRefused) {
+  TempFolder folder;
+  const auto path = folder.path() / "a.image";
+  for (const auto [width, height] : {std::pair(0u, 2u), std::pair(3u, 0u), std::pair(0u, 0u)}) {
+    WriteJobImage(path, {7, 2}, JobImage{width, height, {}, {}});
+    EXPECT_TRUE(Says(RefusalOf([&] { ReadJobImage(path, {7, 2}); }), "is not a yarf image file")) << width;
+    EXPECT_TRUE(Says(RefusalOf([&] { ReadJobImageSize(path, {7, 2}); }), "is not a yarf image file")) << width;
+  }
+}
+
 TEST(JobFiles, AnImageOfAnOlderYarfdIsRefusedUntilItIsAdopted) {
   TempFolder folder;
   const auto path = folder.path() / "a.image";
