@@ -99,16 +99,16 @@ void CheckImageOwner(std::string_view body, const JobFileOwner& owner, const std
                 std::to_string(owner.attempt) + ")");
 }
 
-// The size in an image's header, checked: a film has a pixel at least.
-std::pair<uint32_t, uint32_t> ImageSize(uint32_t width, uint32_t height, const std::filesystem::path& path) {
+// Throws unless an image's header gives a size a film can have: a pixel
+// at least, kMaxImageSide at most.
+void CheckImageSize(uint32_t width, uint32_t height, const std::filesystem::path& path) {
   if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
     throw Error(path.string() + " is not a yarf image file");
-  return {width, height};
 }
 
 // The pixels and variances of a `width` x `height` image in `data`.
 JobImage ImageOf(uint32_t width, uint32_t height, std::string_view data, const std::filesystem::path& path) {
-  ImageSize(width, height, path);
+  CheckImageSize(width, height, path);
   JobImage image{width, height, {}, {}};
   const size_t values = size_t(width) * height * 3;
   if (data.size() != 2 * values * sizeof(float))
@@ -179,7 +179,9 @@ std::optional<std::pair<uint32_t, uint32_t>> ReadJobImageSize(const std::filesys
   header.resize(size_t(in.gcount()));
   const std::string_view body = Header(header, kImageTag, kLegacyImageTag, kImageHeader, path);
   CheckImageOwner(body, owner, path);
-  return ImageSize(Get<uint32_t>(body, 0), Get<uint32_t>(body, 4), path);
+  const uint32_t width = Get<uint32_t>(body, 0), height = Get<uint32_t>(body, 4);
+  CheckImageSize(width, height, path);
+  return std::pair(width, height);
 }
 
 std::optional<JobImage> ReadJobImage(const std::filesystem::path& path, const JobFileOwner& owner) {

@@ -59,12 +59,13 @@ std::vector<std::string> SubmitWarnings(const v1::SubmitRequest& request, const 
   std::vector<std::string> warnings;
   const uint32_t spp = request.options().spp();
   const v1::ComponentSpec sampler = Chosen(request.options().sampler(), request.scene().sampler(), kDefaultSampler);
-  if (spp > 0 && !std::has_single_bit(spp) && Declares(sampler, known, kPowerOfTwoSamplesCapability))
+  if (spp > 0 && !std::has_single_bit(spp) && Declares(sampler, known, kPowerOfTwoSamplesCapability)) {
+    const std::string below = std::to_string(std::bit_floor(spp)), above = std::to_string(std::bit_ceil(spp));
     warnings.push_back("sampler '" + sampler.class_name() + "' works best with a power of two samples per pixel: at " +
-                       std::to_string(spp) + " its " + std::to_string(std::bit_ceil(spp)) +
+                       std::to_string(spp) + " its " + above +
                        "-point pattern is left incomplete, and the image is noisier than " + std::to_string(spp) +
-                       " samples should make it; use " + std::to_string(std::bit_floor(spp)) + " or " +
-                       std::to_string(std::bit_ceil(spp)));
+                       " samples should make it; use " + below + " or " + above);
+  }
   return warnings;
 }
 
