@@ -57,6 +57,27 @@ Transform ShapeTransform(const v1::SceneShape& shape, const std::string& what) {
 
 // An asset reference must name a hash and say how to parse the bytes:
 // there is no file name to guess the format from.
+// Curves as the kernel takes them, in object space (points beyond the
+// last whole one dropped: ValidateShapes refuses them first).
+CurveGeometry CurvesOf(const v1::Curves& curves) {
+  CurveGeometry out;
+  switch (curves.basis()) {
+    case v1::Curves::BASIS_BSPLINE:
+      out.basis = CurveGeometry::Basis::kBSpline;
+      break;
+    case v1::Curves::BASIS_LINEAR:
+      out.basis = CurveGeometry::Basis::kLinear;
+      break;
+    default:
+      out.basis = CurveGeometry::Basis::kBezier;
+  }
+  out.flat = curves.form() == v1::Curves::FORM_FLAT;
+  for (int i = 0; i + 3 < curves.points_size(); i += 4)
+    out.points.push_back({curves.points(i), curves.points(i + 1), curves.points(i + 2), curves.points(i + 3)});
+  out.segments.assign(curves.segments().begin(), curves.segments().end());
+  return out;
+}
+
 void ValidateMeshAsset(const v1::Mesh& mesh, const std::string& what) {
   const std::string& hash = mesh.asset();
   if (!IsSha256(hash))
@@ -95,6 +116,15 @@ void ValidateShapes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& sh
     if (!s.alpha().empty() && !names.textures.count(s.alpha()))
       throw Error(what + ": alpha names '" + s.alpha() + "', which is not a texture of the scene");
     if (!s.alpha().empty() && s.has_sphere()) throw Error(what + ": alpha cut-outs are for meshes, not spheres");
+    if (!s.alpha().empty() && s.has_curves()) throw Error(what + ": alpha cut-outs are for meshes, not curves");
+    if (s.has_curves() && s.has_emitter()) throw Error(what + " is curves, which cannot emit light");
+    if (s.has_curves()) {
+      if (!v1::Curves::Basis_IsValid(s.curves().basis()) || !v1::Curves::Form_IsValid(s.curves().form()))
+        throw Error(what + ": unknown curve basis or form");
+      if (s.curves().points_size() % 4 != 0)
+        throw Error(what + ": curves need x, y, z and a radius (4 numbers) per control point");
+      if (const std::string defect = CurvesOf(s.curves()).Defect(); !defect.empty()) throw Error(what + ": " + defect);
+    }
     for (const std::string* medium : {&s.interior(), &s.exterior()})
       if (!medium->empty() && !names.media.count(*medium))
         throw Error(what + ": medium '" + *medium + "' is not a medium of the scene");
@@ -385,6 +415,16 @@ class Builder {
   // in the group.
   uint32_t AddShape(uint32_t group, const v1::SceneShape& s, const ShapeLook& look, const Transform& to_world,
                     const std::string& what) {
+    if (s.has_curves()) {
+      // Radii scale as spheres' do, by the cube root of the determinant.
+      CurveGeometry curves = CurvesOf(s.curves());
+      const float scale = float(std::cbrt(std::abs(to_world.Determinant3())));
+      for (auto& point : curves.points) {
+        const Vec3 p = to_world.Point(Vec3(point[0], point[1], point[2]));
+        point = {p.x, p.y, p.z, point[3] * scale};
+      }
+      return kernel_->AddCurves(group, std::move(curves), look);
+    }
     if (s.has_sphere()) {
       const auto& c = s.sphere().center();
       const float scale = float(std::cbrt(std::abs(to_world.Determinant3())));

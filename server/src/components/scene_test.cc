@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <random>
 #include <array>
@@ -91,6 +92,176 @@ TEST_F(SceneTest, SphereIsHitFromOutsideAndFromInside) {
   ASSERT_TRUE(inside.Found());
   EXPECT_NEAR(inside.t, 2.0f, 1e-4f);
   EXPECT_NEAR(inside.normal.x, 1.0f, 1e-5f);
+}
+
+// Curves of `basis` along x at z = 5 whose centre line runs straight from
+// x = -1 to x = 1, radius `radius` all along: a tube (or ribbon) there.
+v1::SceneShape* AddStraightCurve(google::protobuf::RepeatedPtrField<v1::SceneShape>* shapes,
+                                 v1::Curves::Basis basis, float radius) {
+  v1::SceneShape* s = shapes->Add();
+  s->set_material("m");
+  v1::Curves* curves = s->mutable_curves();
+  curves->set_basis(basis);
+  // A B-spline passes near, not through, its points: (-3, -1, 1, 3) give
+  // the segment from -1 to 1; Bézier and straight ones end on them.
+  const std::vector<float> xs = basis == v1::Curves::BASIS_BSPLINE   ? std::vector<float>{-3, -1, 1, 3}
+                                : basis == v1::Curves::BASIS_BEZIER ? std::vector<float>{-1, -1.0f / 3, 1.0f / 3, 1}
+                                                                     : std::vector<float>{-1, 1};
+  for (const float x : xs)
+    for (const float v : {x, 0.0f, 5.0f, radius}) curves->add_points(v);
+  curves->add_segments(0);
+  return s;
+}
+
+TEST_F(SceneTest, RoundCurvesAreTubesOfTheirRadiusWhateverTheirBasis) {
+  for (const auto basis : {v1::Curves::BASIS_BEZIER, v1::Curves::BASIS_BSPLINE, v1::Curves::BASIS_LINEAR}) {
+    SCOPED_TRACE(v1::Curves::Basis_Name(basis));
+    v1::Scene scene = BaseScene();
+    AddStraightCurve(scene.mutable_shapes(), basis, 0.25f);
+    auto kernel = Build(scene);
+    const Hit top = Trace(*kernel, {0.3f, 0, 0}, {0, 0, 1});
+    ASSERT_TRUE(top.Found());
+    EXPECT_NEAR(top.t, 4.75f, 1e-3f);
+    EXPECT_NEAR(top.normal.z, -1.0f, 1e-3f);
+    EXPECT_EQ(top.shading_normal.z, top.normal.z);
+    // Off the axis by 0.2: the circle of radius 0.25 is met 0.15 before it,
+    // where its normal leans (0.2, -0.15) / 0.25.
+    const Hit side = Trace(*kernel, {0.3f, 0.2f, 0}, {0, 0, 1});
+    ASSERT_TRUE(side.Found());
+    EXPECT_NEAR(side.t, 4.85f, 2e-3f);
+    EXPECT_NEAR(side.normal.y, 0.8f, 5e-3f);
+    EXPECT_NEAR(side.normal.z, -0.6f, 5e-3f);
+    // Its tangent runs along the curve, its uv along (u) and across it.
+    EXPECT_NEAR(std::abs(side.dpdu.x), 1.0f, 1e-3f);
+    EXPECT_NEAR(Dot(side.dpdv, side.normal), 0.0f, 1e-5f);
+    EXPECT_GT(side.u, 0.5f);
+    EXPECT_LT(side.u, 0.8f);
+    EXPECT_FALSE(Trace(*kernel, {0.3f, 0.3f, 0}, {0, 0, 1}).Found());  // beside it
+    // A shadow ray across it is blocked.
+    Ray across{{0.3f, 0, 0}, 0, {0, 0, 1}, 10};
+    uint8_t blocked = 0;
+    kernel->Occluded(std::span(&across, 1), std::span(&blocked, 1));
+    EXPECT_EQ(blocked, 1);
+  }
+}
+
+TEST_F(SceneTest, FlatCurvesAreRibbonsFacingTheRay) {
+  v1::Scene scene = BaseScene();
+  AddStraightCurve(scene.mutable_shapes(), v1::Curves::BASIS_BEZIER, 0.25f)->mutable_curves()->set_form(
+      v1::Curves::FORM_FLAT);
+  auto kernel = Build(scene);
+  for (const float y : {0.0f, 0.2f}) {
+    const Hit hit = Trace(*kernel, {0.3f, y, 0}, {0, 0, 1});
+    ASSERT_TRUE(hit.Found()) << y;
+    EXPECT_NEAR(hit.t, 5.0f, 1e-3f) << y;  // the plane of the centre line
+    EXPECT_NEAR(hit.normal.z, -1.0f, 1e-3f) << y;
+  }
+  // From the other side it faces that way.
+  const Hit below = Trace(*kernel, {0.3f, 0.1f, 10}, {0, 0, -1});
+  ASSERT_TRUE(below.Found());
+  EXPECT_NEAR(below.t, 5.0f, 1e-3f);
+  EXPECT_NEAR(below.normal.z, 1.0f, 1e-3f);
+  EXPECT_FALSE(Trace(*kernel, {0.3f, 0.3f, 0}, {0, 0, 1}).Found());
+}
+
+TEST_F(SceneTest, PlacedCurvesScaleTheirRadiusAndTurnTheirNormals) {
+  v1::Scene scene = BaseScene();
+  v1::Group* group = scene.add_groups();
+  group->set_name("g");
+  AddStraightCurve(group->mutable_shapes(), v1::Curves::BASIS_BSPLINE, 0.25f);
+  v1::Instance* instance = scene.add_instances();
+  instance->set_group("g");
+  // Scaled 2× about the origin: the tube's axis at z = 10, radius 0.5.
+  v1::Transform* t = instance->mutable_to_world();
+  for (double v : {2.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 1.0}) t->add_m(v);
+  auto kernel = Build(scene);
+  const Hit side = Trace(*kernel, {0.5f, 0.4f, 0}, {0, 0, 1});
+  ASSERT_TRUE(side.Found());
+  EXPECT_NEAR(side.t, 9.7f, 5e-3f);
+  EXPECT_NEAR(side.normal.y, 0.8f, 5e-3f);
+  EXPECT_NEAR(side.normal.z, -0.6f, 5e-3f);
+  // The same curves in the world, scaled by their shape's own to_world.
+  v1::Scene world = BaseScene();
+  *AddStraightCurve(world.mutable_shapes(), v1::Curves::BASIS_BSPLINE, 0.25f)->mutable_to_world() = *t;
+  const Hit same = Trace(*Build(world), {0.5f, 0.4f, 0}, {0, 0, 1});
+  ASSERT_TRUE(same.Found());
+  EXPECT_NEAR(same.t, side.t, 1e-3f);
+}
+
+// Shadow rays and closest hits see the same curves: a ray is blocked
+// exactly when it finds a hit, for every basis and form.
+TEST_F(SceneTest, ShadowRaysAreBlockedByCurvesExactlyWhereRaysHitThem) {
+  for (const auto basis : {v1::Curves::BASIS_BEZIER, v1::Curves::BASIS_BSPLINE, v1::Curves::BASIS_LINEAR})
+    for (const auto form : {v1::Curves::FORM_ROUND, v1::Curves::FORM_FLAT}) {
+      SCOPED_TRACE(v1::Curves::Basis_Name(basis) + " " + v1::Curves::Form_Name(form));
+      v1::Scene scene = BaseScene();
+      v1::Curves* curves = scene.add_shapes()->mutable_curves();
+      scene.mutable_shapes(0)->set_material("m");
+      curves->set_basis(basis);
+      curves->set_form(form);
+      // A wavy strand rising along y and thinning, of six control points.
+      for (int i = 0; i < 6; ++i)
+        for (const float v : {0.3f * std::sin(3.0f * i / 5), -1 + 0.4f * i, 0.4f * std::cos(2.0f * i / 5),
+                              0.14f - 0.016f * i})
+          curves->add_points(v);
+      const uint32_t span = basis == v1::Curves::BASIS_LINEAR ? 2 : 4;
+      for (uint32_t first = 0; first + span <= 6; first += basis == v1::Curves::BASIS_BEZIER ? 3 : 1)
+        curves->add_segments(first);
+      auto kernel = Build(scene);
+      std::mt19937 random(11);
+      std::uniform_real_distribution<float> spread(-1, 1);
+      constexpr int kRays = 4000;
+      std::vector<Ray> rays(kRays);
+      for (Ray& ray : rays) {
+        const Vec3 origin(3 * spread(random), 2 * spread(random), 3 * spread(random));
+        const Vec3 target(0.3f * spread(random), 1.2f * spread(random), 0.4f * spread(random));
+        ray = Ray{origin, 0, Normalize(target - origin), 2 * Length(target - origin)};
+      }
+      std::vector<Hit> hits(kRays);
+      std::vector<uint8_t> blocked(kRays);
+      kernel->Intersect(rays, hits);
+      kernel->Occluded(rays, blocked);
+      int found = 0;
+      for (int i = 0; i < kRays; ++i) {
+        EXPECT_EQ(bool(blocked[i]), hits[i].Found()) << "ray " << i;
+        found += hits[i].Found();
+      }
+      EXPECT_GT(found, kRays / 20);
+      EXPECT_LT(found, kRays);
+    }
+}
+
+TEST_F(SceneTest, MalformedCurvesAreRefusedWithTheirReason) {
+  const auto refusal = [&](const std::function<void(v1::SceneShape&)>& spoil) {
+    v1::Scene scene = BaseScene();
+    spoil(*AddStraightCurve(scene.mutable_shapes(), v1::Curves::BASIS_BEZIER, 0.25f));
+    try {
+      Build(scene);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("built");
+  };
+  const auto contains = [](const std::string& text, const std::string& part) {
+    return text.find(part) != std::string::npos;
+  };
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape&) {}), "built");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_curves()->add_segments(1); }),
+               "segment from control point 1 needs 4 control points, and there are 4");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_curves()->set_segments(0, 4000000000u); }),
+               "needs 4 control points");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_curves()->clear_segments(); }),
+               "at least one segment");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_curves()->add_points(1); }),
+               "4 numbers) per control point");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_curves()->set_points(5, NAN); }),
+               "not a finite number");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_curves()->set_points(7, -1); }),
+               "radius is negative");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_curves()->set_basis(v1::Curves::Basis(9)); }),
+               "unknown curve basis");
+  EXPECT_PRED2(contains, refusal([](v1::SceneShape& s) { s.mutable_emitter()->set_class_name("diffuse_area"); }),
+               "cannot emit light");
 }
 
 // --- surface parameters ----------------------------------------------------

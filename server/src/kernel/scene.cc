@@ -162,6 +162,19 @@ uint32_t KernelScene::AddSphere(uint32_t group, Vec3 center, float radius, const
   return uint32_t(groups_[group].shapes.size() - 1);
 }
 
+uint32_t KernelScene::AddCurves(uint32_t group, CurveGeometry curves, const ShapeLook& look) {
+  // Embree reads the points each segment names: none may lie beyond them.
+  if (const std::string defect = curves.Defect(); !defect.empty()) throw Error("shape '" + look.name + "': " + defect);
+  AttachCurves(device_.get(), groups_[group].scene, uint32_t(groups_[group].shapes.size()), curves);
+  ShapeRecord record;
+  record.kind = Kind::kCurves;
+  record.mesh = uint32_t(curves_.size());
+  record.look = look;
+  curves_.push_back(std::move(curves));
+  groups_[group].shapes.push_back(record);
+  return uint32_t(groups_[group].shapes.size() - 1);
+}
+
 void KernelScene::AddPlacement(uint32_t group, const Transform& to_world,
                                const std::optional<Transform>& to_world_end) {
   placements_.push_back({group, to_world, to_world_end});
@@ -301,6 +314,8 @@ void KernelScene::AddSurfaceLights() {
 
 std::unique_ptr<ShapeSurface> KernelScene::MakeSurface(uint32_t shape) const {
   const ShapeRecord& s = shapes_.at(shape);
+  if (s.kind == Kind::kCurves)
+    throw Error("shape '" + s.look.name + "' is curves, which have no surface to sample points on");
   if (s.kind == Kind::kSphere) {
     SphereGeometry sphere;
     sphere.center = s.placed ? s.to_world.Point(s.center) : s.center;
@@ -438,27 +453,22 @@ void KernelScene::Attribute(std::string_view name, std::span<const SurfaceLocati
 
 uint32_t KernelScene::PrimitiveCount(uint32_t shape) const {
   const ShapeRecord& record = shapes_[shape];
-  return record.kind == Kind::kSphere ? 1 : uint32_t(meshes_[record.mesh].TriangleCount());
+  switch (record.kind) {
+    case Kind::kSphere:
+      return 1;
+    case Kind::kCurves:
+      return uint32_t(curves_[record.mesh].segments.size());
+    case Kind::kTriangles:
+      break;
+  }
+  return uint32_t(meshes_[record.mesh].TriangleCount());
 }
 
 bool KernelScene::Triangle(uint32_t shape, uint32_t primitive, Vec3 corners[3]) const {
   const ShapeRecord& record = shapes_[shape];
-  if (record.kind == Kind::kSphere) return false;
+  if (record.kind != Kind::kTriangles) return false;
   Triangle(record, primitive, corners);
   return true;
-}
-
-float KernelScene::PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const {
-  if (shape.kind == Kind::kSphere) {
-    // Spheres are placed by similarity transforms: scale by the cube root
-    // of the determinant.
-    const float scale = shape.placed ? float(std::cbrt(std::abs(shape.to_world.Determinant3()))) : 1;
-    const float r = shape.radius * scale;
-    return 4 * kPi * r * r;
-  }
-  Vec3 v[3];
-  Triangle(shape, primitive, v);
-  return 0.5f * Length(Cross(v[1] - v[0], v[2] - v[0]));
 }
 
 Transform KernelScene::PlacementAt(const ShapeRecord& shape, float time) {
@@ -481,9 +491,45 @@ Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 posi
   return shape.look.flip_normals ? -n : n;
 }
 
+Vec3 KernelScene::CurveNormal(const ShapeRecord& shape, uint32_t segment, float u, float time, Vec3 ng,
+                              Vec3 toward) const {
+  const CurveGeometry& curves = curves_[shape.mesh];
+  toward = Normalize(toward);
+  Vec3 n;
+  if (curves.flat) {
+    // The ribbon turns about its centre line to face the ray: its normal
+    // is the ray's reverse less its part along the curve.
+    Vec3 tangent = curves.Tangent(segment, u);
+    if (shape.placed) tangent = PlacementAt(shape, time).Vector(tangent);
+    const float length = Length(tangent);
+    n = length > 0 && std::isfinite(length) ? toward - tangent * (Dot(toward, tangent) / (length * length)) : toward;
+  } else {
+    n = shape.placed ? PlacementAt(shape, time).Normal(ng) : ng;
+  }
+  const float length = Length(n);
+  // Zero only where the curve has no width, or runs along the ray: any
+  // unit vector facing the ray then.
+  n = length > 1e-12f && std::isfinite(length) ? n / length : toward;
+  return shape.look.flip_normals && !curves.flat ? -n : n;
+}
+
 void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const {
   hit.shading_normal = hit.normal;
   hit.parameterised = shape.kind == Kind::kSphere;
+  if (shape.kind == Kind::kCurves) {
+    // u along the segment, v across it (Embree's, from -1 to 1 on a
+    // ribbon); the tangent orients the shading frame, as hair needs.
+    hit.u = hit.b1;
+    hit.v = std::clamp(0.5f * (hit.b2 + 1), 0.0f, 1.0f);
+    hit.b1 = hit.b2 = 0;
+    Vec3 tangent = curves_[shape.mesh].Tangent(hit.primitive, hit.u);
+    if (shape.placed) tangent = PlacementAt(shape, time).Vector(tangent);
+    tangent = tangent - hit.normal * Dot(tangent, hit.normal);
+    const float length = Length(tangent);
+    hit.dpdu = length > 1e-12f && std::isfinite(length) ? tangent / length : Frame(hit.normal).s;
+    hit.dpdv = Cross(hit.normal, hit.dpdu);
+    return;
+  }
   if (shape.kind == Kind::kSphere) {
     const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
     const float r = Length(position - center);
@@ -688,7 +734,10 @@ void KernelScene::IntersectPackets(std::span<const Ray> rays, std::span<Hit> hit
       hit.b2 = sphere ? 0 : packet.hit.v[k];
       const Ray& ray = rays[first + k];
       const Vec3 position = ray.origin + ray.direction * hit.t;
-      hit.normal = Normal(shape, hit.primitive, position, ray.time);
+      hit.normal = shape.kind == Kind::kCurves
+                       ? CurveNormal(shape, hit.primitive, hit.b1, ray.time,
+                                     Vec3(packet.hit.Ng_x[k], packet.hit.Ng_y[k], packet.hit.Ng_z[k]), -ray.direction)
+                       : Normal(shape, hit.primitive, position, ray.time);
       Shade(shape, position, ray.time, hit);
     }
   }

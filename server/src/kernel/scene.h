@@ -14,6 +14,7 @@
 #include "kernel/aggregate_geometry.h"
 #include "kernel/alpha_cut.h"
 #include "kernel/camera.h"
+#include "kernel/curves.h"
 #include "kernel/embree_device.h"
 #include "kernel/light_bvh.h"
 #include "kernel/mesh_io.h"
@@ -64,6 +65,9 @@ class KernelScene final : public SceneView {
   // `axes`: the sphere's own x, y, z axes (unit), which its uv follows.
   uint32_t AddSphere(uint32_t group, Vec3 center, float radius, const ShapeLook& look,
                      const std::array<Vec3, 3>& axes = {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)});
+  // Curves neither emit, measure nor take cut-outs: they have no surface
+  // to sample (the scene's validation refuses such shapes first).
+  uint32_t AddCurves(uint32_t group, CurveGeometry curves, const ShapeLook& look);
   // The shape an irradiance meter camera measures: a number AddMesh or
   // AddSphere returned for group kWorld. Required for that camera.
   void SetMeterShape(uint32_t world_shape) { meter_shape_ = world_shape; }
@@ -173,10 +177,10 @@ class KernelScene final : public SceneView {
   // A mesh as Embree triangles, geometry `id` of `scene`.
   void AttachMesh(RTCScene scene, uint32_t id, const TriangleMesh& mesh, const ShapeLook& look);
 
-  enum class Kind { kTriangles, kSphere };
+  enum class Kind { kTriangles, kSphere, kCurves };
   struct ShapeRecord {
     Kind kind = Kind::kTriangles;
-    uint32_t mesh = 0;  // into meshes_
+    uint32_t mesh = 0;  // into meshes_, or curves_ for curves
     Vec3 center;
     float radius = 0;
     // A sphere's own axes, in its group's space (world once placed).
@@ -207,8 +211,12 @@ class KernelScene final : public SceneView {
   // A placed shape's to_world at shutter time `time` (moving ones interpolated).
   static Transform PlacementAt(const ShapeRecord& shape, float time);
   Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position, float time) const;
+  // A curve's at `u` along `segment`: a tube's is Embree's `ng` (in its
+  // group's space), a ribbon's faces the ray's reverse, `toward`.
+  Vec3 CurveNormal(const ShapeRecord& shape, uint32_t segment, float u, float time, Vec3 ng, Vec3 toward) const;
   // Fills hit's uv, shading normal and ∂p/∂u, ∂p/∂v (its shape, primitive,
-  // barycentrics and geometric normal set) at `position`.
+  // barycentrics — a curve's u along and v across — and geometric normal
+  // set) at `position`.
   void Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const;
   // Intersect and Occluded in packets of N rays (8 or 16).
   template <size_t N>
@@ -247,7 +255,6 @@ class KernelScene final : public SceneView {
   // its primitive).
   LightSample PointOnSurfaceLight(const Light& light, float u_primitive, float u0, float u1) const;
   void Triangle(const ShapeRecord& shape, uint32_t primitive, Vec3 v[3]) const;
-  float PrimitiveArea(const ShapeRecord& shape, uint32_t primitive) const;
 
   const EmbreeDevice& device_;
   // Whether Embree runs 16-ray packets natively (AVX-512) on this CPU;
@@ -265,6 +272,7 @@ class KernelScene final : public SceneView {
   uint32_t camera_medium_ = kNoMedium;
   std::optional<uint32_t> meter_shape_;
   std::vector<TriangleMesh> meshes_;
+  std::vector<CurveGeometry> curves_;
   // The cut-outs of meshes with an alpha texture, Embree's filter data.
   std::vector<std::unique_ptr<AlphaCut>> alpha_cuts_;
   std::vector<Group> groups_;

@@ -124,8 +124,14 @@ uint64_t MeshBytes(const v1::Mesh& mesh, const AssetStore* assets, const std::fi
 uint64_t ShapesBytes(const google::protobuf::RepeatedPtrField<v1::SceneShape>& shapes, const AssetStore* assets,
                      const std::filesystem::path& asset_root, uint64_t limit) {
   uint64_t bytes = 0;
-  for (const v1::SceneShape& shape : shapes)
+  for (const v1::SceneShape& shape : shapes) {
     if (shape.has_mesh()) bytes = Saturating(bytes, MeshBytes(shape.mesh(), assets, asset_root, limit));
+    // A curve's control point counted as a vertex, its segment (a BVH
+    // reference and leaf) as a triangle.
+    if (shape.has_curves())
+      bytes = Saturating(bytes, CountedMeshBytes({.vertices = uint64_t(shape.curves().points_size() / 4),
+                                                  .triangles = uint64_t(shape.curves().segments_size())}));
+  }
   return bytes;
 }
 
