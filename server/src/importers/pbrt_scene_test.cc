@@ -373,9 +373,32 @@ TEST(PbrtImport, MalformedFilesFailWithFileAndLine) {
       {"malformed/bad_patches.pbrt", "bad_patches.pbrt:2: shape 'bilinearmesh': indices needs four per patch"},
       {"malformed/unbalanced.pbrt", "unbalanced.pbrt:2: AttributeEnd without AttributeBegin"},
       {"malformed/huge_integer.pbrt", "huge_integer.pbrt:1: parameter 'xresolution' needs an integer"},
+      {"malformed/bad_curve.pbrt", "bad_curve.pbrt:2: curve: a degree-3 bezier curve needs degree × segments + 1"},
   };
   for (const auto& [file, message] : cases)
     EXPECT_NE(ImportErrorOf(file).find(message), std::string::npos) << file << ": " << ImportErrorOf(file);
+}
+
+TEST(PbrtImport, CurvesBecomeBezierSegmentsOfTheirTypeAndWidth) {
+  const ImportResult result = Import("pbrt_curves.pbrt");
+  const v1::Scene& scene = result.scene;
+  ASSERT_EQ(scene.shapes_size(), 3);
+  const v1::Curves& cylinder = scene.shapes(0).curves();
+  EXPECT_EQ(cylinder.basis(), v1::Curves::BASIS_BEZIER);
+  EXPECT_EQ(cylinder.form(), v1::Curves::FORM_ROUND);
+  EXPECT_EQ(cylinder.segments_size(), 2);  // five B-spline points
+  EXPECT_FLOAT_EQ(cylinder.points(3), 0.05f);
+  // Flat by default, tapering from width 0.2 to 0.
+  const v1::Curves& flat = scene.shapes(1).curves();
+  EXPECT_EQ(flat.form(), v1::Curves::FORM_FLAT);
+  ASSERT_EQ(flat.points_size(), 16);
+  EXPECT_FLOAT_EQ(flat.points(3), 0.1f);
+  EXPECT_FLOAT_EQ(flat.points(15), 0.0f);
+  EXPECT_EQ(scene.shapes(2).curves().form(), v1::Curves::FORM_FLAT);
+  EXPECT_TRUE(Warns(result, "pbrt_curves.pbrt:12: ribbon curves face each ray"));
+  EXPECT_FALSE(scene.shapes(2).has_emitter());
+  EXPECT_TRUE(Warns(result, "area lights on curves are not supported"));
+  EXPECT_FALSE(Warns(result, "splitdepth"));
 }
 
 TEST(PbrtImport, NormalMapsCutOutsCylindersAndMeshAttributes) {

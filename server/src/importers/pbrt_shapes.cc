@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "importers/curve_shapes.h"
 #include "importers/loop_subdivision.h"
 #include "importers/mesh_shapes.h"
 #include "importers/pbrt_importer.h"
@@ -182,6 +183,28 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     to_world = to_world * Matrix4::Translate({0, 0, zmin}) * Matrix4::Scale({radius, radius, zmax - zmin});
     Warn(where, "cylinder",
          "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads per turn");
+  } else if (type == "curve") {
+    rule = NormalRule::kSphere;
+    const double width = params.Float("width", 1);
+    const std::vector<double> p = params.Numbers("P", {"point3"});
+    v1::Curves& curves = *shape.mutable_curves() =
+        PbrtCurve(p, int(std::clamp<int64_t>(params.Integer("degree", 3), -1, 4)), params.String("basis", "bezier"),
+                  params.Float("width0", width), params.Float("width1", width), where);
+    const std::string form = params.String("type", "flat");
+    if (form == "cylinder") {
+      curves.set_form(v1::Curves::FORM_ROUND);
+    } else if (form == "flat" || form == "ribbon") {
+      curves.set_form(v1::Curves::FORM_FLAT);
+      if (form == "ribbon") {
+        params.Find("N");
+        Warn(params.WhereIs("type", where), "curve-ribbon",
+             "ribbon curves face each ray: their orientation (N) is not followed");
+      }
+    } else {
+      Fail(params.WhereIs("type", where), "curve: type must be \"flat\", \"ribbon\" or \"cylinder\"");
+    }
+    // pbrt splits curves to bound them; Embree intersects them whole.
+    params.Accept({"splitdepth"});
   } else {
     static const std::vector<std::string> kKnown = {"trianglemesh", "bilinearmesh", "plymesh", "sphere", "disk",
                                                     "cylinder", "loopsubdiv", "curve"};
@@ -190,8 +213,9 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
   }
   if (params.Has("alpha")) {
     const Textured alpha = TexturedFloat(params, "alpha", 1);
-    if (shape.has_sphere()) {
-      Warn(params.WhereIs("alpha", where), "alpha-sphere", "alpha cut-outs on spheres are not supported: ignored");
+    if (shape.has_sphere() || shape.has_curves()) {
+      Warn(params.WhereIs("alpha", where), "alpha-" + type,
+           "alpha cut-outs on " + type + " shapes are not supported: ignored");
     } else if (alpha.IsTexture()) {
       shape.set_alpha(alpha.texture);
     } else if (alpha.constant.r < 1) {
@@ -209,6 +233,8 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
   if (state_.area_light) {
     if (interface) {
       interface_light();
+    } else if (shape.has_curves()) {
+      Warn(state_.area_light->where, "curve-area-light", "area lights on curves are not supported: emission ignored");
     } else if (!object_.empty()) {
       Warn(state_.area_light->where, "instanced-area-light",
            "area lights in object instances are not supported (as in pbrt): emission ignored");

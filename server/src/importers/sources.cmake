@@ -1,6 +1,7 @@
 # The importers' sources, shared by server/CMakeLists.txt and the fuzzing
 # build (fuzz/CMakeLists.txt).
 set(YARF_IMPORTER_SOURCES
+  curve_shapes.cc
   diagnostics.cc
   import.cc
   loop_subdivision.cc

@@ -86,6 +86,26 @@ TEST(MitsubaImport, EveryShapeTypeBecomesAYarfShape) {
   EXPECT_TRUE(Warns(result, "tubes of 128 quads"));
 }
 
+TEST(MitsubaImport, CurveFilesBecomeCurvesWithWorldRadii) {
+  const ImportResult result = Import("mitsuba_curves.xml");
+  const v1::Scene& scene = result.scene;
+  const v1::Curves& spline = ShapeNamed(scene, "spline").curves();
+  EXPECT_EQ(spline.basis(), v1::Curves::BASIS_BSPLINE);
+  EXPECT_EQ(spline.form(), v1::Curves::FORM_ROUND);
+  EXPECT_EQ(std::vector<uint32_t>(spline.segments().begin(), spline.segments().end()),
+            (std::vector<uint32_t>{0, 1, 5}));
+  // Mitsuba's radii are world lengths: yarf's, scaled by to_world's 2,
+  // start at half of them.
+  EXPECT_FLOAT_EQ(spline.points(3), 0.025f);
+  EXPECT_FLOAT_EQ(spline.points(4), 0.2f);  // the second point's x, unscaled
+  const v1::SceneShape& lines = ShapeNamed(scene, "lines");
+  EXPECT_EQ(lines.curves().basis(), v1::Curves::BASIS_LINEAR);
+  EXPECT_EQ(lines.curves().segments_size(), 7);
+  EXPECT_FLOAT_EQ(lines.curves().points(3), 0.05f);
+  EXPECT_FALSE(lines.has_emitter());
+  EXPECT_TRUE(Warns(result, "mitsuba_curves.xml:10: area emitters on curves are not supported"));
+}
+
 TEST(MitsubaImport, ShapeGroupsAndInstancesMapToGroupsAndInstances) {
   const v1::Scene scene = Import("mitsuba_shapes.xml").scene;
   ASSERT_EQ(scene.groups_size(), 1);
@@ -308,6 +328,7 @@ TEST(MitsubaImport, MalformedFilesFailWithFileAndLine) {
       {"malformed/self_reference.xml", "self_reference.xml:2: references nested too deeply"},
       {"malformed/bad_serialized.xml", "bad_serialized.xml:2: not a Mitsuba serialized mesh"},
       {"malformed/two_environments.xml", "two_environments.xml:3: only one environment emitter"},
+      {"malformed/short_curve.xml", "short_hair.txt:4: a curve needs at least 4 control points, this one has 3"},
   };
   for (const auto& [file, message] : cases)
     EXPECT_NE(ImportErrorOf(file).find(message), std::string::npos) << file << ": " << ImportErrorOf(file);

@@ -1,7 +1,9 @@
 // Mitsuba shapes, shape groups and instances.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 
+#include "importers/curve_shapes.h"
 #include "importers/mesh_shapes.h"
 #include "importers/serialized_mesh.h"
 #include "importers/xml_importer.h"
@@ -83,15 +85,29 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
     cylinder_frame = *frame * Matrix4::Scale({radius, radius, Length(axis)});
     Warn(e.where, "cylinder",
          "cylinder shapes are meshed as tubes of " + std::to_string(kCylinderSegments) + " quads");
+  } else if (type == "bsplinecurve" || type == "linearcurve") {
+    rule = NormalRule::kSphere;
+    const auto file = folder_.Resolve(p.String("filename", ""), e.file, p.WhereIs("filename"));
+    *shape.mutable_curves() =
+        MitsubaCurves(ReadTextFile(file, e.where), type == "linearcurve", {folder_.Relative(file), 0});
   } else {
-    static const std::vector<std::string> kKnown = {"obj",  "ply",  "serialized", "sphere",   "rectangle",
-                                                    "cube", "disk", "cylinder",   "instance", "shapegroup"};
+    static const std::vector<std::string> kKnown = {"obj",      "ply",       "serialized",   "sphere",
+                                                    "rectangle", "cube",     "disk",         "cylinder",
+                                                    "instance",  "shapegroup", "bsplinecurve", "linearcurve"};
     if (!p.Objects("sensor").empty())
       Fail(e.where, "shape type '" + type + "' is not supported, and a sensor sits on it" + DidYouMean(type, kKnown));
     Warn(e.where, "shape:" + type, "shape type '" + type + "' is not supported: ignored" + DidYouMean(type, kKnown));
     return;
   }
   const Matrix4 to_world = p.Transform("to_world") * cylinder_frame;
+  if (shape.has_curves()) {
+    // Mitsuba's radii are world lengths, which to_world leaves alone; yarf
+    // scales a curve's radii with its placement, as a sphere's.
+    const double scale = std::cbrt(std::abs(to_world.Determinant3()));
+    v1::Curves& curves = *shape.mutable_curves();
+    if (scale > 0 && std::isfinite(scale))
+      for (int i = 3; i < curves.points_size(); i += 4) curves.set_points(i, float(curves.points(i) / scale));
+  }
   const bool flip = p.Boolean("flip_normals", false);
 
   // The media either side: the interior against the normal.
@@ -136,8 +152,9 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
   }
   shape.set_material(material);
   if (const std::string alpha = bsdfs.empty() ? "" : MaskAlpha(*bsdfs.front()); !alpha.empty()) {
-    if (shape.has_sphere())
-      Warn(bsdfs.front()->where, "mask-sphere", "mask opacity on a sphere is not supported: the sphere is opaque");
+    if (shape.has_sphere() || shape.has_curves())
+      Warn(bsdfs.front()->where, "mask-" + type,
+           "mask opacity on a " + type + " is not supported: the shape is opaque");
     else
       shape.set_alpha(alpha);
   }
@@ -147,8 +164,12 @@ void MitsubaImporter::Shape(const XmlElement& e, const std::string& group) {
            "emitter '" + emitter->Get("type") + "' attached to a shape ignored (only area emitters can be)");
       continue;
     }
-    if (shape.has_emitter()) Fail(emitter->where, "a shape takes one area emitter");
     attached_emitters_.insert(emitter);
+    if (shape.has_curves()) {
+      Warn(emitter->where, "curve-emitter", "area emitters on curves are not supported: emission ignored");
+      continue;
+    }
+    if (shape.has_emitter()) Fail(emitter->where, "a shape takes one area emitter");
     *shape.mutable_emitter() = AreaEmitter(*emitter);
   }
   if (meter) {
