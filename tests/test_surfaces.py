@@ -1,4 +1,4 @@
-"""Surfaces as Mitsuba 3 renders them: UVs, vertex normals, smooth shading.
+"""Surfaces as Mitsuba 3 renders them: UVs, vertex normals, smooth shading, curves.
 
 Each scene is one Mitsuba XML file that yarf's importer and Mitsuba 3
 (scalar_rgb, made in the test) both read; yarf's render must pass Mitsuba's
@@ -10,6 +10,7 @@ that shading normals are handled alike for radiance and for importance.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -155,6 +156,31 @@ def coloured_sphere(attribute: str) -> str:
     )
 
 
+def strands() -> str:
+    """Five wavy strands rising from under the floor and thinning to their tips,
+    as a Mitsuba curve file: "x y z radius" per control point, strands apart
+    by empty lines. Their ends are buried or fine: a ray that enters a tube
+    through its end is stopped by it in yarf (Embree 3's tubes) and passes
+    in Mitsuba 3."""
+    lines = []
+    for k in range(5):
+        for i in range(6):
+            t = i / 5
+            x = -1.2 + 0.6 * k + 0.3 * math.sin(3 * t + k)
+            z = 0.4 * math.cos(2 * t + k)
+            lines.append(f"{x:.4f} {-1.7 + 2.5 * t:.4f} {z:.4f} {0.14 - 0.12 * t:.4f}")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def curves(kind: str, scale: float = 1) -> str:
+    """The strands as Mitsuba's ``kind`` of curve (its radii untouched by to_world)."""
+    placed = (
+        f'<transform name="to_world"><scale value="{scale}"/></transform>' if scale != 1 else ""
+    )
+    return f'<shape type="{kind}"><string name="filename" value="hair.txt"/>{placed}{GREY}</shape>'
+
+
 SHAPES = {
     "vertex-coloured mesh": (
         coloured_sphere("vertex_color"),
@@ -171,6 +197,9 @@ SHAPES = {
         {"sphere.ply": positions_only_ply(uv_sphere(12, 6))},
     ),
     "faceted low-poly sphere": (low_poly_sphere(True), {"sphere.obj": LOW_POLY}),
+    "B-spline curves": (curves("bsplinecurve"), {"hair.txt": strands()}),
+    "B-spline curves, scaled": (curves("bsplinecurve", 1.25), {"hair.txt": strands()}),
+    "straight curves": (curves("linearcurve"), {"hair.txt": strands()}),
     "cylinder": (
         '<shape type="cylinder"><float name="radius" value="0.6"/>'
         '<point name="p0" x="0" y="-1" z="0"/><point name="p1" x="0" y="0.8" z="0"/>'
