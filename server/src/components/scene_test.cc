@@ -137,6 +137,10 @@ TEST_F(SceneTest, RoundCurvesAreTubesOfTheirRadiusWhateverTheirBasis) {
     EXPECT_GT(side.u, 0.5f);
     EXPECT_LT(side.u, 0.8f);
     EXPECT_FALSE(Trace(*kernel, {0.3f, 0.3f, 0}, {0, 0, 1}).Found());  // beside it
+    // A tube is a fibre: from inside it, its wall is not met.
+    EXPECT_FALSE(Trace(*kernel, {0.3f, 0, 5}, {0, 0, 1}).Found());
+    EXPECT_FALSE(Trace(*kernel, {0.3f, 0.1f, 5}, {0, 1, 0}).Found());
+    EXPECT_FALSE(Trace(*kernel, {-3, 0, 5}, {1, 0, 0}).Found());  // in at its end
     // A shadow ray across it is blocked.
     Ray across{{0.3f, 0, 0}, 0, {0, 0, 1}, 10};
     uint8_t blocked = 0;

@@ -1,5 +1,6 @@
 #include "kernel/curves.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -21,6 +22,22 @@ RTCGeometryType EmbreeType(const CurveGeometry& curves) {
       return curves.flat ? RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE : RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE;
   }
   throw Error("curves: unknown basis");
+}
+
+// A tube is a fibre: the light that enters it is the business of its
+// material (hair's lobes carry it through), and a ray that starts on its
+// surface toward the inside, or enters at an end, leaves from the far
+// side. So a tube's inner wall is never met: hits where the ray runs
+// along the outward normal are passed over, as Mitsuba 3's tubes do.
+void SkipInnerWall(const RTCFilterFunctionNArguments* args) {
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
+    if (args->valid[i] != -1) continue;
+    const float along = RTCRayN_dir_x(args->ray, n, i) * RTCHitN_Ng_x(args->hit, n, i) +
+                        RTCRayN_dir_y(args->ray, n, i) * RTCHitN_Ng_y(args->hit, n, i) +
+                        RTCRayN_dir_z(args->ray, n, i) * RTCHitN_Ng_z(args->hit, n, i);
+    if (along > 0) args->valid[i] = 0;
+  }
 }
 
 }  // namespace
@@ -60,6 +77,10 @@ void AttachCurves(RTCDevice device, RTCScene scene, uint32_t id, const CurveGeom
   auto* segments = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT,
                                                                   sizeof(uint32_t), curves.segments.size()));
   std::copy(curves.segments.begin(), curves.segments.end(), segments);
+  if (!curves.flat) {
+    rtcSetGeometryIntersectFilterFunction(geom, &SkipInnerWall);
+    rtcSetGeometryOccludedFilterFunction(geom, &SkipInnerWall);
+  }
   rtcCommitGeometry(geom);
   rtcAttachGeometryByID(scene, geom, id);
   rtcReleaseGeometry(geom);
