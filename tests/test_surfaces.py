@@ -159,9 +159,7 @@ def coloured_sphere(attribute: str) -> str:
 def strands() -> str:
     """Five wavy strands rising from under the floor and thinning to their tips,
     as a Mitsuba curve file: "x y z radius" per control point, strands apart
-    by empty lines. Their ends are buried or fine: a ray that enters a tube
-    through its end is stopped by it in yarf (Embree 3's tubes) and passes
-    in Mitsuba 3."""
+    by empty lines."""
     lines = []
     for k in range(5):
         for i in range(6):
@@ -173,12 +171,25 @@ def strands() -> str:
     return "\n".join(lines)
 
 
-def curves(kind: str, scale: float = 1) -> str:
+def curves(kind: str, scale: float = 1, bsdf: str = GREY) -> str:
     """The strands as Mitsuba's ``kind`` of curve (its radii untouched by to_world)."""
     placed = (
         f'<transform name="to_world"><scale value="{scale}"/></transform>' if scale != 1 else ""
     )
-    return f'<shape type="{kind}"><string name="filename" value="hair.txt"/>{placed}{GREY}</shape>'
+    return f'<shape type="{kind}"><string name="filename" value="hair.txt"/>{placed}{bsdf}</shape>'
+
+
+# Blonde hair, its scales tilted the other way, and black hair with
+# smoother fibres: the fibre model's lobes and absorption.
+BLONDE = (
+    '<bsdf type="hair"><float name="eumelanin" value="0.3"/>'
+    '<float name="scale_tilt" value="-3"/></bsdf>'
+)
+DARK = (
+    '<bsdf type="hair"><float name="eumelanin" value="4"/>'
+    '<float name="longitudinal_roughness" value="0.15"/>'
+    '<float name="azimuthal_roughness" value="0.5"/></bsdf>'
+)
 
 
 SHAPES = {
@@ -200,6 +211,8 @@ SHAPES = {
     "B-spline curves": (curves("bsplinecurve"), {"hair.txt": strands()}),
     "B-spline curves, scaled": (curves("bsplinecurve", 1.25), {"hair.txt": strands()}),
     "straight curves": (curves("linearcurve"), {"hair.txt": strands()}),
+    "blonde hair": (curves("bsplinecurve", bsdf=BLONDE), {"hair.txt": strands()}),
+    "dark hair": (curves("bsplinecurve", bsdf=DARK), {"hair.txt": strands()}),
     "cylinder": (
         '<shape type="cylinder"><float name="radius" value="0.6"/>'
         '<point name="p0" x="0" y="-1" z="0"/><point name="p1" x="0" y="0.8" z="0"/>'

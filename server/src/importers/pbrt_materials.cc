@@ -209,6 +209,22 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
     const double scale = FloatOrTexture(params, "scale", 1);
     reflectance("reflectance", "reflectance", 0.25, scale);
     reflectance("transmittance", "transmittance", 0.25, scale);
+  } else if (type == "hair") {
+    class_name = "hair";
+    // pbrt-v4's choice of absorption: sigma_a, else a colour, else melanin.
+    if (params.Has("sigma_a")) {
+      const Rgb sigma_a = Colour(params, "sigma_a", {0, 0, 0}, SpectrumUse::kReflectance, where);
+      if (!(sigma_a.r >= 0 && sigma_a.g >= 0 && sigma_a.b >= 0 && sigma_a.r < 1e4 && sigma_a.g < 1e4 && sigma_a.b < 1e4))
+        Fail(params.WhereIs("sigma_a", where), what + ": sigma_a must lie in [0, 10000)");
+      SetRgb(props, "sigma_a", sigma_a);
+    } else if (params.Has("reflectance")) {
+      SetRgb(props, "reflectance",
+             ClampColour(Colour(params, "reflectance", {0.5, 0.5, 0.5}, SpectrumUse::kReflectance, where), 1e-4, 1,
+                         [&] { Warn(params.WhereIs("reflectance", where), "clamp:reflectance",
+                                    what + ": reflectance clamped into [0.0001, 1]"); }));
+    }
+    for (const char* key : {"eumelanin", "pheomelanin", "eta", "beta_m", "beta_n", "alpha"})
+      if (params.Has(key)) SetFloat(props, key, FloatOrTexture(params, key, 0));
   } else if (type == "mix") {
     const PbrtParam* materials = params.Find("materials");
     if (!materials || materials->strings.size() != 2) Fail(where, "mix needs \"string materials\" with two names");

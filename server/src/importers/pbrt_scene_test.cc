@@ -233,7 +233,7 @@ TEST(PbrtImport, MaterialsMapToSurfaceModels) {
   EXPECT_EQ(material(7).properties().values().at("bsdf_1").reference(), "b");
   EXPECT_NEAR(FloatProperty(material(7).properties(), "weight"), 0.8, 1e-12);
   EXPECT_EQ(material(8).name(), "default");
-  EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:24: material 'hair' is not supported"));
+  EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:24: material 'subsurface' is not supported"));
   // A shape of the interface material that bounds no medium: left out, as
   // pbrt-v4 skips it.
   EXPECT_EQ(scene.shapes_size(), 9);
@@ -388,6 +388,10 @@ TEST(PbrtImport, CurvesBecomeBezierSegmentsOfTheirTypeAndWidth) {
   EXPECT_EQ(cylinder.form(), v1::Curves::FORM_ROUND);
   EXPECT_EQ(cylinder.segments_size(), 2);  // five B-spline points
   EXPECT_FLOAT_EQ(cylinder.points(3), 0.05f);
+  const v1::Material& hair = MaterialOf(scene, scene.shapes(0));
+  EXPECT_EQ(hair.class_name(), "hair");
+  EXPECT_DOUBLE_EQ(FloatProperty(hair.properties(), "eumelanin"), 0.8);
+  EXPECT_DOUBLE_EQ(FloatProperty(hair.properties(), "beta_m"), 0.25);
   // Flat by default, tapering from width 0.2 to 0.
   const v1::Curves& flat = scene.shapes(1).curves();
   EXPECT_EQ(flat.form(), v1::Curves::FORM_FLAT);
@@ -395,7 +399,7 @@ TEST(PbrtImport, CurvesBecomeBezierSegmentsOfTheirTypeAndWidth) {
   EXPECT_FLOAT_EQ(flat.points(3), 0.1f);
   EXPECT_FLOAT_EQ(flat.points(15), 0.0f);
   EXPECT_EQ(scene.shapes(2).curves().form(), v1::Curves::FORM_FLAT);
-  EXPECT_TRUE(Warns(result, "pbrt_curves.pbrt:12: ribbon curves face each ray"));
+  EXPECT_TRUE(Warns(result, "pbrt_curves.pbrt:14: ribbon curves face each ray"));
   EXPECT_FALSE(scene.shapes(2).has_emitter());
   EXPECT_TRUE(Warns(result, "area lights on curves are not supported"));
   EXPECT_FALSE(Warns(result, "splitdepth"));

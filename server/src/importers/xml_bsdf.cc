@@ -252,6 +252,22 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     for (const char* key : {"diffuse_reflectance_sampling_rate", "main_specular_sampling_rate",
                             "clearcoat_sampling_rate"})
       sampling_rate(key);
+  } else if (type == "hair") {
+    class_name = "hair";
+    // Mitsuba's names for pbrt's parameters, and its own defaults (0.2 of
+    // pheomelanin beside the eumelanin unless an absorption is given).
+    if (p.Has("sigma_a")) {
+      const Textured sigma_a = p.TexturedColor("sigma_a", {0, 0, 0});
+      if (sigma_a.IsTexture()) Fail(p.WhereIs("sigma_a"), what + ": a textured sigma_a is not supported");
+      SetRgb(props, "sigma_a", sigma_a.constant);
+    } else {
+      SetFloat(props, "eumelanin", p.Float("eumelanin", 1.3));
+      SetFloat(props, "pheomelanin", p.Float("pheomelanin", 0.2));
+    }
+    SetFloat(props, "beta_m", p.Float("longitudinal_roughness", 0.3));
+    SetFloat(props, "beta_n", p.Float("azimuthal_roughness", 0.3));
+    SetFloat(props, "alpha", p.Float("scale_tilt", 2));
+    SetFloat(props, "eta", p.Float("eta", 1.55));
   } else if (type == "principledthin") {
     class_name = "principledthin";
     reflectance("base_color", "base_color", {0.5, 0.5, 0.5});
@@ -273,7 +289,7 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     static const std::vector<std::string> kKnown = {
         "diffuse", "roughdiffuse", "twosided", "mask", "bumpmap", "normalmap", "blendbsdf", "null",
         "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-        "roughplastic", "phong", "principled", "principledthin"};
+        "roughplastic", "phong", "principled", "principledthin", "hair"};
     Warn(e.where, "bsdf:" + type,
          "bsdf '" + type + "' is not supported: a grey Lambertian used" + DidYouMean(type, kKnown));
     return assembly_.DefaultMaterial();
