@@ -157,16 +157,17 @@ def coloured_sphere(attribute: str) -> str:
 
 
 def strands() -> str:
-    """Five wavy strands rising from under the floor and thinning to their tips,
-    as a Mitsuba curve file: "x y z radius" per control point, strands apart
-    by empty lines."""
+    """Five wavy strands rising above the floor and thinning, as a Mitsuba curve
+    file: "x y z radius" per control point, strands apart by empty lines.
+    Their thick lower ends stand in the light: rays from the floor enter the
+    tubes there, and must leave them as Mitsuba's rays do."""
     lines = []
     for k in range(5):
         for i in range(6):
             t = i / 5
             x = -1.2 + 0.6 * k + 0.3 * math.sin(3 * t + k)
             z = 0.4 * math.cos(2 * t + k)
-            lines.append(f"{x:.4f} {-1.7 + 2.5 * t:.4f} {z:.4f} {0.14 - 0.12 * t:.4f}")
+            lines.append(f"{x:.4f} {-1 + 1.9 * t:.4f} {z:.4f} {0.14 - 0.08 * t:.4f}")
         lines.append("")
     return "\n".join(lines)
 
