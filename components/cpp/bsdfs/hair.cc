@@ -163,22 +163,7 @@ class Hair final : public yarf::SurfaceModel {
   // came from), pbrt's wi yarf's wo.
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints&,
                 std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value, [&](size_t, Vec3 in, Vec3 out) {
-      const Fibre fibre = FibreFrom(in);
-      const float sin_i = out.x, cos_i = SafeSqrt(1 - Sqr(sin_i)), phi = std::atan2(out.z, out.y) - fibre.phi_o;
-      Vec3 sum;
-      for (int p = 0; p < kLobes; ++p) {
-        const Tilted o = TiltedOut(p, fibre);
-        sum += fibre.ap[p] * (Mp(cos_i, o.cos_theta, sin_i, o.sin_theta, v_[p]) *
-                              Np(phi, p, s_, fibre.gamma_o, fibre.gamma_t));
-      }
-      sum += fibre.ap[kLobes] *
-             (Mp(cos_i, fibre.cos_theta_o, sin_i, fibre.sin_theta_o, v_[kLobes]) / (2 * kPi));
-      // The lobes are per unit projected solid angle of the fibre; the
-      // caller's cosine is the normal's.
-      const float cosine = std::abs(out.z);
-      return cosine > 0 ? sum / cosine : Vec3();
-    });
+    yarf::EvaluateEach(wi, wo, value, [&](size_t, Vec3 in, Vec3 out) { return Value(FibreFrom(in), out); });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints&,
@@ -212,10 +197,7 @@ class Hair final : public yarf::SurfaceModel {
         rows.StoreNoSample(k);
         continue;
       }
-      float value[3];
-      const float in_row[3] = {in.x, in.y, in.z}, out_row[3] = {out.x, out.y, out.z};
-      Evaluate(yarf::TransportMode::kRadiance, in_row, out_row, {}, value);
-      rows.Store(k, out, Vec3::Load(value) * (std::abs(out.z) / density), density, lobe);
+      rows.Store(k, out, Value(fibre, out) * (std::abs(out.z) / density), density, lobe);
     }
   }
 
@@ -277,6 +259,24 @@ class Hair final : public yarf::SurfaceModel {
     const Vec3& last = f.ap[kLobes - 1];
     f.ap[kLobes] = Vec3(rest(last.x, t.x), rest(last.y, t.y), rest(last.z, t.z));
     return f;
+  }
+
+  // f toward `out` of the fibre met as `f` says. pbrt's wo is yarf's wi
+  // (toward where the light that found the point came from), pbrt's wi
+  // yarf's wo.
+  Vec3 Value(const Fibre& f, Vec3 out) const {
+    const float sin_i = std::clamp(out.x, -1.0f, 1.0f), cos_i = SafeSqrt(1 - Sqr(sin_i));
+    const float phi = std::atan2(out.z, out.y) - f.phi_o;
+    Vec3 sum;
+    for (int p = 0; p < kLobes; ++p) {
+      const Tilted o = TiltedOut(p, f);
+      sum += f.ap[p] * (Mp(cos_i, o.cos_theta, sin_i, o.sin_theta, v_[p]) * Np(phi, p, s_, f.gamma_o, f.gamma_t));
+    }
+    sum += f.ap[kLobes] * (Mp(cos_i, f.cos_theta_o, sin_i, f.sin_theta_o, v_[kLobes]) / (2 * kPi));
+    // The lobes are per unit projected solid angle of the fibre; the
+    // caller's cosine is the normal's.
+    const float cosine = std::abs(out.z);
+    return cosine > 0 ? sum / cosine : Vec3();
   }
 
   // Lobe p's cone, tilted by the scales: R by -2α, TT by α, TRT by 4α.

@@ -31,7 +31,10 @@ TEST_F(HairTest, WithoutAbsorptionNoLightIsLost) {
     for (const double beta_n : {0.2, 0.6})
       for (const double alpha : {0.0, 2.0}) {
         const auto model = Make("hair", Lossless(beta_m, beta_n, alpha));
-        for (const Vec3 wi : FibreDirections()) {
+        // Half the directions each, the untilted the even ones, the tilted the odd.
+        const std::vector<Vec3> directions = FibreDirections();
+        for (size_t d = alpha == 0 ? 0 : 1; d < directions.size(); d += 2) {
+          const Vec3 wi = directions[d];
           const SphereIntegrals integral = IntegrateOverSphere(*model, wi);
           const std::string where = "beta_m " + std::to_string(beta_m) + " beta_n " + std::to_string(beta_n) +
                                     " alpha " + std::to_string(alpha) + " wi " + Describe(wi);

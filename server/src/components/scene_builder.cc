@@ -55,8 +55,6 @@ Transform ShapeTransform(const v1::SceneShape& shape, const std::string& what) {
   return shape.has_to_world() ? FromProto(shape.to_world(), what + " to_world") : Transform{};
 }
 
-// An asset reference must name a hash and say how to parse the bytes:
-// there is no file name to guess the format from.
 // Curves as the kernel takes them, in object space (points beyond the
 // last whole one dropped: ValidateShapes refuses them first).
 CurveGeometry CurvesOf(const v1::Curves& curves) {
@@ -78,6 +76,8 @@ CurveGeometry CurvesOf(const v1::Curves& curves) {
   return out;
 }
 
+// An asset reference must name a hash and say how to parse the bytes:
+// there is no file name to guess the format from.
 void ValidateMeshAsset(const v1::Mesh& mesh, const std::string& what) {
   const std::string& hash = mesh.asset();
   if (!IsSha256(hash))
