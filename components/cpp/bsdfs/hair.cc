@@ -159,8 +159,6 @@ class Hair final : public yarf::SurfaceModel {
     }
   }
 
-  // pbrt's wo is yarf's wi (toward where the light that found the point
-  // came from), pbrt's wi yarf's wo.
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints&,
                 std::span<float> value) const override {
     yarf::EvaluateEach(wi, wo, value, [&](size_t, Vec3 in, Vec3 out) { return Value(FibreFrom(in), out); });
