@@ -161,7 +161,10 @@ class Hair final : public yarf::SurfaceModel {
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints&,
                 std::span<float> value) const override {
-    yarf::EvaluateEach(wi, wo, value, [&](size_t, Vec3 in, Vec3 out) { return Value(FibreFrom(in), out); });
+    yarf::EvaluateEach(wi, wo, value, [&](size_t, Vec3 in, Vec3 out) {
+      const Fibre fibre = FibreFrom(in);
+      return Value(fibre, LobeTerms(fibre, out), out);
+    });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints&,
@@ -190,12 +193,13 @@ class Hair final : public yarf::SurfaceModel {
       const float phi_i = fibre.phi_o + dphi;
       const Vec3 out(sin_i, cos_i * std::cos(phi_i), cos_i * std::sin(phi_i));
       const uint32_t lobe = in.z * out.z >= 0 ? kReflectLobe : kTransmitLobe;
-      const float density = Density(fibre, share, out);
+      const std::array<float, kLobes + 1> term = LobeTerms(fibre, out);
+      const float density = Density(share, term);
       if (!yarf::LobeAllowed(lobe, allowed) || !(density > 0) || out.z == 0) {
         rows.StoreNoSample(k);
         continue;
       }
-      rows.Store(k, out, Value(fibre, out) * (std::abs(out.z) / density), density, lobe);
+      rows.Store(k, out, Value(fibre, term, out) * (std::abs(out.z) / density), density, lobe);
     }
   }
 
@@ -203,7 +207,7 @@ class Hair final : public yarf::SurfaceModel {
            std::span<float> pdf) const override {
     yarf::PdfEach(wi, wo, pdf, [&](size_t, Vec3 in, Vec3 out) {
       const Fibre fibre = FibreFrom(in);
-      return Density(fibre, LobeShares(fibre), out);
+      return Density(LobeShares(fibre), LobeTerms(fibre, out));
     });
   }
 
@@ -259,18 +263,26 @@ class Hair final : public yarf::SurfaceModel {
     return f;
   }
 
-  // f toward `out` of the fibre met as `f` says. pbrt's wo is yarf's wi
-  // (toward where the light that found the point came from), pbrt's wi
-  // yarf's wo.
-  Vec3 Value(const Fibre& f, Vec3 out) const {
+  // Each lobe's Mp · Np toward `out` of the fibre met as `f` says (the
+  // residual lobe's Np uniform), the terms f and the density weigh alike.
+  // pbrt's wo is yarf's wi (toward where the light that found the point
+  // came from), pbrt's wi yarf's wo.
+  std::array<float, kLobes + 1> LobeTerms(const Fibre& f, Vec3 out) const {
     const float sin_i = std::clamp(out.x, -1.0f, 1.0f), cos_i = SafeSqrt(1 - Sqr(sin_i));
     const float phi = std::atan2(out.z, out.y) - f.phi_o;
-    Vec3 sum;
+    std::array<float, kLobes + 1> term{};
     for (int p = 0; p < kLobes; ++p) {
       const Tilted o = TiltedOut(p, f);
-      sum += f.ap[p] * (Mp(cos_i, o.cos_theta, sin_i, o.sin_theta, v_[p]) * Np(phi, p, s_, f.gamma_o, f.gamma_t));
+      term[p] = Mp(cos_i, o.cos_theta, sin_i, o.sin_theta, v_[p]) * Np(phi, p, s_, f.gamma_o, f.gamma_t);
     }
-    sum += f.ap[kLobes] * (Mp(cos_i, f.cos_theta_o, sin_i, f.sin_theta_o, v_[kLobes]) / (2 * kPi));
+    term[kLobes] = Mp(cos_i, f.cos_theta_o, sin_i, f.sin_theta_o, v_[kLobes]) / (2 * kPi);
+    return term;
+  }
+
+  // f toward `out`, from its lobe terms: each weighed by its attenuation.
+  static Vec3 Value(const Fibre& f, const std::array<float, kLobes + 1>& term, Vec3 out) {
+    Vec3 sum;
+    for (int p = 0; p <= kLobes; ++p) sum += f.ap[p] * term[p];
     // The lobes are per unit projected solid angle of the fibre; the
     // caller's cosine is the normal's.
     const float cosine = std::abs(out.z);
@@ -301,16 +313,11 @@ class Hair final : public yarf::SurfaceModel {
     return share;
   }
 
-  // Sample's density of `out`, per solid angle: every lobe's.
-  float Density(const Fibre& f, const std::array<float, kLobes + 1>& share, Vec3 out) const {
-    const float sin_i = std::clamp(out.x, -1.0f, 1.0f), cos_i = SafeSqrt(1 - Sqr(sin_i));
-    const float phi = std::atan2(out.z, out.y) - f.phi_o;
+  // Sample's density per solid angle, from the lobe terms: each weighed
+  // by the odds of sampling its lobe.
+  static float Density(const std::array<float, kLobes + 1>& share, const std::array<float, kLobes + 1>& term) {
     float density = 0;
-    for (int p = 0; p < kLobes; ++p) {
-      const Tilted o = TiltedOut(p, f);
-      density += Mp(cos_i, o.cos_theta, sin_i, o.sin_theta, v_[p]) * share[p] * Np(phi, p, s_, f.gamma_o, f.gamma_t);
-    }
-    density += Mp(cos_i, f.cos_theta_o, sin_i, f.sin_theta_o, v_[kLobes]) * share[kLobes] / (2 * kPi);
+    for (int p = 0; p <= kLobes; ++p) density += share[p] * term[p];
     return density;
   }
 

@@ -491,45 +491,43 @@ Vec3 KernelScene::Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 posi
   return shape.look.flip_normals ? -n : n;
 }
 
-Vec3 KernelScene::CurveNormal(const ShapeRecord& shape, uint32_t segment, float u, float time, Vec3 ng,
-                              Vec3 toward) const {
+void KernelScene::ShadeCurve(const ShapeRecord& shape, float time, Vec3 ng, Vec3 toward, Hit& hit) const {
   const CurveGeometry& curves = curves_[shape.mesh];
+  // u along the segment, v across it (Embree's, from -1 to 1 on a
+  // ribbon).
+  hit.u = hit.b1;
+  hit.v = std::clamp(0.5f * (hit.b2 + 1), 0.0f, 1.0f);
+  hit.b1 = hit.b2 = 0;
+  hit.parameterised = false;
+  Vec3 tangent = curves.Tangent(hit.primitive, hit.u);
+  std::optional<Transform> to_world;
+  if (shape.placed) to_world = PlacementAt(shape, time);
+  if (to_world) tangent = to_world->Vector(tangent);
+  // A ribbon turns about its centre line to face the ray: its normal is
+  // the ray's reverse less its part along the curve. A tube's is Embree's.
   toward = Normalize(toward);
   Vec3 n;
   if (curves.flat) {
-    // The ribbon turns about its centre line to face the ray: its normal
-    // is the ray's reverse less its part along the curve.
-    Vec3 tangent = curves.Tangent(segment, u);
-    if (shape.placed) tangent = PlacementAt(shape, time).Vector(tangent);
     const float length = Length(tangent);
     n = length > 0 && std::isfinite(length) ? toward - tangent * (Dot(toward, tangent) / (length * length)) : toward;
   } else {
-    n = shape.placed ? PlacementAt(shape, time).Normal(ng) : ng;
+    n = to_world ? to_world->Normal(ng) : ng;
   }
-  const float length = Length(n);
+  const float n_length = Length(n);
   // Zero only where the curve has no width, or runs along the ray: any
   // unit vector facing the ray then.
-  n = length > 1e-12f && std::isfinite(length) ? n / length : toward;
-  return shape.look.flip_normals && !curves.flat ? -n : n;
+  n = n_length > 1e-12f && std::isfinite(n_length) ? n / n_length : toward;
+  hit.normal = hit.shading_normal = shape.look.flip_normals && !curves.flat ? -n : n;
+  // The tangent orients the shading frame, as hair needs.
+  tangent = tangent - hit.normal * Dot(tangent, hit.normal);
+  const float t_length = Length(tangent);
+  hit.dpdu = t_length > 1e-12f && std::isfinite(t_length) ? tangent / t_length : Frame(hit.normal).s;
+  hit.dpdv = Cross(hit.normal, hit.dpdu);
 }
 
 void KernelScene::Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const {
   hit.shading_normal = hit.normal;
   hit.parameterised = shape.kind == Kind::kSphere;
-  if (shape.kind == Kind::kCurves) {
-    // u along the segment, v across it (Embree's, from -1 to 1 on a
-    // ribbon); the tangent orients the shading frame, as hair needs.
-    hit.u = hit.b1;
-    hit.v = std::clamp(0.5f * (hit.b2 + 1), 0.0f, 1.0f);
-    hit.b1 = hit.b2 = 0;
-    Vec3 tangent = curves_[shape.mesh].Tangent(hit.primitive, hit.u);
-    if (shape.placed) tangent = PlacementAt(shape, time).Vector(tangent);
-    tangent = tangent - hit.normal * Dot(tangent, hit.normal);
-    const float length = Length(tangent);
-    hit.dpdu = length > 1e-12f && std::isfinite(length) ? tangent / length : Frame(hit.normal).s;
-    hit.dpdv = Cross(hit.normal, hit.dpdu);
-    return;
-  }
   if (shape.kind == Kind::kSphere) {
     const Vec3 center = shape.placed ? shape.to_world.Point(shape.center) : shape.center;
     const float r = Length(position - center);
@@ -734,10 +732,12 @@ void KernelScene::IntersectPackets(std::span<const Ray> rays, std::span<Hit> hit
       hit.b2 = sphere ? 0 : packet.hit.v[k];
       const Ray& ray = rays[first + k];
       const Vec3 position = ray.origin + ray.direction * hit.t;
-      hit.normal = shape.kind == Kind::kCurves
-                       ? CurveNormal(shape, hit.primitive, hit.b1, ray.time,
-                                     Vec3(packet.hit.Ng_x[k], packet.hit.Ng_y[k], packet.hit.Ng_z[k]), -ray.direction)
-                       : Normal(shape, hit.primitive, position, ray.time);
+      if (shape.kind == Kind::kCurves) {
+        const Vec3 ng(packet.hit.Ng_x[k], packet.hit.Ng_y[k], packet.hit.Ng_z[k]);
+        ShadeCurve(shape, ray.time, ng, -ray.direction, hit);
+        continue;
+      }
+      hit.normal = Normal(shape, hit.primitive, position, ray.time);
       Shade(shape, position, ray.time, hit);
     }
   }

@@ -211,12 +211,13 @@ class KernelScene final : public SceneView {
   // A placed shape's to_world at shutter time `time` (moving ones interpolated).
   static Transform PlacementAt(const ShapeRecord& shape, float time);
   Vec3 Normal(const ShapeRecord& shape, uint32_t primitive, Vec3 position, float time) const;
-  // A curve's at `u` along `segment`: a tube's is Embree's `ng` (in its
-  // group's space), a ribbon's faces the ray's reverse, `toward`.
-  Vec3 CurveNormal(const ShapeRecord& shape, uint32_t segment, float u, float time, Vec3 ng, Vec3 toward) const;
-  // Fills hit's uv, shading normal and ∂p/∂u, ∂p/∂v (its shape, primitive,
-  // barycentrics — a curve's u along and v across — and geometric normal
-  // set) at `position`.
+  // Fills a curve hit's normal, uv, shading normal and ∂p/∂u, ∂p/∂v (its
+  // shape, primitive and Embree's u and v set): a tube's normal is
+  // Embree's `ng` (in its group's space), a ribbon's faces the ray's
+  // reverse, `toward`.
+  void ShadeCurve(const ShapeRecord& shape, float time, Vec3 ng, Vec3 toward, Hit& hit) const;
+  // Fills a surface hit's uv, shading normal and ∂p/∂u, ∂p/∂v (its shape,
+  // primitive, barycentrics and geometric normal set) at `position`.
   void Shade(const ShapeRecord& shape, Vec3 position, float time, Hit& hit) const;
   // Intersect and Occluded in packets of N rays (8 or 16).
   template <size_t N>
