@@ -143,6 +143,15 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   } else if (type == "diffuse" || type == "matte") {
     class_name = "lambertian";
     reflectance(type == "matte" ? "Kd" : "reflectance", "reflectance", 0.5);
+    // pbrt-v3's matte with a slope deviation σ (degrees) is Oren and
+    // Nayar's qualitative model, roughdiffuse's fast one with α = √2 σ.
+    const double sigma = type == "matte" ? FloatOrTexture(params, "sigma", 0) : 0;
+    if (!(sigma >= 0 && sigma <= 90)) Fail(params.WhereIs("sigma", where), what + ": sigma must lie in [0, 90] degrees");
+    if (sigma > 0) {
+      class_name = "roughdiffuse";
+      SetFloat(props, "alpha", std::sqrt(2.0) * sigma * M_PI / 180);
+      SetBool(props, "use_fast_approx", true);
+    }
   } else if (type == "coateddiffuse" || type == "coatedconductor") {
     // pbrt-v4's layered materials: the plugins of the same names take
     // pbrt's parameter names; only what was given is passed on, so the

@@ -236,8 +236,14 @@ TEST(PbrtImport, MaterialsMapToSurfaceModels) {
   EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:24: material 'subsurface' is not supported"));
   // A shape of the interface material that bounds no medium: left out, as
   // pbrt-v4 skips it.
-  EXPECT_EQ(scene.shapes_size(), 9);
+  EXPECT_EQ(scene.shapes_size(), 10);
   EXPECT_FALSE(Warns(result, "pbrt_materials.pbrt:26"));
+  // pbrt-v3's matte with a slope deviation σ = 20°: Oren and Nayar's
+  // qualitative model, σ² = α²/2.
+  EXPECT_EQ(material(9).class_name(), "roughdiffuse");
+  EXPECT_NEAR(FloatProperty(material(9).properties(), "alpha"), std::sqrt(2.0) * 20 * M_PI / 180, 1e-9);
+  EXPECT_TRUE(material(9).properties().values().at("use_fast_approx").bool_value());
+  ExpectNear(RgbProperty(material(9).properties(), "reflectance"), {0.6, 0.5, 0.4});
 }
 
 // pbrt-v4's layered materials keep their parameters' names; what is not

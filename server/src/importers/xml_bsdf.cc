@@ -116,13 +116,22 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
   };
 
   std::string class_name;
-  if (type == "diffuse" || type == "roughdiffuse") {
-    if (type == "roughdiffuse") {
-      Warn(e.where, "bsdf:roughdiffuse", "bsdf 'roughdiffuse' rendered as a Lambertian");
-      p.Accept({"alpha", "use_fast_approx"});
-    }
+  if (type == "diffuse") {
     class_name = "lambertian";
     reflectance("reflectance", "reflectance", {0.5, 0.5, 0.5});
+    SetBool(props, "two_sided", two_sided);
+  } else if (type == "roughdiffuse") {
+    class_name = "roughdiffuse";
+    reflectance("reflectance", "reflectance", {0.5, 0.5, 0.5});
+    // The grooves' slope may be 0 (Lambertian), unlike a microfacet α.
+    if (const Textured t = p.TexturedColor("alpha", {0.2, 0.2, 0.2}); t.IsTexture()) {
+      SetReference(props, "alpha", t.texture);
+    } else {
+      const double a = p.Float("alpha", 0.2);
+      if (!(a >= 0 && a <= 10)) Fail(p.WhereIs("alpha"), what + ": alpha must lie in [0, 10]");
+      SetFloat(props, "alpha", a);
+    }
+    SetBool(props, "use_fast_approx", p.Boolean("use_fast_approx", false));
     SetBool(props, "two_sided", two_sided);
   } else if (type == "twosided") {
     const XmlElement& front = inner();

@@ -194,7 +194,7 @@ void MitsubaImporter::Emitter(const XmlElement& e) {
     return;
   }
   if (type == "sunsky" || type == "sky" || type == "sun" || type == "skysphere") {
-    Warn(e.where, "environment:" + type, "environment maps are not supported yet: emitter '" + type + "' ignored");
+    Warn(e.where, "environment:" + type, "sun and sky models are not supported: emitter '" + type + "' ignored");
     return;
   }
   Warn(e.where, "emitter:" + type, "emitter '" + type + "' is not supported: ignored");

@@ -151,6 +151,15 @@ TEST(MitsubaImport, BsdfsMapToSurfaceModels) {
   EXPECT_TRUE(Warns(result, "metal 'CuZn' is not among"));
   ExpectNear(RgbProperty(material("s15").properties(), "specular_reflectance"), {0.5, 0.5, 0.5});
   EXPECT_TRUE(material("s15").properties().values().at("nonlinear").bool_value());
+  // Oren and Nayar's model: its slope, its approximation, its sides.
+  EXPECT_EQ(material("s16").class_name(), "roughdiffuse");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s16").properties(), "alpha"), 0.7);
+  EXPECT_TRUE(material("s16").properties().values().at("use_fast_approx").bool_value());
+  EXPECT_FALSE(material("s16").properties().values().at("two_sided").bool_value());
+  EXPECT_EQ(material("s17").class_name(), "roughdiffuse");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s17").properties(), "alpha"), 0.2);
+  EXPECT_FALSE(material("s17").properties().values().at("use_fast_approx").bool_value());
+  EXPECT_TRUE(material("s17").properties().values().at("two_sided").bool_value());
   EXPECT_EQ(material("s13").name(), "default");
   ExpectNear(RgbProperty(material("s13").properties(), "reflectance"), {0.5, 0.5, 0.5});
 }
@@ -228,7 +237,7 @@ TEST(MitsubaImport, DirectionalEmittersTravelAlongDirectionOrTheZOfToWorld) {
   // Mitsuba's defaults: irradiance 1, travelling along +z.
   expect_directional("plain", {1, 1, 1}, {0, 0, 1});
   EXPECT_FALSE(LightNamed(scene, "plain").has_to_world());
-  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:34: environment maps are not supported yet: emitter 'sunsky'"));
+  EXPECT_TRUE(Warns(result, "mitsuba_emitters.xml:34: sun and sky models are not supported: emitter 'sunsky'"));
   EXPECT_FALSE(Warns(result, "emitter 'directional'"));  // no parameter ignored
 }
 
