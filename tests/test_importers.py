@@ -189,8 +189,7 @@ def test_convert_shows_the_importers_warnings(
     errors = capsys.readouterr().err
     assert "yarf: warning: " in errors
     assert (
-        "mitsuba_emitters.xml:34: sun and sky models are not supported: emitter 'sunsky'"
-        in errors
+        "mitsuba_emitters.xml:34: sun and sky models are not supported: emitter 'sunsky'" in errors
     )
 
 

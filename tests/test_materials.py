@@ -47,3 +47,27 @@ def test_blendbsdf_matches_mitsuba(client: Client, tmp_path: Path, name: str) ->
     upload_scene_assets(client, scene, tmp_path)
     assert [m.class_name for m in scene.materials if m.class_name == "blend"] == ["blend"]
     assert_matches_mitsuba(client, scene, path, f"blendbsdf, {name}")
+
+
+# Mitsuba 3's pplastic as it renders in RGB: a rough coating and a diffuse
+# base reflecting apart.
+PPLASTIC = {
+    "beckmann": '<float name="alpha" value="0.2"/>',
+    "anisotropic ggx": (
+        '<string name="distribution" value="ggx"/>'
+        '<float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/>'
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(PPLASTIC))
+def test_pplastic_matches_mitsuba(client: Client, tmp_path: Path, name: str) -> None:
+    shape = (
+        '<shape type="sphere"><float name="radius" value="0.9"/>'
+        f'<bsdf type="pplastic">{PPLASTIC[name]}'
+        '<rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/></bsdf></shape>'
+    )
+    path = write_scene(tmp_path, shape)
+    scene = load_scene(path)
+    assert "pplastic" in {m.class_name for m in scene.materials}
+    assert_matches_mitsuba(client, scene, path, f"pplastic, {name}")

@@ -1,6 +1,6 @@
 // Tests of the metal, microfacet and coated surface plugins (conductor,
-// roughconductor, roughdielectric, plastic, roughplastic, thindielectric,
-// diffusetransmission) and of the helpers they share (microfacet.h,
+// roughconductor, roughdielectric, plastic, roughplastic, pplastic,
+// thindielectric, diffusetransmission) and of the helpers they share (microfacet.h,
 // metals.h). The plugins are loaded from the plugin folder through the
 // registry, as yarfd loads them. For each model with a finite lobe:
 // Pearson's χ² test of Sample's directions against Pdf, Sample agreeing
@@ -145,12 +145,13 @@ class PlasticTest : public MicrofacetTest {
   static constexpr float kEta = float(1.49 / 1.000277);  // the defaults
 };
 class RoughPlasticTest : public MicrofacetTest {};
+class PPlasticTest : public PlasticTest {};
 class ThinDielectricTest : public MicrofacetTest {};
 class DiffuseTransmissionTest : public MicrofacetTest {};
 
 const char* const kNewModels[] = {"conductor",      "roughconductor", "roughdielectric",
-                                  "plastic",        "roughplastic",   "thindielectric",
-                                  "diffusetransmission"};
+                                  "plastic",        "roughplastic",   "pplastic",
+                                  "thindielectric", "diffusetransmission"};
 
 // --- Shared helpers (microfacet.h, metals.h) -------------------------------
 
@@ -366,6 +367,7 @@ TEST_F(MicrofacetTest, RegistersEveryModelWithItsInterfaceAndLobes) {
   EXPECT_EQ(Make("plastic")->Lobes(), uint32_t(kScatterReflect | kScatterDelta | kScatterDiffuse));
   EXPECT_EQ(Make("roughplastic")->Lobes(),
             uint32_t(kScatterReflect | kScatterGlossy | kScatterDiffuse));
+  EXPECT_EQ(Make("pplastic")->Lobes(), uint32_t(kScatterReflect | kScatterGlossy | kScatterDiffuse));
   EXPECT_EQ(Make("thindielectric")->Lobes(),
             uint32_t(kScatterReflect | kScatterRefract | kScatterDelta));
   EXPECT_EQ(Make("diffusetransmission")->Lobes(),
@@ -384,7 +386,7 @@ TEST_F(MicrofacetTest, BadPropertiesAreRejectedByName) {
     for (const char* text : mentions)
       EXPECT_NE(message.find(text), std::string::npos) << name << ": " << message;
   };
-  for (const char* name : {"roughconductor", "roughdielectric", "roughplastic"}) {
+  for (const char* name : {"roughconductor", "roughdielectric", "roughplastic", "pplastic"}) {
     expect_error(name, Props({{"alpha", -0.1}}), {"'alpha'"});
     expect_error(name, Props({{"alpha", 0.0}}), {"'alpha'"});
     expect_error(name, Props({{"distribution", std::string("phong")}}), {"'distribution'"});
@@ -404,11 +406,11 @@ TEST_F(MicrofacetTest, BadPropertiesAreRejectedByName) {
   }
   expect_error("roughdielectric", Props({{"int_ior", 1.33}, {"ext_ior", 1.33}}),
                {"'int_ior'", "'ext_ior'"});
-  for (const char* name : {"roughdielectric", "plastic", "roughplastic", "thindielectric"}) {
+  for (const char* name : {"roughdielectric", "plastic", "roughplastic", "pplastic", "thindielectric"}) {
     expect_error(name, Props({{"int_ior", -1.5}}), {"'int_ior'"});
     expect_error(name, Props({{"ext_ior", 0.0}}), {"'ext_ior'"});
   }
-  for (const char* name : {"plastic", "roughplastic"})
+  for (const char* name : {"plastic", "roughplastic", "pplastic"})
     expect_error(name, Props({{"diffuse_reflectance", 1.2}}), {"'diffuse_reflectance'"});
   expect_error("diffusetransmission", Props({{"reflectance", 0.6}, {"transmittance", 0.6}}),
                {"'reflectance'", "'transmittance'"});
@@ -784,6 +786,66 @@ TEST_F(PlasticTest, IsReciprocalAndOneSided) {
   EXPECT_EQ(specular.flags, uint32_t(kScatterReflect | kScatterDelta));
   EXPECT_EQ(specular.pdf, 1.0f);
   EXPECT_NEAR(specular.weight.x, FresnelDielectric(wi.z, kEta), 1e-6f);
+}
+
+// --- pplastic --------------------------------------------------------------------
+
+TEST_F(PPlasticTest, SamplesFollowPdf) {
+  for (const Properties& props : {Props({{"alpha", 0.15}}), Props({{"alpha_u", 0.1}, {"alpha_v", 0.5}})}) {
+    const auto model = Make("pplastic", props);
+    for (Vec3 wi : {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)})
+      EXPECT_TRUE(SamplesFollowPdf(*model, wi, 200000, 121)) << "wi " << Describe(wi);
+  }
+}
+
+TEST_F(PPlasticTest, SampleAgreesWithPdfAndEvaluate) {
+  for (double alpha : {0.01, 0.1, 0.6}) {
+    const auto model =
+        Make("pplastic", Props({{"alpha", alpha}, {"diffuse_reflectance", Rgb{Vec3(0.1f, 0.4f, 0.9f)}}}));
+    for (Vec3 wi : Above()) {
+      const int produced =
+          ExpectSampleAgreesWithPdfAndEvaluate(*model, wi, 2000, 122, kRadiance, "alpha " + std::to_string(alpha));
+      EXPECT_GT(produced, 2000 / 2) << "alpha " << alpha << ", wi " << Describe(wi);
+    }
+  }
+}
+
+TEST_F(PPlasticTest, PdfIntegratesToTheRateOfSamples) {
+  ExpectPdfIntegratesToTheRateOfSamples("pplastic", {Vec3(0, 0, 1), DirectionAt(0.5, 1.0), DirectionAt(0.1, -2.0)},
+                                        123);
+}
+
+TEST_F(PPlasticTest, IsReciprocalAndOneSided) {
+  ExpectReciprocalAndOneSided(*Make("pplastic", Props({{"alpha", 0.3}})), 124);
+}
+
+// The coating and the base reflect apart: the coating as roughplastic's
+// (the same rough dielectric), the base through the smooth interface's
+// Fresnel transmittance in and out, and nothing else.
+TEST_F(PPlasticTest, IsTheCoatingsReflectionPlusTheBaseSeenThroughTheInterface) {
+  const Vec3 rho(0.2f, 0.5f, 0.8f);
+  const auto coating_only = Make("pplastic", Props({{"alpha", 0.25}, {"diffuse_reflectance", 0.0}}));
+  const auto rough_coating = Make("roughplastic", Props({{"alpha", 0.25}, {"diffuse_reflectance", 0.0}}));
+  const auto base_only = Make("pplastic", Props({{"diffuse_reflectance", Rgb{rho}}, {"specular_reflectance", 0.0}}));
+  const auto both = Make("pplastic", Props({{"alpha", 0.25}, {"diffuse_reflectance", Rgb{rho}}}));
+  for (uint64_t k = 0; k < 500; ++k) {
+    const auto u = Uniform3(125, k), v = Uniform3(126, k);
+    const Vec3 wi = SampleUniformHemisphere(u[0], u[1]), wo = SampleUniformHemisphere(v[0], v[1]);
+    const Vec3 coating = EvaluateOne(*coating_only, wi, wo);
+    ExpectVecNear(coating, EvaluateOne(*rough_coating, wi, wo), 1e-5f, "coating " + Describe(wi) + Describe(wo));
+    const float through = (1 - FresnelDielectric(wi.z, kEta)) * (1 - FresnelDielectric(wo.z, kEta));
+    const Vec3 base = rho * (through * kInvPi);
+    ExpectVecNear(EvaluateOne(*base_only, wi, wo), base, 1e-5f, "base " + Describe(wi) + Describe(wo));
+    ExpectVecNear(EvaluateOne(*both, wi, wo), coating + base, 1e-5f, "both " + Describe(wi) + Describe(wo));
+  }
+  // A white base under a smooth coating reflects less than all: nothing the
+  // interface reflects back inside comes out again.
+  const auto white = Make("pplastic", Props({{"alpha", 0.05}, {"diffuse_reflectance", 1.0}}));
+  for (Vec3 wi : Above()) {
+    const SphereIntegrals sums = IntegrateOverSphere(*white, wi);
+    EXPECT_LT(sums.albedo.x, 1.0f) << Describe(wi);
+    EXPECT_GT(sums.albedo.x, 0.5f) << Describe(wi);
+  }
 }
 
 // --- roughplastic ----------------------------------------------------------------

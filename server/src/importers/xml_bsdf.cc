@@ -87,6 +87,16 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     if (!(a > 0 && a <= 10)) Fail(p.WhereIs(key), what + ": " + key + " must lie in (0, 10]");
     SetFloat(props, key, a);
   };
+  // A microfacet surface: its distribution, and one α or α_u and α_v.
+  auto rough_surface = [&] {
+    distribution();
+    if (p.Has("alpha_u") || p.Has("alpha_v")) {
+      alpha("alpha_u");
+      alpha("alpha_v");
+    } else {
+      alpha("alpha");
+    }
+  };
   // A Disney model's weight in [0, high], a number or a texture: Mitsuba
   // reads them unchecked, yarf's models refuse a constant outside, so
   // clamp here.
@@ -203,13 +213,7 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     }
     if (p.Has("specular_reflectance")) reflectance("specular_reflectance", "specular_reflectance", {1, 1, 1});
     if (type == "roughconductor") {
-      distribution();
-      if (p.Has("alpha_u") || p.Has("alpha_v")) {
-        alpha("alpha_u");
-        alpha("alpha_v");
-      } else {
-        alpha("alpha");
-      }
+      rough_surface();
     }
   } else if (type == "dielectric" || type == "thindielectric" || type == "roughdielectric") {
     class_name = type;
@@ -221,13 +225,7 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
         Warn(p.WhereIs(key), std::string("dielectric:") + key, what + ": " + key + " is not supported: ignored");
       }
     if (type == "roughdielectric") {
-      distribution();
-      if (p.Has("alpha_u") || p.Has("alpha_v")) {
-        alpha("alpha_u");
-        alpha("alpha_v");
-      } else {
-        alpha("alpha");
-      }
+      rough_surface();
     }
   } else if (type == "plastic" || type == "roughplastic") {
     class_name = type;
@@ -240,6 +238,14 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     }
     if (p.Has("specular_reflectance")) reflectance("specular_reflectance", "specular_reflectance", {1, 1, 1});
     if (p.Has("nonlinear")) SetBool(props, "nonlinear", p.Boolean("nonlinear", false));
+  } else if (type == "pplastic") {
+    // Its RGB rendering: the coating and the base reflect apart.
+    class_name = type;
+    reflectance("diffuse_reflectance", "diffuse_reflectance", {0.5, 0.5, 0.5});
+    if (p.Has("specular_reflectance")) reflectance("specular_reflectance", "specular_reflectance", {1, 1, 1});
+    ior("int_ior", kPolypropylene);
+    ior("ext_ior", kAir);
+    rough_surface();
   } else if (type == "phong") {
     class_name = "phong";
     reflectance("diffuse_reflectance", "diffuse_reflectance", {0.5, 0.5, 0.5});
@@ -298,7 +304,7 @@ std::string MitsubaImporter::MakeMaterial(const XmlElement& e, const std::string
     static const std::vector<std::string> kKnown = {
         "diffuse", "roughdiffuse", "twosided", "mask", "bumpmap", "normalmap", "blendbsdf", "null",
         "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-        "roughplastic", "phong", "principled", "principledthin", "hair"};
+        "roughplastic", "pplastic", "phong", "principled", "principledthin", "hair"};
     Warn(e.where, "bsdf:" + type,
          "bsdf '" + type + "' is not supported: a grey Lambertian used" + DidYouMean(type, kKnown));
     return assembly_.DefaultMaterial();

@@ -160,6 +160,12 @@ TEST(MitsubaImport, BsdfsMapToSurfaceModels) {
   EXPECT_DOUBLE_EQ(FloatProperty(material("s17").properties(), "alpha"), 0.2);
   EXPECT_FALSE(material("s17").properties().values().at("use_fast_approx").bool_value());
   EXPECT_TRUE(material("s17").properties().values().at("two_sided").bool_value());
+  // pplastic as Mitsuba renders it in RGB, with its roughness and indices.
+  EXPECT_EQ(material("s18").class_name(), "pplastic");
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s18").properties(), "alpha_u"), 0.1);
+  EXPECT_DOUBLE_EQ(FloatProperty(material("s18").properties(), "alpha_v"), 0.2);
+  EXPECT_EQ(StringProperty(material("s18").properties(), "distribution"), "beckmann");
+  EXPECT_NEAR(FloatProperty(material("s18").properties(), "int_ior"), 1.49, 1e-6);
   EXPECT_EQ(material("s13").name(), "default");
   ExpectNear(RgbProperty(material("s13").properties(), "reflectance"), {0.5, 0.5, 0.5});
 }
