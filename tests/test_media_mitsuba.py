@@ -35,6 +35,15 @@ def homogeneous(name: str, sigma_t: str, albedo: str, g: float = 0.0, scale: flo
     )
 
 
+def phased(phase: str) -> str:
+    """A fog of albedo 0.9 that scatters by ``phase`` (Mitsuba's XML)."""
+    return (
+        '<medium type="homogeneous" name="interior"><rgb name="sigma_t" value="1, 1, 1"/>'
+        '<rgb name="albedo" value="0.9, 0.8, 0.7"/><float name="scale" value="1.5"/>'
+        f"{phase}</medium>"
+    )
+
+
 def fog_cube(medium: str, scale: float = 1.1) -> str:
     """A null cube (Mitsuba's [-1, 1]³, scaled) holding ``medium`` as its interior."""
     return (
@@ -111,6 +120,20 @@ SCENES = {
         '<float name="int_ior" value="1.5"/></bsdf>'
         + homogeneous("interior", "1, 1, 1", "0.8, 0.8, 0.8", scale=1.2)
         + "</shape>",
+        {"lights": SPOT},
+    ),
+    # Lit from one side: the phase function's shape shows in the fog's
+    # brightness against the angle the camera sees the light turned by.
+    "Rayleigh scattering lit by a spot light": (
+        fog_cube(phased('<phase type="rayleigh"/>')),
+        {"lights": SPOT},
+    ),
+    "a tabulated phase function lit by a spot light": (
+        fog_cube(
+            phased(
+                '<phase type="tabphase"><string name="values" value="6, 1, 0.3, 0.2, 0.6, 4"/></phase>'
+            )
+        ),
         {"lights": SPOT},
     ),
     "a heterogeneous grid with spatially varying albedo": (fog_cube(GRID), {}),

@@ -1,11 +1,12 @@
 // Tests of the phase functions (phase.h) and of the homogeneous medium,
 // loaded through the registry as yarfd loads it: each phase function
-// integrates to one, its samples follow its density (mean cosine g, and a
-// binned comparison), and the homogeneous medium's majorant is its own
-// extinction.
+// integrates to one, its samples follow its density (mean cosine, and a
+// binned comparison), Rayleigh's and a table's values are theirs, and the
+// homogeneous medium's majorant is its own extinction.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <memory>
 #include <vector>
 
@@ -22,6 +23,25 @@ Properties Phase(double g, double g2 = 0, double blend = 0) {
   props.Set("g2", g2);
   props.Set("blend", blend);
   return props;
+}
+
+Properties RayleighPhase() {
+  Properties props;
+  props.Set("phase", std::string("rayleigh"));
+  return props;
+}
+
+Properties TabulatedPhase(std::vector<float> values) {
+  Properties props;
+  props.Set("phase", std::string("tabulated"));
+  props.Set("phase_values", std::move(values));
+  return props;
+}
+
+// A direction at scattering cosine μ from wi (the light's travel turned by
+// acos μ): wo = -frame(wi)·(μ's direction).
+Vec3 ScatteredAt(Vec3 wi, float mu, float phi = 0) {
+  return -Frame(wi).ToWorld(SphericalDirection(SinFromCos(mu), mu, phi));
 }
 
 // ∫ p(wi, wo) dwo over the sphere, by a midpoint rule in μ (p depends on
@@ -43,6 +63,24 @@ TEST(PhaseFunction, IntegratesToOne) {
   for (double g : {0.0, 0.3, -0.6, 0.9})
     EXPECT_NEAR(PhaseIntegral(PhaseFunction(Phase(g))), 1.0, 2e-3) << "g = " << g;
   EXPECT_NEAR(PhaseIntegral(PhaseFunction(Phase(0.7, -0.4, 0.3))), 1.0, 2e-3);
+  EXPECT_NEAR(PhaseIntegral(PhaseFunction(RayleighPhase())), 1.0, 2e-3);
+  EXPECT_NEAR(PhaseIntegral(PhaseFunction(TabulatedPhase({1, 0.5f, 0.1f}))), 1.0, 2e-3);
+  EXPECT_NEAR(PhaseIntegral(PhaseFunction(TabulatedPhase({0, 0, 3, 0, 7, 7, 0.2f}))), 1.0, 2e-3);
+}
+
+TEST(PhaseFunction, RayleighAndTablesTakeTheirValues) {
+  const Vec3 wi = Normalize(Vec3(0.4f, 0.1f, -0.7f));
+  const PhaseFunction rayleigh(RayleighPhase());
+  for (float mu : {-1.0f, -0.5f, 0.0f, 0.3f, 1.0f})
+    EXPECT_NEAR(rayleigh.Evaluate(wi, ScatteredAt(wi, mu)), 3 * (1 + mu * mu) / (16 * kPi), 1e-5f) << mu;
+  // Values 1, 0.5, 0.1 at μ = -1, 0, 1 (back-scattering the most): their
+  // integral over the sphere is 2π (0.75 + 0.3).
+  const PhaseFunction table(TabulatedPhase({1, 0.5f, 0.1f}));
+  const float scale = 1 / (2 * kPi * 1.05f);
+  EXPECT_NEAR(table.Evaluate(wi, ScatteredAt(wi, -1)), 1 * scale, 1e-4f);
+  EXPECT_NEAR(table.Evaluate(wi, ScatteredAt(wi, -0.5f)), 0.75f * scale, 1e-4f);
+  EXPECT_NEAR(table.Evaluate(wi, ScatteredAt(wi, 0.5f)), 0.3f * scale, 1e-4f);
+  EXPECT_NEAR(table.Evaluate(wi, ScatteredAt(wi, 1)), 0.1f * scale, 1e-4f);
 }
 
 TEST(PhaseFunction, ForwardScatteringIsAlongThePath) {
@@ -52,14 +90,27 @@ TEST(PhaseFunction, ForwardScatteringIsAlongThePath) {
   EXPECT_GT(phase.Evaluate(wi, -wi), 10 * phase.Evaluate(wi, wi));
 }
 
-// Samples: unit directions whose mean of μ = -wi·wo is the mean cosine of
-// the mixture, and whose μ histogram matches the density's.
+// Samples: unit directions whose mean of μ = -wi·wo is the mean cosine
+// (g, for Henyey–Greenstein lobes; 0 for Rayleigh's; the density's own by
+// quadrature for a table), and whose μ histogram matches the density's.
 TEST(PhaseFunction, SamplesFollowTheDensity) {
   struct Case {
-    double g, g2, blend;
+    const char* name;
+    Properties props;
+    double mean;  // NaN: by quadrature of the density
   };
-  for (const Case c : {Case{0, 0, 0}, Case{0.6, 0, 0}, Case{-0.3, 0, 0}, Case{0.8, -0.5, 0.25}}) {
-    const PhaseFunction phase(Phase(c.g, c.g2, c.blend));
+  const double by_quadrature = std::nan("");
+  const std::vector<Case> cases = {
+      {"isotropic", Phase(0), 0},
+      {"hg 0.6", Phase(0.6), 0.6},
+      {"hg -0.3", Phase(-0.3), -0.3},
+      {"blend", Phase(0.8, -0.5, 0.25), 0.75 * 0.8 + 0.25 * -0.5},
+      {"rayleigh", RayleighPhase(), 0},
+      {"table", TabulatedPhase({1, 0.5f, 0.1f}), by_quadrature},
+      {"table with gaps", TabulatedPhase({0, 0, 3, 0, 7, 7, 0.2f}), by_quadrature},
+  };
+  for (const Case& c : cases) {
+    const PhaseFunction phase(c.props);
     const Vec3 wi = Normalize(Vec3(-0.2f, 0.9f, 0.1f));
     const int n = 400000, bins = 20;
     std::vector<double> histogram(bins);
@@ -71,18 +122,19 @@ TEST(PhaseFunction, SamplesFollowTheDensity) {
       mean_mu += mu / n;
       histogram[std::min(bins - 1, int((mu + 1) / 2 * bins))] += 1.0 / n;
     }
-    EXPECT_NEAR(mean_mu, (1 - c.blend) * c.g + c.blend * c.g2, 5e-3) << c.g;
-    const Frame frame(wi);
+    double expected_mean = 0;
     for (int b = 0; b < bins; ++b) {
       // The bin's probability by quadrature of 2π p dμ.
       double expected = 0;
       for (int q = 0; q < 1000; ++q) {
         const float mu = -1 + 2 * (float(b) + (float(q) + 0.5f) / 1000) / bins;
-        expected += phase.Evaluate(wi, -frame.ToWorld(SphericalDirection(SinFromCos(mu), mu, 0))) * 2 * kPi *
-                    (2.0 / bins / 1000);
+        const double mass = phase.Evaluate(wi, ScatteredAt(wi, mu)) * 2 * kPi * (2.0 / bins / 1000);
+        expected += mass;
+        expected_mean += mu * mass;
       }
-      EXPECT_NEAR(histogram[b], expected, 5 * std::sqrt(expected / n) + 1e-4) << "g " << c.g << " bin " << b;
+      EXPECT_NEAR(histogram[b], expected, 5 * std::sqrt(expected / n) + 1e-4) << c.name << " bin " << b;
     }
+    EXPECT_NEAR(mean_mu, std::isnan(c.mean) ? expected_mean : c.mean, 5e-3) << c.name;
   }
 }
 
@@ -91,6 +143,24 @@ TEST(PhaseFunction, RefusesAsymmetryOutsideTheOpenInterval) {
   EXPECT_THROW(PhaseFunction(Phase(-1.5)), Error);
   EXPECT_THROW(PhaseFunction(Phase(0.5, 0.2, 1.5)), Error);
   EXPECT_THROW(PhaseFunction(Phase(std::nan(""))), Error);
+}
+
+TEST(PhaseFunction, RefusesMalformedTablesAndMixedShapes) {
+  for (const std::vector<float>& values :
+       {std::vector<float>{}, {1}, {0, 0, 0}, {1, -0.5f, 1}, {1, std::nanf(""), 1}, {1, INFINITY}})
+    EXPECT_THROW(PhaseFunction(TabulatedPhase(values)), Error) << values.size() << " values";
+  Properties no_values;
+  no_values.Set("phase", std::string("tabulated"));
+  EXPECT_THROW(PhaseFunction{no_values}, Error);
+  Properties rayleigh_with_g = RayleighPhase();
+  rayleigh_with_g.Set("g", 0.3);
+  EXPECT_THROW(PhaseFunction{rayleigh_with_g}, Error);
+  Properties hg_with_values = Phase(0.3);
+  hg_with_values.Set("phase_values", std::vector<float>{1, 2});
+  EXPECT_THROW(PhaseFunction{hg_with_values}, Error);
+  Properties unknown;
+  unknown.Set("phase", std::string("mie"));
+  EXPECT_THROW(PhaseFunction{unknown}, Error);
 }
 
 class HomogeneousTest : public testing::Test {

@@ -362,7 +362,7 @@ TEST(MitsubaMedia, InlineMediaConstVolumesAndTheDefaults) {
   EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
 }
 
-TEST(MitsubaMedia, PhaseFunctionsBecomeOneOrTwoHenyeyGreensteinLobes) {
+TEST(MitsubaMedia, PhaseFunctionsBecomeHenyeyGreensteinLobesRayleighsOrATable) {
   const auto medium_with = [](const std::string& phase) {
     const ImportResult result = Mitsuba("<shape type=\"sphere\"><medium name=\"interior\" type=\"homogeneous\">" +
                                         phase + "</medium></shape>\n");
@@ -370,6 +370,7 @@ TEST(MitsubaMedia, PhaseFunctionsBecomeOneOrTwoHenyeyGreensteinLobes) {
   };
   const auto [hg, hg_props] = medium_with("<phase type=\"hg\"/>");
   EXPECT_DOUBLE_EQ(FloatProperty(hg_props, "g"), 0.8);  // Mitsuba's default
+  EXPECT_FALSE(HasProperty(hg_props, "phase"));
   const auto [blend, blend_props] = medium_with(
       "<phase type=\"blendphase\"><float name=\"weight\" value=\"0.25\"/>"
       "<phase name=\"phase_0\" type=\"isotropic\"/>"
@@ -378,10 +379,32 @@ TEST(MitsubaMedia, PhaseFunctionsBecomeOneOrTwoHenyeyGreensteinLobes) {
   EXPECT_DOUBLE_EQ(FloatProperty(blend_props, "g2"), -0.5);
   EXPECT_DOUBLE_EQ(FloatProperty(blend_props, "blend"), 0.25);
   const auto [rayleigh, rayleigh_props] = medium_with("<phase type=\"rayleigh\"/>");
+  EXPECT_EQ(StringProperty(rayleigh_props, "phase"), "rayleigh");
   EXPECT_FALSE(HasProperty(rayleigh_props, "g"));
-  EXPECT_TRUE(Warns(rayleigh, "media.xml:2: phase function 'rayleigh' is not supported: isotropic used"));
+  EXPECT_FALSE(Warns(rayleigh, "phase function"));
   // The default integrator, path, says it ignores the medium.
   EXPECT_TRUE(Warns(rayleigh, "integrator 'path' does not render participating media"));
+  const auto [table, table_props] = medium_with("<phase type=\"tabphase\"><string name=\"values\" value=\"3, 1 0.5\"/></phase>");
+  EXPECT_EQ(StringProperty(table_props, "phase"), "tabulated");
+  const auto& values = table_props.values().at("phase_values").float_array_value().values();
+  EXPECT_EQ(std::vector<float>(values.begin(), values.end()), (std::vector<float>{3, 1, 0.5f}));
+  // What yarf has no shape for: isotropic, said once.
+  const auto [sggx, sggx_props] = medium_with("<phase type=\"sggx\"/>");
+  EXPECT_FALSE(HasProperty(sggx_props, "phase"));
+  EXPECT_TRUE(Warns(sggx, "media.xml:2: phase function 'sggx' is not supported: isotropic used"));
+  const auto [mixed, mixed_props] = medium_with(
+      "<phase type=\"blendphase\"><phase type=\"rayleigh\"/>"
+      "<phase type=\"hg\"><float name=\"g\" value=\"0.5\"/></phase></phase>");
+  EXPECT_TRUE(Warns(mixed, "only Henyey-Greenstein lobes blend: isotropic used for 'rayleigh'"));
+  EXPECT_DOUBLE_EQ(FloatProperty(mixed_props, "g2"), 0.5);
+  for (const char* values : {"", "1", "1, -2", "0, 0", "1, x"}) {
+    const std::string error = ErrorOf([&] {
+      Mitsuba(std::string("<shape type=\"sphere\"><medium name=\"interior\" type=\"homogeneous\">"
+                          "<phase type=\"tabphase\"><string name=\"values\" value=\"") +
+              values + "\"/></phase></medium></shape>\n");
+    });
+    EXPECT_NE(error.find("phase 'tabphase': values"), std::string::npos) << "values '" << values << "': " << error;
+  }
 }
 
 // A Mitsuba .vol grid of one channel in a fresh folder.

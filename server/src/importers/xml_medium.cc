@@ -7,8 +7,11 @@
 // volume's to_world places (Mitsuba's media have no transform of their
 // own), an albedo gridvolume its albedo_filename.
 #include <algorithm>
+#include <string>
+#include <vector>
 
 #include "importers/colour_checks.h"
+#include "importers/numbers.h"
 #include "importers/properties_util.h"
 #include "importers/volume_file.h"
 #include "importers/xml_importer.h"
@@ -68,32 +71,57 @@ std::optional<MediumValue> ValueOf(MitsubaImporter& importer, XmlPlugin& medium,
   return value;
 }
 
-// The Henyey–Greenstein asymmetry of a phase function; 0 (isotropic, with
-// a warning) for one yarf has none for.
-double Asymmetry(MitsubaImporter& importer, const XmlElement& e) {
-  XmlPlugin p(e, importer);
+// A phase function as yarf's medium properties take it: Henyey–Greenstein
+// (its g), Rayleigh's, or a table over the scattering angle's cosine.
+struct PhaseSpec {
+  std::string shape = "hg";
   double g = 0;
+  std::vector<double> values;
+};
+
+// One of Mitsuba's phase functions; isotropic (with a warning) for one
+// yarf has none for.
+PhaseSpec PhaseOf(MitsubaImporter& importer, const XmlElement& e) {
+  XmlPlugin p(e, importer);
+  PhaseSpec spec;
   if (p.type() == "hg") {
-    g = p.Float("g", 0.8);
-    if (!(g > -1 && g < 1)) Fail(p.WhereIs("g"), "phase 'hg': g must lie in (-1, 1)");
+    spec.g = p.Float("g", 0.8);
+    if (!(spec.g > -1 && spec.g < 1)) Fail(p.WhereIs("g"), "phase 'hg': g must lie in (-1, 1)");
+  } else if (p.type() == "rayleigh") {
+    spec.shape = "rayleigh";
+  } else if (p.type() == "tabphase") {
+    // Values at evenly spaced cosines of the scattering angle, from -1
+    // (back toward the light) to 1, as yarf's table.
+    spec.shape = "tabulated";
+    const auto values = ParseDoubleList(p.String("values", ""));
+    if (!values || values->size() < 2 || values->size() > (size_t(1) << 20))
+      Fail(p.WhereIs("values"), "phase 'tabphase': values needs 2 to 2^20 numbers");
+    for (const double v : *values)
+      if (!(v >= 0 && v < 1e30)) Fail(p.WhereIs("values"), "phase 'tabphase': values must be finite and >= 0");
+    if (std::all_of(values->begin(), values->end(), [](double v) { return v == 0; }))
+      Fail(p.WhereIs("values"), "phase 'tabphase': values must not all be zero");
+    spec.values = *values;
   } else if (p.type() != "isotropic") {
     importer.Warn(e.where, "phase:" + p.type(),
                   "phase function '" + p.type() + "' is not supported: isotropic used");
-    return 0;
+    return spec;
   }
   p.WarnUnused();
-  return g;
+  return spec;
 }
 
-// The medium's phase function as yarf's g, g2 and blend: isotropic, hg,
-// or a blendphase of two of them.
+// The medium's phase function as yarf's properties: isotropic, hg,
+// rayleigh, a table, or a blendphase of two Henyey–Greenstein lobes.
 void Phase(MitsubaImporter& importer, XmlPlugin& medium, v1::Properties& props) {
   const auto phases = medium.Objects("phase");
   if (phases.empty()) return;  // isotropic
   if (phases.size() > 1) Fail(phases[1]->where, "a medium takes one phase function");
   const XmlElement& e = *phases.front();
   if (e.Get("type") != "blendphase") {
-    if (const double g = Asymmetry(importer, e); g != 0) SetFloat(props, "g", g);
+    const PhaseSpec spec = PhaseOf(importer, e);
+    if (spec.shape != "hg") SetString(props, "phase", spec.shape);
+    if (spec.g != 0) SetFloat(props, "g", spec.g);
+    if (!spec.values.empty()) SetFloats(props, "phase_values", spec.values);
     return;
   }
   // Mitsuba's blend: (1 − weight)·first + weight·second.
@@ -103,7 +131,16 @@ void Phase(MitsubaImporter& importer, XmlPlugin& medium, v1::Properties& props) 
   const double weight = blend.Float("weight", 0.5);
   if (!(weight >= 0 && weight <= 1)) Fail(blend.WhereIs("weight"), "phase 'blendphase': weight must lie in [0, 1]");
   blend.WarnUnused();
-  const double g = Asymmetry(importer, *lobes[0]), g2 = Asymmetry(importer, *lobes[1]);
+  // yarf blends Henyey–Greenstein lobes only.
+  const auto lobe_g = [&](const XmlElement& lobe) {
+    const PhaseSpec spec = PhaseOf(importer, lobe);
+    if (spec.shape == "hg") return spec.g;
+    importer.Warn(lobe.where, "blendphase:" + spec.shape,
+                  "phase 'blendphase': only Henyey-Greenstein lobes blend: isotropic used for '" + lobe.Get("type") +
+                      "'");
+    return 0.0;
+  };
+  const double g = lobe_g(*lobes[0]), g2 = lobe_g(*lobes[1]);
   if (g != 0) SetFloat(props, "g", g);
   if (weight > 0) {
     SetFloat(props, "g2", g2);
