@@ -98,6 +98,9 @@ SPOT = (
     '<rgb name="intensity" value="20, 18, 15"/><float name="cutoff_angle" value="30"/></emitter>'
 )
 
+# Back- and forward-peaked, values at μ = -1, -0.6, ..., 1.
+TABULATED = '<phase type="tabphase"><string name="values" value="6, 1, 0.3, 0.2, 0.6, 4"/></phase>'
+
 SCENES = {
     "fog lit by an area light": (fog_cube(FOG), {}),
     "an object inside fog": (fog_cube(FOG) + GREY_SPHERE, {}),
@@ -129,11 +132,7 @@ SCENES = {
         {"lights": SPOT},
     ),
     "a tabulated phase function lit by a spot light": (
-        fog_cube(
-            phased(
-                '<phase type="tabphase"><string name="values" value="6, 1, 0.3, 0.2, 0.6, 4"/></phase>'
-            )
-        ),
+        fog_cube(phased(TABULATED)),
         {"lights": SPOT},
     ),
     "a heterogeneous grid with spatially varying albedo": (fog_cube(GRID), {}),
