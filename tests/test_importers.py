@@ -321,3 +321,80 @@ def test_gzip_compressed_pbrt_files_and_ply_meshes_render_as_their_plain_copies(
         main(["convert", str(tmp_path / "packed" / "scene.pbrt.gz"), str(tmp_path / "out.json")])
         == 0
     )
+
+
+def test_a_pbrt_sphere_cut_to_almost_nothing_renders_as_the_whole_sphere(
+    client: Client, tmp_path: Path
+) -> None:
+    """A partial sphere is meshed with pbrt's uv and normals: one cut by a
+    hair's breadth (zmin, zmax, phimax just inside the whole) shades, casts
+    shadows and, as an area light, shines as the analytic sphere does."""
+
+    def render(sphere: str) -> RenderResult:
+        (tmp_path / "sphere.pbrt").write_text(
+            'LookAt 0 3 5  0 0 0  0 1 0\nCamera "perspective" "float fov" 40\n'
+            'Film "rgb" "integer xresolution" 32 "integer yresolution" 32\n'
+            'Sampler "independent" "integer pixelsamples" 4\nWorldBegin\n'
+            'AttributeBegin\nAreaLightSource "diffuse" "rgb L" [4 3 2]\n'
+            'Translate 1.5 1.5 0\nShape "sphere" "float radius" 0.4 '
+            f"{sphere}\nAttributeEnd\n"
+            'Material "diffuse" "rgb reflectance" [0.6 0.6 0.6]\n'
+            f'Rotate 90 1 0 0\nShape "sphere" {sphere}\n'
+            'Shape "trianglemesh" "point3 P" [-4 -4 1  4 -4 1  4 4 1  -4 4 1] '
+            '"integer indices" [0 1 2 0 2 3]\n'
+        )
+        imported = import_scene(tmp_path / "sphere.pbrt")
+        return client.render(imported.scene, spp=256, seed=5, timeout=120)
+
+    whole = render("")
+    cut = render('"float zmin" -0.99999 "float zmax" 0.99999 "float phimax" 359.999')
+    test = block_z_test(
+        cut.pixels, cut.variance, whole.pixels, whole.variance, block=4, family_alpha=1e-3
+    )
+    assert not test.failing.size, test.report()
+    assert np.mean(whole.pixels) > 0.05
+
+
+@pytest.mark.parametrize(
+    "light",
+    [
+        'Shape "trianglemesh" "point3 P" [-0.5 -0.5 -0.5  0.5 -0.5 -0.5  0.5 0.5 -0.5  '
+        '-0.5 0.5 -0.5] "normal N" [0 0 1  0 0 1  0 0 1  0 0 1] "integer indices" [0 1 2 0 2 3]',
+        'Shape "cylinder" "float radius" 0.4',
+        'Shape "disk" "float radius" 0.5 "float innerradius" 0.2',
+        'Shape "sphere" "float radius" 0.4 "float phimax" 300',
+    ],
+)
+def test_pbrt_lights_shine_from_their_side_whichever_way_the_camera_turns(
+    client: Client, tmp_path: Path, light: str
+) -> None:
+    """pbrt's LookAt without `Scale -1 1 1` has the other handedness than
+    yarf's camera, which the importer meets by mirroring the world: a mesh
+    with normals, and the quadrics meshed with theirs, keep the side they
+    shine from, so the two cameras' images are each other's mirror."""
+
+    def render(handedness: str) -> RenderResult:
+        (tmp_path / "lit.pbrt").write_text(
+            f'{handedness}LookAt 0 3 5  0 0 0  0 1 0\nCamera "perspective" "float fov" 40\n'
+            'Film "rgb" "integer xresolution" 32 "integer yresolution" 32\nWorldBegin\n'
+            'AttributeBegin\nAreaLightSource "diffuse" "rgb L" [4 3 2]\n'
+            f"Translate 1.5 1.5 0\n{light}\nAttributeEnd\n"
+            'Rotate 90 1 0 0\nShape "trianglemesh" "point3 P" [-4 -4 1  4 -4 1  4 4 1  -4 4 1] '
+            '"integer indices" [0 1 2 0 2 3]\n'
+        )
+        result = client.render(
+            import_scene(tmp_path / "lit.pbrt").scene, spp=64, seed=3, timeout=120
+        )
+        return result
+
+    mirrored, turned = render(""), render("Scale -1 1 1\n")
+    assert np.mean(turned.pixels) > 0.05
+    test = block_z_test(
+        mirrored.pixels[:, ::-1],
+        mirrored.variance[:, ::-1],
+        turned.pixels,
+        turned.variance,
+        block=4,
+        family_alpha=1e-3,
+    )
+    assert not test.failing.size, test.report()

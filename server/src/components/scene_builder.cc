@@ -383,6 +383,7 @@ class Builder {
       look.name = s.name().empty() ? what : s.name();
       look.material = materials_.at(s.material());
       look.flip_normals = s.flip_normals();
+      look.flip_winding = s.flip_winding();
       if (!s.interior().empty() || !s.exterior().empty())
         look.media = {MediumNumber(s.interior()), MediumNumber(s.exterior()), true};
       if (!s.alpha().empty()) {

@@ -321,6 +321,35 @@ TEST_F(SceneTest, VertexNormalsDecideTheSideOfAMeshWoundTheOtherWay) {
   EXPECT_EQ(hit.v, hit.b2);
 }
 
+// flip_winding turns the winding's normal around, unless vertex normals
+// decide (even normals that are the faces' own, which the kernel drops as
+// such); flip_normals turns whatever decided.
+TEST_F(SceneTest, FlipWindingTurnsTheWindingsSideAndFlipNormalsTheFinalOne) {
+  struct Case {
+    bool vertex_normals, flip_winding, flip_normals;
+    float normal_z;
+  };
+  for (const Case c : {Case{false, false, false, 1}, Case{false, true, false, -1}, Case{false, true, true, 1},
+                       Case{false, false, true, -1}, Case{true, true, false, 1}, Case{true, true, true, -1},
+                       Case{true, false, true, -1}}) {
+    v1::Scene scene = BaseScene();
+    v1::SceneShape* s = AddTriangle(scene.mutable_shapes());
+    *s->mutable_to_world() = Translation(0, 0, 5);
+    if (c.vertex_normals)
+      for (int k = 0; k < 3; ++k)
+        for (float v : {0.f, 0.f, 1.f}) s->mutable_mesh()->add_normals(v);
+    s->set_flip_winding(c.flip_winding);
+    s->set_flip_normals(c.flip_normals);
+    auto kernel = Build(scene);
+    const Hit hit = Trace(*kernel, {0, 0, 0}, {0, 0, 1});
+    ASSERT_TRUE(hit.Found());
+    const std::string what = std::string(c.vertex_normals ? "normals" : "no normals") +
+                             (c.flip_winding ? ", winding flipped" : "") + (c.flip_normals ? ", normals flipped" : "");
+    EXPECT_NEAR(hit.normal.z, c.normal_z, 1e-6f) << what;
+    EXPECT_NEAR(hit.shading_normal.z, c.normal_z, 1e-6f) << what;
+  }
+}
+
 TEST_F(SceneTest, PlacedMeshesTransformTheirShadingNormals) {
   v1::Scene scene = BaseScene();
   v1::Group* group = scene.add_groups();

@@ -140,26 +140,74 @@ v1::Mesh CubeMesh() {
   return mesh;
 }
 
-v1::Mesh DiskMesh(DiskUv uv) {
+v1::Mesh DiskMesh(DiskUv uv, double inner, double phi_max_degrees) {
+  const double phi_max = std::clamp(phi_max_degrees, 1e-4, 360.0) * (kPi / 180);
+  const bool whole = phi_max_degrees >= 360;
+  const int steps = std::max(1, int(std::ceil(kDiskSegments * phi_max / (2 * kPi) - 1e-9)));
   v1::Mesh mesh;
   auto vertex = [&](double r, double phi) {
-    Add<float>(mesh.mutable_positions(), {float(r * std::cos(phi)), float(r * std::sin(phi)), 0.0f});
+    // A whole turn ends exactly where it starts.
+    const bool end = whole && phi >= phi_max;
+    Add<float>(mesh.mutable_positions(),
+               {end ? float(r) : float(r * std::cos(phi)), end ? 0.0f : float(r * std::sin(phi)), 0.0f});
     Add<float>(mesh.mutable_normals(), {0, 0, 1});
-    const double turn = phi / (2 * kPi);
+    const double turn = phi / phi_max;
     if (uv == DiskUv::kMitsuba)
       Add<float>(mesh.mutable_uvs(), {float(r), float(turn)});
     else
-      Add<float>(mesh.mutable_uvs(), {float(turn), float(1 - r)});
+      Add<float>(mesh.mutable_uvs(), {float(turn), float((1 - r) / (1 - inner))});
   };
-  // Vertices 0..N-1: the centre of each segment; N..2N: the rim, its
-  // first point repeated at φ = 2π.
-  for (int k = 0; k < kDiskSegments; ++k) vertex(0, 2 * kPi * (k + 0.5) / kDiskSegments);
-  for (int k = 0; k <= kDiskSegments; ++k) vertex(1, 2 * kPi * k / kDiskSegments);
-  for (uint32_t k = 0; k < uint32_t(kDiskSegments); ++k)
-    Add<uint32_t>(mesh.mutable_indices(), {k, kDiskSegments + k, kDiskSegments + k + 1});
-  // The repeated rim point sits exactly where the first does.
-  mesh.set_positions(3 * (2 * kDiskSegments), 1.0f);
-  mesh.set_positions(3 * (2 * kDiskSegments) + 1, 0.0f);
+  const auto angle = [&](double k) { return phi_max * k / steps; };
+  if (inner > 0) {
+    // Vertices 2k on the inner rim, 2k + 1 on the outer, for k = 0..steps.
+    for (int k = 0; k <= steps; ++k) {
+      vertex(inner, angle(k));
+      vertex(1, angle(k));
+    }
+    for (uint32_t k = 0; k < uint32_t(steps); ++k)
+      Add<uint32_t>(mesh.mutable_indices(), {2 * k, 2 * k + 1, 2 * k + 3, 2 * k, 2 * k + 3, 2 * k + 2});
+    return mesh;
+  }
+  // Vertices 0..steps-1: the centre of each segment; steps..2·steps: the
+  // rim.
+  for (int k = 0; k < steps; ++k) vertex(0, angle(k + 0.5));
+  for (int k = 0; k <= steps; ++k) vertex(1, angle(k));
+  const uint32_t n = uint32_t(steps);
+  for (uint32_t k = 0; k < n; ++k) Add<uint32_t>(mesh.mutable_indices(), {k, n + k, n + k + 1});
+  return mesh;
+}
+
+v1::Mesh SphereZoneMesh(double z_min, double z_max, double phi_max_degrees) {
+  const double phi_max = std::clamp(phi_max_degrees, 1e-4, 360.0) * (kPi / 180);
+  const bool whole = phi_max_degrees >= 360;
+  // pbrt-v4's θ range: from the lower cap (v = 0) to the upper (v = 1).
+  const double theta_low = std::acos(std::clamp(z_min, -1.0, 1.0)), theta_high = std::acos(std::clamp(z_max, -1.0, 1.0));
+  const int columns = std::max(1, int(std::ceil(kCylinderSegments * phi_max / (2 * kPi) - 1e-9)));
+  const int rows = std::max(1, int(std::ceil(kCylinderSegments / 2 * (theta_low - theta_high) / kPi - 1e-9)));
+  v1::Mesh mesh;
+  // Vertex (row, column) at index row·(columns + 1) + column.
+  for (int i = 0; i <= rows; ++i) {
+    const double v = double(i) / rows, theta = theta_low + v * (theta_high - theta_low);
+    const double sin_theta = std::sin(theta), cos_theta = std::cos(theta);
+    for (int k = 0; k <= columns; ++k) {
+      const double u = double(k) / columns, phi = u * phi_max;
+      const bool end = whole && k == columns;
+      const float x = float(sin_theta * (end ? 1.0 : std::cos(phi))), y = float(end ? 0.0 : sin_theta * std::sin(phi));
+      Add<float>(mesh.mutable_positions(), {x, y, float(cos_theta)});
+      Add<float>(mesh.mutable_normals(), {x, y, float(cos_theta)});
+      Add<float>(mesh.mutable_uvs(), {float(u), float(v)});
+    }
+  }
+  const auto at = [&](int i, int k) { return uint32_t(i * (columns + 1) + k); };
+  for (int i = 0; i < rows; ++i)
+    for (int k = 0; k < columns; ++k) {
+      // Counter-clockwise seen from outside; a ring at a pole is a point,
+      // where the quad is one triangle.
+      const uint32_t a = at(i, k), b = at(i, k + 1), c = at(i + 1, k + 1), d = at(i + 1, k);
+      const bool low_pole = i == 0 && theta_low >= kPi - 1e-12, high_pole = i + 1 == rows && theta_high <= 1e-12;
+      if (!low_pole) Add<uint32_t>(mesh.mutable_indices(), {a, b, c});
+      if (!high_pole) Add<uint32_t>(mesh.mutable_indices(), {a, c, d});
+    }
   return mesh;
 }
 

@@ -26,11 +26,21 @@ enum class DiskUv {
   kPbrt,     // (φ/2π, 1 − r) (pbrt-v4's disk of inner radius 0)
 };
 
-// The unit disk in the z = 0 plane, normal +z, as a fan of kDiskSegments
-// triangles around its centre. Each triangle has a centre vertex of its
-// own (at the middle angle of its segment) and the rim is cut at φ = 0,
-// so that interpolated uv follow the polar parameterisation.
-v1::Mesh DiskMesh(DiskUv uv);
+// The unit disk in the z = 0 plane, normal +z, from radius `inner` (in
+// [0, 1)) out and from φ = 0 to phi_max (degrees, in (0, 360]), in
+// kDiskSegments steps per turn: without a hole, a fan of triangles around
+// its centre, each with a centre vertex of its own (at the middle angle of
+// its segment), the rim cut at φ = 0, so that interpolated uv follow the
+// polar parameterisation; with one, a ring of quads. pbrt-v4's uv run
+// (φ / phi_max, (1 − r) / (1 − inner)).
+v1::Mesh DiskMesh(DiskUv uv, double inner = 0, double phi_max_degrees = 360);
+
+// The zone of the unit sphere between the planes z = z_min and z = z_max
+// (in [-1, 1], z_min < z_max), from φ = 0 to phi_max (degrees, in
+// (0, 360]): pbrt-v4's partial sphere, with its uv (φ / phi_max, and v
+// from 0 at z_min to 1 at z_max evenly in θ) and smooth normals pointing
+// outward, in kCylinderSegments steps per turn of φ and per half turn of θ.
+v1::Mesh SphereZoneMesh(double z_min, double z_max, double phi_max_degrees);
 
 // The open tube of radius 1 around the z axis from z = 0 to z = 1, swept
 // from φ = 0 to phi_max (degrees, in (0, 360]) in kCylinderSegments steps

@@ -317,8 +317,10 @@ TEST(PbrtImport, ALeftHandedLookAtMirrorsTheWorldAndKeepsTheLitSide) {
   // Reflected about x = 0, the camera's vertical plane.
   ExpectNear(to_world.Point({1, 2, 3}), {-1, 2, 3});
   // The triangle faces the camera (-z) in pbrt; after the reflection its
-  // winding faces +z, so yarf flips its normal back.
-  EXPECT_TRUE(light.flip_normals());
+  // winding faces +z, so yarf turns its winding's normal back (a user's
+  // flip it is not: vertex normals would decide).
+  EXPECT_TRUE(light.flip_winding());
+  EXPECT_FALSE(light.flip_normals());
   ExpectNear(ToVec(scene.camera().origin()), {0, 0, -5});
   // The distant light travels along (1, 0, 1), mirrored: still by a rotation.
   ASSERT_EQ(scene.lights_size(), 1);
@@ -598,6 +600,76 @@ TEST(PbrtImport, AnAreaLightOnBilinearPatchesEmitsItsPowerOverTheirArea) {
   const Vec3d radiance = RgbProperty(shape.emitter().properties(), "radiance");
   EXPECT_NEAR(Luminance(radiance), 2 / M_PI, 1e-6);
   EXPECT_FALSE(Warns(result, "emissionfilename"));
+}
+
+// A meshed quadric's triangles: their summed area in world space, and
+// whether each, in the shape's own space, faces away from `centre` (its
+// winding's normal outward).
+struct MeshedArea {
+  double area = 0;
+  bool outward = true;
+};
+MeshedArea AreaOf(const v1::SceneShape& shape, Vec3d centre) {
+  const Matrix4 to_world = ToMatrix(shape.to_world());
+  MeshedArea out;
+  for (const auto& t : Triangles(shape.mesh())) {
+    out.area += TriangleArea(to_world.Point(t[0]), to_world.Point(t[1]), to_world.Point(t[2]));
+    const Vec3d n = Cross(t[1] - t[0], t[2] - t[0]);
+    if (Dot(n, (t[0] + t[1] + t[2]) * (1.0 / 3) - centre) <= 0) out.outward = false;
+  }
+  return out;
+}
+
+TEST(PbrtImport, PartialQuadricsAreMeshedWithPbrtsUvAndArea) {
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\n"
+      "Shape \"sphere\" \"float radius\" 2 \"float zmin\" -1 \"float zmax\" 1.5 \"float phimax\" 270\n"
+      "Shape \"sphere\" \"float zmax\" 0.5\n"
+      "Shape \"disk\" \"float radius\" 2 \"float innerradius\" 0.8 \"float phimax\" 90\n"
+      "Shape \"disk\" \"float phimax\" 180\n"
+      "Shape \"sphere\" \"float zmin\" 0.5 \"float zmax\" 0.5\n",
+      "partial.pbrt");
+  ASSERT_EQ(result.scene.shapes_size(), 4);
+  EXPECT_TRUE(Warns(result, "partial.pbrt:6: a partial sphere of no area"));
+  // The zone: on the sphere of radius 2, between its planes and within its
+  // wedge, uv as pbrt's (φ / φmax, θ from zmin's to zmax's), normals outward.
+  // (In the sphere's own space, scaled to radius 1: the world is mirrored
+  // here, as pbrt's default camera's handedness differs from yarf's.)
+  const v1::SceneShape& zone = result.scene.shapes(0);
+  ASSERT_FALSE(zone.has_sphere());
+  const double phi_max = 1.5 * M_PI, theta_min = std::acos(-0.5), theta_max = std::acos(0.75);
+  EXPECT_NEAR(Length(ToMatrix(zone.to_world()).Point({0, 0, 1}) - ToMatrix(zone.to_world()).Point({0, 0, 0})), 2,
+              1e-9);
+  for (int i = 0; i < zone.mesh().positions_size() / 3; ++i) {
+    const Vec3d p = Vertex(zone.mesh(), i) * 2;
+    EXPECT_NEAR(Length(p), 2, 1e-5) << i;
+    EXPECT_GE(p.z, -1 - 1e-5);
+    EXPECT_LE(p.z, 1.5 + 1e-5);
+    const double phi = std::atan2(p.y, p.x) < -1e-6 ? std::atan2(p.y, p.x) + 2 * M_PI : std::atan2(p.y, p.x);
+    const double u = zone.mesh().uvs(2 * i), v = zone.mesh().uvs(2 * i + 1);
+    if (std::hypot(p.x, p.y) > 1e-6 && u < 1) EXPECT_NEAR(u, std::max(phi, 0.0) / phi_max, 1e-5) << i;
+    EXPECT_NEAR(v, (std::acos(std::clamp(p.z / 2, -1.0, 1.0)) - theta_min) / (theta_max - theta_min), 1e-4) << i;
+    ExpectNear(NormalOf(zone.mesh(), i), p * 0.5, 1e-5);
+  }
+  // Their areas as pbrt-v4 gives them, φmax r (zmax − zmin) and φmax (r² − rᵢ²) / 2,
+  // within the meshing's shortfall, wound outward.
+  const MeshedArea zone_area = AreaOf(zone, {0, 0, 0});
+  EXPECT_NEAR(zone_area.area, phi_max * 2 * 2.5, 1e-3 * phi_max * 5);
+  EXPECT_TRUE(zone_area.outward);
+  const MeshedArea cap = AreaOf(result.scene.shapes(1), {0, 0, 0});
+  EXPECT_NEAR(cap.area, 2 * M_PI * 1.5, 1e-3 * 2 * M_PI * 1.5);  // from the south pole up to z = 0.5
+  EXPECT_TRUE(cap.outward);
+  const v1::SceneShape& ring = result.scene.shapes(2);
+  EXPECT_NEAR(AreaOf(ring, {0, 0, -1}).area, M_PI / 4 * (4 - 0.64), 1e-3 * M_PI / 4 * (4 - 0.64));
+  EXPECT_TRUE(AreaOf(ring, {0, 0, -1}).outward);  // facing +z
+  for (int i = 0; i < ring.mesh().positions_size() / 3; ++i) {
+    const Vec3d p = Vertex(ring.mesh(), i) * 2;
+    const double r = std::hypot(p.x, p.y);
+    EXPECT_GE(r, 0.8 - 1e-5);
+    EXPECT_GE(std::min(p.x, p.y), -1e-5);  // the first quadrant
+    EXPECT_NEAR(ring.mesh().uvs(2 * i + 1), (2 - r) / (2 - 0.8), 1e-5) << i;
+  }
+  EXPECT_NEAR(AreaOf(result.scene.shapes(3), {0, 0, -1}).area, M_PI / 2, 1e-3 * M_PI / 2);
 }
 
 ImportResult PbrtWithIntegrator(const std::string& integrator) {

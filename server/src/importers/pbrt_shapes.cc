@@ -96,7 +96,12 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     TriangleArrays mesh_arrays = patches      ? BilinearPatches(p, indices, n, uv)
                                  : subdivided ? Subdivided(p, indices, params, where)
                                               : TriangleArrays{p, n, uv, std::move(indices)};
-    if (!mesh_arrays.normals.empty()) OrientByNormals(mesh_arrays.positions, mesh_arrays.normals, mesh_arrays.indices);
+    if (!mesh_arrays.normals.empty()) {
+      OrientByNormals(mesh_arrays.positions, mesh_arrays.normals, mesh_arrays.indices);
+      // pbrt-v4 faces a mesh with normals as they face, ReverseOrientation
+      // or not.
+      flip = false;
+    }
     if (state_.area_light) {
       // pbrt-v4 makes a light of each triangle, and of each patch.
       const std::vector<double>& q = mesh_arrays.positions;
@@ -147,29 +152,43 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
         Warn(params.WhereIs(key, where), "plymesh-displacement", "plymesh displacement is not supported: ignored");
       }
   } else if (type == "sphere") {
-    rule = NormalRule::kSphere;
     const double radius = params.Float("radius", 1);
     if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "sphere radius must be positive");
-    shape.mutable_sphere()->set_radius(radius);
-    shape.mutable_sphere()->mutable_center();
-    // yarf's sphere has v = θ/π from its z axis (Mitsuba's); pbrt's has
-    // v = 1 − θ/π. Mirrored in z, the same sphere has pbrt's.
-    to_world = to_world * Matrix4::Scale({1, 1, -1});
-    const double zmin = std::clamp(params.Float("zmin", -radius), -radius, radius);
-    const double zmax = std::clamp(params.Float("zmax", radius), -radius, radius);
+    const double z0 = std::clamp(params.Float("zmin", -radius), -radius, radius);
+    const double z1 = std::clamp(params.Float("zmax", radius), -radius, radius);
+    const double zmin = std::min(z0, z1), zmax = std::max(z0, z1);
     const double phimax = std::clamp(params.Float("phimax", 360), 0.0, 360.0);
-    if (zmin > -radius || zmax < radius || phimax < 360)
-      Warn(where, "partial-sphere", "partial spheres (zmin, zmax, phimax) are rendered whole");
-    light_areas.push_back(phimax * M_PI / 180 * radius * std::abs(zmax - zmin));
+    if (!(zmax > zmin) || !(phimax > 0)) {
+      Warn(where, "empty-sphere", "a partial sphere of no area (zmin = zmax or phimax = 0): left out");
+      return;
+    }
+    light_areas.push_back(phimax * M_PI / 180 * radius * (zmax - zmin));
+    if (zmin > -radius || zmax < radius || phimax < 360) {
+      // A zone or wedge of the sphere: meshed, with pbrt's uv.
+      *shape.mutable_mesh() = assembly_.Made(SphereZoneMesh(zmin / radius, zmax / radius, phimax), where);
+      to_world = to_world * Matrix4::Scale({radius, radius, radius});
+      Warn(where, "partial-sphere",
+           "partial spheres (zmin, zmax, phimax) are meshed, " + std::to_string(kCylinderSegments) +
+               " quads per turn and per half turn");
+    } else {
+      rule = NormalRule::kSphere;
+      shape.mutable_sphere()->set_radius(radius);
+      shape.mutable_sphere()->mutable_center();
+      // yarf's sphere has v = θ/π from its z axis (Mitsuba's); pbrt's has
+      // v = 1 − θ/π. Mirrored in z, the same sphere has pbrt's.
+      to_world = to_world * Matrix4::Scale({1, 1, -1});
+    }
   } else if (type == "disk") {
     const double radius = params.Float("radius", 1), height = params.Float("height", 0);
     if (!(radius > 0 && radius < 1e30)) Fail(params.WhereIs("radius", where), "disk radius must be positive");
     const double inner = std::clamp(params.Float("innerradius", 0), 0.0, radius);
     const double phimax = std::clamp(params.Float("phimax", 360), 0.0, 360.0);
-    if (inner > 0 || phimax < 360)
-      Warn(where, "partial-disk", "partial disks (innerradius, phimax) are rendered whole");
+    if (!(inner < radius) || !(phimax > 0)) {
+      Warn(where, "empty-disk", "a partial disk of no area (innerradius = radius or phimax = 0): left out");
+      return;
+    }
     light_areas.push_back(phimax * M_PI / 180 / 2 * (radius * radius - inner * inner));
-    *shape.mutable_mesh() = assembly_.Made(DiskMesh(DiskUv::kPbrt), where);
+    *shape.mutable_mesh() = assembly_.Made(DiskMesh(DiskUv::kPbrt, inner / radius, phimax), where);
     to_world = to_world * Matrix4::Translate({0, 0, height}) * Matrix4::Scale({radius, radius, 1});
     Warn(where, "disk", "disk shapes are meshed as fans of " + std::to_string(kDiskSegments) + " triangles");
   } else if (type == "cylinder") {

@@ -20,18 +20,27 @@ void SetTransform(const Matrix4& m, v1::Transform* out, std::function<void()> cl
     *out = m.ToProto();
 }
 
-// yarf computes a mesh's normal from its winding after to_world; decide
-// whether to flip it so it matches the source renderer's.
-bool YarfFlip(bool flip, NormalRule rule, const Matrix4& to_world, bool mirrored_world) {
+// yarf computes a mesh's normal from its winding after to_world (or from
+// its vertex normals, when it has them); decide how to turn it so that it
+// matches the source renderer's: the user's flip, and the winding's when
+// the placement reverses it.
+struct YarfSide {
+  bool flip_normals, flip_winding;
+};
+YarfSide SideOf(bool flip, NormalRule rule, const Matrix4& to_world, bool mirrored_world) {
   switch (rule) {
     case NormalRule::kWorldWinding:
-      return flip != mirrored_world;
+      return {flip, mirrored_world};
     case NormalRule::kTransformed:
-      return flip != (to_world.Determinant3() < 0);
+      return {flip, to_world.Determinant3() < 0};
     case NormalRule::kSphere:
-      return flip;
+      break;
   }
-  return flip;
+  return {flip, false};
+}
+void SetSide(v1::SceneShape& shape, const YarfSide& side) {
+  shape.set_flip_normals(side.flip_normals);
+  shape.set_flip_winding(side.flip_winding);
 }
 
 // A rotation taking +z to the unit vector `z`.
@@ -108,7 +117,7 @@ void SceneAssembly::AddShape(v1::SceneShape shape, const Matrix4& to_world, bool
   }
   // Groups are placed by instances, whose transforms carry normals as
   // normals: only the shape's own transform matters here.
-  shape.set_flip_normals(YarfFlip(flip, rule, to_world, false));
+  SetSide(shape, SideOf(flip, rule, to_world, false));
   if (!to_world.IsIdentity()) *shape.mutable_to_world() = to_world.ToProto();
   *Group(group).add_shapes() = std::move(shape);
 }
@@ -242,7 +251,7 @@ v1::Scene SceneAssembly::Finish() {
     v1::SceneShape& shape = *scene_.mutable_shapes(i);
     const WorldShape& w = world_shapes_[i];
     const Matrix4 to_world = mirror_ * w.to_world;
-    shape.set_flip_normals(YarfFlip(w.flip, w.rule, to_world, mirrored_));
+    SetSide(shape, SideOf(w.flip, w.rule, to_world, mirrored_));
     SetTransform(to_world, shape.mutable_to_world(), [&] { shape.clear_to_world(); });
   }
   for (int i = 0; i < scene_.lights_size(); ++i) {

@@ -296,12 +296,14 @@ TEST(MitsubaImport, AMirroringSensorMirrorsTheWorldAndKeepsLitSides) {
   ExpectNear(ToVec(scene.camera().target()), {0, 0, 4});
   const v1::SceneShape& right = ShapeNamed(scene, "right");
   ExpectNear(ToMatrix(right.to_world()).Point(ToVec(right.sphere().center())), {-2, 0, 0});
-  // The reflection reverses the triangle's winding: flipping its normal
-  // keeps the emitting side toward the camera.
+  // The reflection reverses the triangle's winding: turning its winding's
+  // normal back keeps the emitting side toward the camera.
   const v1::SceneShape& lit = ShapeNamed(scene, "lit");
   EXPECT_LT(ToMatrix(lit.to_world()).Determinant3(), 0);
-  EXPECT_TRUE(lit.flip_normals());
+  EXPECT_TRUE(lit.flip_winding());
+  EXPECT_FALSE(lit.flip_normals());
   EXPECT_FALSE(right.flip_normals());
+  EXPECT_FALSE(right.flip_winding());
 }
 
 // The importer reads what its user can read: a file beside the scene's

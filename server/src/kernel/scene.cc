@@ -107,6 +107,9 @@ void KernelScene::SetAggregate(uint32_t group, std::shared_ptr<Aggregate> aggreg
 }
 
 uint32_t KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook& look) {
+  // A mesh with vertex normals takes its side from them, even where they
+  // are its faces' own and dropped as such.
+  const bool winding_decides = mesh.normals.empty();
   DropFaceNormals(mesh);
   // Shapes are Embree geometries numbered as in their group, so that a hit
   // names its shape whichever aggregate found it.
@@ -127,6 +130,7 @@ uint32_t KernelScene::AddMesh(uint32_t group, TriangleMesh mesh, const ShapeLook
     const Vec3 n = Cross(p1 - p0, p2 - p0);
     const float length = Length(n);
     normals[t] = length > 0 ? n / length : Vec3(0, 0, 1);
+    if (look.flip_winding && winding_decides) normals[t] = -normals[t];
     // With vertex normals, the face's side is theirs (as pbrt-v4): the
     // winding of a smooth mesh's triangles need not agree with them.
     if (!mesh.normals.empty() && Dot(normals[t], mesh.normals[v[0]] + mesh.normals[v[1]] + mesh.normals[v[2]]) < 0)

@@ -30,6 +30,9 @@ struct ShapeLook {
   uint32_t material = 0;
   const Emitter* emitter = nullptr;
   bool flip_normals = false;
+  // Meshes: the normal of a triangle's winding is reversed before its
+  // vertex normals (if any) and flip_normals have their say.
+  bool flip_winding = false;
   // Meshes: the probability that a ray meets the surface at a uv (a
   // cut-out); null for an opaque one.
   std::shared_ptr<const Texture> alpha;
