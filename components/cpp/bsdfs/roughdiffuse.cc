@@ -104,7 +104,9 @@ class RoughDiffuse final : public yarf::SurfaceModel {
   // polar angle θ (α in Oren and Nayar), the smaller (β), and the cosine
   // of the azimuth between them.
   Vec3 Value(Vec3 reflectance, float alpha, Vec3 in, Vec3 out) const {
-    const float sigma2 = 0.5f * alpha * alpha;
+    // The model's terms have long saturated by α = 100 (σ² = 5000): larger
+    // slopes, which would overflow σ², are taken as that.
+    const float slope = std::min(alpha, 100.0f), sigma2 = 0.5f * slope * slope;
     const float cos_in = std::min(std::abs(in.z), 1.0f), cos_out = std::min(std::abs(out.z), 1.0f);
     const float sin_in = std::sqrt(1 - cos_in * cos_in), sin_out = std::sqrt(1 - cos_out * cos_out);
     // Where a direction has no azimuth (at the normal), any will do: the

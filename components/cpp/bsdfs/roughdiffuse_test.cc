@@ -129,6 +129,15 @@ TEST_F(RoughDiffuseTest, OneSidedIsBlackFromBehind) {
   EXPECT_GT(EvaluateOne(*model, -a, -b).x, 0.0f);
 }
 
+TEST_F(RoughDiffuseTest, HugeSlopesGiveFiniteValues) {
+  const auto model = Make("roughdiffuse", RoughProperties(Vec3(1, 1, 1), 1e30, false));
+  const Vec3 f = EvaluateOne(*model, Normalize(Vec3(0.3f, 0.1f, 0.9f)), Normalize(Vec3(-0.5f, 0.2f, 0.4f)));
+  EXPECT_TRUE(std::isfinite(f.x) && f.x > 0) << Describe(f);
+  ExpectVecNear(f, OrenNayar(Vec3(1, 1, 1), 100, false, Normalize(Vec3(0.3f, 0.1f, 0.9f)),
+                             Normalize(Vec3(-0.5f, 0.2f, 0.4f))),
+                1e-3f, "as at alpha 100");
+}
+
 TEST_F(RoughDiffuseTest, BadSlopesAreRefusedByName) {
   for (const double alpha : {-0.1, std::nan(""), std::numeric_limits<double>::infinity()}) {
     Properties props;

@@ -66,6 +66,9 @@ TEST(PhaseFunction, IntegratesToOne) {
   EXPECT_NEAR(PhaseIntegral(PhaseFunction(RayleighPhase())), 1.0, 2e-3);
   EXPECT_NEAR(PhaseIntegral(PhaseFunction(TabulatedPhase({1, 0.5f, 0.1f}))), 1.0, 2e-3);
   EXPECT_NEAR(PhaseIntegral(PhaseFunction(TabulatedPhase({0, 0, 3, 0, 7, 7, 0.2f}))), 1.0, 2e-3);
+  // Whatever the values' scale: denormal or near the float's largest.
+  EXPECT_NEAR(PhaseIntegral(PhaseFunction(TabulatedPhase({1e-45f, 0, 1e-45f}))), 1.0, 2e-3);
+  EXPECT_NEAR(PhaseIntegral(PhaseFunction(TabulatedPhase({3e38f, 1e38f, 3e38f}))), 1.0, 2e-3);
 }
 
 TEST(PhaseFunction, RayleighAndTablesTakeTheirValues) {

@@ -59,19 +59,22 @@ class TabulatedPhase {
     if (values_.size() < 2) throw Error("property 'phase_values' needs at least 2 values, from μ = -1 to 1");
     for (const float v : values_)
       if (!(v >= 0 && std::isfinite(v))) throw Error("property 'phase_values' must hold finite numbers >= 0");
-    cdf_.assign(values_.size(), 0.0);
+    // Normalised in double, so that ∫ p dω = 2π ∫ p dμ = 1 whatever the
+    // values' scale (denormals included).
     const double step = Step();
+    double area = 0;
+    for (size_t i = 1; i < values_.size(); ++i) area += 0.5 * step * (double(values_[i - 1]) + values_[i]);
+    if (!(area > 0)) throw Error("property 'phase_values' must not be all zero");
+    for (float& v : values_) v = float(v / (2 * kPiDouble * area));
+    cdf_.assign(values_.size(), 0.0);
     for (size_t i = 1; i < values_.size(); ++i) cdf_[i] = cdf_[i - 1] + 0.5 * step * (values_[i - 1] + values_[i]);
-    if (!(cdf_.back() > 0)) throw Error("property 'phase_values' must not be all zero");
-    // ∫ p dω = 2π ∫ p dμ = 1.
-    scale_ = float(1 / (2 * kPiDouble * cdf_.back()));
   }
 
   float Evaluate(float mu) const {
     const float x = (std::clamp(mu, -1.0f, 1.0f) + 1) / float(Step());
     const size_t i = std::min(size_t(x), values_.size() - 2);
     const float t = x - float(i);
-    return scale_ * ((1 - t) * values_[i] + t * values_[i + 1]);
+    return (1 - t) * values_[i] + t * values_[i + 1];
   }
 
   float SampleCosine(float u) const {
@@ -89,9 +92,8 @@ class TabulatedPhase {
  private:
   static constexpr double kPiDouble = 3.14159265358979323846;
   double Step() const { return 2.0 / double(values_.size() - 1); }
-  std::vector<float> values_;
-  std::vector<double> cdf_;  // the area below each value's μ
-  float scale_ = 0;
+  std::vector<float> values_;  // p at each μ, normalised
+  std::vector<double> cdf_;    // the area below each value's μ
 };
 
 class PhaseFunction {
