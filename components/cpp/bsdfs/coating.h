@@ -10,7 +10,9 @@
 #include <span>
 #include <vector>
 
+#include "microfacet.h"
 #include "yarf/parameters.h"
+#include "yarf/support/warps.h"
 #include "yarf/texture.h"
 #include "yarf/vecmath.h"
 
@@ -93,5 +95,28 @@ class Points {
   float eta_;
   std::optional<Point> uniform_;
 };
+
+// A rough coating's reflection, f / R: F(wi·h) D(h) G2(wi, wo) / (4 cos θi
+// cos θo), h the half vector (roughplastic's and pplastic's), for wi and
+// wo above.
+inline float RoughCoatingReflection(const microfacet::Roughness& roughness, float eta, Vec3 wi, Vec3 wo) {
+  const Vec3 h = Normalize(wi + wo);
+  return FresnelDielectric(Dot(wi, h), eta) * microfacet::Ndf(h, roughness) * microfacet::SmithG2(wi, wo, roughness) /
+         (4.0f * wi.z * wo.z);
+}
+
+// The density of a rough coating's Sample: its lobe (the normals visible
+// from wi) with odds p_glossy, the base's cosine-weighted hemisphere with
+// the rest; the coating lobe's part below the surface is lost (Sample
+// returns no sample there).
+inline float RoughCoatingDensity(const microfacet::Roughness& roughness, Vec3 wi, Vec3 wo, float p_glossy) {
+  if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
+  float density = (1.0f - p_glossy) * CosineHemispherePdf(wo.z);
+  if (p_glossy > 0) {
+    const Vec3 h = Normalize(wi + wo);
+    density += p_glossy * microfacet::SmithG1(wi, roughness) * microfacet::Ndf(h, roughness) / (4.0f * wi.z);
+  }
+  return density;
+}
 
 }  // namespace yarf::coating

@@ -69,7 +69,8 @@ class PPlastic final : public yarf::SurfaceModel {
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 const yarf::SurfacePoints& at, std::span<float> value) const override {
     const Layers layers(*this, at);
-    yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) { return Value(layers, k, in, out, true, true); });
+    yarf::EvaluateEach(wi, wo, value,
+                       [&](size_t k, Vec3 in, Vec3 out) { return Value(layers, k, in, out, true, true); });
   }
 
   void Sample(yarf::TransportMode, std::span<const float> wi, const yarf::SurfacePoints& at,
@@ -91,7 +92,7 @@ class PPlastic final : public yarf::SurfaceModel {
       const mf::Roughness roughness = layers.roughness[k];
       const Vec3 out = pick_glossy ? mf::ReflectAbout(in, mf::SampleVisibleNormal(in, roughness, u[1], u[2]))
                                    : yarf::SampleCosineHemisphere(u[1], u[2]);
-      const float density = Density(roughness, in, out, p_glossy);
+      const float density = yarf::coating::RoughCoatingDensity(roughness, in, out, p_glossy);
       if (!(density > 0)) {
         rows.StoreNoSample(k);
         continue;
@@ -107,7 +108,8 @@ class PPlastic final : public yarf::SurfaceModel {
     const bool glossy = !specular_.IsZero(), diffuse = !diffuse_.IsZero();
     yarf::PdfEach(wi, wo, pdf, [&](size_t k, Vec3 in, Vec3 out) {
       if (!(in.z > 0) || !(glossy || diffuse)) return 0.0f;
-      return Density(layers.roughness[k], in, out, GlossyProbability(layers, k, in.z, glossy, diffuse));
+      const float p_glossy = GlossyProbability(layers, k, in.z, glossy, diffuse);
+      return yarf::coating::RoughCoatingDensity(layers.roughness[k], in, out, p_glossy);
     });
   }
 
@@ -128,8 +130,7 @@ class PPlastic final : public yarf::SurfaceModel {
   float GlossyProbability(const Layers& layers, size_t k, float cos_i, bool glossy, bool diffuse) const {
     if (!glossy) return 0.0f;
     if (!diffuse) return 1.0f;
-    const float r = yarf::coating::Mean(layers.specular[k]), d = yarf::coating::Mean(layers.diffuse[k]);
-    const float s = r + d > 0 ? r / (r + d) : 0.5f;
+    const float s = yarf::coating::WeighLobes(layers.diffuse[k], layers.specular[k]).specular_weight;
     const float fresnel = yarf::FresnelDielectric(cos_i, eta_);
     const float g = fresnel * s, b = (1 - fresnel) * (1 - s);
     return g + b > 0 ? g / (g + b) : 0.0f;
@@ -139,30 +140,13 @@ class PPlastic final : public yarf::SurfaceModel {
   Vec3 Value(const Layers& layers, size_t k, Vec3 wi, Vec3 wo, bool glossy, bool diffuse) const {
     if (!(wi.z > 0 && wo.z > 0)) return Vec3();
     Vec3 out;
-    if (glossy) {
-      const mf::Roughness roughness = layers.roughness[k];
-      const Vec3 h = yarf::Normalize(wi + wo);
-      const float fresnel = yarf::FresnelDielectric(yarf::Dot(wi, h), eta_);
-      out += layers.specular[k] *
-             (fresnel * mf::Ndf(h, roughness) * mf::SmithG2(wi, wo, roughness) / (4.0f * wi.z * wo.z));
-    }
+    if (glossy)
+      out += layers.specular[k] * yarf::coating::RoughCoatingReflection(layers.roughness[k], eta_, wi, wo);
     if (diffuse) {
       const float through = (1 - yarf::FresnelDielectric(wi.z, eta_)) * (1 - yarf::FresnelDielectric(wo.z, eta_));
       out += layers.diffuse[k] * (through * yarf::kInvPi);
     }
     return out;
-  }
-
-  // Density of the lobe mixture Sample draws from; the glossy lobe's part
-  // below the surface is lost (Sample returns no sample there).
-  static float Density(const mf::Roughness& roughness, Vec3 wi, Vec3 wo, float p_glossy) {
-    if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
-    float density = (1.0f - p_glossy) * yarf::CosineHemispherePdf(wo.z);
-    if (p_glossy > 0) {
-      const Vec3 h = yarf::Normalize(wi + wo);
-      density += p_glossy * mf::SmithG1(wi, roughness) * mf::Ndf(h, roughness) / (4.0f * wi.z);
-    }
-    return density;
   }
 
   yarf::TexturedValue diffuse_, specular_;

@@ -40,8 +40,12 @@ class RoughDiffuse final : public yarf::SurfaceModel {
     return {P::RgbTexture("reflectance").Default(0.5).Range(0, 1).Doc("reflectance of the grooves' faces"),
             P::FloatTexture("alpha").Default(0.2).Min(0).Doc(
                 "RMS slope of the grooves (Beckmann's roughness; Oren and Nayar's σ is alpha/√2)"),
-            P::Bool("use_fast_approx").Default(false).Doc("Oren and Nayar's qualitative model, without interreflection"),
-            P::Bool("two_sided").Default(true).Doc("whether the back side reflects like the front (false: it is black)")};
+            P::Bool("use_fast_approx")
+                .Default(false)
+                .Doc("Oren and Nayar's qualitative model, without interreflection"),
+            P::Bool("two_sided")
+                .Default(true)
+                .Doc("whether the back side reflects like the front (false: it is black)")};
   }
 
   explicit RoughDiffuse(const yarf::Properties& props)

@@ -115,7 +115,7 @@ class RoughPlastic final : public yarf::SurfaceModel {
           out = mf::ReflectAbout(in, mf::SampleVisibleNormal(in, roughness_, u[1], u[2]));
         else
           out = yarf::SampleCosineHemisphere(u[1], u[2]);
-        density = Density(in, out, p_glossy);
+        density = yarf::coating::RoughCoatingDensity(roughness_, in, out, p_glossy);
       }
       if (!(density > 0)) {
         rows.StoreNoSample(k);
@@ -133,7 +133,7 @@ class RoughPlastic final : public yarf::SurfaceModel {
       const yarf::coating::Point local = coating[k];
       const bool glossy = local.lobes.has_specular, diffuse = local.lobes.has_diffuse;
       const float p_glossy = in.z > 0 ? GlossyProbability(local, in.z, glossy, diffuse) : 0.0f;
-      return glossy || diffuse ? Density(in, out, p_glossy) : 0.0f;
+      return glossy || diffuse ? yarf::coating::RoughCoatingDensity(roughness_, in, out, p_glossy) : 0.0f;
     });
   }
 
@@ -183,27 +183,11 @@ class RoughPlastic final : public yarf::SurfaceModel {
   Vec3 Value(const yarf::coating::Point& local, Vec3 wi, Vec3 wo, bool glossy, bool diffuse) const {
     if (!(wi.z > 0 && wo.z > 0)) return Vec3();
     Vec3 out;
-    if (glossy && local.lobes.has_specular) {
-      const Vec3 h = yarf::Normalize(wi + wo);
-      const float fresnel = yarf::FresnelDielectric(yarf::Dot(wi, h), eta_);
-      out += local.specular * (fresnel * mf::Ndf(h, roughness_) * mf::SmithG2(wi, wo, roughness_) /
-                               (4.0f * wi.z * wo.z));
-    }
+    if (glossy && local.lobes.has_specular)
+      out += local.specular * yarf::coating::RoughCoatingReflection(roughness_, eta_, wi, wo);
     if (diffuse && local.lobes.has_diffuse)
       out += local.scaled_diffuse * (Transmittance(wi.z) * Transmittance(wo.z) * yarf::kInvPi);
     return out;
-  }
-
-  // Density of the lobe mixture Sample draws from; the glossy lobe's part
-  // below the surface is lost (Sample returns no sample there).
-  float Density(Vec3 wi, Vec3 wo, float p_glossy) const {
-    if (!(wi.z > 0 && wo.z > 0)) return 0.0f;
-    float density = (1.0f - p_glossy) * yarf::CosineHemispherePdf(wo.z);
-    if (p_glossy > 0) {
-      const Vec3 h = yarf::Normalize(wi + wo);
-      density += p_glossy * mf::SmithG1(wi, roughness_) * mf::Ndf(h, roughness_) / (4.0f * wi.z);
-    }
-    return density;
   }
 
   yarf::TexturedValue diffuse_;

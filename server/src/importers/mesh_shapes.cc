@@ -181,7 +181,8 @@ v1::Mesh SphereZoneMesh(double z_min, double z_max, double phi_max_degrees) {
   const double phi_max = std::clamp(phi_max_degrees, 1e-4, 360.0) * (kPi / 180);
   const bool whole = phi_max_degrees >= 360;
   // pbrt-v4's θ range: from the lower cap (v = 0) to the upper (v = 1).
-  const double theta_low = std::acos(std::clamp(z_min, -1.0, 1.0)), theta_high = std::acos(std::clamp(z_max, -1.0, 1.0));
+  const double theta_low = std::acos(std::clamp(z_min, -1.0, 1.0));
+  const double theta_high = std::acos(std::clamp(z_max, -1.0, 1.0));
   const int columns = std::max(1, int(std::ceil(kCylinderSegments * phi_max / (2 * kPi) - 1e-9)));
   const int rows = std::max(1, int(std::ceil(kCylinderSegments / 2 * (theta_low - theta_high) / kPi - 1e-9)));
   v1::Mesh mesh;

@@ -146,7 +146,8 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
     // pbrt-v3's matte with a slope deviation σ (degrees) is Oren and
     // Nayar's qualitative model, roughdiffuse's fast one with α = √2 σ.
     const double sigma = type == "matte" ? FloatOrTexture(params, "sigma", 0) : 0;
-    if (!(sigma >= 0 && sigma <= 90)) Fail(params.WhereIs("sigma", where), what + ": sigma must lie in [0, 90] degrees");
+    if (!(sigma >= 0 && sigma <= 90))
+      Fail(params.WhereIs("sigma", where), what + ": sigma must lie in [0, 90] degrees");
     if (sigma > 0) {
       class_name = "roughdiffuse";
       SetFloat(props, "alpha", std::sqrt(2.0) * sigma * M_PI / 180);

@@ -7,6 +7,7 @@
 // volume's to_world places (Mitsuba's media have no transform of their
 // own), an albedo gridvolume its albedo_filename.
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -97,10 +98,12 @@ PhaseSpec PhaseOf(MitsubaImporter& importer, const XmlElement& e) {
     if (!values || values->size() < 2 || values->size() > (size_t(1) << 20))
       Fail(p.WhereIs("values"), "phase 'tabphase': values needs 2 to 2^20 numbers");
     for (const double v : *values)
-      if (!(v >= 0 && v < 1e30)) Fail(p.WhereIs("values"), "phase 'tabphase': values must be finite and >= 0");
-    if (std::all_of(values->begin(), values->end(), [](double v) { return v == 0; }))
-      Fail(p.WhereIs("values"), "phase 'tabphase': values must not all be zero");
-    spec.values = *values;
+      if (!(v >= 0 && std::isfinite(v))) Fail(p.WhereIs("values"), "phase 'tabphase': values must be finite and >= 0");
+    const double largest = *std::max_element(values->begin(), values->end());
+    if (!(largest > 0)) Fail(p.WhereIs("values"), "phase 'tabphase': values must not all be zero");
+    // Only their shape matters (the medium normalises them): scaled to a
+    // largest of 1, whatever magnitude the file gave.
+    for (const double v : *values) spec.values.push_back(v / largest);
   } else if (p.type() != "isotropic") {
     importer.Warn(e.where, "phase:" + p.type(),
                   "phase function '" + p.type() + "' is not supported: isotropic used");
