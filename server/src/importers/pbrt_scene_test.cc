@@ -107,6 +107,28 @@ TEST_F(PbrtBasic, ReverseOrientationFlipsNormalsAndPlymeshStaysAFile) {
   EXPECT_FALSE(shape(0).flip_normals());
 }
 
+// pbrt-v4 faces a mesh with normals as they face, ReverseOrientation or
+// not: a plymesh whose header gives its vertices normals is not flipped.
+TEST(PbrtImport, ReverseOrientationLeavesAPlymeshWithNormalsFacingThem) {
+  char pattern[] = "/tmp/yarf-plymesh-XXXXXX";
+  ASSERT_NE(mkdtemp(pattern), nullptr);
+  const std::filesystem::path folder = pattern;
+  const std::string vertices = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string faces = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  std::ofstream(folder / "plain.ply") << "ply\nformat ascii 1.0\n" << vertices << faces << "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  std::ofstream(folder / "smooth.ply") << "ply\r\nformat ascii 1.0\r\n" << vertices
+                                       << "property float nx\nproperty float ny\nproperty float nz\n" << faces
+                                       << "0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n";
+  std::ofstream(folder / "scene.pbrt") << "WorldBegin\nReverseOrientation\n"
+                                          "Shape \"plymesh\" \"string filename\" \"plain.ply\"\n"
+                                          "Shape \"plymesh\" \"string filename\" \"smooth.ply\"\n";
+  const v1::Scene scene = ImportSceneFile(folder / "scene.pbrt").scene;
+  std::filesystem::remove_all(folder);
+  ASSERT_EQ(scene.shapes_size(), 2);
+  EXPECT_TRUE(scene.shapes(0).flip_normals());
+  EXPECT_FALSE(scene.shapes(1).flip_normals());
+}
+
 TEST_F(PbrtBasic, AreaLightBlackbodyScaledAndOrientedByN) {
   const v1::SceneShape& light = shape(4);
   EXPECT_EQ(light.emitter().class_name(), "diffuse_area");

@@ -2,13 +2,17 @@
 // object being defined.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "importers/curve_shapes.h"
 #include "importers/loop_subdivision.h"
 #include "importers/mesh_shapes.h"
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
+#include "importers/scene_folder.h"
 
 namespace yarf::importers {
 namespace {
@@ -23,6 +27,22 @@ void OrientByNormals(const std::vector<double>& p, const std::vector<double>& n,
     const Vec3d winding = Cross(point(b) - point(a), point(c) - point(a));
     if (Dot(winding, normal(a) + normal(b) + normal(c)) < 0) std::swap(indices[t + 1], indices[t + 2]);
   }
+}
+
+// Whether a PLY file's header gives its vertices normals (a property nx
+// of element vertex): the first 64 KiB of the file hold any real header.
+bool PlyHasVertexNormals(const std::filesystem::path& file, const SourceLocation& where) {
+  std::istringstream header(ReadFileHead(file, size_t(64) << 10, where));
+  std::string line, element;
+  while (std::getline(header, line)) {
+    std::istringstream words(line);
+    std::string keyword, a, b;
+    words >> keyword >> a >> b;
+    if (keyword == "end_header") break;
+    if (keyword == "element") element = a;
+    if (keyword == "property" && element == "vertex" && b == "nx") return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -146,6 +166,8 @@ void PbrtImporter::Shape(const std::string& type, PbrtParams& params, const Sour
     }
     shape.mutable_mesh()->set_file(folder_.Relative(file));
     shape.mutable_mesh()->set_format("ply");
+    // As a trianglemesh with N, a mesh with normals faces as they do.
+    if (flip && PlyHasVertexNormals(file, params.WhereIs("filename", where))) flip = false;
     for (const char* key : {"displacement", "edgelength"})
       if (params.Has(key)) {
         params.Find(key);

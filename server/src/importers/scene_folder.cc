@@ -71,6 +71,28 @@ std::string SceneFolder::Display(const fs::path& file) const {
 // Scene text beyond this size is refused (meshes belong in their own files).
 constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(1) << 30;
 
+std::string ReadFileHead(const fs::path& file, size_t bytes, const SourceLocation& where) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) Fail(where, "cannot read '" + file.string() + "'");
+  std::string head(bytes, '\0');
+  in.read(head.data(), std::streamsize(bytes));
+  head.resize(size_t(in.gcount()));
+  if (!IsGzip(head)) return head;
+  // A compressed header may need any share of the compressed bytes: all of
+  // them, inflated only as far as asked.
+  std::error_code error;
+  if (fs::file_size(file, error) > kMaxSceneBytes) Fail(where, "file '" + file.string() + "' is larger than 1 GiB");
+  in.clear();
+  in.seekg(0);
+  std::ostringstream compressed;
+  if (!(compressed << in.rdbuf())) Fail(where, "cannot read '" + file.string() + "'");
+  try {
+    return Inflate(compressed.view(), bytes).bytes;
+  } catch (const std::runtime_error& e) {
+    Fail(where, "gzip file '" + file.string() + "': " + e.what());
+  }
+}
+
 std::string ReadTextFile(const fs::path& file, const SourceLocation& where) {
   std::error_code error;
   if (!fs::is_regular_file(file, error)) Fail(where, "file '" + file.string() + "' not found");

@@ -53,4 +53,9 @@ class SceneFolder {
 // file (to at most 1 GiB); fails at `where` otherwise.
 std::string ReadTextFile(const std::filesystem::path& file, const SourceLocation& where);
 
+// The first `bytes` bytes of a file, inflated first when it is a gzip file
+// (a header's worth: a mesh file's, say); fails at `where` if the file
+// cannot be read or inflated.
+std::string ReadFileHead(const std::filesystem::path& file, size_t bytes, const SourceLocation& where);
+
 }  // namespace yarf::importers
