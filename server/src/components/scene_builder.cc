@@ -566,7 +566,8 @@ void ValidateMeter(const v1::Scene& scene) {
   const v1::Camera& camera = scene.camera();
   if (camera.model() != v1::Camera::RADIANCE_METER && camera.model() != v1::Camera::IRRADIANCE_METER) return;
   const v1::ReconstructionFilter& filter = scene.film().filter();
-  if (filter.kind() != v1::ReconstructionFilter::BOX || (filter.radius() != 0 && filter.radius() < 0.5))
+  const auto below_half = [](double radius) { return radius != 0 && radius < 0.5; };
+  if (filter.kind() != v1::ReconstructionFilter::BOX || below_half(filter.radius()) || below_half(filter.radius_y()))
     throw Error("film: a meter needs the box filter of radius 0.5 or more, so that every sample weighs the same");
   if (camera.model() != v1::Camera::IRRADIANCE_METER) return;
   int found = 0;
@@ -651,6 +652,11 @@ void ValidateScene(const v1::Scene& scene, const AssetSource* assets) {
   // Built here so that Submit refuses an unknown kind or a bad radius
   // (Error naming the field) rather than the job failing later.
   ReconstructionFilter{film.filter()};
+  if (!(std::isfinite(film.exposure()) && film.exposure() >= 0 && film.exposure() <= 1e12))
+    throw Error("film.exposure " + std::to_string(film.exposure()) + " is out of range (0 to 1e12; 0 means 1)");
+  if (!(std::isfinite(film.max_component_value()) && film.max_component_value() >= 0))
+    throw Error("film.max_component_value " + std::to_string(film.max_component_value()) +
+                " must be finite and not negative (0: no limit)");
   if (!scene.has_camera()) throw Error("scene has no camera");
   Camera(scene.camera(), film.width(), film.height());
   ValidateMeter(scene);

@@ -125,7 +125,7 @@ void TileIntegrand::EvaluateChunk(std::span<const float> points, std::span<float
     for (float py = py0; py <= py1; ++py)
       for (float px = px0; px <= px1; ++px) {
         const float w = target_.PixelWeight(uint32_t(px), uint32_t(py), x, y);
-        if (!(w > 0)) continue;
+        if (w == 0) continue;  // a negative lobe counts
         const Vec3 value = rgb * (area_ * w);
         float* slot = row + Slot(uint32_t(px), uint32_t(py));
         slot[0] += value.x;

@@ -80,8 +80,8 @@ std::string ErrorOf(const std::function<void()>& call) {
 }
 
 TEST(TileIntegrand, ItsIntegralIsEachPixelsFilteredValueUnderEveryFilter) {
-  for (auto kind : {v1::ReconstructionFilter::BOX, v1::ReconstructionFilter::TENT,
-                    v1::ReconstructionFilter::GAUSSIAN}) {
+  for (auto kind : {v1::ReconstructionFilter::BOX, v1::ReconstructionFilter::TENT, v1::ReconstructionFilter::GAUSSIAN,
+                    v1::ReconstructionFilter::MITCHELL, v1::ReconstructionFilter::LANCZOS}) {
     // What camera samples converge to: a fine grid of them over the film.
     Film reference(kWidth, kHeight, Filter(kind));
     constexpr int kPerPixel = 64;

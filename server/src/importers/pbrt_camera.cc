@@ -1,6 +1,7 @@
 // pbrt's Camera, Film, Sampler, PixelFilter and Integrator.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -70,7 +71,10 @@ void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const Sou
       Warn(params.WhereIs(unsupported, where), std::string("camera:") + unsupported,
            std::string("camera: ") + unsupported + " is not supported: ignored");
     }
-  params.Accept({"shutteropen", "shutterclose"});
+  // The film's exposure takes the time the shutter is open (Finish).
+  shutter_time_ = params.Float("shutterclose", 1) - params.Float("shutteropen", 0);
+  if (!(shutter_time_ > 0 && shutter_time_ < 1e12))
+    Fail(where, "shutteropen and shutterclose must leave the shutter open a while (pbrt: else a black image)");
   if (type == "perspective" || orthographic) params.WarnUnused(diagnostics_, "camera '" + type + "'");
 
   // pbrt-v4's camera sits in the outside medium of the MediumInterface in force.
@@ -98,13 +102,19 @@ void PbrtImporter::Film(const std::string& type, PbrtParams& params, const Sourc
       params.Find(crop);
       Warn(params.WhereIs(crop, where), "film-crop", "film crop windows are not supported: the full film is rendered");
     }
-  if (params.Has("iso") && params.Float("iso", 100) != 100)
-    Warn(params.WhereIs("iso", where), "film-iso", "film iso is not supported: ignored");
+  iso_ = params.Float("iso", 100);
+  if (!(iso_ > 0 && iso_ < 1e12)) Fail(params.WhereIs("iso", where), "iso must be positive");
+  const double max_component = params.Float("maxcomponentvalue", std::numeric_limits<double>::infinity());
+  if (!(max_component > 0)) Fail(params.WhereIs("maxcomponentvalue", where), "maxcomponentvalue must be positive");
+  if (std::isfinite(max_component)) film.set_max_component_value(max_component);
   if (params.Has("exposuretime") && params.Float("exposuretime", 1) != 1)
-    Warn(params.WhereIs("exposuretime", where), "film-exposure", "film exposuretime is not supported: ignored");
+    Warn(params.WhereIs("exposuretime", where), "film-exposure",
+         "film exposuretime is not pbrt-v4's: the camera's shutteropen and shutterclose set the exposure");
   if (params.String("sensor", "cie1931") != "cie1931")
     Warn(params.WhereIs("sensor", where), "film-sensor", "camera sensor response curves are not supported");
-  params.Accept({"filename", "diagonal", "savefp16", "maxcomponentvalue", "whitebalance", "writefp16"});
+  if (params.Float("whitebalance", 0) != 0)
+    Warn(params.WhereIs("whitebalance", where), "film-whitebalance", "film white balance is not supported: ignored");
+  params.Accept({"filename", "diagonal", "savefp16", "writefp16"});
   params.WarnUnused(diagnostics_, "film '" + type + "'");
 }
 
@@ -173,21 +183,31 @@ void PbrtImporter::PixelFilter(const std::string& type, PbrtParams& params, cons
   } else if (type == "triangle") {
     filter.set_kind(v1::ReconstructionFilter::TENT);
     radius = 2;
+  } else if (type == "mitchell") {
+    filter.set_kind(v1::ReconstructionFilter::MITCHELL);
+    radius = 2;
+    filter.set_b(params.Float("B", 1.0 / 3));
+    filter.set_c(params.Float("C", 1.0 / 3));
+  } else if (type == "sinc") {
+    filter.set_kind(v1::ReconstructionFilter::LANCZOS);
+    radius = 4;
+    filter.set_lobes(params.Float("tau", 3));
+    if (!(filter.lobes() > 0)) Fail(params.WhereIs("tau", where), "sinc filter: tau must be positive");
   } else {
     filter.set_kind(v1::ReconstructionFilter::GAUSSIAN);
     radius = 1.5;
     if (type == "gaussian") {
-      if (params.Float("sigma", 0.5) != 0.5)
-        Warn(params.WhereIs("sigma", where), "gaussian-sigma", "gaussian filter: yarf's has sigma 0.5 pixel");
+      filter.set_stddev(params.Float("sigma", 0.5));
+      if (!(filter.stddev() > 0)) Fail(params.WhereIs("sigma", where), "gaussian filter: sigma must be positive");
     } else {
       Warn(where, "filter:" + type, "pixel filter '" + type + "' replaced by a gaussian");
-      params.Accept({"B", "C", "tau"});
     }
   }
   const double x = params.Float("xradius", radius), y = params.Float("yradius", radius);
-  if (x != y) Warn(where, "filter-radius", "pixel filter: different x and y radii; the x radius is used for both");
-  if (!(x > 0 && x <= 64)) Fail(where, "pixel filter radius out of range");
+  // Submit holds them to the film's largest radius.
+  if (!(x > 0 && y > 0)) Fail(where, "pixel filter radii must be positive");
   filter.set_radius(x);
+  if (y != x) filter.set_radius_y(y);
   params.WarnUnused(diagnostics_, "pixel filter '" + type + "'");
 }
 

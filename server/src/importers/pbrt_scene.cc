@@ -298,6 +298,8 @@ ImportResult PbrtImporter::Finish() {
     PbrtParams none;
     Integrator("volpath", none, origin_);
   }
+  if (const double exposure = shutter_time_ * iso_ / 100; exposure != 1)
+    assembly_.scene().mutable_film()->set_exposure(exposure);
   ResolveMedia();
   ChooseVolumetricTransport();
   // yarf's zsobol indexes the film's points with 32 bits: Morton-ordered

@@ -694,6 +694,50 @@ TEST(PbrtImport, PartialQuadricsAreMeshedWithPbrtsUvAndArea) {
   EXPECT_NEAR(AreaOf(result.scene.shapes(3), {0, 0, -1}).area, M_PI / 2, 1e-3 * M_PI / 2);
 }
 
+TEST(PbrtImport, PixelFiltersKeepTheirShapeAndEachAxisItsRadius) {
+  const auto filter_of = [](const std::string& filter) {
+    return ImportPbrt("PixelFilter " + filter + "\nWorldBegin\n", "filter.pbrt").scene.film().filter();
+  };
+  const v1::ReconstructionFilter mitchell = filter_of(R"("mitchell" "float B" 0.25 "float C" 0.375)");
+  EXPECT_EQ(mitchell.kind(), v1::ReconstructionFilter::MITCHELL);
+  EXPECT_DOUBLE_EQ(mitchell.radius(), 2);
+  EXPECT_DOUBLE_EQ(mitchell.b(), 0.25);
+  EXPECT_DOUBLE_EQ(mitchell.c(), 0.375);
+  const v1::ReconstructionFilter sinc = filter_of(R"("sinc" "float tau" 2 "float yradius" 3)");
+  EXPECT_EQ(sinc.kind(), v1::ReconstructionFilter::LANCZOS);
+  EXPECT_DOUBLE_EQ(sinc.radius(), 4);  // pbrt's default
+  EXPECT_DOUBLE_EQ(sinc.radius_y(), 3);
+  EXPECT_DOUBLE_EQ(sinc.lobes(), 2);
+  const v1::ReconstructionFilter gaussian = filter_of(R"("gaussian" "float sigma" 0.75 "float xradius" 2)");
+  EXPECT_EQ(gaussian.kind(), v1::ReconstructionFilter::GAUSSIAN);
+  EXPECT_DOUBLE_EQ(gaussian.stddev(), 0.75);
+  EXPECT_DOUBLE_EQ(gaussian.radius(), 2);
+  EXPECT_DOUBLE_EQ(gaussian.radius_y(), 1.5);
+  // The default filter: pbrt-v4's Gaussian, σ 0.5 out to 1.5.
+  const v1::ReconstructionFilter fallback = ImportPbrt("WorldBegin\n", "none.pbrt").scene.film().filter();
+  EXPECT_EQ(fallback.kind(), v1::ReconstructionFilter::GAUSSIAN);
+  EXPECT_DOUBLE_EQ(fallback.stddev(), 0.5);
+  EXPECT_DOUBLE_EQ(fallback.radius(), 1.5);
+  EXPECT_THROW(filter_of(R"("gaussian" "float sigma" 0)"), ImportError);
+  EXPECT_THROW(filter_of(R"("sinc" "float tau" -1)"), ImportError);
+  EXPECT_THROW(filter_of(R"("box" "float yradius" 0)"), ImportError);
+}
+
+TEST(PbrtImport, TheFilmIsExposedForTheShuttersOpenTimeAndIsoAndMayCapSamples) {
+  const auto film_of = [](const std::string& camera, const std::string& film) {
+    return ImportPbrt("Camera \"perspective\" " + camera + "\nFilm \"rgb\" " + film + "\nWorldBegin\n", "film.pbrt")
+        .scene.film();
+  };
+  EXPECT_DOUBLE_EQ(film_of("", "").exposure(), 0);  // 1 s at ISO 100: as rendered
+  EXPECT_DOUBLE_EQ(film_of("", "").max_component_value(), 0);
+  EXPECT_DOUBLE_EQ(film_of(R"("float shutteropen" 0.5 "float shutterclose" 0.75)", R"("float iso" 800)").exposure(),
+                   2);
+  EXPECT_DOUBLE_EQ(film_of("", R"("float maxcomponentvalue" 10)").max_component_value(), 10);
+  EXPECT_THROW(film_of(R"("float shutteropen" 1 "float shutterclose" 1)", ""), ImportError);
+  EXPECT_THROW(film_of("", R"("float iso" 0)"), ImportError);
+  EXPECT_THROW(film_of("", R"("float maxcomponentvalue" -1)"), ImportError);
+}
+
 ImportResult PbrtWithIntegrator(const std::string& integrator) {
   return ImportPbrt("Integrator " + integrator + "\nWorldBegin\nShape \"sphere\"\n", "integrator.pbrt");
 }

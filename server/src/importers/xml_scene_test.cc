@@ -401,6 +401,38 @@ TEST(MitsubaImport, AnOrthographicSensorSpansTwoUnitsOfItsScaledSpace) {
   EXPECT_TRUE(result.warnings.empty());
 }
 
+TEST(MitsubaImport, ReconstructionFiltersKeepTheirShape) {
+  const auto filter_of = [](const std::string& rfilter) {
+    return ImportMitsuba(R"(<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">)" + rfilter +
+                             "</film></sensor></scene>",
+                         "filter.xml")
+        .scene.film()
+        .filter();
+  };
+  const v1::ReconstructionFilter mitchell =
+      filter_of(R"(<rfilter type="mitchell"><float name="B" value="0.2"/><float name="C" value="0.4"/></rfilter>)");
+  EXPECT_EQ(mitchell.kind(), v1::ReconstructionFilter::MITCHELL);
+  EXPECT_DOUBLE_EQ(mitchell.radius(), 2);
+  EXPECT_DOUBLE_EQ(mitchell.b(), 0.2);
+  EXPECT_DOUBLE_EQ(mitchell.c(), 0.4);
+  const v1::ReconstructionFilter catmull_rom = filter_of(R"(<rfilter type="catmullrom"/>)");
+  EXPECT_EQ(catmull_rom.kind(), v1::ReconstructionFilter::MITCHELL);
+  EXPECT_DOUBLE_EQ(catmull_rom.b(), 0);
+  EXPECT_DOUBLE_EQ(catmull_rom.c(), 0.5);
+  const v1::ReconstructionFilter lanczos =
+      filter_of(R"(<rfilter type="lanczos"><integer name="lobes" value="2"/></rfilter>)");
+  EXPECT_EQ(lanczos.kind(), v1::ReconstructionFilter::LANCZOS);
+  EXPECT_DOUBLE_EQ(lanczos.lobes(), 2);
+  EXPECT_DOUBLE_EQ(lanczos.radius(), 2);
+  const v1::ReconstructionFilter gaussian =
+      filter_of(R"(<rfilter type="gaussian"><float name="stddev" value="0.75"/></rfilter>)");
+  EXPECT_EQ(gaussian.kind(), v1::ReconstructionFilter::GAUSSIAN);
+  EXPECT_DOUBLE_EQ(gaussian.stddev(), 0.75);
+  EXPECT_DOUBLE_EQ(gaussian.radius(), 3);  // Mitsuba's 4 standard deviations
+  EXPECT_THROW(filter_of(R"(<rfilter type="gaussian"><float name="stddev" value="0"/></rfilter>)"), ImportError);
+  EXPECT_THROW(filter_of(R"(<rfilter type="lanczos"><integer name="lobes" value="0"/></rfilter>)"), ImportError);
+}
+
 // The import error of a Mitsuba scene given as text, "" when it imports.
 std::string ErrorOf(const std::string& xml) {
   try {

@@ -279,19 +279,32 @@ void MitsubaImporter::Film(const XmlElement& e) {
     } else if (type == "tent") {
       filter.set_kind(v1::ReconstructionFilter::TENT);
       filter.set_radius(f.Float("radius", 1.0));
+    } else if (type == "mitchell" || type == "catmullrom") {
+      // Mitsuba's catmullrom is its mitchell with B = 0, C = 1/2.
+      const bool catmull_rom = type == "catmullrom";
+      filter.set_kind(v1::ReconstructionFilter::MITCHELL);
+      filter.set_radius(2);
+      filter.set_b(catmull_rom ? 0 : f.Float("B", 1.0 / 3));
+      filter.set_c(catmull_rom ? 0.5 : f.Float("C", 1.0 / 3));
+    } else if (type == "lanczos") {
+      filter.set_kind(v1::ReconstructionFilter::LANCZOS);
+      const int64_t lobes = f.Integer("lobes", 3);
+      if (lobes < 1 || lobes > 16) Fail(f.WhereIs("lobes"), "lanczos: lobes must lie in 1 to 16");
+      filter.set_lobes(double(lobes));
+      filter.set_radius(double(lobes));
     } else {
       filter.set_kind(v1::ReconstructionFilter::GAUSSIAN);
       if (type == "gaussian") {
         const double stddev = f.Float("stddev", 0.5);
-        if (std::abs(stddev - 0.5) > 1e-9)
-          Warn(f.where(), "gaussian-stddev", "gaussian filter: yarf's has a standard deviation of 0.5 pixel");
+        if (!(stddev > 0 && stddev <= 4)) Fail(f.WhereIs("stddev"), "gaussian: stddev must lie in (0, 4] pixels");
+        filter.set_stddev(stddev);
         filter.set_radius(4 * stddev);
       } else {
         Warn(f.where(), "rfilter:" + type, "reconstruction filter '" + type + "' replaced by a gaussian");
       }
     }
     if (!(filter.radius() >= 0 && filter.radius() <= 64)) Fail(f.where(), "filter radius out of range");
-    if (type == "box" || type == "tent" || type == "gaussian") f.WarnUnused();
+    if (filter.kind() != v1::ReconstructionFilter::GAUSSIAN || type == "gaussian") f.WarnUnused();
   }
   p.WarnUnused();
 }

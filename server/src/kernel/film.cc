@@ -11,60 +11,134 @@
 
 namespace yarf {
 
-ReconstructionFilter::ReconstructionFilter(const v1::ReconstructionFilter& filter)
-    : kind_(filter.kind()) {
-  // Proto3 enums carry any number: an unknown kind would index past `defaults`.
-  if (!v1::ReconstructionFilter::Kind_IsValid(kind_))
-    throw Error("film.filter.kind " + std::to_string(int(kind_)) + " is not BOX, TENT or GAUSSIAN");
-  if (!(std::isfinite(filter.radius()) && filter.radius() >= 0 && filter.radius() <= kMaxRadius))
-    throw Error("film.filter.radius " + std::to_string(filter.radius()) + " is out of range (0 to " +
-                std::to_string(int(kMaxRadius)) + " pixels; 0 means the kind's default)");
-  const double defaults[] = {0.5, 1.0, 2.0};
-  radius_ = float(filter.radius() > 0 ? filter.radius() : defaults[kind_]);
-  if (kind_ == v1::ReconstructionFilter::GAUSSIAN)
-    gaussian_offset_ = std::exp(-radius_ * radius_ / (2 * 0.25f));
+namespace {
+
+// A filter parameter that is finite and within [lo, hi], else Error.
+double Checked(const char* name, double value, double lo, double hi) {
+  if (!(std::isfinite(value) && value >= lo && value <= hi))
+    throw Error(std::string("film.filter.") + name + " " + std::to_string(value) + " is out of range (" +
+                std::to_string(lo) + " to " + std::to_string(hi) + ")");
+  return value;
 }
 
-float ReconstructionFilter::Mass1(float centre, float lo, float hi) const {
+// sin(πx)/(πx).
+float Sinc(float x) {
+  if (std::abs(x) < 1e-5f) return 1;
+  const float px = kPi * x;
+  return std::sin(px) / px;
+}
+
+// The kind's support radius when the filter gives none.
+double DefaultRadius(const v1::ReconstructionFilter& filter, double stddev, double lobes) {
+  switch (filter.kind()) {
+    case v1::ReconstructionFilter::TENT:
+      return 1;
+    case v1::ReconstructionFilter::GAUSSIAN:
+      return 4 * stddev;
+    case v1::ReconstructionFilter::MITCHELL:
+      return 2;
+    case v1::ReconstructionFilter::LANCZOS:
+      return lobes;
+    default:
+      return 0.5;
+  }
+}
+
+double StddevOf(const v1::ReconstructionFilter& filter) {
+  return filter.stddev() > 0 ? filter.stddev() : 0.5;
+}
+
+double LobesOf(const v1::ReconstructionFilter& filter) { return filter.lobes() > 0 ? filter.lobes() : 3; }
+
+// The radius along x, then y, checked.
+std::pair<float, float> RadiiOf(const v1::ReconstructionFilter& filter) {
+  // Proto3 enums carry any number.
+  if (!v1::ReconstructionFilter::Kind_IsValid(filter.kind()))
+    throw Error("film.filter.kind " + std::to_string(int(filter.kind())) +
+                " is not BOX, TENT, GAUSSIAN, MITCHELL or LANCZOS");
+  Checked("radius", filter.radius(), 0, ReconstructionFilter::kMaxRadius);
+  Checked("radius_y", filter.radius_y(), 0, ReconstructionFilter::kMaxRadius);
+  Checked("stddev", filter.stddev(), 0, 1e3);
+  Checked("lobes", filter.lobes(), 0, 1e3);
+  const double fallback = DefaultRadius(filter, StddevOf(filter), LobesOf(filter));
+  if (filter.radius() == 0 && fallback > ReconstructionFilter::kMaxRadius)
+    throw Error("film.filter: the default radius " + std::to_string(fallback) + " (4 stddev, or lobes) is above " +
+                std::to_string(int(ReconstructionFilter::kMaxRadius)) + " pixels: give a radius");
+  const double x = filter.radius() > 0 ? filter.radius() : fallback;
+  return {float(x), float(filter.radius_y() > 0 ? filter.radius_y() : x)};
+}
+
+}  // namespace
+
+FilterAxis::FilterAxis(const v1::ReconstructionFilter& filter, float radius)
+    : kind_(filter.kind()), radius_(radius) {
+  if (kind_ == v1::ReconstructionFilter::GAUSSIAN) {
+    const double stddev = StddevOf(filter);
+    gaussian_alpha_ = float(-1 / (2 * stddev * stddev));
+    gaussian_offset_ = std::exp(gaussian_alpha_ * radius_ * radius_);
+  } else if (kind_ == v1::ReconstructionFilter::MITCHELL) {
+    const float b = float(Checked("b", filter.has_b() ? filter.b() : 1.0 / 3, -100, 100));
+    const float c = float(Checked("c", filter.has_c() ? filter.c() : 1.0 / 3, -100, 100));
+    inner_ = {(12 - 9 * b - 6 * c) / 6, (-18 + 12 * b + 6 * c) / 6, 0, (6 - 2 * b) / 6};
+    outer_ = {(-b - 6 * c) / 6, (6 * b + 30 * c) / 6, (-12 * b - 48 * c) / 6, (8 * b + 24 * c) / 6};
+  } else if (kind_ == v1::ReconstructionFilter::LANCZOS) {
+    lobes_ = float(LobesOf(filter));
+  }
+  // A negative lobe is fine; a filter whose centre or mass is not
+  // positive would make a pixel the negative of its samples' average.
+  if (!(Weight(0) > 0 && Mass(0, -radius_, radius_) > 0))
+    throw Error("film.filter: these parameters make a filter whose centre or integral is not positive");
+}
+
+float FilterAxis::Mass(float centre, float lo, float hi) const {
   lo = std::max(lo, centre - radius_), hi = std::min(hi, centre + radius_);
   if (!(hi > lo)) return 0;
   // Midpoint rule: the weights are smooth enough for 4096 steps.
   constexpr int kSteps = 4096;
   double sum = 0;
-  for (int i = 0; i < kSteps; ++i) sum += Weight1(lo + (i + 0.5f) * (hi - lo) / kSteps - centre);
+  for (int i = 0; i < kSteps; ++i) sum += Weight(lo + (i + 0.5f) * (hi - lo) / kSteps - centre);
   return float(sum * (hi - lo) / kSteps);
 }
 
-float ReconstructionFilter::Weight1(float d) const {
+float FilterAxis::Weight(float d) const {
   d = std::abs(d);
   if (d >= radius_) return 0;
   switch (kind_) {
     case v1::ReconstructionFilter::TENT:
       return 1 - d / radius_;
-    case v1::ReconstructionFilter::GAUSSIAN:  // standard deviation 0.5 pixel
-      return std::exp(-d * d / (2 * 0.25f)) - gaussian_offset_;
+    case v1::ReconstructionFilter::GAUSSIAN:
+      return std::exp(gaussian_alpha_ * d * d) - gaussian_offset_;
+    case v1::ReconstructionFilter::MITCHELL: {
+      const float x = 2 * d / radius_;
+      const std::array<float, 4>& k = x <= 1 ? inner_ : outer_;
+      return ((k[0] * x + k[1]) * x + k[2]) * x + k[3];
+    }
+    case v1::ReconstructionFilter::LANCZOS:
+      return Sinc(d) * Sinc(d / lobes_);
     default:
       return 1;
   }
 }
+
+ReconstructionFilter::ReconstructionFilter(const v1::ReconstructionFilter& filter)
+    : x_(filter, RadiiOf(filter).first), y_(filter, RadiiOf(filter).second) {}
 
 Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
     : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {}
 
 PixelWindow Film::Footprint(float x, float y) const {
   if (!(std::isfinite(x) && std::isfinite(y))) return {0, 0, 0, 0};
-  const float r = filter_.radius();
   // Pixel i has its centre at i + 0.5. Clamped as floats: a position far
   // off the film does not fit an int.
-  const auto span = [r](float at, uint32_t size) -> std::pair<uint32_t, uint32_t> {
+  const auto span = [](float at, float r, uint32_t size) -> std::pair<uint32_t, uint32_t> {
     const float first = std::max(0.0f, std::ceil(at - r - 0.5f));
     // At most kMaxFootprintSide pixels even where floats round coarsely.
     const float last = std::min({float(size) - 1, std::floor(at + r - 0.5f), first + float(kMaxFootprintSide - 1)});
     if (!(first <= last)) return {0, 0};
     return {uint32_t(first), uint32_t(last) + 1};
   };
-  const auto [x0, x1] = span(x, width_);
-  const auto [y0, y1] = span(y, height_);
+  const auto [x0, x1] = span(x, filter_.x().radius(), width_);
+  const auto [y0, y1] = span(y, filter_.y().radius(), height_);
   if (x0 == x1 || y0 == y1) return {0, 0, 0, 0};
   return {x0, y0, x1, y1};
 }
@@ -75,15 +149,15 @@ void Film::ForEachPixelInFilter(float x, float y, const PixelWindow& pixels, Vis
   // made once, rather than two per pixel (exponentials, for a Gaussian).
   std::array<float, kMaxFootprintSide> column_weight, row_weight;
   const uint32_t columns = pixels.x1 - pixels.x0, rows = pixels.y1 - pixels.y0;
-  for (uint32_t i = 0; i < columns; ++i) column_weight[i] = filter_.Weight1(float(pixels.x0 + i) + 0.5f - x);
-  for (uint32_t j = 0; j < rows; ++j) row_weight[j] = filter_.Weight1(float(pixels.y0 + j) + 0.5f - y);
+  for (uint32_t i = 0; i < columns; ++i) column_weight[i] = filter_.x().Weight(float(pixels.x0 + i) + 0.5f - x);
+  for (uint32_t j = 0; j < rows; ++j) row_weight[j] = filter_.y().Weight(float(pixels.y0 + j) + 0.5f - y);
   for (uint32_t j = 0; j < rows; ++j) {
-    if (!(row_weight[j] > 0)) continue;
+    if (row_weight[j] == 0) continue;
     const uint32_t y = pixels.y0 + j;
     const size_t row = size_t(y) * width_;
     for (uint32_t i = 0; i < columns; ++i) {
       const double w = column_weight[i] * row_weight[j];
-      if (w > 0) visit(row + pixels.x0 + i, pixels.x0 + i, y, w);
+      if (w != 0) visit(row + pixels.x0 + i, pixels.x0 + i, y, w);
     }
   }
 }
@@ -136,15 +210,15 @@ void Film::PrepareMasses() {
   if (column_mass_.empty()) {
     // Made at the first splat or pixel weight (a resumed film's too):
     // within a radius of the border a pixel's filter is cut; elsewhere whole.
-    const float r = filter_.radius(), whole = filter_.Mass1(0, -r, r);
-    const auto masses = [&](uint32_t count) {
-      std::vector<float> mass(count, whole);
+    const auto masses = [](const FilterAxis& axis, uint32_t count) {
+      const float r = axis.radius();
+      std::vector<float> mass(count, axis.Mass(0, -r, r));
       for (uint32_t i = 0; i < count; ++i)
-        if (i + 0.5f < r || i + 0.5f + r > float(count)) mass[i] = filter_.Mass1(i + 0.5f, 0, float(count));
+        if (i + 0.5f < r || i + 0.5f + r > float(count)) mass[i] = axis.Mass(i + 0.5f, 0, float(count));
       return mass;
     };
-    column_mass_ = masses(width_);
-    row_mass_ = masses(height_);
+    column_mass_ = masses(filter_.x(), width_);
+    row_mass_ = masses(filter_.y(), height_);
   }
 }
 

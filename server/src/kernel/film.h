@@ -8,6 +8,8 @@
 // PrepareSplats); everything else wants the film to itself.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -19,26 +21,44 @@
 
 namespace yarf {
 
-class ReconstructionFilter {
+// One axis of a separable filter: its weight at a distance from the
+// pixel's centre, zero from its radius on.
+class FilterAxis {
  public:
-  // Largest radius in pixels; beyond it a sample would touch too many pixels.
-  static constexpr double kMaxRadius = 16;
-  // Throws Error for a kind the proto does not name or a radius that is
-  // not finite or outside [0, kMaxRadius].
-  explicit ReconstructionFilter(const v1::ReconstructionFilter& filter);
+  FilterAxis(const v1::ReconstructionFilter& filter, float radius);
   float radius() const { return radius_; }
-  float Weight(float dx, float dy) const { return Weight1(dx) * Weight1(dy); }
-  // The weight along one axis at distance d from the centre: Weight is
-  // the product of the two axes'.
-  float Weight1(float d) const;
-  // ∫ of the 1-D weight around `centre` over [lo, hi]: the part of a
-  // pixel's filter that lies on the film, along one axis.
-  float Mass1(float centre, float lo, float hi) const;
+  float Weight(float d) const;
+  // ∫ of the weight around `centre` over [lo, hi]: the part of a pixel's
+  // filter that lies on the film.
+  float Mass(float centre, float lo, float hi) const;
 
  private:
   v1::ReconstructionFilter::Kind kind_;
   float radius_;
-  float gaussian_offset_ = 0;
+  // GAUSSIAN: −1/(2σ²) and the weight at the radius, taken off.
+  float gaussian_alpha_ = 0, gaussian_offset_ = 0;
+  // MITCHELL: the cubic's coefficients on [0, 1] and (1, 2], highest first.
+  std::array<float, 4> inner_{}, outer_{};
+  // LANCZOS: the window's width.
+  float lobes_ = 3;
+};
+
+class ReconstructionFilter {
+ public:
+  // Largest radius in pixels; beyond it a sample would touch too many pixels.
+  static constexpr double kMaxRadius = 16;
+  // Throws Error for a kind the proto does not name, a radius, standard
+  // deviation or parameter that is not finite or out of range, or a
+  // filter that does not weigh its own centre most of all its mass.
+  explicit ReconstructionFilter(const v1::ReconstructionFilter& filter);
+  // How far the filter reaches along either axis.
+  float radius() const { return std::max(x_.radius(), y_.radius()); }
+  const FilterAxis& x() const { return x_; }
+  const FilterAxis& y() const { return y_; }
+  float Weight(float dx, float dy) const { return x_.Weight(dx) * y_.Weight(dy); }
+
+ private:
+  FilterAxis x_, y_;
 };
 
 class Film {

@@ -43,7 +43,7 @@ void FilmTarget::Accumulate(const FilmSamples& samples) {
     const float x = samples.xy[2 * i], y = samples.xy[2 * i + 1];
     const PixelWindow footprint = film_.Footprint(x, y);
     if (footprint.x0 == footprint.x1) continue;
-    const Vec3 value = samples.splats ? samples.rgb[i] : samples.rgb[i] * camera_weight_;
+    const Vec3 value = Recorded(samples.rgb[i], samples.splats ? 1.0f : camera_weight_);
     // Each block the filter reaches, with the sample's pixels there.
     for (uint32_t by = footprint.y0 / kBlockSide; by <= (footprint.y1 - 1) / kBlockSide; ++by)
       for (uint32_t bx = footprint.x0 / kBlockSide; bx <= (footprint.x1 - 1) / kBlockSide; ++bx) {
@@ -59,6 +59,13 @@ void FilmTarget::Accumulate(const FilmSamples& samples) {
   }
 }
 
+Vec3 FilmTarget::Recorded(Vec3 rgb, float weight) const {
+  const Vec3 value = rgb * (weight * exposure_);
+  // Hue kept, as pbrt-v4's film does; NaN is left for the film to drop.
+  const float largest = MaxComponent(value);
+  return largest > max_component_ ? value * (max_component_ / largest) : value;
+}
+
 float FilmTarget::PixelWeight(uint32_t px, uint32_t py, float x, float y) const {
   // The masses are made once and only read after: no film lock needed.
   std::call_once(masses_prepared_, [&] { film_.PrepareMasses(); });
@@ -71,7 +78,7 @@ void FilmTarget::AddPixelEstimates(const PixelWindow& window, uint32_t samples, 
   if (window.x1 > film_.width() || window.y1 > film_.height() || window.x0 >= window.x1 || window.y0 >= window.y1 ||
       values.size() != size_t(width) * (window.y1 - window.y0) || variances.size() != values.size())
     throw Error("pixel estimates of a window not on the film, or not one per pixel");
-  const float weight_sq = camera_weight_ * camera_weight_;
+  const float weight = camera_weight_ * exposure_, weight_sq = weight * weight;
   std::shared_lock adding(lock_);
   for (uint32_t by = window.y0 / kBlockSide; by <= (window.y1 - 1) / kBlockSide; ++by)
     for (uint32_t bx = window.x0 / kBlockSide; bx <= (window.x1 - 1) / kBlockSide; ++bx) {
@@ -79,7 +86,7 @@ void FilmTarget::AddPixelEstimates(const PixelWindow& window, uint32_t samples, 
       for (uint32_t y = std::max(window.y0, by * kBlockSide); y < std::min(window.y1, (by + 1) * kBlockSide); ++y)
         for (uint32_t x = std::max(window.x0, bx * kBlockSide); x < std::min(window.x1, (bx + 1) * kBlockSide); ++x) {
           const size_t i = size_t(y - window.y0) * width + (x - window.x0);
-          film_.AddEstimate(x, y, values[i] * camera_weight_, variances[i] * weight_sq, samples);
+          film_.AddEstimate(x, y, values[i] * weight, variances[i] * weight_sq, samples);
         }
     }
 }

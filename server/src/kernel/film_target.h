@@ -63,6 +63,14 @@ class FilmTarget final : public RenderTarget {
   // What each camera sample's radiance counts for (π for an irradiance
   // meter: KernelScene::CameraRayWeight); 1 unless set.
   void WeighCameraSamples(float weight) { camera_weight_ = weight; }
+  // How the film records a sample (v1::Film's exposure and
+  // max_component_value, 0 for none): times `exposure`, then scaled down
+  // to `max_component` if a component is above it. Whole-pixel estimates
+  // are exposed alone.
+  void Expose(float exposure, float max_component) {
+    exposure_ = exposure;
+    max_component_ = max_component > 0 ? max_component : kInfinity;
+  }
 
   uint32_t SamplesPerPixel() const override { return spp_; }
   uint32_t FirstSample() const override { return share_.first_sample; }
@@ -92,7 +100,11 @@ class FilmTarget final : public RenderTarget {
   const std::atomic<bool>& cancel_;
   PassCallback on_pass_;
   uint32_t samples_done_;
+  // The sample's radiance as the film records it.
+  Vec3 Recorded(Vec3 rgb, float weight) const;
+
   float camera_weight_ = 1;
+  float exposure_ = 1, max_component_ = kInfinity;
   uint32_t block_columns_;
   std::unique_ptr<BlockMutex[]> block_mutexes_;
   std::once_flag splats_prepared_;

@@ -197,5 +197,47 @@ TEST(FilmTarget, PixelEstimatesAreWeighedAsCameraSamples) {
   EXPECT_THROW(target.AddPixelEstimates({70, 40, 76, 42}, 8, values, variances), Error);
 }
 
+TEST(FilmTarget, TheFilmRecordsSamplesExposedThenScaledDownToTheLargestComponent) {
+  Film film(3, 1, Filter(v1::ReconstructionFilter::BOX, 0));
+  FilmLock lock;
+  const std::atomic<bool> cancel{false};
+  FilmTarget target(film, lock, 8, 1, {}, cancel, [](uint32_t) {});
+  target.WeighCameraSamples(2);
+  target.Expose(1.5f, 6);
+  FilmSamples camera;
+  camera.Add(0, 0.5f, 0.5f, {1, 0.5f, 0.25f});  // × 2 × 1.5: (3, 1.5, 0.75), below 6
+  camera.Add(1, 1.5f, 0.5f, {4, 2, 1});         // (12, 6, 3), scaled by 6/12
+  target.Accumulate(camera);
+  FilmSamples splats;
+  splats.splats = true;
+  splats.Add(0, 2.5f, 0.5f, {8, 1, 0});  // × 1.5 (no camera weight): (12, 1.5, 0), scaled by 1/2
+  target.Accumulate(splats);
+  target.PassDone(1);
+  const std::vector<float> pixels = film.Pixels();
+  const std::vector<float> expected{3, 1.5f, 0.75f, 6, 3, 1.5f, 6, 0.75f, 0};
+  for (size_t k = 0; k < expected.size(); ++k) EXPECT_FLOAT_EQ(pixels[k], expected[k]) << k;
+  // Whole-pixel estimates are exposed, never scaled down: an estimate is
+  // a mean, not a sample.
+  Film estimated(1, 1, Filter(v1::ReconstructionFilter::BOX, 0));
+  FilmTarget estimates(estimated, lock, 8, 1, {}, cancel, [](uint32_t) {});
+  estimates.Expose(2, 1);
+  const std::vector<Vec3> value{{10, 1, 0}}, variance{{4, 0, 0}};
+  estimates.AddPixelEstimates({0, 0, 1, 1}, 8, value, variance);
+  EXPECT_FLOAT_EQ(estimated.Pixels()[0], 20);
+  EXPECT_FLOAT_EQ(estimated.Variances()[0], 16);
+}
+
+TEST(FilmTarget, NoExposureGivenRecordsSamplesAsTheyCome) {
+  Film film(kWidth, kHeight, Filter(v1::ReconstructionFilter::BOX, 0));
+  FilmLock lock;
+  const std::atomic<bool> cancel{false};
+  FilmTarget target(film, lock, 8, 1, {}, cancel, [](uint32_t) {});
+  target.Expose(1, 0);  // 0: no largest component
+  FilmSamples camera;
+  camera.Add(0, 0.5f, 0.5f, {1e30f, 1, 0});
+  target.Accumulate(camera);
+  EXPECT_FLOAT_EQ(film.Pixels()[0], 1e30f);
+}
+
 }  // namespace
 }  // namespace yarf

@@ -430,6 +430,8 @@ void Job::RenderRun(const JobResources& resources, const RunSettings& settings) 
     next_checkpoint = end + std::max(every, std::chrono::duration<double>(10 * (end - start)));
   });
   target.WeighCameraSamples(kernel->CameraRayWeight());
+  const v1::Film& film = scene.film();
+  target.Expose(film.exposure() > 0 ? float(film.exposure()) : 1.0f, float(film.max_component_value()));
   // Served while it renders, for transports in other processes.
   const auto served = resources.scenes.Serve(kernel);
   parts.transport->Prepare(*kernel);
