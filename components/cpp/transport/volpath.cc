@@ -26,7 +26,9 @@
 //
 // Parameters: VolPathTracer::Parameters() below, as `path`'s; medium
 // collisions count as vertices in max_depth and rr_depth, null boundaries
-// not.
+// not, unless max_medium_depth bounds them apart (a random walk under the
+// skin of a subsurface material scatters hundreds of times in one of
+// pbrt's bounces).
 
 #include <algorithm>
 #include <bit>
@@ -49,8 +51,9 @@ struct VolPath : SpectralPath {
   Ray ray;
   uint32_t medium = kNoMedium;
   Vec3 radiance;
-  // Real scattering vertices so far.
-  int depth = 0;
+  // Real scattering vertices so far: all of them, those max_depth counts
+  // (all but the medium's when max_medium_depth counts those), the medium's.
+  int vertices = 0, depth = 0, medium_depth = 0;
   // Emission found next takes full weight: the camera ray, a delta lobe.
   bool specular = true;
   // The last real scattering vertex, where light samples were taken.
@@ -90,12 +93,24 @@ class VolPathTracer final : public Transport {
  public:
   // Each sample lands in its own pixel: the film may be rendered in tiles.
   static std::vector<std::string> Capabilities() { return {kPixelLocalCapability}; }
-  static ParameterSchema Parameters() { return PathLength::Parameters(); }
+  static ParameterSchema Parameters() {
+    ParameterSchema schema = PathLength::Parameters();
+    schema.push_back(Parameter::Int("max_medium_depth")
+                         .Default(0)
+                         .Range(-1, double(PathLength::kLongest))
+                         .Doc("scatterings in media a path may have apart from max_depth, which then counts surface "
+                              "vertices alone; 0: media count in max_depth, as Mitsuba's and pbrt's; -1 unbounded"));
+    return schema;
+  }
 
-  explicit VolPathTracer(const Properties& props) : length_(props) {}
+  explicit VolPathTracer(const Properties& props)
+      : length_(props), max_medium_depth_(int(props.Int("max_medium_depth", 0, -1, PathLength::kLongest))) {}
 
   uint32_t Dimensions() const override {
-    return kFirstBounceDimension + kDimensionsPerBounce * std::min<uint32_t>(length_.Bounces(), kPrimaryVertices);
+    // Vertices a path may have: max_depth's, and the media's apart.
+    uint64_t vertices = length_.Bounces();
+    if (max_medium_depth_ != 0) vertices += max_medium_depth_ < 0 ? kPrimaryVertices : uint64_t(max_medium_depth_);
+    return kFirstBounceDimension + kDimensionsPerBounce * uint32_t(std::min<uint64_t>(vertices, kPrimaryVertices));
   }
 
   void Prepare(const SceneView& scene) override { null_boundaries_ = HasNullBoundaries(scene); }
@@ -122,16 +137,25 @@ class VolPathTracer final : public Transport {
 
  private:
   bool MayScatter(const VolPath& p) const { return length_.max_depth < 0 || p.depth + 1 < length_.max_depth; }
+  bool MayScatterInMedium(const VolPath& p) const {
+    if (max_medium_depth_ == 0) return MayScatter(p);
+    return max_medium_depth_ < 0 || p.medium_depth < max_medium_depth_;
+  }
+  // Counts a scattering vertex the path just made.
+  void Scattered(VolPath& p, bool in_medium) const {
+    ++p.vertices;
+    ++(in_medium && max_medium_depth_ != 0 ? p.medium_depth : p.depth);
+  }
 
   // Coordinate `offset` of the path's current vertex.
   static float Uniform(const PrimarySamples& points, uint32_t i, VolPath& p, uint32_t offset) {
-    if (p.depth >= kPrimaryVertices) return p.random.Next();
-    return points.Get(i, kFirstBounceDimension + kDimensionsPerBounce * uint32_t(p.depth) + offset);
+    if (p.vertices >= kPrimaryVertices) return p.random.Next();
+    return points.Get(i, kFirstBounceDimension + kDimensionsPerBounce * uint32_t(p.vertices) + offset);
   }
 
   // Russian roulette on the path's weight relative to its density (pbrt-v4's β/mean r_u).
   bool Survives(const PrimarySamples& points, uint32_t i, VolPath& p) const {
-    if (p.depth < length_.rr_depth) return true;
+    if (p.vertices < length_.rr_depth) return true;
     const float mean = ChannelMean(p.r_u);
     const float survive = mean > 0 ? std::min(MaxComponent(p.beta) / mean, 0.95f) : 0.0f;
     if (!(Uniform(points, i, p, kRoulette) < survive)) return false;
@@ -212,7 +236,7 @@ class VolPathTracer final : public Transport {
     std::vector<float> u_phase;
     for (const MediumVertex& v : scattered) {
       VolPath& p = paths[v.path];
-      if (!MayScatter(p)) continue;
+      if (!MayScatterInMedium(p)) continue;
       p.scatter_point = v.position;
       all.push_back(uint32_t(vertices.size()));
       vertices.push_back(v);
@@ -269,7 +293,7 @@ class VolPathTracer final : public Transport {
         p.ray.direction = Normalize(Vec3::Load(&wo[3 * j]));
         p.ray.tnear = 0;
         p.ray.tfar = kInfinity;
-        ++p.depth;
+        Scattered(p, true);
         if (Survives(points, owners[j], p)) next.push_back(owners[j]);
       }
     }
@@ -338,7 +362,7 @@ class VolPathTracer final : public Transport {
         const Vec3 direction = Normalize(v.at.frame.ToWorld(out));
         p.medium = scene.MediaOf(v.shape).Beyond(direction, v.at.ng, p.medium);
         Redirect(p.ray, v.at.position, v.at.ng, direction);
-        ++p.depth;
+        Scattered(p, false);
         if (Survives(points, v.path, p)) next.push_back(v.path);
       }
     }
@@ -412,7 +436,7 @@ class VolPathTracer final : public Transport {
     std::vector<ShadowWalk> shadows(links.size());
     for (size_t k = 0; k < links.size(); ++k) {
       const VolPath& p = paths[links[k].path];
-      shadows[k] = {links[k].ray, links[k].medium, p.hero, Hash(p.random.seed, uint32_t(p.depth), k)};
+      shadows[k] = {links[k].ray, links[k].medium, p.hero, Hash(p.random.seed, uint32_t(p.vertices), k)};
     }
     const std::vector<ShadowTransmittance> through = Transmittances(scene, shadows, null_boundaries_);
     for (size_t k = 0; k < links.size(); ++k) {
@@ -427,6 +451,7 @@ class VolPathTracer final : public Transport {
   }
 
   PathLength length_;
+  int max_medium_depth_;
   bool null_boundaries_ = false;
 };
 

@@ -100,6 +100,8 @@ class PbrtImporter {
   // The shape bounds the media of the MediumInterface in force, if they
   // differ (pbrt-v4's medium transition); a pbrt name for now.
   void SetMedia(v1::SceneShape& shape);
+  // The homogeneous medium inside a subsurface material (pbrt_materials.cc).
+  v1::Properties SubsurfaceMedium(PbrtParams& params, const SourceLocation& where);
   void ResolveMedia();
   // Transport: volpath for pbrt's volpath where the scene has media.
   void ChooseVolumetricTransport();
@@ -126,6 +128,9 @@ class PbrtImporter {
   std::map<std::string, std::string> named_materials_;  // pbrt name → yarf material
   // pbrt's named media → the yarf medium made ("" for one left out).
   std::map<std::string, std::string> media_;
+  // A subsurface material's yarf name → the key in media_ of the medium
+  // its shapes enclose.
+  std::map<std::string, std::string> subsurface_media_;
   // Each medium a shape or the camera names, and where.
   std::vector<std::pair<std::string, SourceLocation>> medium_uses_;
   std::string integrator_type_;  // pbrt's, for media

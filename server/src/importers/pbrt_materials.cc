@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "importers/colour_checks.h"
+#include "importers/measured_media.h"
 #include "importers/named_ior.h"
 #include "importers/pbrt_importer.h"
 #include "importers/properties_util.h"
@@ -26,6 +28,17 @@ std::optional<std::string> MetalName(const PbrtParam* p) {
   const std::string suffix = s.substr(dash + 1);
   if (suffix != "eta" && suffix != "k") return std::nullopt;
   return s.substr(6, dash - 6);
+}
+
+// The single-scattering albedo of a thick homogeneous medium whose
+// multiple scattering reflects `reflectance` of the light (Christensen and
+// Burley's fit for a random walk in a medium, as Cycles inverts its
+// random-walk subsurface colour): pbrt-v4 inverts its diffusion profile's
+// table instead, whose albedo differs by a few percent.
+double SingleScatteringAlbedo(double reflectance) {
+  const double a = std::clamp(reflectance, 0.0, 1.0);
+  const double root = 4.09712 + 4.20863 * a - std::sqrt(9.59217 + 41.6808 * a + 17.7126 * a * a);
+  return std::clamp(1 - root * root, 0.0, 1.0);
 }
 
 // pbrt-v4 maps roughness to the microfacet alpha by a square root.
@@ -57,6 +70,8 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
     normal_map = assembly_.AddTexture("normalmap", Spec("bitmap", std::move(image)));
   }
   v1::Properties props;
+  // A subsurface material's medium inside (empty for other materials).
+  v1::Properties medium;
   // A reflectance: a texture (clamped into [0, 1] by the model; `scale`
   // only for constants), or a constant clamped here.
   auto reflectance = [&](const std::string& key, const std::string& out, double fallback, double scale = 1) {
@@ -200,11 +215,15 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
     }
   } else if (type == "conductor") {
     class_name = conductor("");
-  } else if (type == "dielectric" || type == "thindielectric") {
-    SetFloat(props, "int_ior", eta("eta", 1.5));
+  } else if (type == "dielectric" || type == "thindielectric" || type == "subsurface") {
+    // pbrt-v4's subsurface material is a dielectric boundary over what its
+    // BSSRDF approximates by diffusion: a scattering medium inside, which
+    // here is that medium itself, walked through by volpath.
+    const bool subsurface = type == "subsurface";
+    SetFloat(props, "int_ior", eta("eta", subsurface ? 1.33 : 1.5));
     SetFloat(props, "ext_ior", 1.0);
-    class_name = type;
-    if (type == "dielectric") {
+    class_name = subsurface ? "dielectric" : type;
+    if (type != "thindielectric") {
       const auto [u, v] = roughness("");
       if (u != 0 || v != 0) {
         class_name = "roughdielectric";
@@ -214,6 +233,7 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
           SetFloat(props, "alpha_u", u), SetFloat(props, "alpha_v", v);
       }
     }
+    if (subsurface) medium = SubsurfaceMedium(params, where);
   } else if (type == "diffusetransmission") {
     class_name = "diffusetransmission";
     const double scale = FloatOrTexture(params, "scale", 1);
@@ -260,9 +280,10 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   }
   params.WarnUnused(diagnostics_, what);
   // Anonymous materials with equal parameters share one yarf material.
-  std::string key;
+  std::string key, medium_key;
   google::protobuf::TextFormat::PrintToString(props, &key);
-  key = class_name + "\n" + key;
+  google::protobuf::TextFormat::PrintToString(medium, &medium_key);
+  key = class_name + "\n" + key + "\n" + medium_key;
   if (name.empty()) {
     const auto it = material_cache_.find(key);
     if (it != material_cache_.end()) return it->second;
@@ -280,7 +301,64 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
   }
   const std::string made = assembly_.AddMaterial(name.empty() ? type : name, class_name, std::move(props));
   if (name.empty()) material_cache_[key] = made;
+  if (!medium.values().empty()) {
+    // Keyed apart from MakeNamedMedium's names, which cannot hold a quote.
+    const std::string inside = "\"subsurface\" " + made;
+    media_[inside] = assembly_.AddMedium(made + "-inside", Spec("homogeneous", std::move(medium)), std::nullopt, where);
+    subsurface_media_[made] = inside;
+  }
   return made;
+}
+
+v1::Properties PbrtImporter::SubsurfaceMedium(PbrtParams& params, const SourceLocation& where) {
+  const std::string what = "material 'subsurface'";
+  v1::Properties medium;
+  auto coefficients = [&](Rgb sigma_a, Rgb sigma_s) {
+    for (const Rgb& c : {sigma_a, sigma_s})
+      if (!(std::min({c.r, c.g, c.b}) >= 0 && std::max({c.r, c.g, c.b}) < 1e30))
+        Fail(where, what + ": sigma_a and sigma_s must be finite and non-negative");
+    SetRgb(medium, "sigma_a", sigma_a);
+    SetRgb(medium, "sigma_s", sigma_s);
+  };
+  const double scale = params.Float("scale", 1);
+  if (!(scale > 0 && scale < 1e30)) Fail(params.WhereIs("scale", where), what + ": scale must be positive");
+  double g = params.Float("g", 0);
+  if (!(g > -1 && g < 1)) Fail(params.WhereIs("g", where), what + ": g must lie in (-1, 1)");
+  // pbrt-v4's four ways, in its order: a measured medium's name, σ_a and
+  // σ_s, a reflectance with a mean free path, or its default (skin-like,
+  // per millimetre); `scale` multiplies the coefficients, or the path.
+  if (const std::string preset = params.String("name", ""); !preset.empty()) {
+    const auto measured = PbrtMeasuredMedium(preset);
+    if (!measured)
+      Fail(params.WhereIs("name", where), what + ": \"" + preset + "\" is not one of pbrt-v4's measured media" +
+                                              DidYouMean(preset, PbrtMeasuredMediumNames()));
+    if (g != 0)
+      Warn(params.WhereIs("g", where), "subsurface-g", what + ": g ignored with a measured medium (as pbrt-v4)");
+    g = 0;  // the measurements' σ_s are reduced ones
+    coefficients(measured->sigma_a * scale, measured->sigma_prime_s * scale);
+  } else if (params.Has("sigma_a") || params.Has("sigma_s")) {
+    if (!params.Has("sigma_a") || !params.Has("sigma_s")) Fail(where, what + ": give sigma_a and sigma_s together");
+    coefficients(Colour(params, "sigma_a", {}, SpectrumUse::kReflectance, where) * scale,
+                 Colour(params, "sigma_s", {}, SpectrumUse::kReflectance, where) * scale);
+  } else if (params.Has("reflectance")) {
+    const Rgb reflectance = Colour(params, "reflectance", {}, SpectrumUse::kReflectance, where);
+    const Rgb mfp = Colour(params, "mfp", {1, 1, 1}, SpectrumUse::kReflectance, where) * scale;
+    if (!(std::min({mfp.r, mfp.g, mfp.b}) > 0)) Fail(params.WhereIs("mfp", where), what + ": mfp must be positive");
+    Rgb sigma_a, sigma_s;
+    for (auto [r, path, a, s] : {std::tuple{reflectance.r, mfp.r, &sigma_a.r, &sigma_s.r},
+                                 std::tuple{reflectance.g, mfp.g, &sigma_a.g, &sigma_s.g},
+                                 std::tuple{reflectance.b, mfp.b, &sigma_a.b, &sigma_s.b}}) {
+      const double albedo = SingleScatteringAlbedo(r);
+      *s = albedo / path;
+      *a = (1 - albedo) / path;
+    }
+    coefficients(sigma_a, sigma_s);
+  } else {
+    coefficients(Rgb{0.0011, 0.0024, 0.014} * scale, Rgb{2.55, 3.21, 3.77} * scale);
+  }
+  if (g != 0) SetFloat(medium, "g", g);
+  params.Accept({"mfp"});
+  return medium;
 }
 
 }  // namespace yarf::importers

@@ -226,7 +226,15 @@ void PbrtImporter::MakeNamedMedium(const std::string& name, PbrtParams& params, 
 
 void PbrtImporter::SetMedia(v1::SceneShape& shape) {
   // pbrt-v4: a surface with the same medium on both sides is no
-  // transition; rays keep the medium they are in.
+  // transition; rays keep the medium they are in. A subsurface material
+  // encloses its own, unless the MediumInterface names another inside.
+  const auto subsurface = subsurface_media_.find(shape.material());
+  if (subsurface != subsurface_media_.end() && state_.inside_medium == state_.outside_medium) {
+    shape.set_interior(subsurface->second);
+    shape.set_exterior(state_.outside_medium);
+    if (!state_.outside_medium.empty()) medium_uses_.emplace_back(state_.outside_medium, state_.medium_where);
+    return;
+  }
   if (state_.inside_medium == state_.outside_medium) return;
   shape.set_interior(state_.inside_medium);
   shape.set_exterior(state_.outside_medium);
@@ -256,7 +264,12 @@ void PbrtImporter::ResolveMedia() {
 void PbrtImporter::ChooseVolumetricTransport() {
   if (!assembly_.HasMedia()) return;
   if (integrator_type_ == "volpath") {
-    assembly_.scene().mutable_transport()->set_class_name("volpath");
+    v1::ComponentSpec& transport = *assembly_.scene().mutable_transport();
+    transport.set_class_name("volpath");
+    // pbrt's subsurface scattering is one bounce of its paths, however
+    // often the light scatters under the surface: the walks through the
+    // media that stand for it are bounded apart (roulette ends them).
+    if (!subsurface_media_.empty()) SetInt(*transport.mutable_properties(), "max_medium_depth", -1);
   } else {
     Warn(integrator_where_, "integrator-media",
          "integrator '" + integrator_type_ +

@@ -738,6 +738,54 @@ TEST(PbrtImport, TheFilmIsExposedForTheShuttersOpenTimeAndIsoAndMayCapSamples) {
   EXPECT_THROW(film_of("", R"("float maxcomponentvalue" -1)"), ImportError);
 }
 
+TEST(PbrtImport, ASubsurfaceMaterialIsADielectricAroundItsScatteringMedium) {
+  const auto import = [](const std::string& material) {
+    return ImportPbrt("WorldBegin\nMaterial \"subsurface\" " + material + "\nShape \"sphere\"\n", "sss.pbrt");
+  };
+  const auto medium_of = [](const ImportResult& result) -> const v1::Properties& {
+    const v1::SceneShape& shape = result.scene.shapes(0);
+    EXPECT_TRUE(shape.exterior().empty());
+    for (const v1::SceneMedium& m : result.scene.media())
+      if (m.name() == shape.interior()) {
+        EXPECT_EQ(m.medium().class_name(), "homogeneous");
+        return m.medium().properties();
+      }
+    ADD_FAILURE() << "the shape encloses no medium";
+    return result.scene.media(0).medium().properties();
+  };
+  // σ_a and σ_s as given, times scale; pbrt's volpath bounds the walk apart.
+  const ImportResult given = import(R"("rgb sigma_a" [1 2 3] "rgb sigma_s" [4 5 6] "float scale" 2 "float g" 0.5)");
+  ExpectNear(RgbProperty(medium_of(given), "sigma_a"), {2, 4, 6});
+  ExpectNear(RgbProperty(medium_of(given), "sigma_s"), {8, 10, 12});
+  EXPECT_DOUBLE_EQ(FloatProperty(medium_of(given), "g"), 0.5);
+  EXPECT_EQ(given.scene.materials(0).class_name(), "dielectric");
+  EXPECT_DOUBLE_EQ(FloatProperty(given.scene.materials(0).properties(), "int_ior"), 1.33);  // pbrt's default
+  EXPECT_EQ(given.scene.transport().class_name(), "volpath");
+  EXPECT_EQ(IntProperty(given.scene.transport().properties(), "max_medium_depth"), -1);
+  // A reflectance and mean free path: σ_t = 1 / mfp, split by the albedo
+  // whose multiple scattering reflects that much (Christensen and Burley:
+  // 0.8 → 1 − (4.09712 + 4.20863·0.8 − √(9.59217 + 41.6808·0.8 + 17.7126·0.64))² = 0.990589).
+  const ImportResult reflecting =
+      import(R"("rgb reflectance" [0.8 0.8 0.8] "rgb mfp" [0.5 0.5 0.5] "float roughness" 0.04)");
+  const Vec3d sigma_a = RgbProperty(medium_of(reflecting), "sigma_a");
+  const Vec3d sigma_s = RgbProperty(medium_of(reflecting), "sigma_s");
+  EXPECT_NEAR(sigma_a.x + sigma_s.x, 2, 1e-9);
+  EXPECT_NEAR(sigma_s.x / 2, 0.990589, 1e-6);
+  EXPECT_EQ(reflecting.scene.materials(0).class_name(), "roughdielectric");
+  // pbrt-v4's measured media by name (reduced σ_s, g 0), and its default.
+  ExpectNear(RgbProperty(medium_of(import(R"("string name" "Skin1")")), "sigma_a"), {0.032, 0.17, 0.48});
+  ExpectNear(RgbProperty(medium_of(import("")), "sigma_s"), {2.55, 3.21, 3.77});
+  // Two materials of different media share no medium.
+  const ImportResult two = ImportPbrt(
+      "WorldBegin\nMaterial \"subsurface\" \"string name\" \"Skin1\"\nShape \"sphere\"\n"
+      "Material \"subsurface\" \"string name\" \"Ketchup\"\nShape \"sphere\"\n",
+      "two.pbrt");
+  EXPECT_NE(two.scene.shapes(0).interior(), two.scene.shapes(1).interior());
+  EXPECT_THROW(import(R"("rgb sigma_a" [1 1 1])"), ImportError);
+  EXPECT_THROW(import(R"("string name" "Unobtainium")"), ImportError);
+  EXPECT_THROW(import(R"("rgb reflectance" [0.5 0.5 0.5] "rgb mfp" [0 1 1])"), ImportError);
+}
+
 ImportResult PbrtWithIntegrator(const std::string& integrator) {
   return ImportPbrt("Integrator " + integrator + "\nWorldBegin\nShape \"sphere\"\n", "integrator.pbrt");
 }
