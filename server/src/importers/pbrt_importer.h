@@ -50,6 +50,9 @@ class PbrtImporter {
     // shapes that follow ("" is vacuum), and where it was given.
     std::string inside_medium, outside_medium;
     SourceLocation medium_where;
+    // Attribute "shape" | "light" | "material" | "medium" | "texture":
+    // defaults for the parameters of every such directive that follows.
+    std::map<std::string, std::vector<PbrtParam>> attribute_defaults;
   };
   static constexpr const char* kInterface = "\x01interface";
 
@@ -58,6 +61,8 @@ class PbrtImporter {
   double Number(PbrtTokenizer& tokens, const SourceLocation& where);
   std::string Quoted(PbrtTokenizer& tokens, const SourceLocation& where);
   Matrix4 Matrix(PbrtTokenizer& tokens, const SourceLocation& where);
+  // A directive's parameters with the Attribute defaults for its kind.
+  PbrtParams ParamsOf(PbrtTokenizer& tokens, const std::string& kind) const;
   void Warn(const SourceLocation& where, const std::string& key, const std::string& message) {
     diagnostics_.Warn(where, key, message);
   }

@@ -147,6 +147,15 @@ void PbrtParams::Accept(std::initializer_list<const char*> names) {
   for (const char* name : names) Find(name);
 }
 
+void PbrtParams::AddDefaults(const std::vector<PbrtParam>& defaults) {
+  for (const PbrtParam& d : defaults)
+    if (!Has(d.name)) {
+      params_.push_back(d);
+      params_.back().used = false;
+      params_.back().attribute_default = true;
+    }
+}
+
 std::vector<PbrtParam> PbrtParams::TakeUnread() {
   std::vector<PbrtParam> unread;
   for (PbrtParam& p : params_)
@@ -160,7 +169,7 @@ std::vector<PbrtParam> PbrtParams::TakeUnread() {
 void PbrtParams::WarnUnused(Diagnostics& diagnostics, const std::string& what) const {
   const std::vector<std::string> asked(asked_.begin(), asked_.end());
   for (const PbrtParam& p : params_)
-    if (!p.used)
+    if (!p.used && !p.attribute_default)
       diagnostics.Warn(p.where, what + ":" + p.name,
                        what + ": parameter '" + p.name + "' ignored" + DidYouMean(p.name, asked));
 }

@@ -21,12 +21,20 @@ struct PbrtParam {
   std::vector<std::string> strings;  // string values
   std::vector<bool> bools;           // bool values
   bool used = false;
+  // Given by an Attribute directive for every directive of its kind: no
+  // warning when a directive has no use for it.
+  bool attribute_default = false;
 };
 
 class PbrtParams {
  public:
   // Reads parameters until the next token is not a string.
   static PbrtParams Parse(PbrtTokenizer& tokens);
+  // Adds those of `defaults` the list does not give itself (pbrt-v4's
+  // Attribute defaults, which a directive's own parameters override).
+  void AddDefaults(const std::vector<PbrtParam>& defaults);
+  // The parameters as given, for keeping as defaults.
+  const std::vector<PbrtParam>& All() const { return params_; }
 
   // The parameter (marked as read), or nullptr.
   const PbrtParam* Find(const std::string& name);

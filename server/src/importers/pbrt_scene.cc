@@ -72,6 +72,13 @@ Matrix4 PbrtImporter::Matrix(PbrtTokenizer& tokens, const SourceLocation& where)
   return Matrix4(m);
 }
 
+PbrtParams PbrtImporter::ParamsOf(PbrtTokenizer& tokens, const std::string& kind) const {
+  PbrtParams params = PbrtParams::Parse(tokens);
+  if (const auto defaults = state_.attribute_defaults.find(kind); defaults != state_.attribute_defaults.end())
+    params.AddDefaults(defaults->second);
+  return params;
+}
+
 void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const fs::path& file, int depth) {
   const std::string& name = word.text;
   const SourceLocation& where = word.where;
@@ -79,9 +86,11 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
     const double x = Number(tokens, where), y = Number(tokens, where);
     return Vec3d{x, y, Number(tokens, where)};
   };
-  auto typed = [&](auto handler) {
+  // A directive of a type and parameters (with the Attribute defaults of
+  // `kind`, if any).
+  auto typed = [&](auto handler, const std::string& kind = "") {
     const std::string type = Quoted(tokens, where);
-    PbrtParams params = PbrtParams::Parse(tokens);
+    PbrtParams params = ParamsOf(tokens, kind);
     (this->*handler)(type, params, where);
   };
   auto before_world = [&](bool expected) {
@@ -154,8 +163,15 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
     attributes_.pop_back();
   } else if (name == "Attribute") {
     const std::string target = Quoted(tokens, where);
-    PbrtParams params = PbrtParams::Parse(tokens);
-    Warn(where, "Attribute", "Attribute \"" + target + "\" defaults are not supported: ignored");
+    if (target != "shape" && target != "light" && target != "material" && target != "medium" && target != "texture")
+      Fail(where, "Attribute \"" + target + "\": the target must be shape, light, material, medium or texture");
+    // Later defaults of the same name replace earlier ones.
+    std::vector<PbrtParam>& defaults = state_.attribute_defaults[target];
+    const PbrtParams given = PbrtParams::Parse(tokens);
+    for (const PbrtParam& p : given.All()) {
+      std::erase_if(defaults, [&](const PbrtParam& d) { return d.name == p.name; });
+      defaults.push_back(p);
+    }
   } else if (name == "WorldBegin") {
     before_world(false);
     world_ = true;
@@ -197,7 +213,7 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
     Warn(where, name, "ColorSpace is not supported: ignored (colours are read as sRGB)");
   } else if (name == "MakeNamedMedium") {
     const std::string medium = Quoted(tokens, where);
-    PbrtParams params = PbrtParams::Parse(tokens);
+    PbrtParams params = ParamsOf(tokens, "medium");
     MakeNamedMedium(medium, params, where);
   } else if (name == "MediumInterface") {
     // "inside" "outside", or one name for both; an attribute, as the material.
@@ -208,12 +224,12 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
   } else if (name == "Material") {
     before_world(true);
     const std::string type = Quoted(tokens, where);
-    PbrtParams params = PbrtParams::Parse(tokens);
+    PbrtParams params = ParamsOf(tokens, "material");
     state_.material = MakeMaterial(type, params, where, "");
   } else if (name == "MakeNamedMaterial") {
     before_world(true);
     const std::string material = Quoted(tokens, where);
-    PbrtParams params = PbrtParams::Parse(tokens);
+    PbrtParams params = ParamsOf(tokens, "material");
     const std::string type = params.String("type", "");
     if (type.empty()) Fail(where, "MakeNamedMaterial \"" + material + "\" needs a \"string type\"");
     if (named_materials_.count(material)) Fail(where, "named material '" + material + "' defined twice");
@@ -227,17 +243,17 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
     before_world(true);
     const std::string texture = Quoted(tokens, where), type = Quoted(tokens, where),
                       texture_class = Quoted(tokens, where);
-    PbrtParams params = PbrtParams::Parse(tokens);
+    PbrtParams params = ParamsOf(tokens, "texture");
     Texture(texture, type, texture_class, params, where);
   } else if (name == "Shape") {
     before_world(true);
-    typed(&PbrtImporter::Shape);
+    typed(&PbrtImporter::Shape, "shape");
   } else if (name == "LightSource") {
     before_world(true);
-    typed(&PbrtImporter::LightSource);
+    typed(&PbrtImporter::LightSource, "light");
   } else if (name == "AreaLightSource") {
     before_world(true);
-    typed(&PbrtImporter::AreaLightSource);
+    typed(&PbrtImporter::AreaLightSource, "light");
   } else if (name == "ObjectBegin") {
     before_world(true);
     const std::string object = Quoted(tokens, where);

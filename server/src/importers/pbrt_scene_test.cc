@@ -786,6 +786,31 @@ TEST(PbrtImport, ASubsurfaceMaterialIsADielectricAroundItsScatteringMedium) {
   EXPECT_THROW(import(R"("rgb reflectance" [0.5 0.5 0.5] "rgb mfp" [0 1 1])"), ImportError);
 }
 
+TEST(PbrtImport, AttributeDefaultsApplyToTheDirectivesOfTheirKindUntilAttributeEnd) {
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\n"
+      "AttributeBegin\n"
+      "  Attribute \"shape\" \"float radius\" 2\n"
+      "  Attribute \"material\" \"rgb reflectance\" [0.1 0.2 0.3]\n"
+      "  Material \"diffuse\"\n"
+      "  Shape \"sphere\"\n"
+      "  Shape \"sphere\" \"float radius\" 3\n"  // its own value wins
+      "  Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n"  // no use for a radius, no warning
+      "  Attribute \"shape\" \"float radius\" 4\n"  // replaces the first
+      "  Shape \"sphere\"\n"
+      "AttributeEnd\n"
+      "Shape \"sphere\"\n",
+      "attributes.pbrt");
+  ASSERT_EQ(result.scene.shapes_size(), 5);
+  EXPECT_DOUBLE_EQ(result.scene.shapes(0).sphere().radius(), 2);
+  EXPECT_DOUBLE_EQ(result.scene.shapes(1).sphere().radius(), 3);
+  EXPECT_DOUBLE_EQ(result.scene.shapes(3).sphere().radius(), 4);
+  EXPECT_DOUBLE_EQ(result.scene.shapes(4).sphere().radius(), 1);  // AttributeEnd restored pbrt's default
+  ExpectNear(RgbProperty(result.scene.materials(0).properties(), "reflectance"), {0.1, 0.2, 0.3});
+  EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
+  EXPECT_THROW(ImportPbrt("WorldBegin\nAttribute \"camera\" \"float fov\" 30\n", "bad.pbrt"), ImportError);
+}
+
 ImportResult PbrtWithIntegrator(const std::string& integrator) {
   return ImportPbrt("Integrator " + integrator + "\nWorldBegin\nShape \"sphere\"\n", "integrator.pbrt");
 }
