@@ -202,6 +202,45 @@ def test_crop_renders_only_the_window(
     assert result.pixels.shape == (8, 8, 3)
 
 
+@pytest.mark.parametrize(
+    ("film", "window"),
+    [
+        ('"float cropwindow" [0.75 0.25 0 0.5]', (16, 8, 8, 0)),  # fractions, edges rounded up
+        ('"integer pixelbounds" [3 11 4 9]', (8, 5, 3, 4)),
+    ],
+)
+def test_a_pbrt_files_crop_is_what_render_renders_unless_crop_is_given(
+    yarf: Yarf,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    film: str,
+    window: tuple[int, int, int, int],
+) -> None:
+    path = tmp_path / "cropped.pbrt"
+    path.write_text(
+        'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\n'
+        f'Film "rgb" "integer xresolution" 32 "integer yresolution" 16 {film}\n'
+        'WorldBegin\nLightSource "infinite" "rgb L" [1 1 1]\nShape "sphere"\n'
+    )
+    output = tmp_path / "cropped.exr"
+    code, _, err = yarf("render", str(path), "-o", str(output), "--spp", "2", "-q")
+    assert code == 0, err
+    spec, _ = read_image(output)
+    assert (spec.width, spec.height, spec.x, spec.y) == window
+    assert (spec.full_width, spec.full_height) == (32, 16)
+    # --crop wins over the file's, as pbrt's command line does.
+    code, _, err = yarf(
+        "render", str(path), "-o", str(output), "--spp", "2", "-q", "--crop", "0,32,0,16"
+    )
+    assert code == 0, err
+    spec, _ = read_image(output)
+    assert (spec.width, spec.height) == (32, 16)
+    # yarf convert says what the file asks for.
+    capsys.readouterr()
+    assert main(["convert", str(path), str(tmp_path / "cropped.json")]) == 0
+    assert "it renders only --crop" in capsys.readouterr().out
+
+
 def test_time_limit_ends_early_with_a_valid_image(
     yarf: Yarf, client: Client, tmp_path: Path, scene_path: Path
 ) -> None:

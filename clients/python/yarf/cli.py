@@ -198,16 +198,15 @@ def _import(
     return imported
 
 
-def load_scene_file(args: argparse.Namespace) -> tuple[scene_pb2.Scene, int]:
-    """The scene file of ``args.scene`` (mesh files still files), and the spp it asks
-    for (0: none)."""
+def load_scene_file(args: argparse.Namespace) -> ImportedScene:
+    """The scene file of ``args.scene`` (mesh files still files), with the spp and
+    crop a Mitsuba or pbrt file asks for."""
     path = Path(args.scene)
     if is_imported_scene(path):
-        imported = _import(path, args.define, inline_files=False, strict=args.strict)
-        return imported.scene, imported.sample_count
+        return _import(path, args.define, inline_files=False, strict=args.strict)
     if args.define:
         raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
-    return load_scene(path, inline_files=False), 0
+    return ImportedScene(load_scene(path, inline_files=False))
 
 
 def checked_settings(args: argparse.Namespace) -> RenderSettings:
@@ -223,9 +222,11 @@ def prepare_job(
 ) -> tuple[PreparedJob, SceneAssets]:
     """The scene file with the options applied, and its mesh and texture files: every
     failure here comes before any server is asked for."""
-    scene, file_spp = load_scene_file(args)
+    loaded = load_scene_file(args)
     try:
-        job = settings.prepare(scene, default_spp=file_spp)
+        job = settings.prepare(
+            loaded.scene, default_spp=loaded.sample_count, default_crop=loaded.crop
+        )
     except OptionError as error:
         raise CommandError(error.for_command_line(), exit_code=2) from None
     return job, scene_assets(job.scene, Path(args.scene).parent)
@@ -391,15 +392,16 @@ def convert_command(args: argparse.Namespace) -> int:
     same_folder = source.resolve().parent == target.resolve().parent
     if is_imported_scene(source):
         imported = _import(source, args.define, inline_files=not same_folder, strict=args.strict)
-        scene, sample_count = imported.scene, imported.sample_count
+        scene, sample_count, crop = imported.scene, imported.sample_count, imported.crop
     else:
         if args.define:
             raise CommandError("-D sets parameters of Mitsuba scenes only", exit_code=2)
-        scene, sample_count = load_scene(source, inline_files=False), 0
+        scene, sample_count, crop = load_scene(source, inline_files=False), 0, ""
         if not same_folder:
             inline_mesh_files(scene, source.parent)
     write_scene(scene, target)
     note = f"; the file asks for {sample_count} spp (--spp {sample_count})" if sample_count else ""
+    note += f"; it renders only --crop {crop}" if crop else ""
     print(f"wrote {target}{note}")
     return 0
 

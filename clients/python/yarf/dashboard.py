@@ -290,11 +290,13 @@ def upload_option_parser() -> argparse.ArgumentParser:
 
 @dataclass(frozen=True)
 class UploadedScene:
-    """A scene file the browser sent, loaded; its spp (0: none) and import warnings."""
+    """A scene file the browser sent, loaded; its spp (0: none), import warnings and
+    crop (as --crop takes it; "": the whole film)."""
 
     scene: scene_pb2.Scene
     sample_count: int
     warnings: list[str]
+    crop: str = ""
 
 
 def file_references(scene: scene_pb2.Scene) -> list[str]:
@@ -331,8 +333,9 @@ def load_uploaded_scene(data: bytes, file_name: str) -> UploadedScene:
                     path, inline_files=False, confine=True, timeout=IMPORT_SECONDS
                 )
                 scene, spp, warnings = imported.scene, imported.sample_count, imported.warnings
+                crop = imported.crop
             else:
-                scene, spp, warnings = load_scene(path, inline_files=False), 0, []
+                scene, spp, warnings, crop = load_scene(path, inline_files=False), 0, [], ""
         except SceneError as error:
             raise SceneError(_about_upload(str(error), path)) from None
     own = f"{path}:"
@@ -344,7 +347,7 @@ def load_uploaded_scene(data: bytes, file_name: str) -> UploadedScene:
             f"{file_name}: names {references[0]}{more}: an uploaded scene must be one file with "
             "its meshes and textures inline; `yarf submit` sends a scene with its files"
         )
-    return UploadedScene(scene, spp, shown)
+    return UploadedScene(scene, spp, shown, crop)
 
 
 _LOCATED = re.compile(r"\S+:\d+: ")
@@ -531,7 +534,9 @@ class DashboardHandler(BaseHTTPRequestHandler):
             # Its own name only: the folder it came from is the browser's business.
             safe_name = re.sub(r"[^\w.+-]", "_", Path(file_name).name).lstrip(".") or "scene"
             uploaded = load_uploaded_scene(data, safe_name[: -len(suffix)] + suffix)
-            job = settings.prepare(uploaded.scene, default_spp=uploaded.sample_count)
+            job = settings.prepare(
+                uploaded.scene, default_spp=uploaded.sample_count, default_crop=uploaded.crop
+            )
         except (OptionError, SceneError) as error:
             raise DashboardError(HTTPStatus.BAD_REQUEST, str(error)) from None
         client = self.server.client

@@ -280,10 +280,12 @@ class RenderSettings:
         scene: scene_pb2.Scene,
         *,
         default_spp: int = 0,
+        default_crop: str = "",
     ) -> PreparedJob:
         """A copy of ``scene`` with the film size and materials set, the transport and
-        crop window for RenderOptions, and the spp (``default_spp`` when unset, 0: the
-        server's). OptionError when a setting does not fit the scene."""
+        crop window for RenderOptions (``default_crop``, as --crop writes it, when unset:
+        the part of the film a scene file renders), and the spp (``default_spp`` when
+        unset, 0: the server's). OptionError when a setting does not fit the scene."""
         self.check()
         prepared = scene_pb2.Scene()
         prepared.CopyFrom(scene)
@@ -291,12 +293,19 @@ class RenderSettings:
             prepared.film.width, prepared.film.height = self.res
         _replace_materials(prepared, self.materials)
         crop = None
-        if self.crop is not None:
+        window = (
+            self.crop
+            if self.crop is not None
+            else parse_crop(default_crop)
+            if default_crop
+            else None
+        )
+        if window is not None:
             if not prepared.film.width or not prepared.film.height:
                 raise OptionError("crop", "the scene's film has no size: give --res too")
             # Whether the job's integrator can render a crop is the server's
             # check (its class's capabilities).
-            crop = self.crop.pixels(prepared.film.width, prepared.film.height)
+            crop = window.pixels(prepared.film.width, prepared.film.height)
         return PreparedJob(
             scene=prepared,
             spp=self.spp or default_spp,

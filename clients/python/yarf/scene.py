@@ -76,6 +76,9 @@ class ImportedScene:
     sample_count: int = 0
     # "file:line: message", one per construct ignored or approximated.
     warnings: list[str] = field(default_factory=list)
+    # The part of the film the file renders, as --crop takes it
+    # ("x0,x1,y0,y1", pixels or fractions); "" for the whole film.
+    crop: str = ""
 
 
 def find_yarf_import() -> Path:
@@ -134,14 +137,16 @@ def import_scene(
         message = errors[-1] if errors else f"yarf-import failed (exit status {done.returncode})"
         raise SceneError(message)
     warnings = [line.removeprefix("warning: ") for line in stderr if line.startswith("warning: ")]
-    sample_count = 0
+    sample_count, crop = 0, ""
     for line in stderr:
         if line.startswith("info: sample_count "):
             sample_count = int(line.split()[-1])
+        elif line.startswith("info: crop "):
+            crop = line.split()[-1]
     scene = parse_scene(done.stdout.decode("utf-8"), ".json", source=str(path))
     if inline_files:
         inline_mesh_files(scene, path.parent)
-    return ImportedScene(scene, sample_count, warnings)
+    return ImportedScene(scene, sample_count, warnings, crop)
 
 
 def load_scene(

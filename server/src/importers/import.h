@@ -30,6 +30,11 @@ struct ImportResult {
   v1::Scene scene;
   // Samples per pixel the file asks for; 0 when it does not say.
   uint32_t sample_count = 0;
+  // The part of the film the file renders, when it renders only a part
+  // (pbrt's cropwindow or pixelbounds, Mitsuba's crop_*), as `yarf render
+  // --crop` takes it: "x0,x1,y0,y1" in pixels, or, written with decimal
+  // points, in fractions of the film. Empty: the whole film.
+  std::string crop;
   // "file:line: message", one per kind of construct ignored or approximated.
   std::vector<std::string> warnings;
 };

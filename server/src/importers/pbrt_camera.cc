@@ -97,11 +97,32 @@ void PbrtImporter::Film(const std::string& type, PbrtParams& params, const Sourc
   v1::Film& film = *assembly_.scene().mutable_film();
   film.set_width(uint32_t(width));
   film.set_height(uint32_t(height));
-  for (const char* crop : {"cropwindow", "pixelbounds"})
-    if (params.Has(crop)) {
-      params.Find(crop);
-      Warn(params.WhereIs(crop, where), "film-crop", "film crop windows are not supported: the full film is rendered");
-    }
+  // The part of the film rendered: a crop window in fractions of the
+  // film (winning, as in pbrt-v4), else pixel bounds, cut to the film.
+  if (params.Has("cropwindow")) {
+    const std::vector<double> c = params.Numbers("cropwindow", {"float"});
+    if (c.size() != 4) Fail(params.WhereIs("cropwindow", where), "cropwindow needs 4 values: x0 x1 y0 y1");
+    const auto fraction = [](double v) { return std::to_string(std::clamp(v, 0.0, 1.0)); };
+    const double x0 = std::min(c[0], c[1]), x1 = std::max(c[0], c[1]);
+    const double y0 = std::min(c[2], c[3]), y1 = std::max(c[2], c[3]);
+    // pbrt-v4 rounds each edge up to a pixel.
+    if (std::ceil(width * std::clamp(x0, 0.0, 1.0)) >= std::ceil(width * std::clamp(x1, 0.0, 1.0)) ||
+        std::ceil(height * std::clamp(y0, 0.0, 1.0)) >= std::ceil(height * std::clamp(y1, 0.0, 1.0)))
+      Fail(params.WhereIs("cropwindow", where), "cropwindow leaves no pixel");
+    crop_ = fraction(x0) + "," + fraction(x1) + "," + fraction(y0) + "," + fraction(y1);
+    if (params.Has("pixelbounds"))
+      Warn(params.WhereIs("pixelbounds", where), "film-crop", "pixelbounds and cropwindow: the crop window used");
+    params.Accept({"pixelbounds"});
+  } else if (params.Has("pixelbounds")) {
+    const std::vector<double> b = params.Numbers("pixelbounds", {"integer"});
+    if (b.size() != 4) Fail(params.WhereIs("pixelbounds", where), "pixelbounds needs 4 values: x0 x1 y0 y1");
+    const auto cut = [](double v, int64_t size) { return int64_t(std::clamp(v, 0.0, double(size))); };
+    const int64_t x0 = cut(b[0], width), x1 = cut(b[1], width), y0 = cut(b[2], height), y1 = cut(b[3], height);
+    if (x0 != b[0] || x1 != b[1] || y0 != b[2] || y1 != b[3])
+      Warn(params.WhereIs("pixelbounds", where), "film-crop", "pixelbounds reach past the film: cut to it");
+    if (!(x0 < x1 && y0 < y1)) Fail(params.WhereIs("pixelbounds", where), "pixelbounds leave no pixel");
+    crop_ = std::to_string(x0) + "," + std::to_string(x1) + "," + std::to_string(y0) + "," + std::to_string(y1);
+  }
   iso_ = params.Float("iso", 100);
   if (!(iso_ > 0 && iso_ < 1e12)) Fail(params.WhereIs("iso", where), "iso must be positive");
   const double max_component = params.Float("maxcomponentvalue", std::numeric_limits<double>::infinity());

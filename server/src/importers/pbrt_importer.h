@@ -152,6 +152,7 @@ class PbrtImporter {
   bool start_transform_active_ = true;  // ActiveTransform is not EndTime
   bool has_camera_ = false, has_film_ = false, has_sampler_ = false, has_integrator_ = false, has_filter_ = false;
   uint32_t sample_count_ = 16;
+  std::string crop_;  // ImportResult::crop
   // pbrt-v4's imaging ratio: the camera's shutter open time × the film's ISO / 100.
   double shutter_time_ = 1, iso_ = 100;
   int nesting_ = 0;

@@ -332,6 +332,7 @@ ImportResult PbrtImporter::Finish() {
   ImportResult result;
   result.scene = assembly_.Finish();
   result.sample_count = sample_count_;
+  result.crop = crop_;
   result.warnings = diagnostics_.Lines();
   return result;
 }

@@ -811,6 +811,24 @@ TEST(PbrtImport, AttributeDefaultsApplyToTheDirectivesOfTheirKindUntilAttributeE
   EXPECT_THROW(ImportPbrt("WorldBegin\nAttribute \"camera\" \"float fov\" 30\n", "bad.pbrt"), ImportError);
 }
 
+TEST(PbrtImport, ACropWindowOrPixelBoundsIsThePartOfTheFilmRendered) {
+  const auto crop_of = [](const std::string& film) {
+    return ImportPbrt("Film \"rgb\" \"integer xresolution\" 40 \"integer yresolution\" 20 " + film + "\nWorldBegin\n",
+                      "crop.pbrt");
+  };
+  EXPECT_EQ(crop_of("").crop, "");
+  // Fractions (written with decimal points), each pair in either order.
+  EXPECT_EQ(crop_of(R"("float cropwindow" [0.5 0.25 0 1])").crop, "0.250000,0.500000,0.000000,1.000000");
+  EXPECT_EQ(crop_of(R"("integer pixelbounds" [2 30 5 15])").crop, "2,30,5,15");
+  // pbrt-v4: the crop window wins; pixel bounds past the film are cut to it.
+  const ImportResult both = crop_of(R"("float cropwindow" [0 0.5 0 0.5] "integer pixelbounds" [0 40 -3 50])");
+  EXPECT_EQ(both.crop, "0.000000,0.500000,0.000000,0.500000");
+  EXPECT_EQ(crop_of(R"("integer pixelbounds" [0 40 -3 50])").crop, "0,40,0,20");
+  EXPECT_THROW(crop_of(R"("float cropwindow" [0.3 0.3 0 1])"), ImportError);
+  EXPECT_THROW(crop_of(R"("float cropwindow" [0 1 0])"), ImportError);
+  EXPECT_THROW(crop_of(R"("integer pixelbounds" [50 60 0 10])"), ImportError);
+}
+
 ImportResult PbrtWithIntegrator(const std::string& integrator) {
   return ImportPbrt("Integrator " + integrator + "\nWorldBegin\nShape \"sphere\"\n", "integrator.pbrt");
 }

@@ -87,6 +87,7 @@ class MitsubaImporter {
   Diagnostics& diagnostics_;
   SceneAssembly assembly_;
   uint32_t sample_count_ = 0;
+  std::string crop_;  // ImportResult::crop
   bool has_integrator_ = false;
   std::map<std::string, const XmlElement*> ids_;
   std::set<const XmlElement*> emitter_elements_;  // elements inside an <emitter>

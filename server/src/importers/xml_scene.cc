@@ -73,6 +73,7 @@ ImportResult MitsubaImporter::Run(const XmlElement& scene) {
   ImportResult result;
   result.scene = assembly_.Finish();
   result.sample_count = sample_count_;
+  result.crop = crop_;
   result.warnings = diagnostics_.Lines();
   return result;
 }

@@ -433,6 +433,22 @@ TEST(MitsubaImport, ReconstructionFiltersKeepTheirShape) {
   EXPECT_THROW(filter_of(R"(<rfilter type="lanczos"><integer name="lobes" value="0"/></rfilter>)"), ImportError);
 }
 
+TEST(MitsubaImport, ACropWindowIsThePartOfTheFilmRendered) {
+  const auto crop_of = [](const std::string& crop) {
+    return ImportMitsuba(R"(<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">)"
+                         R"(<integer name="width" value="40"/><integer name="height" value="20"/>)" +
+                             crop + "</film></sensor></scene>",
+                         "crop.xml")
+        .crop;
+  };
+  EXPECT_EQ(crop_of(""), "");
+  EXPECT_EQ(crop_of(R"(<integer name="crop_offset_x" value="4"/><integer name="crop_offset_y" value="2"/>)"
+                    R"(<integer name="crop_width" value="10"/><integer name="crop_height" value="8"/>)"),
+            "4,14,2,10");
+  EXPECT_THROW(crop_of(R"(<integer name="crop_offset_x" value="35"/><integer name="crop_width" value="10"/>)"),
+               ImportError);
+}
+
 // The import error of a Mitsuba scene given as text, "" when it imports.
 std::string ErrorOf(const std::string& xml) {
   try {

@@ -261,10 +261,15 @@ void MitsubaImporter::Film(const XmlElement& e) {
   v1::Film& film = *assembly_.scene().mutable_film();
   film.set_width(uint32_t(width));
   film.set_height(uint32_t(height));
-  for (const char* crop : {"crop_offset_x", "crop_offset_y", "crop_width", "crop_height"})
-    if (p.Has(crop)) Warn(p.WhereIs(crop), "film-crop", "film crop windows are not supported: the full film is rendered");
-  p.Accept({"crop_offset_x", "crop_offset_y", "crop_width", "crop_height", "pixel_format", "component_format",
-            "file_format", "banner", "sample_border", "compensate", "rfilter"});
+  // The part of the film rendered, in pixels.
+  if (p.Has("crop_offset_x") || p.Has("crop_offset_y") || p.Has("crop_width") || p.Has("crop_height")) {
+    const int64_t x0 = p.Integer("crop_offset_x", 0), y0 = p.Integer("crop_offset_y", 0);
+    const int64_t w = p.Integer("crop_width", width), h = p.Integer("crop_height", height);
+    if (!(x0 >= 0 && y0 >= 0 && w >= 1 && h >= 1 && x0 <= width - w && y0 <= height - h))
+      Fail(e.where, "the crop window (crop_offset_x/y, crop_width/height) must lie inside the film");
+    crop_ = std::to_string(x0) + "," + std::to_string(x0 + w) + "," + std::to_string(y0) + "," + std::to_string(y0 + h);
+  }
+  p.Accept({"pixel_format", "component_format", "file_format", "banner", "sample_border", "compensate", "rfilter"});
 
   v1::ReconstructionFilter& filter = *film.mutable_filter();
   const auto filters = p.Objects("rfilter");

@@ -6,8 +6,9 @@
 // The scene goes to stdout as JSON, or to OUT in the format its extension
 // names. On stderr: one "warning: file:line: ..." line per construct that
 // was ignored or approximated, and "info: sample_count N" when the file
-// asks for a number of samples per pixel (yarf's render options carry it,
-// not the Scene). Mesh files stay files, named relative to IN's folder.
+// asks for a number of samples per pixel, "info: crop x0,x1,y0,y1" when it
+// renders only part of its film (yarf's render options carry them, not the
+// Scene). Mesh files stay files, named relative to IN's folder.
 // -D sets a Mitsuba scene parameter ($name), overriding its <default>.
 // --strict makes every warning an error: nothing is ignored or approximated.
 // --confine finds only files inside IN's folder (symbolic links followed),
@@ -103,6 +104,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (result.sample_count > 0) std::cerr << "info: sample_count " << result.sample_count << "\n";
+  if (!result.crop.empty()) std::cerr << "info: crop " << result.crop << "\n";
 
   std::string text;
   if (text_format) {
