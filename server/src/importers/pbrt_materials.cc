@@ -122,9 +122,18 @@ std::string PbrtImporter::MakeMaterial(const std::string& type, PbrtParams& para
     const PbrtParam* refl = params.Find("reflectance");
     const PbrtParam* eta_param = params.Find(prefix + "eta");
     const PbrtParam* k_param = params.Find(prefix + "k");
-    if (refl) {
+    const Textured given = refl ? TexturedColour(params, "reflectance", {}, SpectrumUse::kReflectance, where)
+                                : Textured{};
+    if (refl && !given.IsTexture()) {
+      // pbrt-v4's conductor of that reflectance at normal incidence: η = 1
+      // and k = 2√r / √(1 − r), so that ((η − 1)² + k²) / ((η + 1)² + k²) = r.
+      const Rgb r = ClampColour(given.constant, 0, 0.9999, [] {});
+      const auto k = [](double v) { return 2 * std::sqrt(v) / std::sqrt(1 - v); };
+      SetRgb(props, "eta", {1, 1, 1});
+      SetRgb(props, "k", {k(r.r), k(r.g), k(r.b)});
+    } else if (refl) {
       Warn(refl->where, "conductor-reflectance",
-           "conductor given by reflectance: a perfect conductor tinted by it (Fresnel falloff differs)");
+           "conductor given by a reflectance texture: a perfect conductor tinted by it (Fresnel falloff differs)");
       SetString(props, "material", "none");
       reflectance("reflectance", "specular_reflectance", 1);
     } else if (MetalName(eta_param) || MetalName(k_param) || (!eta_param && !k_param)) {

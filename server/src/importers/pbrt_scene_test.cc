@@ -234,10 +234,14 @@ TEST(PbrtImport, MaterialsMapToSurfaceModels) {
   EXPECT_EQ(material(1).class_name(), "conductor");
   ExpectNear(RgbProperty(material(1).properties(), "eta"), {0.2, 0.9, 1.1});
   ExpectNear(RgbProperty(material(1).properties(), "k"), {3.9, 2.4, 2.1});
-  // Given by reflectance: a perfect conductor tinted by it, rough.
+  // Given by reflectance: pbrt-v4's conductor of η = 1 and the k that
+  // reflects that much at normal incidence, k = 2√r / √(1 − r); rough.
   EXPECT_EQ(material(2).class_name(), "roughconductor");
-  EXPECT_EQ(StringProperty(material(2).properties(), "material"), "none");
-  ExpectNear(RgbProperty(material(2).properties(), "specular_reflectance"), {0.9, 0.8, 0.7});
+  ExpectNear(RgbProperty(material(2).properties(), "eta"), {1, 1, 1});
+  const Vec3d k = RgbProperty(material(2).properties(), "k");
+  for (const auto& [kc, r] : {std::pair{k.x, 0.9}, {k.y, 0.8}, {k.z, 0.7}}) {
+    EXPECT_NEAR(kc * kc / (4 + kc * kc), r, 1e-9);  // Fresnel at normal incidence with η = 1
+  }
   EXPECT_NEAR(FloatProperty(material(2).properties(), "alpha"), 0.1, 1e-12);
   // Brass is not among yarf's tabulated metals.
   EXPECT_EQ(StringProperty(material(3).properties(), "material"), "none");
@@ -254,8 +258,10 @@ TEST(PbrtImport, MaterialsMapToSurfaceModels) {
   EXPECT_EQ(material(7).properties().values().at("bsdf_0").reference(), "a");
   EXPECT_EQ(material(7).properties().values().at("bsdf_1").reference(), "b");
   EXPECT_NEAR(FloatProperty(material(7).properties(), "weight"), 0.8, 1e-12);
-  EXPECT_EQ(material(8).name(), "default");
-  EXPECT_TRUE(Warns(result, "pbrt_materials.pbrt:24: material 'subsurface' is not supported"));
+  // subsurface: a dielectric around its medium (PbrtImport.ASubsurfaceMaterial...).
+  EXPECT_EQ(material(8).class_name(), "dielectric");
+  EXPECT_FALSE(scene.shapes(8).interior().empty());
+  EXPECT_FALSE(Warns(result, "pbrt_materials.pbrt:24"));
   // A shape of the interface material that bounds no medium: left out, as
   // pbrt-v4 skips it.
   EXPECT_EQ(scene.shapes_size(), 10);
