@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,6 +41,13 @@ class PbrtImporter {
     SourceLocation where, power_where;
     std::filesystem::path image;  // pbrt's `filename`: radiance from an image
   };
+  // One parameter default of an Attribute directive, before those given
+  // earlier.
+  struct AttributeDefault {
+    std::string target;
+    PbrtParam param;
+    std::shared_ptr<const AttributeDefault> earlier;
+  };
   // What AttributeBegin saves and AttributeEnd restores.
   struct State {
     Matrix4 ctm;
@@ -51,8 +59,10 @@ class PbrtImporter {
     std::string inside_medium, outside_medium;
     SourceLocation medium_where;
     // Attribute "shape" | "light" | "material" | "medium" | "texture":
-    // defaults for the parameters of every such directive that follows.
-    std::map<std::string, std::vector<PbrtParam>> attribute_defaults;
+    // defaults for the parameters of every such directive that follows,
+    // the latest first. Shared, not copied, by AttributeBegin.
+    std::shared_ptr<const AttributeDefault> attribute_defaults;
+    size_t attribute_default_values = 0;  // their numbers, strings and bools
   };
   static constexpr const char* kInterface = "\x01interface";
 

@@ -149,7 +149,7 @@ void PbrtParams::Accept(std::initializer_list<const char*> names) {
 
 void PbrtParams::AddDefaults(const std::vector<PbrtParam>& defaults) {
   for (const PbrtParam& d : defaults)
-    if (!Has(d.name)) {
+    if (!Has(d.name)) {  // neither given nor an earlier default
       params_.push_back(d);
       params_.back().used = false;
       params_.back().attribute_default = true;

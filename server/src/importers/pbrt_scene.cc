@@ -17,6 +17,10 @@ constexpr int kMaxIncludeDepth = 32;
 // Files included in all (a file may be included many times, not in a cycle).
 constexpr int kMaxIncludes = 10000;
 constexpr size_t kMaxAttributeDepth = 10000;
+// Values of the Attribute parameters in force at once: pbrt's directives
+// have a few dozen parameters each, and every directive of a kind reads
+// through them.
+constexpr size_t kMaxAttributeDefaultValues = 4096;
 
 }  // namespace
 
@@ -74,8 +78,10 @@ Matrix4 PbrtImporter::Matrix(PbrtTokenizer& tokens, const SourceLocation& where)
 
 PbrtParams PbrtImporter::ParamsOf(PbrtTokenizer& tokens, const std::string& kind) const {
   PbrtParams params = PbrtParams::Parse(tokens);
-  if (const auto defaults = state_.attribute_defaults.find(kind); defaults != state_.attribute_defaults.end())
-    params.AddDefaults(defaults->second);
+  std::vector<PbrtParam> defaults;
+  for (const AttributeDefault* d = state_.attribute_defaults.get(); d; d = d->earlier.get())
+    if (d->target == kind) defaults.push_back(d->param);
+  params.AddDefaults(defaults);  // the first of a name, the latest, is the one kept
   return params;
 }
 
@@ -165,12 +171,15 @@ void PbrtImporter::Directive(const PbrtToken& word, PbrtTokenizer& tokens, const
     const std::string target = Quoted(tokens, where);
     if (target != "shape" && target != "light" && target != "material" && target != "medium" && target != "texture")
       Fail(where, "Attribute \"" + target + "\": the target must be shape, light, material, medium or texture");
-    // Later defaults of the same name replace earlier ones.
-    std::vector<PbrtParam>& defaults = state_.attribute_defaults[target];
+    // Later defaults of the same name win over earlier ones (ParamsOf).
     const PbrtParams given = PbrtParams::Parse(tokens);
     for (const PbrtParam& p : given.All()) {
-      std::erase_if(defaults, [&](const PbrtParam& d) { return d.name == p.name; });
-      defaults.push_back(p);
+      state_.attribute_default_values += std::max<size_t>(1, p.numbers.size() + p.strings.size() + p.bools.size());
+      if (state_.attribute_default_values > kMaxAttributeDefaultValues)
+        Fail(where, "Attribute parameters in force hold more than " + std::to_string(kMaxAttributeDefaultValues) +
+                        " values");
+      state_.attribute_defaults =
+          std::make_shared<const AttributeDefault>(AttributeDefault{target, p, state_.attribute_defaults});
     }
   } else if (name == "WorldBegin") {
     before_world(false);

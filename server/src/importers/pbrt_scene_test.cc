@@ -815,6 +815,14 @@ TEST(PbrtImport, AttributeDefaultsApplyToTheDirectivesOfTheirKindUntilAttributeE
   ExpectNear(RgbProperty(result.scene.materials(0).properties(), "reflectance"), {0.1, 0.2, 0.3});
   EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
   EXPECT_THROW(ImportPbrt("WorldBegin\nAttribute \"camera\" \"float fov\" 30\n", "bad.pbrt"), ImportError);
+  // Defaults are bounded: every directive of their kind reads through them.
+  std::string many = "WorldBegin\n";
+  for (int i = 0; i < 4097; ++i) many += "Attribute \"shape\" \"float radius\" 1\n";
+  EXPECT_THROW(ImportPbrt(many, "many.pbrt"), ImportError);
+  // AttributeEnd gives back what an AttributeBegin took.
+  std::string nested = "WorldBegin\n";
+  for (int i = 0; i < 4000; ++i) nested += "AttributeBegin\nAttribute \"shape\" \"float radius\" 1\nAttributeEnd\n";
+  EXPECT_NO_THROW(ImportPbrt(nested + "Shape \"sphere\"\n", "nested.pbrt"));
 }
 
 TEST(PbrtImport, ACropWindowOrPixelBoundsIsThePartOfTheFilmRendered) {
