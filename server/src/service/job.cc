@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <thread>
 #include <tuple>
@@ -431,7 +432,10 @@ void Job::RenderRun(const JobResources& resources, const RunSettings& settings) 
   });
   target.WeighCameraSamples(kernel->CameraRayWeight());
   const v1::Film& film = scene.film();
-  target.Expose(film.exposure() > 0 ? float(film.exposure()) : 1.0f, float(film.max_component_value()));
+  // A positive limit stays one in float (0 is none).
+  const double limit = film.max_component_value();
+  target.Expose(film.exposure() > 0 ? float(film.exposure()) : 1.0f,
+                limit > 0 ? std::max(float(limit), std::numeric_limits<float>::denorm_min()) : 0.0f);
   // Served while it renders, for transports in other processes.
   const auto served = resources.scenes.Serve(kernel);
   parts.transport->Prepare(*kernel);
