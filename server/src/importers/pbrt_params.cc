@@ -147,13 +147,11 @@ void PbrtParams::Accept(std::initializer_list<const char*> names) {
   for (const char* name : names) Find(name);
 }
 
-void PbrtParams::AddDefaults(const std::vector<PbrtParam>& defaults) {
-  for (const PbrtParam& d : defaults)
-    if (!Has(d.name)) {  // neither given nor an earlier default
-      params_.push_back(d);
-      params_.back().used = false;
-      params_.back().attribute_default = true;
-    }
+void PbrtParams::AddDefault(const PbrtParam& d) {
+  if (Has(d.name)) return;  // given, or a later default
+  params_.push_back(d);
+  params_.back().used = false;
+  params_.back().attribute_default = true;
 }
 
 std::vector<PbrtParam> PbrtParams::TakeUnread() {

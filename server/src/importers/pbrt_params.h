@@ -30,9 +30,9 @@ class PbrtParams {
  public:
   // Reads parameters until the next token is not a string.
   static PbrtParams Parse(PbrtTokenizer& tokens);
-  // Adds those of `defaults` the list does not give itself (pbrt-v4's
-  // Attribute defaults, which a directive's own parameters override).
-  void AddDefaults(const std::vector<PbrtParam>& defaults);
+  // Adds `d` unless the list gives its name already (pbrt-v4's Attribute
+  // defaults, which a directive's own parameters override).
+  void AddDefault(const PbrtParam& d);
   // The parameters as given, for keeping as defaults.
   const std::vector<PbrtParam>& All() const { return params_; }
 

@@ -78,10 +78,9 @@ Matrix4 PbrtImporter::Matrix(PbrtTokenizer& tokens, const SourceLocation& where)
 
 PbrtParams PbrtImporter::ParamsOf(PbrtTokenizer& tokens, const std::string& kind) const {
   PbrtParams params = PbrtParams::Parse(tokens);
-  std::vector<PbrtParam> defaults;
+  // The latest first: the first of a name is the one kept.
   for (const AttributeDefault* d = state_.attribute_defaults.get(); d; d = d->earlier.get())
-    if (d->target == kind) defaults.push_back(d->param);
-  params.AddDefaults(defaults);  // the first of a name, the latest, is the one kept
+    if (d->target == kind) params.AddDefault(d->param);
   return params;
 }
 

@@ -121,7 +121,7 @@ float FilterAxis::Weight(float d) const {
 }
 
 ReconstructionFilter::ReconstructionFilter(const v1::ReconstructionFilter& filter)
-    : x_(filter, RadiiOf(filter).first), y_(filter, RadiiOf(filter).second) {}
+    : ReconstructionFilter(filter, RadiiOf(filter)) {}
 
 Film::Film(uint32_t width, uint32_t height, const v1::ReconstructionFilter& filter)
     : width_(width), height_(height), filter_spec_(filter), filter_(filter), pixels_(size_t(width) * height) {}

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "yarf/transport.h"
@@ -58,6 +59,9 @@ class ReconstructionFilter {
   float Weight(float dx, float dy) const { return x_.Weight(dx) * y_.Weight(dy); }
 
  private:
+  ReconstructionFilter(const v1::ReconstructionFilter& filter, std::pair<float, float> radii)
+      : x_(filter, radii.first), y_(filter, radii.second) {}
+
   FilterAxis x_, y_;
 };
 
