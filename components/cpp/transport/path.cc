@@ -86,6 +86,11 @@ struct Workspace {
   std::vector<Hit> hits;
   std::vector<Vertex> vertices;
   std::vector<uint32_t> vertex_material, emitted, escaped;
+  // Next-event estimation's samples, and the points and paths they are
+  // drawn for.
+  LightSamples lights;
+  std::vector<Vec3> light_from;
+  std::vector<uint32_t> light_owners;
   ShadowTests shadows;
   std::vector<uint8_t> occluded;
   // A material group's calls: directions toward the light samples, the
@@ -170,7 +175,8 @@ class PathTracer final : public Transport {
     // One light sample for every vertex whose material can use it, all in
     // one SampleLightsFrom call and one Radiance call per emitter, then
     // per material the BSDF toward them.
-    const LightSamples lights = SampleLights(scene, points, vertices, LitVertices(scene, groups), base);
+    SampleLights(scene, points, w, LitVertices(scene, groups), base);
+    const LightSamples& lights = w.lights;
     ShadowTests& shadows = w.shadows;
     shadows.Clear();
     w.next.clear();
@@ -219,18 +225,19 @@ class PathTracer final : public Transport {
     }
   }
 
-  // Next-event estimation's light samples, one for each vertex of `lit`.
-  LightSamples SampleLights(const SceneView& scene, const PrimarySamples& points, const std::vector<Vertex>& vertices,
-                            const std::vector<uint32_t>& lit, uint32_t base) const {
-    std::vector<uint32_t> owners(lit.size());
-    std::vector<Vec3> from(lit.size());
+  // Next-event estimation's light samples, one for each vertex of `lit`,
+  // into w.lights.
+  void SampleLights(const SceneView& scene, const PrimarySamples& points, Workspace& w,
+                    const std::vector<uint32_t>& lit, uint32_t base) const {
+    w.light_owners.resize(lit.size());
+    w.light_from.resize(lit.size());
     for (size_t j = 0; j < lit.size(); ++j) {
-      owners[j] = vertices[lit[j]].path;
-      from[j] = vertices[lit[j]].at.position;
+      w.light_owners[j] = w.vertices[lit[j]].path;
+      w.light_from[j] = w.vertices[lit[j]].at.position;
     }
-    return LightSamples::Of(
-        scene, SampleLightsFrom(scene, points, from, owners, base + kLightChoice, base + kLightPosition), lit,
-        vertices.size());
+    SampleLightsFrom(scene, points, w.light_from, w.light_owners, base + kLightChoice, base + kLightPosition,
+                     w.lights.direction);
+    w.lights.Weigh(scene, lit, w.vertices.size());
   }
 
   // Weighs the light samples of a material's vertices by the BSDF and

@@ -182,7 +182,8 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // toward it from p (uniform[3k+1], uniform[3k+2]): spheres by the solid
   // angle they subtend, triangles by area, an environment by its own
   // SampleDirection. Batched, as an environment's emitter is called once
-  // for the whole batch.
+  // for the whole batch. Every element of `out` is written (emitter
+  // nullptr where nothing was sampled), whatever it held.
   // rpc: SampleLights
   virtual void SampleLightsFrom(std::span<const Vec3> points, std::span<const float> uniform,
                                 std::span<LightDirection> out) const = 0;

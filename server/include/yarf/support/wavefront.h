@@ -71,7 +71,14 @@ class SurfaceRows {
     const size_t k = location_.size();
     uv_.push_back(site.u);
     uv_.push_back(site.v);
-    location_.push_back(site.location);
+    // Field by field: a site just made on the stack (SurfaceSite::Uv) has
+    // its location stored in pieces, which a whole-struct copy would
+    // reread as one wide load, a store-forwarding stall per row.
+    SurfaceLocation& location = location_.emplace_back();
+    location.shape = site.location.shape;
+    location.primitive = site.location.primitive;
+    location.b1 = site.location.b1;
+    location.b2 = site.location.b2;
     if (!site.parameterised) return;
     if (extras_.empty()) extras_.resize(kExtras * capacity_);
     std::copy_n(site.footprint, 4, &extras_[kFootprint * capacity_ + 4 * k]);
@@ -493,15 +500,15 @@ inline std::vector<Vec3> EmissionSeen(const SceneView& scene, const std::vector<
 
 // The radiance each sampled light sends toward the point it was sampled
 // from (zero for a sample without an emitter): one call per emitter.
-inline std::vector<Vec3> LightRadiance(const SceneView& scene, const std::vector<LightDirection>& lights) {
-  std::vector<Vec3> out(lights.size());
+inline void LightRadiance(const SceneView& scene, const std::vector<LightDirection>& lights,
+                          std::vector<Vec3>& out) {
+  out.assign(lights.size(), Vec3(0, 0, 0));
   std::vector<const Emitter*> emitters(lights.size());
   for (size_t k = 0; k < lights.size(); ++k) emitters[k] = lights[k].emitter;
   CallEmitters(
       scene, emitters, Densities::kNone,
       [&](EmitterBatch& batch, uint32_t k) { batch.Add(lights[k].w, SurfaceSite::Uv(lights[k].u, lights[k].v)); },
       [&](uint32_t k, Vec3 radiance, float) { out[k] = radiance; });
-  return out;
 }
 
 // Next-event estimation's light samples for the vertices of a bounce that
@@ -517,10 +524,17 @@ struct LightSamples {
   // asked of each emitter in one call.
   static LightSamples Of(const SceneView& scene, std::vector<LightDirection> drawn,
                          const std::vector<uint32_t>& which, size_t count) {
-    LightSamples samples{std::vector<uint32_t>(count, 0), std::move(drawn), {}};
-    for (uint32_t j = 0; j < which.size(); ++j) samples.slot[which[j]] = j;
-    samples.radiance = LightRadiance(scene, samples.direction);
+    LightSamples samples;
+    samples.direction = std::move(drawn);
+    samples.Weigh(scene, which, count);
     return samples;
+  }
+  // The same for samples drawn into `direction` in place: a workspace's
+  // LightSamples keeps its buffers from bounce to bounce.
+  void Weigh(const SceneView& scene, const std::vector<uint32_t>& which, size_t count) {
+    slot.assign(count, 0);
+    for (uint32_t j = 0; j < which.size(); ++j) slot[which[j]] = j;
+    LightRadiance(scene, direction, radiance);
   }
   const LightDirection& Direction(uint32_t v) const { return direction[slot[v]]; }
   Vec3 Radiance(uint32_t v) const { return radiance[slot[v]]; }
@@ -734,10 +748,9 @@ inline std::vector<Vec3> EnvironmentAlong(const SceneView& scene, const std::vec
 // The lights seen from each point, for next-event estimation: light
 // choice from coordinate `choice`, the direction from (direction,
 // direction + 1) of point owners[k].
-inline std::vector<LightDirection> SampleLightsFrom(const SceneView& scene, const PrimarySamples& points,
-                                                    const std::vector<Vec3>& from,
-                                                    const std::vector<uint32_t>& owners, uint32_t choice,
-                                                    uint32_t direction) {
+inline void SampleLightsFrom(const SceneView& scene, const PrimarySamples& points, const std::vector<Vec3>& from,
+                             const std::vector<uint32_t>& owners, uint32_t choice, uint32_t direction,
+                             std::vector<LightDirection>& out) {
   const size_t n = from.size();
   std::vector<float> coordinates(3 * n), u(3 * n);
   points.Gather(owners, choice, std::span(coordinates).first(n));
@@ -745,8 +758,15 @@ inline std::vector<LightDirection> SampleLightsFrom(const SceneView& scene, cons
   points.Gather(owners, direction + 1, std::span(coordinates).subspan(2 * n, n));
   for (size_t k = 0; k < n; ++k)
     for (size_t j = 0; j < 3; ++j) u[3 * k + j] = coordinates[j * n + k];
-  std::vector<LightDirection> out(from.size());
+  out.resize(n);  // every element written by the scene: a reused vector is not cleared twice
   scene.SampleLightsFrom(from, u, out);
+}
+inline std::vector<LightDirection> SampleLightsFrom(const SceneView& scene, const PrimarySamples& points,
+                                                    const std::vector<Vec3>& from,
+                                                    const std::vector<uint32_t>& owners, uint32_t choice,
+                                                    uint32_t direction) {
+  std::vector<LightDirection> out;
+  SampleLightsFrom(scene, points, from, owners, choice, direction, out);
   return out;
 }
 
