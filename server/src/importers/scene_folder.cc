@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
-#include <sstream>
+#include <limits>
 #include <stdexcept>
 #include <system_error>
 #include <vector>
@@ -71,47 +71,50 @@ std::string SceneFolder::Display(const fs::path& file) const {
 // Scene text beyond this size is refused (meshes belong in their own files).
 constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(1) << 30;
 
-std::string ReadFileHead(const fs::path& file, size_t bytes, const SourceLocation& where) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) Fail(where, "cannot read '" + file.string() + "'");
-  std::string head(bytes, '\0');
-  in.read(head.data(), std::streamsize(bytes));
-  head.resize(size_t(in.gcount()));
-  if (!IsGzip(head)) return head;
-  // A compressed header may need any share of the compressed bytes: all of
-  // them, inflated only as far as asked.
+namespace {
+
+// The first `limit` bytes of a file, or of what it inflates to when it
+// is a gzip file; `complete` when nothing is left out. At most 1 GiB is
+// read, and inflated (a gzip file's header may need any share of its
+// compressed bytes: all of them).
+Inflated ReadUpTo(const fs::path& file, std::uintmax_t limit, const SourceLocation& where) {
   std::error_code error;
-  if (fs::file_size(file, error) > kMaxSceneBytes) Fail(where, "file '" + file.string() + "' is larger than 1 GiB");
-  in.clear();
-  in.seekg(0);
-  std::ostringstream compressed;
-  if (!(compressed << in.rdbuf())) Fail(where, "cannot read '" + file.string() + "'");
+  if (!fs::is_regular_file(file, error)) Fail(where, "file '" + file.string() + "' not found");
+  const std::uintmax_t size = fs::file_size(file, error);
+  if (error) Fail(where, "cannot read '" + file.string() + "'");
+  std::ifstream in(file, std::ios::binary);
+  std::string bytes;
+  // Reads on to `end` bytes from the start.
+  const auto read_to = [&](std::uintmax_t end) {
+    if (end > kMaxSceneBytes) Fail(where, "file '" + file.string() + "' is larger than 1 GiB");
+    const size_t from = bytes.size();
+    bytes.resize(size_t(end));
+    if (!in.read(bytes.data() + from, std::streamsize(bytes.size() - from)))
+      Fail(where, "cannot read '" + file.string() + "'");
+  };
+  read_to(std::min(size, limit));
+  if (!IsGzip(bytes)) {
+    const bool complete = bytes.size() == size;
+    return {std::move(bytes), complete};
+  }
+  read_to(size);
   try {
-    return Inflate(compressed.view(), bytes).bytes;
+    return Inflate(bytes, std::min(limit, kMaxSceneBytes));
   } catch (const std::runtime_error& e) {
     Fail(where, "gzip file '" + file.string() + "': " + e.what());
   }
 }
 
+}  // namespace
+
+std::string ReadFileHead(const fs::path& file, size_t bytes, const SourceLocation& where) {
+  return ReadUpTo(file, bytes, where).bytes;
+}
+
 std::string ReadTextFile(const fs::path& file, const SourceLocation& where) {
-  std::error_code error;
-  if (!fs::is_regular_file(file, error)) Fail(where, "file '" + file.string() + "' not found");
-  if (fs::file_size(file, error) > kMaxSceneBytes) Fail(where, "file '" + file.string() + "' is larger than 1 GiB");
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  if (!in || !(text << in.rdbuf())) {
-    if (in && fs::file_size(file, error) == 0) return {};
-    Fail(where, "cannot read '" + file.string() + "'");
-  }
-  if (!IsGzip(text.view())) return text.str();
-  Inflated inflated;
-  try {
-    inflated = Inflate(text.view(), kMaxSceneBytes);
-  } catch (const std::runtime_error& e) {
-    Fail(where, "gzip file '" + file.string() + "': " + e.what());
-  }
-  if (!inflated.complete) Fail(where, "file '" + file.string() + "' inflates to more than 1 GiB");
-  return std::move(inflated.bytes);
+  Inflated text = ReadUpTo(file, std::numeric_limits<std::uintmax_t>::max(), where);
+  if (!text.complete) Fail(where, "file '" + file.string() + "' inflates to more than 1 GiB");
+  return std::move(text.bytes);
 }
 
 }  // namespace yarf::importers
