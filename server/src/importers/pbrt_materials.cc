@@ -330,7 +330,8 @@ v1::Properties PbrtImporter::SubsurfaceMedium(PbrtParams& params, const SourceLo
     SetRgb(medium, "sigma_s", sigma_s);
   };
   const double scale = params.Float("scale", 1);
-  if (!(scale > 0 && scale < 1e30)) Fail(params.WhereIs("scale", where), what + ": scale must be positive");
+  if (!(scale > 0 && scale < 1e30))
+    Fail(params.WhereIs("scale", where), what + ": scale must be positive and below 1e30");
   double g = params.Float("g", 0);
   if (!(g > -1 && g < 1)) Fail(params.WhereIs("g", where), what + ": g must lie in (-1, 1)");
   // pbrt-v4's four ways, in its order: a measured medium's name, σ_a and

@@ -790,6 +790,14 @@ TEST(PbrtImport, ASubsurfaceMaterialIsADielectricAroundItsScatteringMedium) {
   EXPECT_THROW(import(R"("rgb sigma_a" [1 1 1])"), ImportError);
   EXPECT_THROW(import(R"("string name" "Unobtainium")"), ImportError);
   EXPECT_THROW(import(R"("rgb reflectance" [0.5 0.5 0.5] "rgb mfp" [0 1 1])"), ImportError);
+  for (const char* scale : {R"("float scale" 0)", R"("float scale" 1e300)"}) {
+    try {
+      import(scale);
+      ADD_FAILURE() << scale << " was accepted";
+    } catch (const ImportError& e) {
+      EXPECT_NE(std::string(e.what()).find("scale must be positive and below 1e30"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(PbrtImport, AttributeDefaultsApplyToTheDirectivesOfTheirKindUntilAttributeEnd) {
