@@ -2,10 +2,8 @@
 //
 // Scatters incident light equally in all directions of the side it
 // arrives on: f(wi, wo) = reflectance / π when wi and wo lie on the same
-// side of the surface, 0 otherwise. Both sides reflect alike (a two-sided
-// material, as pbrt's DiffuseBxDF) unless two_sided is false: then the
-// back side is black (Mitsuba's diffuse, one-sided unless wrapped in its
-// twosided). There is no transmission.
+// side of the surface, 0 otherwise. Both sides reflect alike unless
+// two_sided is false (DiffuseHemisphere). There is no transmission.
 //
 // Parameters: Lambertian::Parameters() below. A texture's values are
 // clamped to [0, 1].
@@ -17,10 +15,10 @@
 #include <span>
 #include <string>
 
-#include "yarf/support/scatter_rows.h"
+#include "diffuse_hemisphere.h"
 #include "yarf/plugin.h"
+#include "yarf/support/scatter_rows.h"
 #include "yarf/texture.h"
-#include "yarf/support/warps.h"
 
 namespace {
 
@@ -35,20 +33,19 @@ class Lambertian final : public yarf::SurfaceModel {
                 .Default(0.5)
                 .Range(0, 1)
                 .Doc("fraction of the incident light reflected, per channel"),
-            yarf::Parameter::Bool("two_sided").Default(true).Doc(
-                "whether the back side reflects like the front (false: it is black)")};
+            yarf::DiffuseHemisphere::TwoSidedParameter()};
   }
 
   explicit Lambertian(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.5f, 0.5f, 0.5f),
                                                 /*unit=*/true)),
-        two_sided_(props.Bool("two_sided", true)) {}
+        hemisphere_(props) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 const yarf::SurfacePoints& at, std::span<float> value) const override {
     const auto reflectance = reflectance_.At(at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
-      return Reflects(in, out) ? reflectance[k] * yarf::kInvPi : Vec3();
+      return hemisphere_.Reflects(in, out) ? reflectance[k] * yarf::kInvPi : Vec3();
     });
   }
 
@@ -61,12 +58,9 @@ class Lambertian final : public yarf::SurfaceModel {
     const yarf::SampleRows rows{wo, weight, pdf, flags};
     const auto reflectance = reflectance_.At(at);
     for (size_t k = 0; k < count; ++k) {
-      const float wi_z = wi[3 * k + 2];
-      Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);
-      // Mirror onto wi's side: the back face reflects like the front.
-      if (wi_z < 0) out.z = -out.z;
-      const float density = yarf::CosineHemispherePdf(std::abs(out.z));
-      if (!can_reflect || wi_z == 0 || (wi_z < 0 && !two_sided_) || density <= 0) {
+      float density;
+      const Vec3 out = hemisphere_.Sample(Vec3::Load(&wi[3 * k]), uniform[3 * k + 1], uniform[3 * k + 2], density);
+      if (!can_reflect || !(density > 0)) {
         rows.StoreNoSample(k);
         continue;
       }
@@ -77,19 +71,14 @@ class Lambertian final : public yarf::SurfaceModel {
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints& at,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf, [&](size_t, Vec3 in, Vec3 out) {
-      return Reflects(in, out) ? yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
-    });
+    yarf::PdfEach(wi, wo, pdf, [&](size_t, Vec3 in, Vec3 out) { return hemisphere_.Pdf(in, out); });
   }
 
   uint32_t Lobes() const override { return kLobe; }
 
  private:
-  // wi and wo on one side: the front, or either when two-sided.
-  bool Reflects(Vec3 in, Vec3 out) const { return in.z * out.z > 0 && (two_sided_ || in.z > 0); }
-
   yarf::TexturedValue reflectance_;
-  bool two_sided_;
+  yarf::DiffuseHemisphere hemisphere_;
 };
 
 }  // namespace

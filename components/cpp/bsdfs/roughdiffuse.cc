@@ -10,9 +10,8 @@
 // model has Oren and Nayar's single-scattering terms C1, C2, C3 and their
 // approximation of light reflected twice in a groove (which grows with
 // reflectance²), the fast one only their qualitative A + B form. alpha = 0
-// is Lambertian. Both sides reflect alike unless two_sided is false (then
-// the back is black, as Mitsuba's, one-sided unless wrapped in its
-// twosided).
+// is Lambertian. Both sides reflect alike unless two_sided is false
+// (DiffuseHemisphere).
 //
 // Parameters: RoughDiffuse::Parameters() below. Lobes: diffuse reflection,
 // sampled from the cosine-weighted hemisphere on wi's side.
@@ -22,9 +21,9 @@
 #include <limits>
 #include <span>
 
+#include "diffuse_hemisphere.h"
 #include "yarf/plugin.h"
 #include "yarf/support/scatter_rows.h"
-#include "yarf/support/warps.h"
 #include "yarf/texture.h"
 
 namespace {
@@ -43,23 +42,21 @@ class RoughDiffuse final : public yarf::SurfaceModel {
             P::Bool("use_fast_approx")
                 .Default(false)
                 .Doc("Oren and Nayar's qualitative model, without interreflection"),
-            P::Bool("two_sided")
-                .Default(true)
-                .Doc("whether the back side reflects like the front (false: it is black)")};
+            yarf::DiffuseHemisphere::TwoSidedParameter()};
   }
 
   explicit RoughDiffuse(const yarf::Properties& props)
       : reflectance_(yarf::TexturedValue::Color(props, "reflectance", Vec3(0.5f, 0.5f, 0.5f), /*unit=*/true)),
         alpha_(ReadSlope(props)),
         fast_(props.Bool("use_fast_approx", false)),
-        two_sided_(props.Bool("two_sided", true)) {}
+        hemisphere_(props) {}
 
   void Evaluate(yarf::TransportMode, std::span<const float> wi, std::span<const float> wo,
                 const yarf::SurfacePoints& at, std::span<float> value) const override {
     const auto reflectance = reflectance_.At(at);
     const auto alpha = alpha_.FloatsAt(at);
     yarf::EvaluateEach(wi, wo, value, [&](size_t k, Vec3 in, Vec3 out) {
-      return Reflects(in, out) ? Value(reflectance[k], alpha[k], in, out) : Vec3();
+      return hemisphere_.Reflects(in, out) ? Value(reflectance[k], alpha[k], in, out) : Vec3();
     });
   }
 
@@ -71,10 +68,9 @@ class RoughDiffuse final : public yarf::SurfaceModel {
     const auto alpha = alpha_.FloatsAt(at);
     for (size_t k = 0; k < wi.size() / 3; ++k) {
       const Vec3 in = Vec3::Load(&wi[3 * k]);
-      Vec3 out = yarf::SampleCosineHemisphere(uniform[3 * k + 1], uniform[3 * k + 2]);
-      if (in.z < 0) out.z = -out.z;
-      const float density = yarf::CosineHemispherePdf(std::abs(out.z));
-      if (!yarf::LobeAllowed(kLobe, allowed) || !Reflects(in, out) || !(density > 0)) {
+      float density;
+      const Vec3 out = hemisphere_.Sample(in, uniform[3 * k + 1], uniform[3 * k + 2], density);
+      if (!yarf::LobeAllowed(kLobe, allowed) || !(density > 0)) {
         rows.StoreNoSample(k);
         continue;
       }
@@ -84,9 +80,7 @@ class RoughDiffuse final : public yarf::SurfaceModel {
 
   void Pdf(std::span<const float> wi, std::span<const float> wo, const yarf::SurfacePoints&,
            std::span<float> pdf) const override {
-    yarf::PdfEach(wi, wo, pdf, [&](size_t, Vec3 in, Vec3 out) {
-      return Reflects(in, out) ? yarf::CosineHemispherePdf(std::abs(out.z)) : 0.0f;
-    });
+    yarf::PdfEach(wi, wo, pdf, [&](size_t, Vec3 in, Vec3 out) { return hemisphere_.Pdf(in, out); });
   }
 
   uint32_t Lobes() const override { return kLobe; }
@@ -100,8 +94,6 @@ class RoughDiffuse final : public yarf::SurfaceModel {
     if (!(alpha >= 0 && std::isfinite(alpha))) throw yarf::Error("property 'alpha' must be a finite number >= 0");
     return yarf::TexturedValue(Vec3(float(alpha), float(alpha), float(alpha)));
   }
-
-  bool Reflects(Vec3 in, Vec3 out) const { return in.z * out.z > 0 && (two_sided_ || in.z > 0); }
 
   // f for wi and wo on one side (the back mirrored onto the front). The
   // model is symmetric in the two directions: it reads only the larger
@@ -141,7 +133,8 @@ class RoughDiffuse final : public yarf::SurfaceModel {
   }
 
   yarf::TexturedValue reflectance_, alpha_;
-  bool fast_, two_sided_;
+  bool fast_;
+  yarf::DiffuseHemisphere hemisphere_;
 };
 
 }  // namespace
