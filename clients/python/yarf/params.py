@@ -58,6 +58,7 @@ _CAMERA_FIELDS: dict[int, tuple[str, ...]] = {
     scene_pb2.Camera.ORTHOGRAPHIC: (*_CAMERA_PLACEMENT, "view_size", *_CAMERA_CLIPPING),
     scene_pb2.Camera.RADIANCE_METER: ("origin", "target"),
     scene_pb2.Camera.IRRADIANCE_METER: (),
+    scene_pb2.Camera.SPHERICAL: (*_CAMERA_PLACEMENT, *_CAMERA_CLIPPING),
 }
 
 

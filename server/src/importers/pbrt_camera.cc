@@ -20,15 +20,24 @@ constexpr int64_t kMaxDepth = 1 << 16;
 void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const SourceLocation& where) {
   if (has_camera_) Fail(where, "a second Camera");
   has_camera_ = true;
-  const bool orthographic = type == "orthographic";
-  if (type != "perspective" && !orthographic)
+  const bool orthographic = type == "orthographic", spherical = type == "spherical";
+  if (type != "perspective" && !orthographic && !spherical)
     Warn(where, "camera:" + type, "camera '" + type + "' is not supported: a perspective camera used");
   // The CTM maps world to camera space; the camera names that frame.
   const auto camera_to_world = state_.ctm.Inverse();
   if (!camera_to_world) Fail(where, "the camera transform is singular");
   v1::Camera camera;
   camera.set_fov_axis(v1::Camera::SMALLER);  // pbrt's fov and screen window span the shorter image axis
-  if (orthographic) {
+  if (spherical) {
+    camera.set_model(v1::Camera::SPHERICAL);
+    const std::string mapping = params.String("mapping", "equiarea");
+    if (mapping != "equiarea" && mapping != "equirect")
+      Fail(params.WhereIs("mapping", where), "spherical camera: mapping must be \"equiarea\" or \"equirect\"");
+    camera.set_spherical_mapping(mapping == "equiarea" ? v1::Camera::EQUAL_AREA : v1::Camera::EQUIRECTANGULAR);
+    // pbrt-v4 reads and ignores these for a spherical camera.
+    for (const char* ignored : {"lensradius", "focaldistance", "frameaspectratio", "screenwindow"})
+      if (params.Has(ignored)) params.Find(ignored);
+  } else if (orthographic) {
     // pbrt-v4's screen window spans [-1, 1] of camera space across the
     // shorter image axis, unless given; the camera transform scales it.
     camera.set_model(v1::Camera::ORTHOGRAPHIC);
@@ -53,8 +62,8 @@ void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const Sou
     if (!(fov > 0 && fov < 180)) Fail(params.WhereIs("fov", where), "fov must lie in (0, 180) degrees");
     camera.set_fov(fov);
   }
-  const double lens_radius = params.Float("lensradius", 0);
-  const double focal_distance = params.Float("focaldistance", 1e6);
+  const double lens_radius = spherical ? 0 : params.Float("lensradius", 0);
+  const double focal_distance = spherical ? 1 : params.Float("focaldistance", 1e6);
   if (!(lens_radius >= 0 && lens_radius < 1e30) || !(focal_distance > 0))
     Fail(where, "need lensradius >= 0 and focaldistance > 0");
   if (lens_radius > 0 && orthographic) {
@@ -66,7 +75,7 @@ void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const Sou
     camera.set_focus_distance(focal_distance);
   }
   for (const char* unsupported : {"screenwindow", "frameaspectratio"})
-    if (params.Has(unsupported) && !(orthographic && std::string(unsupported) == "screenwindow")) {
+    if (!spherical && params.Has(unsupported) && !(orthographic && std::string(unsupported) == "screenwindow")) {
       params.Find(unsupported);
       Warn(params.WhereIs(unsupported, where), std::string("camera:") + unsupported,
            std::string("camera: ") + unsupported + " is not supported: ignored");
@@ -75,7 +84,8 @@ void PbrtImporter::Camera(const std::string& type, PbrtParams& params, const Sou
   shutter_time_ = params.Float("shutterclose", 1) - params.Float("shutteropen", 0);
   if (!(shutter_time_ > 0 && shutter_time_ < 1e12))
     Fail(where, "shutteropen and shutterclose must leave the shutter open a while (pbrt: else a black image)");
-  if (type == "perspective" || orthographic) params.WarnUnused(diagnostics_, "camera '" + type + "'");
+  if (type == "perspective" || orthographic || spherical)
+    params.WarnUnused(diagnostics_, "camera '" + type + "'");
 
   // pbrt-v4's camera sits in the outside medium of the MediumInterface in force.
   if (!state_.outside_medium.empty()) {

@@ -25,6 +25,9 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
     case v1::Camera::IRRADIANCE_METER:
       kind_ = Kind::kIrradianceMeter;
       break;
+    case v1::Camera::SPHERICAL:
+      kind_ = Kind::kSpherical;
+      break;
     default:
       throw Error("camera: unknown model " + std::to_string(int(camera.model())));
   }
@@ -61,6 +64,25 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
   right_ = Normalize(right);
   up_ = Cross(right_, forward_);
 
+  if (camera.near_clip() < 0 || camera.far_clip() < 0 ||
+      (camera.far_clip() > 0 && camera.far_clip() <= camera.near_clip()))
+    throw Error("camera: need 0 <= near_clip < far_clip (far_clip 0 = unbounded)");
+  near_clip_ = float(camera.near_clip());
+  far_clip_ = float(camera.far_clip());
+  if (kind_ == Kind::kSpherical) {
+    if (camera.spherical_mapping() != v1::Camera::EQUAL_AREA &&
+        camera.spherical_mapping() != v1::Camera::EQUIRECTANGULAR)
+      throw Error("camera: unknown spherical_mapping " + std::to_string(int(camera.spherical_mapping())));
+    equal_area_ = camera.spherical_mapping() == v1::Camera::EQUAL_AREA;
+    // A pixel's angular size: what PixelSpacing steps by at distance 1.
+    if (equal_area_) {
+      pixel_x_ = pixel_y_ = std::sqrt(4 * kPi / (float(width) * float(height)));
+    } else {
+      pixel_x_ = 2 * kPi / float(width);
+      pixel_y_ = kPi / float(height);
+    }
+    return;
+  }
   const bool orthographic = kind_ == Kind::kOrthographic;
   if (orthographic && !(camera.view_size() > 0 && camera.view_size() < 1e30))
     throw Error("camera: an orthographic view_size must be positive and finite, got " +
@@ -81,11 +103,6 @@ Camera::Camera(const v1::Camera& camera, uint32_t width, uint32_t height) {
     lens_radius_ = float(camera.lens_radius());
     focus_distance_ = float(camera.focus_distance());
   }
-  if (camera.near_clip() < 0 || camera.far_clip() < 0 ||
-      (camera.far_clip() > 0 && camera.far_clip() <= camera.near_clip()))
-    throw Error("camera: need 0 <= near_clip < far_clip (far_clip 0 = unbounded)");
-  near_clip_ = float(camera.near_clip());
-  far_clip_ = float(camera.far_clip());
   inv_film_area_ = 1.0f / (4 * tan_half_x_ * tan_half_y_);
   pixel_x_ = 2 * tan_half_x_ / float(width);
   pixel_y_ = 2 * tan_half_y_ / float(height);
@@ -108,6 +125,8 @@ std::string_view Camera::UnreachableReason() const {
       return "a radiance meter cannot be reached by light paths (it measures along a single ray)";
     case Kind::kIrradianceMeter:
       return "an irradiance meter cannot be reached by light paths (they land on a lens and film, and it has neither)";
+    case Kind::kSpherical:
+      return "a spherical camera cannot be reached by light paths (as in pbrt-v4)";
     default:
       return {};
   }
@@ -129,6 +148,18 @@ Ray Camera::MeterRay(float film_x, float film_y, float lens_u, float lens_v, flo
   // Off the surface, to the side the normal faces, so as not to hit it.
   ray.origin = OffsetRayOrigin(at.position, at.normal, ray.direction);
   return ray;
+}
+
+Vec3 Camera::SphericalDirection(float film_x, float film_y) const {
+  if (equal_area_) {
+    // The map's pole (its +z, the square's centre) is up, as pbrt-v4
+    // swaps its y and z.
+    const Vec3 d = EqualAreaSquareToSphere(film_x, film_y);
+    return {d.x, d.z, d.y};
+  }
+  const float theta = kPi * film_y, phi = 2 * kPi * film_x;
+  const float sin_theta = std::sin(theta);
+  return {sin_theta * std::cos(phi), std::cos(theta), sin_theta * std::sin(phi)};
 }
 
 Vec3 Camera::LensPoint(float lens_u, float lens_v) const {
@@ -205,6 +236,16 @@ float Camera::DirectionPdf(Vec3 direction) const {
 
 Ray Camera::Generate(float film_x, float film_y, float lens_u, float lens_v, float time) const {
   if (IsMeter()) return MeterRay(film_x, film_y, lens_u, lens_v, time);
+  if (kind_ == Kind::kSpherical) {
+    const Vec3 d = SphericalDirection(film_x, film_y);
+    Ray ray;
+    ray.origin = origin_;
+    ray.direction = Normalize(right_ * d.x + up_ * d.y + forward_ * d.z);
+    ray.tnear = near_clip_;
+    ray.tfar = far_clip_ > 0 ? far_clip_ : kInfinity;
+    ray.time = time;
+    return ray;
+  }
   if (kind_ == Kind::kOrthographic) {
     Ray ray;
     ray.origin = origin_ + right_ * ((2 * film_x - 1) * tan_half_x_) + up_ * ((1 - 2 * film_y) * tan_half_y_);

@@ -1,5 +1,6 @@
-// Pinhole and thin-lens perspective cameras and the orthographic camera,
-// placed by look-at; Mitsuba's radiance and irradiance meters.
+// Pinhole and thin-lens perspective cameras, the orthographic camera and
+// pbrt-v4's spherical camera, placed by look-at; Mitsuba's radiance and
+// irradiance meters.
 #pragma once
 
 #include <memory>
@@ -61,8 +62,11 @@ class Camera {
   Vec3 origin() const { return origin_; }
 
  private:
-  enum class Kind { kPerspective, kOrthographic, kRadianceMeter, kIrradianceMeter };
+  enum class Kind { kPerspective, kOrthographic, kRadianceMeter, kIrradianceMeter, kSpherical };
   bool IsMeter() const { return kind_ == Kind::kRadianceMeter || kind_ == Kind::kIrradianceMeter; }
+  // A spherical camera's direction through film position (x, y), camera
+  // space (x right, y up, z forward).
+  Vec3 SphericalDirection(float film_x, float film_y) const;
   // The point of the lens for (u, v), camera space.
   Vec3 LensPoint(float lens_u, float lens_v) const;
   Ray MeterRay(float film_x, float film_y, float lens_u, float lens_v, float time) const;
@@ -77,7 +81,10 @@ class Camera {
   float lens_radius_ = 0, focus_distance_ = 1;
   float near_clip_ = 0, far_clip_ = 0;
   float shutter_ = 0;
-  // One pixel's width and height on the plane at distance 1.
+  // A spherical camera's mapping: equal-area, else equirectangular.
+  bool equal_area_ = true;
+  // One pixel's width and height on the plane at distance 1 (a spherical
+  // camera's: its angular size).
   float pixel_x_ = 0, pixel_y_ = 0;
   // 1/A, A the film's area on the plane at distance 1.
   float inv_film_area_ = 0;

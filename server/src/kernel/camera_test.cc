@@ -223,5 +223,73 @@ TEST(Camera, IrradianceMeterRaysLeaveItsShapeCosineDistributed) {
   }
 }
 
+// LookAlongZ's frame: forward +z, up +y, right −x.
+v1::Camera Spherical(v1::Camera::SphericalMapping mapping) {
+  v1::Camera spec = LookAlongZ(0);
+  spec.set_model(v1::Camera::SPHERICAL);
+  spec.set_spherical_mapping(mapping);
+  return spec;
+}
+
+void ExpectDirection(const Camera& camera, float x, float y, Vec3 expected) {
+  const Ray r = camera.Generate(x, y, 0.3f, 0.7f, 0);
+  EXPECT_NEAR(r.origin.x, 1, 1e-6f);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(r.direction[i], expected[i], 1e-5f) << "film " << x << ", " << y;
+}
+
+// The share of a film grid's rays within `angle` of `axis`.
+double ShareWithin(const Camera& camera, Vec3 axis, float angle) {
+  constexpr int kSide = 400;
+  int within = 0;
+  for (int j = 0; j < kSide; ++j)
+    for (int i = 0; i < kSide; ++i) {
+      const Ray r = camera.Generate((i + 0.5f) / kSide, (j + 0.5f) / kSide, 0.5f, 0.5f, 0);
+      within += Dot(r.direction, axis) > std::cos(angle);
+    }
+  return double(within) / (kSide * kSide);
+}
+
+TEST(Camera, SphericalEquirectangularMapsLatitudeDownAndLongitudeFromRightTowardForward) {
+  const Camera camera(Spherical(v1::Camera::EQUIRECTANGULAR), 64, 32);
+  const Vec3 right(-1, 0, 0), up(0, 1, 0), forward(0, 0, 1);
+  ExpectDirection(camera, 0.3f, 0, up);
+  ExpectDirection(camera, 0.6f, 1, -up);
+  ExpectDirection(camera, 0, 0.5f, right);
+  ExpectDirection(camera, 0.25f, 0.5f, forward);
+  ExpectDirection(camera, 0.5f, 0.5f, -right);
+  ExpectDirection(camera, 0.75f, 0.5f, -forward);
+  // Rows are latitudes: a cap of angle a about up is the top a/π of the film.
+  EXPECT_NEAR(ShareWithin(camera, up, 0.5f), 0.5 / kPi, 3e-3);
+}
+
+TEST(Camera, SphericalEqualAreaSeesTheSameSolidAngleThroughEveryPartOfTheFilm) {
+  const Camera camera(Spherical(v1::Camera::EQUAL_AREA), 32, 32);
+  const Vec3 right(-1, 0, 0), up(0, 1, 0), forward(0, 0, 1);
+  // The map's pole, its centre, is up; its corners down; its edges' middles
+  // the horizon.
+  ExpectDirection(camera, 0.5f, 0.5f, up);
+  ExpectDirection(camera, 0, 0, -up);
+  ExpectDirection(camera, 1, 1, -up);
+  ExpectDirection(camera, 0.5f, 1, forward);
+  ExpectDirection(camera, 0.5f, 0, -forward);
+  ExpectDirection(camera, 1, 0.5f, right);
+  ExpectDirection(camera, 0, 0.5f, -right);
+  // Any cone of half-angle a holds (1 − cos a)/2 of the film.
+  const Vec3 axes[] = {up, -up, forward, Normalize(Vec3(1, 2, -3))};
+  for (const Vec3 axis : axes)
+    for (const float angle : {0.3f, 1.0f, 2.0f})
+      EXPECT_NEAR(ShareWithin(camera, axis, angle), (1 - std::cos(angle)) / 2, 3e-3) << angle;
+}
+
+TEST(Camera, SphericalCameraCannotBeReachedAndRefusesUnknownMappings) {
+  const Camera camera(Spherical(v1::Camera::EQUAL_AREA), 16, 16);
+  EXPECT_NE(camera.UnreachableReason().find("spherical camera"), std::string_view::npos);
+  Vec3 lens;
+  float x, y, importance;
+  EXPECT_FALSE(camera.Connect(Vec3(1, 0, 5), 0.5f, 0.5f, &lens, &x, &y, &importance));
+  EXPECT_EQ(camera.DirectionPdf(Vec3(0, 0, 1)), 0);
+  EXPECT_ANY_THROW(Camera(Spherical(v1::Camera::SphericalMapping(7)), 16, 16));
+}
+
 }  // namespace
 }  // namespace yarf
