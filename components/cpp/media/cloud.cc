@@ -22,74 +22,10 @@
 #include "phase.h"
 #include "volume_grid.h"
 #include "yarf/plugin.h"
+#include "yarf/support/perlin_noise.h"
 
 namespace yarf {
 namespace {
-
-// Ken Perlin's permutation of 0..255, twice, as pbrt's Perlin noise uses
-// it (so that the clouds are pbrt's).
-constexpr int kPermutation[512] = {
-    151, 160, 137, 91,  90,  15,  131, 13,  201, 95,  96,  53,  194, 233, 7,   225, 140, 36,  103, 30,  69,  142,
-    8,   99,  37,  240, 21,  10,  23,  190, 6,   148, 247, 120, 234, 75,  0,   26,  197, 62,  94,  252, 219, 203,
-    117, 35,  11,  32,  57,  177, 33,  88,  237, 149, 56,  87,  174, 20,  125, 136, 171, 168, 68,  175, 74,  165,
-    71,  134, 139, 48,  27,  166, 77,  146, 158, 231, 83,  111, 229, 122, 60,  211, 133, 230, 220, 105, 92,  41,
-    55,  46,  245, 40,  244, 102, 143, 54,  65,  25,  63,  161, 1,   216, 80,  73,  209, 76,  132, 187, 208, 89,
-    18,  169, 200, 196, 135, 130, 116, 188, 159, 86,  164, 100, 109, 198, 173, 186, 3,   64,  52,  217, 226, 250,
-    124, 123, 5,   202, 38,  147, 118, 126, 255, 82,  85,  212, 207, 206, 59,  227, 47,  16,  58,  17,  182, 189,
-    28,  42,  223, 183, 170, 213, 119, 248, 152, 2,   44,  154, 163, 70,  221, 153, 101, 155, 167, 43,  172, 9,
-    129, 22,  39,  253, 19,  98,  108, 110, 79,  113, 224, 232, 178, 185, 112, 104, 218, 246, 97,  228, 251, 34,
-    242, 193, 238, 210, 144, 12,  191, 179, 162, 241, 81,  51,  145, 235, 249, 14,  239, 107, 49,  192, 214, 31,
-    181, 199, 106, 157, 184, 84,  204, 176, 115, 121, 50,  45,  127, 4,   150, 254, 138, 236, 205, 93,  222, 114,
-    67,  29,  24,  72,  243, 141, 128, 195, 78,  66,  215, 61,  156, 180, 151, 160, 137, 91,  90,  15,  131, 13,
-    201, 95,  96,  53,  194, 233, 7,   225, 140, 36,  103, 30,  69,  142, 8,   99,  37,  240, 21,  10,  23,  190,
-    6,   148, 247, 120, 234, 75,  0,   26,  197, 62,  94,  252, 219, 203, 117, 35,  11,  32,  57,  177, 33,  88,
-    237, 149, 56,  87,  174, 20,  125, 136, 171, 168, 68,  175, 74,  165, 71,  134, 139, 48,  27,  166, 77,  146,
-    158, 231, 83,  111, 229, 122, 60,  211, 133, 230, 220, 105, 92,  41,  55,  46,  245, 40,  244, 102, 143, 54,
-    65,  25,  63,  161, 1,   216, 80,  73,  209, 76,  132, 187, 208, 89,  18,  169, 200, 196, 135, 130, 116, 188,
-    159, 86,  164, 100, 109, 198, 173, 186, 3,   64,  52,  217, 226, 250, 124, 123, 5,   202, 38,  147, 118, 126,
-    255, 82,  85,  212, 207, 206, 59,  227, 47,  16,  58,  17,  182, 189, 28,  42,  223, 183, 170, 213, 119, 248,
-    152, 2,   44,  154, 163, 70,  221, 153, 101, 155, 167, 43,  172, 9,   129, 22,  39,  253, 19,  98,  108, 110,
-    79,  113, 224, 232, 178, 185, 112, 104, 218, 246, 97,  228, 251, 34,  242, 193, 238, 210, 144, 12,  191, 179,
-    162, 241, 81,  51,  145, 235, 249, 14,  239, 107, 49,  192, 214, 31,  181, 199, 106, 157, 184, 84,  204, 176,
-    115, 121, 50,  45,  127, 4,   150, 254, 138, 236, 205, 93,  222, 114, 67,  29,  24,  72,  243, 141, 128, 195,
-    78,  66,  215, 61,  156, 180};
-
-// The gradient of lattice point (x, y, z), one of 12 edge directions,
-// dotted with the offset (dx, dy, dz) from it.
-float Gradient(int x, int y, int z, float dx, float dy, float dz) {
-  const int h = kPermutation[kPermutation[kPermutation[x] + y] + z] & 15;
-  const float u = h < 8 || h == 12 || h == 13 ? dx : dy;
-  const float v = h < 4 || h == 12 || h == 13 ? dy : dz;
-  return ((h & 1) ? -u : u) + ((h & 2) ? -v : v);
-}
-
-// 6t⁵ − 15t⁴ + 10t³: the fade that makes the noise C² across cells.
-float Fade(float t) { return t * t * t * (t * (t * 6 - 15) + 10); }
-
-float Lerp(float t, float a, float b) { return (1 - t) * a + t * b; }
-
-// Perlin's improved noise, in [-1, 1], 0 at lattice points.
-float Noise(Vec3 p) {
-  const float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
-  const float dx = p.x - fx, dy = p.y - fy, dz = p.z - fz;
-  const int x = int(fx) & 255, y = int(fy) & 255, z = int(fz) & 255;
-  const float w000 = Gradient(x, y, z, dx, dy, dz), w100 = Gradient(x + 1, y, z, dx - 1, dy, dz);
-  const float w010 = Gradient(x, y + 1, z, dx, dy - 1, dz), w110 = Gradient(x + 1, y + 1, z, dx - 1, dy - 1, dz);
-  const float w001 = Gradient(x, y, z + 1, dx, dy, dz - 1), w101 = Gradient(x + 1, y, z + 1, dx - 1, dy, dz - 1);
-  const float w011 = Gradient(x, y + 1, z + 1, dx, dy - 1, dz - 1);
-  const float w111 = Gradient(x + 1, y + 1, z + 1, dx - 1, dy - 1, dz - 1);
-  const float wx = Fade(dx), wy = Fade(dy), wz = Fade(dz);
-  const float y0 = Lerp(wy, Lerp(wx, w000, w100), Lerp(wx, w010, w110));
-  const float y1 = Lerp(wy, Lerp(wx, w001, w101), Lerp(wx, w011, w111));
-  return Lerp(wz, y0, y1);
-}
-
-// The noise's gradient by forward differences (pbrt's DNoise).
-Vec3 NoiseGradient(Vec3 p) {
-  const float delta = 0.01f, n = Noise(p);
-  return Vec3(Noise(p + Vec3(delta, 0, 0)) - n, Noise(p + Vec3(0, delta, 0)) - n, Noise(p + Vec3(0, 0, delta)) - n) /
-         delta;
-}
 
 float FiniteProperty(const Properties& props, const char* key, double fallback) {
   const float value = float(props.Float(key, fallback));

@@ -37,6 +37,7 @@ class Constant final : public yarf::Texture {
   }
 
   bool ReadsFootprints() const override { return value_.ReadsFootprints(); }
+  bool ReadsPositions() const override { return value_.ReadsPositions(); }
 
   std::vector<float> Mean() const override {
     const Vec3 mean = value_.Mean();

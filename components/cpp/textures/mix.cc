@@ -49,6 +49,9 @@ class Mix final : public yarf::Texture {
       ((1.0f - amount[k]) * tex1[k] + amount[k] * tex2[k]).Store(&value[3 * k]);
   }
 
+  bool ReadsPositions() const override {
+    return tex1_.ReadsPositions() || tex2_.ReadsPositions() || amount_.ReadsPositions();
+  }
   bool ReadsFootprints() const override {
     return tex1_.ReadsFootprints() || tex2_.ReadsFootprints() || amount_.ReadsFootprints();
   }

@@ -44,6 +44,7 @@ class Scale final : public yarf::Texture {
   }
 
   bool ReadsFootprints() const override { return tex_.ReadsFootprints() || scale_.ReadsFootprints(); }
+  bool ReadsPositions() const override { return tex_.ReadsPositions() || scale_.ReadsPositions(); }
 
   std::vector<float> Mean() const override {
     const Vec3 mean = tex_.Mean() * scale_.Mean().x;

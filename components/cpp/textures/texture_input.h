@@ -39,6 +39,7 @@ class TextureInput {
 
   bool IsConstant() const { return value_.IsConstant(); }
   bool ReadsFootprints() const { return value_.ReadsFootprints(); }
+  bool ReadsPositions() const { return value_.ReadsPositions(); }
   Vec3 Constant() const { return value_.Constant(); }
   Vec3 Mean() const { return mean_; }
   void Evaluate(const SurfacePoints& at, std::vector<Vec3>& out) const { value_.Evaluate(at, out); }

@@ -37,6 +37,11 @@ class Texture : public virtual Component {
   // transports the footprints (SceneView::FootprintsRead).
   // in-process only: a texture in another process is taken to read them.
   virtual bool ReadsFootprints() const { return true; }
+  // Whether Evaluate reads SurfacePoints::position (a solid texture): a
+  // scene none of whose textures does spares transports the positions of
+  // surfaces without a parameterisation (SceneView::PositionsRead).
+  // A texture in another process is taken to read them.
+  virtual bool ReadsPositions() const { return false; }
 };
 
 // A property's values at a batch of points (TexturedValue::At and
@@ -99,6 +104,7 @@ class TexturedValue {
   bool IsConstant() const { return texture_ == nullptr; }
   Vec3 Constant() const { return constant_; }
   bool ReadsFootprints() const { return texture_ && texture_->ReadsFootprints(); }
+  bool ReadsPositions() const { return texture_ && texture_->ReadsPositions(); }
   // Whether the value is 0 everywhere: a constant black (a texture is
   // taken to be non-zero somewhere), so a model can drop the lobe.
   bool IsZero() const { return IsConstant() && constant_.x == 0 && constant_.y == 0 && constant_.z == 0; }

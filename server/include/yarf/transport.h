@@ -232,6 +232,10 @@ class SceneView : public Intersector, public SurfaceAttributes {
   // in-process only: it spares ShadingPoint work; a transport in another
   // process asks SampleSpacing where it wants a footprint.
   virtual bool FootprintsRead() const { return true; }
+  // Whether anything reads the positions of points on surfaces without a
+  // parameterisation (SurfaceSite::positioned): a solid texture, or a
+  // texture or material in another process. in-process only.
+  virtual bool PositionsRead() const { return true; }
   // Whether the lens has area (thin lens) or is a point (pinhole).
   // rpc: Layout
   virtual bool CameraHasLens() const = 0;

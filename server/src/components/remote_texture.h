@@ -19,6 +19,7 @@ class Remote<Texture> final : public Texture {
   explicit Remote(std::unique_ptr<RemoteInstance> instance);
 
   uint32_t Channels() const override { return channels_; }
+  bool ReadsPositions() const override { return true; }
   void Evaluate(const SurfacePoints& at, std::span<float> value) const override;
   std::vector<float> Mean() const override { return mean_; }
 

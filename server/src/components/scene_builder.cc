@@ -275,10 +275,13 @@ class Builder {
     }
     // Footprints are made for the textures that filter over them and for
     // materials in other processes, which may filter their own.
-    bool footprints_read = remote_materials;
-    for (const auto& [name, texture] : textures_)
+    bool footprints_read = remote_materials, positions_read = remote_materials;
+    for (const auto& [name, texture] : textures_) {
       footprints_read = footprints_read || texture->ReadsFootprints();
+      positions_read = positions_read || texture->ReadsPositions();
+    }
     kernel_->ReadFootprints(footprints_read);
+    kernel_->ReadPositions(positions_read);
     for (const v1::SceneMedium& m : scene_.media()) {
       const std::string what = MediumName(m);
       ResolvedProperties own{&textures_, nullptr, {}};

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "importers/importer_test_support.h"
 #include "importers/loop_subdivision.h"
@@ -470,6 +471,43 @@ TEST(PbrtImport, NormalMapsCutOutsCylindersAndMeshAttributes) {
   EXPECT_FLOAT_EQ(triangle.uvs(5), 1.0f);
   // A misspelt parameter is told the nearest one pbrt's material has.
   EXPECT_TRUE(Warns(result, "parameter 'reflectanse' ignored (did you mean 'reflectance'?)"));
+}
+
+TEST(PbrtImport, SolidNoiseTexturesLiveInTheSpaceOfTheTransformAtTheirDirective) {
+  const ImportResult result = ImportPbrt(
+      "WorldBegin\nAttributeBegin\nTranslate 1 2 3\nScale 2 2 2\n"
+      "Texture \"n\" \"float\" \"fbm\" \"integer octaves\" 4 \"float roughness\" 0.7\nAttributeEnd\n"
+      "Texture \"m\" \"spectrum\" \"marble\" \"float variation\" 0.3\n"
+      "Material \"diffuse\" \"texture reflectance\" \"m\"\n"
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n",
+      "noise.pbrt");
+  const v1::Scene& scene = result.scene;
+  std::map<std::string, const v1::ComponentSpec*> textures;
+  for (const v1::SceneTexture& t : scene.textures()) textures[t.texture().class_name()] = &t.texture();
+  ASSERT_TRUE(textures.count("fbm") && textures.count("marble"));
+  const v1::Properties& fbm = textures["fbm"]->properties();
+  EXPECT_EQ(IntProperty(fbm, "octaves"), 4);
+  EXPECT_DOUBLE_EQ(FloatProperty(fbm, "roughness"), 0.7);
+  EXPECT_DOUBLE_EQ(FloatProperty(textures["marble"]->properties(), "variation"), 0.3);
+  // A pbrt world point x is yarf's mirror(x) (the shape placed at the
+  // identity shows the mirror); the texture takes it back to (x − t) / 2.
+  const Matrix4 mirror = ToMatrix(scene.shapes(0).to_world());
+  const Matrix4 to_texture = ToMatrix(fbm.values().at("to_texture").transform_value());
+  for (const Vec3d x : {Vec3d{0, 0, 0}, Vec3d{1, -2, 5}, Vec3d{-3, 4, 0.5}})
+    ExpectNear(to_texture.Point(mirror.Point(x)), (x - Vec3d{1, 2, 3}) * 0.5);
+  // The marble, defined at the identity, sees pbrt's world itself.
+  const auto& marble = textures["marble"]->properties().values();
+  const Matrix4 marble_space =
+      marble.count("to_texture") ? ToMatrix(marble.at("to_texture").transform_value()) : Matrix4();
+  ExpectNear(marble_space.Point(mirror.Point({1, -2, 5})), {1, -2, 5});
+  const auto import = [](const std::string& texture) {
+    return ImportPbrt("WorldBegin\nTexture \"t\" " + texture + "\n", "bad.pbrt");
+  };
+  EXPECT_THROW(import(R"("spectrum" "fbm")"), ImportError);
+  EXPECT_THROW(import(R"("float" "marble")"), ImportError);
+  EXPECT_THROW(import(R"("float" "wrinkled" "string mapping" "uv")"), ImportError);
+  EXPECT_THROW(import(R"("float" "fbm" "integer octaves" 0)"), ImportError);
+  EXPECT_THROW(import(R"("float" "fbm" "float roughness" 2)"), ImportError);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // pbrt textures as scene textures (Scene.textures): imagemap, checkerboard,
-// scale, mix and constant. Each also keeps its mean, for the parameters
-// yarf takes as constants; a class yarf has none for is its mean alone.
+// scale, mix, constant, dots and the solid noise textures (fbm, wrinkled,
+// windy, marble). Each also keeps its mean, for the parameters yarf takes as
+// constants; a class yarf has none for is its mean alone.
 #include "importers/numbers.h"
 #include "importers/pbrt_importer.h"
 #include "importers/recursion_guard.h"
@@ -51,7 +52,40 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
 
   Rgb mean{0.5, 0.5, 0.5};
   std::string yarf_class = texture_class;
-  if (texture_class == "constant") {
+  // A solid texture's space: the CTM at the Texture directive.
+  std::optional<Matrix4> texture_to_world;
+  if (texture_class == "fbm" || texture_class == "wrinkled" || texture_class == "windy" ||
+      texture_class == "marble") {
+    if (texture_class == "marble" && !spectral) Fail(where, "pbrt's marble is a spectrum texture");
+    if (texture_class != "marble" && spectral) Fail(where, "pbrt's " + texture_class + " is a float texture");
+    if (!state_.ctm.Inverse()) Fail(where, "the texture's transform is singular");
+    texture_to_world = state_.ctm;
+    const std::string mapping = params.String("mapping", "point");
+    if (mapping != "point")
+      Fail(params.WhereIs("mapping", where), "a solid texture's mapping must be \"point\", not \"" + mapping + "\"");
+    if (texture_class != "windy") {
+      const int64_t octaves = params.Integer("octaves", 8);
+      if (octaves < 1 || octaves > 64) Fail(params.WhereIs("octaves", where), "octaves must lie in [1, 64]");
+      const double roughness = params.Float("roughness", 0.5);
+      if (!(roughness >= 0 && roughness <= 1)) Fail(params.WhereIs("roughness", where), "roughness must lie in [0, 1]");
+      SetInt(props, "octaves", octaves);
+      SetFloat(props, "roughness", roughness);
+    }
+    if (texture_class == "marble") {
+      SetFloat(props, "scale", params.Float("scale", 1));
+      SetFloat(props, "variation", params.Float("variation", 0.2));
+    }
+    // What the mean stands in for (light power, constants): fbm and windy
+    // swing about 0, wrinkled's turbulence about its octaves' mean |noise|.
+    mean = texture_class == "marble" ? Rgb{0.58, 0.58, 0.6} : Rgb{0, 0, 0};
+  } else if (texture_class == "dots") {
+    const Textured inside = input("inside", 1), outside = input("outside", 0);
+    // A stand-in: the dots cover about a fifth of the plane.
+    mean = Lerp(0.2, outside.constant, inside.constant);
+    set("inside", inside);
+    set("outside", outside);
+    map_uv(false);
+  } else if (texture_class == "constant") {
     yarf_class = "constant_texture";  // "constant" is the constant environment
     const Textured value = input("value", 1);
     mean = value.constant;
@@ -115,7 +149,8 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
   params.WarnUnused(diagnostics_, "texture '" + texture_class + "'");
   const double grey = (mean.r + mean.g + mean.b) / 3;
   Textured result{spectral ? mean : Rgb{grey, grey, grey}, ""};
-  if (!yarf_class.empty()) result.texture = assembly_.AddTexture(name, Spec(yarf_class, std::move(props)));
+  if (!yarf_class.empty())
+    result.texture = assembly_.AddTexture(name, Spec(yarf_class, std::move(props)), texture_to_world);
   (spectral ? spectrum_textures_ : float_textures_)[name] = result;
 }
 

@@ -77,10 +77,12 @@ std::string SceneAssembly::AddMaterial(const std::string& name, const std::strin
   return m.name();
 }
 
-std::string SceneAssembly::AddTexture(const std::string& name, v1::ComponentSpec texture) {
+std::string SceneAssembly::AddTexture(const std::string& name, v1::ComponentSpec texture,
+                                      const std::optional<Matrix4>& texture_to_world) {
   v1::SceneTexture& t = *scene_.add_textures();
   t.set_name(UniqueName(texture_names_, name));
   *t.mutable_texture() = std::move(texture);
+  texture_transforms_.push_back(texture_to_world);
   return t.name();
 }
 
@@ -265,6 +267,13 @@ v1::Scene SceneAssembly::Finish() {
   for (int i = 0; i < scene_.media_size(); ++i)
     if (const std::optional<Matrix4>& to_world = medium_transforms_[i]; to_world && !(mirror_ * *to_world).IsIdentity())
       SetTransform(*scene_.mutable_media(i)->mutable_medium()->mutable_properties(), "to_world", mirror_ * *to_world);
+  for (int i = 0; i < scene_.textures_size(); ++i) {
+    const std::optional<Matrix4>& placed = texture_transforms_[i];
+    // Texture space to yarf's world is the placement, then the mirror.
+    const std::optional<Matrix4> to_texture = placed ? (mirror_ * *placed).Inverse() : std::nullopt;
+    if (to_texture && !to_texture->IsIdentity())
+      SetTransform(*scene_.mutable_textures(i)->mutable_texture()->mutable_properties(), "to_texture", *to_texture);
+  }
   for (int i = 0; i < scene_.instances_size(); ++i) {
     v1::Instance& instance = *scene_.mutable_instances(i);
     SetTransform(mirror_ * instance_transforms_[i], instance.mutable_to_world(),

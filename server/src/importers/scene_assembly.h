@@ -37,8 +37,11 @@ class SceneAssembly {
   // Adds a material; returns its name: `name`, made unique if taken.
   std::string AddMaterial(const std::string& name, const std::string& class_name, v1::Properties properties);
   // Adds a texture (Scene.textures) after those it may refer to; returns
-  // its name: `name`, made unique if taken.
-  std::string AddTexture(const std::string& name, v1::ComponentSpec texture);
+  // its name: `name`, made unique if taken. A solid texture gives the
+  // placement of its space (invertible), which Finish turns into its
+  // property "to_texture", world to texture space, after the world's mirror.
+  std::string AddTexture(const std::string& name, v1::ComponentSpec texture,
+                         const std::optional<Matrix4>& texture_to_world = std::nullopt);
   // The material of class "null": a medium boundary that does not scatter.
   std::string NullMaterial();
 
@@ -117,7 +120,8 @@ class SceneAssembly {
   std::set<std::string> texture_names_;
   std::set<std::string> medium_names_;
   std::string null_material_;
-  std::vector<std::optional<Matrix4>> medium_transforms_;  // parallel to scene_.media()
+  std::vector<std::optional<Matrix4>> medium_transforms_;   // parallel to scene_.media()
+  std::vector<std::optional<Matrix4>> texture_transforms_;  // parallel to scene_.textures()
   std::map<std::string, int> group_index_;
   std::string default_material_;
   std::vector<WorldShape> world_shapes_;   // parallel to scene_.shapes()

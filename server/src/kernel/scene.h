@@ -101,6 +101,8 @@ class KernelScene final : public SceneView {
   void SampleTrianglesBySolidAngle(bool by_solid_angle) { triangles_by_solid_angle_ = by_solid_angle; }
   // Whether anything reads texture footprints (SceneView::FootprintsRead).
   void ReadFootprints(bool read) { footprints_read_ = read; }
+  // Whether anything reads positions (SceneView::PositionsRead).
+  void ReadPositions(bool read) { positions_read_ = read; }
   void Commit();
 
   // Commit (the BVH builds) and every later Intersect and Occluded throw
@@ -145,6 +147,7 @@ class KernelScene final : public SceneView {
   void SetSamplesPerPixel(uint32_t spp);
   void SampleSpacing(Vec3 p, Vec3 n, Vec3& dpdx, Vec3& dpdy) const override;
   bool FootprintsRead() const override { return footprints_read_; }
+  bool PositionsRead() const override { return positions_read_; }
   void Attribute(std::string_view name, std::span<const SurfaceLocation> at, std::span<float> rgb) const override;
   bool CameraHasLens() const override { return camera_.HasLens(); }
   bool CameraReadsLens() const override { return camera_.ReadsLens(); }
@@ -268,6 +271,7 @@ class KernelScene final : public SceneView {
   uint64_t service_handle_ = 0;
   float sample_spacing_ = 1;
   bool footprints_read_ = true;
+  bool positions_read_ = true;
   uint32_t width_, height_;
   // Shared: a material may wrap another (normalmap).
   std::vector<std::shared_ptr<const SurfaceModel>> materials_;

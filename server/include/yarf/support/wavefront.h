@@ -35,6 +35,9 @@ struct SurfaceSite {
   // On a surface with a parameterisation of its own (Hit::parameterised):
   // then the footprint, position and frame below are known.
   bool parameterised = false;
+  // Not parameterised, but its position is known, for the solid textures
+  // that read it (SceneView::PositionsRead); footprint and frame zero.
+  bool positioned = false;
   float footprint[4] = {0, 0, 0, 0};
   Vec3 position;
   Vec3 dpdu, dpdv;  // in the local shading frame
@@ -57,9 +60,11 @@ struct SurfaceSite {
 // The SurfacePoints of a batch of at most `capacity` sites, owning its
 // arrays (this runs for every surface call of every bounce): uv and
 // locations always; footprints, positions and frames only once a site on
-// a parameterised surface is added (zero for the others), else they are
-// left empty, as unknown: what reads them (filtering, bump maps) needs a
-// parameterisation.
+// a parameterised surface (or a positioned one) is added (zero for the
+// others), else they are left empty, as unknown: what reads them
+// (filtering, bump maps) needs a parameterisation, a solid texture a
+// position (where none is known, a point on a light seen by its uv, it
+// sees the origin).
 class SurfaceRows {
  public:
   SurfaceRows(const SurfaceAttributes* attributes, size_t capacity)
@@ -79,7 +84,7 @@ class SurfaceRows {
     location.primitive = site.location.primitive;
     location.b1 = site.location.b1;
     location.b2 = site.location.b2;
-    if (!site.parameterised) return;
+    if (!site.parameterised && !site.positioned) return;
     if (extras_.empty()) extras_.resize(kExtras * capacity_);
     std::copy_n(site.footprint, 4, &extras_[kFootprint * capacity_ + 4 * k]);
     site.position.Store(&extras_[kPosition * capacity_ + 3 * k]);
@@ -121,7 +126,12 @@ struct ShadingPoint {
         frame(ShadingFrame(hit)),
         wi(frame.ToLocal(-ray.direction)),
         site(SurfaceSite::Of(hit)) {
-    if (!hit.parameterised) return;
+    if (!hit.parameterised) {
+      if (!scene.PositionsRead()) return;
+      site.positioned = true;
+      site.position = position;
+      return;
+    }
     site.parameterised = true;
     site.position = position;
     site.dpdu = frame.ToLocal(hit.dpdu);
