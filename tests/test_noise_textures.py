@@ -1,6 +1,7 @@
-"""pbrt-v4's noise textures as pbrt defines them: the solid ones (fbm,
-wrinkled, windy, marble) placed by the transform in force at their Texture
-directive, and dots over the surface's uv.
+"""pbrt-v4's procedural textures as pbrt defines them: the solid ones (fbm,
+wrinkled, windy, marble, the checkerboard of dimension 3) placed by the
+transform in force at their Texture directive, and dots and bilerp over
+the surface's uv.
 
 A flat diffuse floor under a uniform white sky reflects its albedo: seen
 straight down by an orthographic camera, each pixel is the mean albedo
@@ -190,13 +191,26 @@ def windy(p: np.ndarray) -> np.ndarray:
     return np.abs(fbm(0.1 * p, 0.5, 3)) * fbm(p, 0.5, 6)
 
 
+def solid_checkerboard(p: np.ndarray) -> np.ndarray:
+    """pbrt's checkerboard of dimension 3: 0.8 in even unit cubes, 0.3 in odd."""
+    return grey(np.where(np.floor(p).sum(axis=-1) % 2 == 0, 0.8, 0.3))
+
+
+def bilerp(world: np.ndarray, corners: tuple[float, float, float, float]) -> np.ndarray:
+    """pbrt's bilerp of v00, v10, v01, v11 at (s, t) = (x/4 + ½, z/4 + ½) of uv (x, z)."""
+    s, t = world[..., 0] / 4 + 0.5, world[..., 2] / 4 + 0.5
+    v00, v10, v01, v11 = corners
+    return grey((1 - s) * (1 - t) * v00 + s * (1 - t) * v10 + (1 - s) * t * v01 + s * t * v11)
+
+
 MIX_MATERIAL = (
     'Texture "albedo" "spectrum" "mix" "rgb tex1" [0.5 0.5 0.5] "rgb tex2" [0.8 0.8 0.8]'
     ' "texture amount" "noise"\nMaterial "diffuse" "texture reflectance" "albedo"'
 )
 # Each texture: its directive, the material using it, the albedo it gives
 # at the floor's points (world space), and the albedo were it misplaced
-# (a solid texture's transform ignored; the dots' uv scales swapped).
+# (a solid texture's transform ignored; the dots' uv scales swapped, the
+# bilerp's corners v10 and v01).
 Albedo = Callable[[np.ndarray], np.ndarray]
 CASES: dict[str, tuple[str, str, Albedo, Albedo]] = {
     "fbm": (
@@ -223,6 +237,22 @@ CASES: dict[str, tuple[str, str, Albedo, Albedo]] = {
         'Material "diffuse" "texture reflectance" "albedo"',
         lambda x: marble(texture_space(x), 1.5, 0.5),
         lambda x: marble(x, 1.5, 0.5),
+    ),
+    "checkerboard 3-D": (
+        'Texture "albedo" "spectrum" "checkerboard" "integer dimension" 3\n'
+        '    "rgb tex1" [0.8 0.8 0.8] "rgb tex2" [0.3 0.3 0.3]',
+        'Material "diffuse" "texture reflectance" "albedo"',
+        lambda x: solid_checkerboard(texture_space(x)),
+        lambda x: solid_checkerboard(x),
+    ),
+    "bilerp": (
+        "",
+        'Texture "albedo" "spectrum" "bilerp" "rgb v00" [0.2 0.2 0.2] "rgb v10" [0.8 0.8 0.8]\n'
+        '    "rgb v01" [0.5 0.5 0.5] "rgb v11" [0.3 0.3 0.3]\n'
+        '    "float uscale" 0.25 "float vscale" 0.25 "float udelta" 0.5 "float vdelta" 0.5\n'
+        'Material "diffuse" "texture reflectance" "albedo"',
+        lambda x: bilerp(x, (0.2, 0.8, 0.5, 0.3)),
+        lambda x: bilerp(x, (0.2, 0.5, 0.8, 0.3)),
     ),
     "dots": (
         "",
@@ -253,6 +283,6 @@ def test_pbrt_noise_texture_is_pbrts_noise_where_the_file_places_it(
     assert (z**2).mean() < 1.3, (name, (z**2).mean())
     assert np.abs(z).max() < 5.5, (name, np.abs(z).max())
     # Misplaced, it would not match: measured so, the mean square z-score
-    # is 5.8 (windy) to 160 (wrinkled).
+    # is 5.8 (windy) to 480 (the solid checkerboard).
     wrong = (image - misplaced(floor_points(8)).mean(axis=2)) / np.sqrt(variance + 1e-12)
     assert (wrong**2).mean() > 3

@@ -508,6 +508,22 @@ TEST(PbrtImport, SolidNoiseTexturesLiveInTheSpaceOfTheTransformAtTheirDirective)
   EXPECT_THROW(import(R"("float" "wrinkled" "string mapping" "uv")"), ImportError);
   EXPECT_THROW(import(R"("float" "fbm" "integer octaves" 0)"), ImportError);
   EXPECT_THROW(import(R"("float" "fbm" "float roughness" 2)"), ImportError);
+  EXPECT_THROW(import(R"("spectrum" "checkerboard" "integer dimension" 4)"), ImportError);
+  // A checkerboard of dimension 3 is one in space, bilerp keeps its corners.
+  const ImportResult more = ImportPbrt(
+      "WorldBegin\nTranslate 0 0 1\nTexture \"c\" \"spectrum\" \"checkerboard\" \"integer dimension\" 3\n"
+      "Texture \"b\" \"float\" \"bilerp\" \"float v10\" 0.25 \"float uscale\" 2\n",
+      "more.pbrt");
+  ASSERT_EQ(more.scene.textures_size(), 2);
+  const v1::ComponentSpec& cubes = more.scene.textures(0).texture();
+  EXPECT_EQ(cubes.class_name(), "checkerboard3d");
+  EXPECT_TRUE(cubes.properties().values().count("to_texture"));
+  const v1::ComponentSpec& bilerp = more.scene.textures(1).texture();
+  EXPECT_EQ(bilerp.class_name(), "bilerp");
+  EXPECT_DOUBLE_EQ(RgbProperty(bilerp.properties(), "v10").x, 0.25);
+  EXPECT_DOUBLE_EQ(RgbProperty(bilerp.properties(), "v11").x, 1);
+  EXPECT_DOUBLE_EQ(FloatProperty(bilerp.properties(), "uscale"), 2);
+  EXPECT_TRUE(more.warnings.empty());
 }
 
 }  // namespace

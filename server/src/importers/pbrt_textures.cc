@@ -1,6 +1,6 @@
-// pbrt textures as scene textures (Scene.textures): imagemap, checkerboard,
-// scale, mix, constant, dots and the solid noise textures (fbm, wrinkled,
-// windy, marble). Each also keeps its mean, for the parameters yarf takes as
+// pbrt textures as scene textures (Scene.textures): imagemap, checkerboard
+// (of 2 or 3 dimensions), scale, mix, constant, bilerp, dots and the solid
+// noise textures (fbm, wrinkled, windy, marble). Each also keeps its mean, for the parameters yarf takes as
 // constants; a class yarf has none for is its mean alone.
 #include "importers/numbers.h"
 #include "importers/pbrt_importer.h"
@@ -54,15 +54,21 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
   std::string yarf_class = texture_class;
   // A solid texture's space: the CTM at the Texture directive.
   std::optional<Matrix4> texture_to_world;
-  if (texture_class == "fbm" || texture_class == "wrinkled" || texture_class == "windy" ||
-      texture_class == "marble") {
-    if (texture_class == "marble" && !spectral) Fail(where, "pbrt's marble is a spectrum texture");
-    if (texture_class != "marble" && spectral) Fail(where, "pbrt's " + texture_class + " is a float texture");
+  auto place_in_space = [&] {
     if (!state_.ctm.Inverse()) Fail(where, "the texture's transform is singular");
     texture_to_world = state_.ctm;
     const std::string mapping = params.String("mapping", "point");
     if (mapping != "point")
       Fail(params.WhereIs("mapping", where), "a solid texture's mapping must be \"point\", not \"" + mapping + "\"");
+  };
+  const bool solid_checkerboard = texture_class == "checkerboard" && params.Float("dimension", 2) == 3;
+  if (texture_class == "checkerboard" && !solid_checkerboard && params.Float("dimension", 2) != 2)
+    Fail(params.WhereIs("dimension", where), "checkerboard: dimension must be 2 or 3");
+  if (texture_class == "fbm" || texture_class == "wrinkled" || texture_class == "windy" ||
+      texture_class == "marble") {
+    if (texture_class == "marble" && !spectral) Fail(where, "pbrt's marble is a spectrum texture");
+    if (texture_class != "marble" && spectral) Fail(where, "pbrt's " + texture_class + " is a float texture");
+    place_in_space();
     if (texture_class != "windy") {
       const int64_t octaves = params.Integer("octaves", 8);
       if (octaves < 1 || octaves > 64) Fail(params.WhereIs("octaves", where), "octaves must lie in [1, 64]");
@@ -78,6 +84,20 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
     // What the mean stands in for (light power, constants): fbm and windy
     // swing about 0, wrinkled's turbulence about its octaves' mean |noise|.
     mean = texture_class == "marble" ? Rgb{0.58, 0.58, 0.6} : Rgb{0, 0, 0};
+  } else if (solid_checkerboard) {
+    yarf_class = "checkerboard3d";
+    const Textured a = input("tex1", 1), b = input("tex2", 0);
+    mean = Lerp(0.5, a.constant, b.constant);
+    set("tex1", a);
+    set("tex2", b);
+    place_in_space();
+  } else if (texture_class == "bilerp") {
+    const Rgb v00 = input("v00", 0).constant, v10 = input("v10", 0).constant;
+    const Rgb v01 = input("v01", 1).constant, v11 = input("v11", 1).constant;
+    mean = Lerp(0.5, Lerp(0.5, v00, v10), Lerp(0.5, v01, v11));
+    for (const auto& [key, value] : {std::pair{"v00", v00}, {"v10", v10}, {"v01", v01}, {"v11", v11}})
+      SetRgb(props, key, value);
+    map_uv(false);
   } else if (texture_class == "dots") {
     const Textured inside = input("inside", 1), outside = input("outside", 0);
     // A stand-in: the dots cover about a fifth of the plane.
@@ -103,7 +123,7 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
     set("tex1", a);
     set("tex2", b);
     SetFloatOrTexture(props, "amount", amount);
-  } else if (texture_class == "checkerboard" && params.Float("dimension", 2) == 2) {
+  } else if (texture_class == "checkerboard") {
     const Textured a = input("tex1", 1), b = input("tex2", 0);
     mean = Lerp(0.5, a.constant, b.constant);
     set("tex1", a);
@@ -139,11 +159,8 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
     params.Accept({"maxanisotropy"});
     map_uv(true);
   } else {
-    if (texture_class == "checkerboard") params.Accept({"tex1", "tex2", "dimension"});
     Warn(where, "texture:" + texture_class,
-         "texture '" + texture_class + "' is not supported: replaced by its mean" +
-             (texture_class == "checkerboard" ? " (3-D checkerboard)" : " (grey 0.5)"));
-    if (texture_class == "checkerboard") mean = {0.5, 0.5, 0.5};
+         "texture '" + texture_class + "' is not supported: replaced by its mean (grey 0.5)");
     yarf_class.clear();
   }
   params.WarnUnused(diagnostics_, "texture '" + texture_class + "'");
