@@ -118,18 +118,13 @@ class Checkerboard final : public yarf::Texture {
   uint32_t Channels() const override { return 3; }
 
   void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
-    yarf::textures::CheckShapes(at, value, 3);
-    std::vector<Vec3> first, second;
-    first_.Evaluate(at, first);
-    second_.Evaluate(at, second);
-    for (size_t k = 0; k < at.Count(); ++k) {
+    yarf::textures::Blend(at, value, first_, second_, [&](size_t k) {
       const double u = at.uv[2 * k], v = at.uv[2 * k + 1];
       const std::array<double, 4> d = map_.Footprint(yarf::textures::FootprintAt(at, k));
       const double rs = std::max(std::abs(d[0]), std::abs(d[2]));
       const double rt = std::max(std::abs(d[1]), std::abs(d[3]));
-      const float w = float(SecondWeight(OddFraction(map_.U(u, v), rs, form_), OddFraction(map_.V(u, v), rt, form_)));
-      ((1.0f - w) * first[k] + w * second[k]).Store(&value[3 * k]);
-    }
+      return float(SecondWeight(OddFraction(map_.U(u, v), rs, form_), OddFraction(map_.V(u, v), rt, form_)));
+    });
   }
 
   std::vector<float> Mean() const override {

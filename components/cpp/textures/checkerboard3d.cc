@@ -45,19 +45,14 @@ class Checkerboard3d final : public yarf::Texture {
   uint32_t Channels() const override { return 3; }
 
   void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
-    yarf::textures::CheckShapes(at, value, 3);
-    const size_t n = at.Count();
-    std::vector<Vec3> even, odd;
-    even_.Evaluate(at, even);
-    odd_.Evaluate(at, odd);
-    const bool positioned = at.position.size() == 3 * n;
-    for (size_t k = 0; k < n; ++k) {
+    const bool positioned = at.position.size() == 3 * at.Count();
+    yarf::textures::Blend(at, value, even_, odd_, [&](size_t k) {
       const Vec3 p = to_texture_.Point(positioned ? Vec3::Load(&at.position[3 * k]) : Vec3(0, 0, 0));
       // Summed in double, three floors of floats stay exact integers,
       // whose parity fmod reads (an int would overflow far out).
       const double cubes = std::floor(double(p.x)) + std::floor(double(p.y)) + std::floor(double(p.z));
-      (std::fmod(cubes, 2.0) == 0 ? even[k] : odd[k]).Store(&value[3 * k]);
-    }
+      return std::fmod(cubes, 2.0) == 0 ? 0.0f : 1.0f;
+    });
   }
 
   std::vector<float> Mean() const override {

@@ -60,14 +60,10 @@ class Dots final : public yarf::Texture {
   uint32_t Channels() const override { return 3; }
 
   void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
-    yarf::textures::CheckShapes(at, value, 3);
-    std::vector<Vec3> inside, outside;
-    inside_.Evaluate(at, inside);
-    outside_.Evaluate(at, outside);
-    for (size_t k = 0; k < at.Count(); ++k) {
+    yarf::textures::Blend(at, value, outside_, inside_, [&](size_t k) {
       const double u = at.uv[2 * k], v = at.uv[2 * k + 1];
-      (InDot(map_.U(u, v), map_.V(u, v)) ? inside[k] : outside[k]).Store(&value[3 * k]);
-    }
+      return InDot(map_.U(u, v), map_.V(u, v)) ? 1.0f : 0.0f;
+    });
   }
 
   std::vector<float> Mean() const override {

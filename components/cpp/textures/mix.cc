@@ -39,14 +39,9 @@ class Mix final : public yarf::Texture {
   uint32_t Channels() const override { return 3; }
 
   void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
-    yarf::textures::CheckShapes(at, value, 3);
-    std::vector<Vec3> tex1, tex2;
     std::vector<float> amount;
-    tex1_.Evaluate(at, tex1);
-    tex2_.Evaluate(at, tex2);
     amount_.Evaluate(at, amount);
-    for (size_t k = 0; k < amount.size(); ++k)
-      ((1.0f - amount[k]) * tex1[k] + amount[k] * tex2[k]).Store(&value[3 * k]);
+    yarf::textures::Blend(at, value, tex1_, tex2_, [&](size_t k) { return amount[k]; });
   }
 
   bool ReadsPositions() const override {

@@ -6,9 +6,11 @@
 
 #include <cmath>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "texture_rows.h"
 #include "yarf/error.h"
 #include "yarf/properties.h"
 #include "yarf/texture.h"
@@ -67,5 +69,21 @@ class TextureInput {
   TexturedValue value_;
   Vec3 mean_;
 };
+
+// The value of a two-input pattern (checkerboard, dots, mix): both inputs
+// looked up at the points, blended at each as (1 − w)·first + w·second
+// with w = second_weight(k), into `value` ([N,3]).
+template <typename SecondWeight>
+void Blend(const SurfacePoints& at, std::span<float> value, const TextureInput& first, const TextureInput& second,
+           SecondWeight&& second_weight) {
+  CheckShapes(at, value, 3);
+  std::vector<Vec3> a, b;
+  first.Evaluate(at, a);
+  second.Evaluate(at, b);
+  for (size_t k = 0; k < at.Count(); ++k) {
+    const float w = second_weight(k);
+    ((1.0f - w) * a[k] + w * b[k]).Store(&value[3 * k]);
+  }
+}
 
 }  // namespace yarf::textures
