@@ -31,6 +31,10 @@ TEST(PerlinNoise, IsZeroOnTheLatticeRepeatsEvery256CellsAndStaysWithinOne) {
     EXPECT_LE(std::abs(n), 1.05f) << p.x << " " << p.y << " " << p.z;
     EXPECT_NEAR(Noise(p + Vec3(256, -512, 768)), n, 2e-4f);
   }
+  // A point not finite (a position far out, through a transform) has 0.
+  EXPECT_EQ(Noise(Vec3(NAN, 0.5f, 0.5f)), 0);
+  EXPECT_EQ(Noise(Vec3(0.5f, INFINITY, 0.5f)), 0);
+  EXPECT_EQ(Noise(Vec3(0.5f, 0.5f, 3e38f)), Noise(Vec3(0.5f, 0.5f, std::fmod(3e38f, float(1 << 30)))));
   // Not zero between lattice points, and continuous there.
   EXPECT_GT(std::abs(Noise(Vec3(0.3f, 0.6f, 0.2f))), 1e-3f);
   EXPECT_NEAR(Noise(Vec3(0.3f, 0.6f, 0.2f)), Noise(Vec3(0.3001f, 0.6f, 0.2f)), 1e-3f);
@@ -102,6 +106,14 @@ TEST_F(SolidNoiseTest, MarbleRunsThroughPbrtsGreysByItsVeins) {
     EXPECT_NEAR(value[0], 0.87f, 1e-4f);
     EXPECT_NEAR(value[2], 0.9f, 1e-4f);
   }
+  // A point so far out that its veins are not finite still has a colour.
+  const auto far_scaled = Make("marble", With({{"scale", 1e30}}));
+  const std::vector<float> far_xyz = {3e9f, 1e9f, 2e9f}, far_uv = {0, 0};
+  SurfacePoints far{far_uv};
+  far.position = far_xyz;
+  std::vector<float> far_value(3);
+  far_scaled->Evaluate(far, far_value);
+  for (const float c : far_value) EXPECT_TRUE(c > 0.2f && c < 1) << c;
   const std::vector<float> mean = marble->Mean();
   ASSERT_EQ(mean.size(), 3u);
   for (const float m : mean) EXPECT_TRUE(m > 0.3f && m < 1.0f) << m;

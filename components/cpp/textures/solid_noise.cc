@@ -49,6 +49,7 @@ Vec3 Lerp(float t, Vec3 a, Vec3 b) { return a * (1 - t) + b * t; }
 // Casteljau's construction, times pbrt's 1.5.
 Vec3 MarbleColour(float t) {
   constexpr int kSegments = int(kMarbleColours.size()) - 3;
+  t = t > 0 ? std::min(t, 1.0f) : 0.0f;  // a NaN (a point far out) too
   const int first = std::clamp(int(std::floor(t * kSegments)), 0, kSegments - 1);
   t = t * kSegments - float(first);
   const Vec3* c = &kMarbleColours[size_t(first)];

@@ -1,7 +1,11 @@
 // pbrt textures as scene textures (Scene.textures): imagemap, checkerboard
 // (of 2 or 3 dimensions), scale, mix, constant, bilerp, dots and the solid
-// noise textures (fbm, wrinkled, windy, marble). Each also keeps its mean, for the parameters yarf takes as
-// constants; a class yarf has none for is its mean alone.
+// noise textures (fbm, wrinkled, windy, marble). Each also keeps its mean,
+// for the parameters yarf takes as constants; a class yarf has none for is
+// its mean alone.
+#include <cmath>
+#include <optional>
+
 #include "importers/numbers.h"
 #include "importers/pbrt_importer.h"
 #include "importers/recursion_guard.h"
@@ -69,21 +73,26 @@ void PbrtImporter::Texture(const std::string& name, const std::string& type, con
     if (texture_class == "marble" && !spectral) Fail(where, "pbrt's marble is a spectrum texture");
     if (texture_class != "marble" && spectral) Fail(where, "pbrt's " + texture_class + " is a float texture");
     place_in_space();
+    // What the mean stands in for (light power, constants): fbm and windy
+    // swing about 0, marble about its greys; wrinkled's turbulence is about
+    // its octaves' weights times 0.2, pbrt's own stand-in for |noise|.
+    mean = texture_class == "marble" ? Rgb{0.58, 0.58, 0.6} : Rgb{0, 0, 0};
     if (texture_class != "windy") {
       const int64_t octaves = params.Integer("octaves", 8);
       if (octaves < 1 || octaves > 64) Fail(params.WhereIs("octaves", where), "octaves must lie in [1, 64]");
       const double roughness = params.Float("roughness", 0.5);
-      if (!(roughness >= 0 && roughness <= 1)) Fail(params.WhereIs("roughness", where), "roughness must lie in [0, 1]");
+      if (!(roughness >= 0 && roughness <= 1))
+        Fail(params.WhereIs("roughness", where), "roughness must lie in [0, 1]");
       SetInt(props, "octaves", octaves);
       SetFloat(props, "roughness", roughness);
+      double weights = 0;
+      for (int64_t i = 0; i <= octaves; ++i) weights += std::pow(roughness, double(i));
+      if (texture_class == "wrinkled") mean = Rgb{0.2 * weights, 0.2 * weights, 0.2 * weights};
     }
     if (texture_class == "marble") {
       SetFloat(props, "scale", params.Float("scale", 1));
       SetFloat(props, "variation", params.Float("variation", 0.2));
     }
-    // What the mean stands in for (light power, constants): fbm and windy
-    // swing about 0, wrinkled's turbulence about its octaves' mean |noise|.
-    mean = texture_class == "marble" ? Rgb{0.58, 0.58, 0.6} : Rgb{0, 0, 0};
   } else if (solid_checkerboard) {
     yarf_class = "checkerboard3d";
     const Textured a = input("tex1", 1), b = input("tex2", 0);

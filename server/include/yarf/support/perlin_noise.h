@@ -53,8 +53,10 @@ inline float Lerp(float t, float a, float b) { return (1 - t) * a + t * b; }
 
 }  // namespace perlin
 
-// Noise at p: 0 at every lattice point, within about [−1, 1], period 256.
+// Noise at p: 0 at every lattice point, within about [−1, 1], period 256;
+// 0 at a point not finite.
 inline float Noise(Vec3 p) {
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return 0;
   // Coordinates beyond 2³⁰ are brought back into range (the lattice
   // repeats every 256 cells) before they would overflow an int.
   const float x = std::fmod(p.x, float(1 << 30)), y = std::fmod(p.y, float(1 << 30)),
@@ -63,13 +65,15 @@ inline float Noise(Vec3 p) {
   const float dx = x - fx, dy = y - fy, dz = z - fz;
   const int ix = int(fx) & 255, iy = int(fy) & 255, iz = int(fz) & 255;
   using perlin::Gradient, perlin::Lerp;
+  const float w000 = Gradient(ix, iy, iz, dx, dy, dz), w100 = Gradient(ix + 1, iy, iz, dx - 1, dy, dz);
+  const float w010 = Gradient(ix, iy + 1, iz, dx, dy - 1, dz), w110 = Gradient(ix + 1, iy + 1, iz, dx - 1, dy - 1, dz);
+  const float w001 = Gradient(ix, iy, iz + 1, dx, dy, dz - 1), w101 = Gradient(ix + 1, iy, iz + 1, dx - 1, dy, dz - 1);
+  const float w011 = Gradient(ix, iy + 1, iz + 1, dx, dy - 1, dz - 1);
+  const float w111 = Gradient(ix + 1, iy + 1, iz + 1, dx - 1, dy - 1, dz - 1);
   const float wx = perlin::Fade(dx), wy = perlin::Fade(dy), wz = perlin::Fade(dz);
-  const float x00 = Lerp(wx, Gradient(ix, iy, iz, dx, dy, dz), Gradient(ix + 1, iy, iz, dx - 1, dy, dz));
-  const float x10 = Lerp(wx, Gradient(ix, iy + 1, iz, dx, dy - 1, dz), Gradient(ix + 1, iy + 1, iz, dx - 1, dy - 1, dz));
-  const float x01 = Lerp(wx, Gradient(ix, iy, iz + 1, dx, dy, dz - 1), Gradient(ix + 1, iy, iz + 1, dx - 1, dy, dz - 1));
-  const float x11 =
-      Lerp(wx, Gradient(ix, iy + 1, iz + 1, dx, dy - 1, dz - 1), Gradient(ix + 1, iy + 1, iz + 1, dx - 1, dy - 1, dz - 1));
-  return Lerp(wz, Lerp(wy, x00, x10), Lerp(wy, x01, x11));
+  const float y0 = Lerp(wy, Lerp(wx, w000, w100), Lerp(wx, w010, w110));
+  const float y1 = Lerp(wy, Lerp(wx, w001, w101), Lerp(wx, w011, w111));
+  return Lerp(wz, y0, y1);
 }
 
 // The noise's gradient by forward differences of 0.01 (pbrt's DNoise).
