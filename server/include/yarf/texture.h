@@ -40,7 +40,7 @@ class Texture : public virtual Component {
   // Whether Evaluate reads SurfacePoints::position (a solid texture): a
   // scene none of whose textures does spares transports the positions of
   // surfaces without a parameterisation (SceneView::PositionsRead).
-  // A texture in another process is taken to read them.
+  // in-process only: a texture in another process is taken to read them.
   virtual bool ReadsPositions() const { return false; }
 };
 

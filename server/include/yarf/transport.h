@@ -234,7 +234,9 @@ class SceneView : public Intersector, public SurfaceAttributes {
   virtual bool FootprintsRead() const { return true; }
   // Whether anything reads the positions of points on surfaces without a
   // parameterisation (SurfaceSite::positioned): a solid texture, or a
-  // texture or material in another process. in-process only.
+  // texture or material in another process.
+  // in-process only: it spares ShadingPoint work; a transport in another
+  // process knows its points' positions.
   virtual bool PositionsRead() const { return true; }
   // Whether the lens has area (thin lens) or is a point (pinhole).
   // rpc: Layout
