@@ -16,6 +16,7 @@
 
 #include "texture_input.h"
 #include "texture_rows.h"
+#include "texture_space.h"
 #include "yarf/plugin.h"
 
 namespace {
@@ -30,24 +31,20 @@ class Checkerboard3d final : public yarf::Texture {
     return {
         P::RgbTexture("tex1").Default(1.0).Doc("the colour of even cubes"),
         P::RgbTexture("tex2").Default(0.0).Doc("the colour of odd cubes"),
-        P::Matrix("to_texture").Doc("world space to the texture's space (identity when absent)"),
+        yarf::textures::TextureSpace::ToTextureParameter(),
     };
   }
 
   explicit Checkerboard3d(const yarf::Properties& props)
       : even_(TextureInput::Color(props, "tex1", Vec3(1, 1, 1))),
         odd_(TextureInput::Color(props, "tex2", Vec3(0, 0, 0))),
-        to_texture_(props.Matrix("to_texture", yarf::Transform::Identity())) {
-    for (const double x : to_texture_.m)
-      if (!std::isfinite(x)) throw yarf::Error("property 'to_texture' must be finite");
-  }
+        space_(props) {}
 
   uint32_t Channels() const override { return 3; }
 
   void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
-    const bool positioned = at.position.size() == 3 * at.Count();
     yarf::textures::Blend(at, value, even_, odd_, [&](size_t k) {
-      const Vec3 p = to_texture_.Point(positioned ? Vec3::Load(&at.position[3 * k]) : Vec3(0, 0, 0));
+      const Vec3 p = space_.At(at, k);
       // Summed in double, three floors of floats stay exact integers,
       // whose parity fmod reads (an int would overflow far out).
       const double cubes = std::floor(double(p.x)) + std::floor(double(p.y)) + std::floor(double(p.z));
@@ -65,7 +62,7 @@ class Checkerboard3d final : public yarf::Texture {
 
  private:
   TextureInput even_, odd_;
-  yarf::Transform to_texture_;
+  yarf::textures::TextureSpace space_;
 };
 
 }  // namespace

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "texture_rows.h"
+#include "texture_space.h"
 #include "yarf/plugin.h"
 #include "yarf/support/perlin_noise.h"
 
@@ -62,8 +63,7 @@ class SolidNoise final : public yarf::Texture {
  public:
   static yarf::ParameterSchema Parameters() {
     using P = yarf::Parameter;
-    yarf::ParameterSchema schema = {
-        P::Matrix("to_texture").Doc("world space to the texture's space (identity when absent)")};
+    yarf::ParameterSchema schema = {yarf::textures::TextureSpace::ToTextureParameter()};
     if (kPattern == Pattern::kWindy) return schema;
     schema.push_back(P::Int("octaves").Default(8).Min(1).Max(64).Doc("octaves of noise summed"));
     schema.push_back(P::Float("roughness").Default(0.5).Min(0).Max(1).Doc(
@@ -76,13 +76,11 @@ class SolidNoise final : public yarf::Texture {
   }
 
   explicit SolidNoise(const yarf::Properties& props)
-      : to_texture_(props.Matrix("to_texture", yarf::Transform::Identity())),
+      : space_(props),
         octaves_(kPattern == Pattern::kWindy ? 0 : int(props.Int("octaves", 8, 1, 64))),
         omega_(Finite(props, "roughness", 0.5)),
         scale_(Finite(props, "scale", 1)),
         variation_(Finite(props, "variation", 0.2)) {
-    for (const double x : to_texture_.m)
-      if (!std::isfinite(x)) throw yarf::Error("property 'to_texture' must be finite");
     if (kPattern != Pattern::kWindy && !(omega_ >= 0 && omega_ <= 1))
       throw yarf::Error("property 'roughness' must lie in [0, 1]");
   }
@@ -91,11 +89,8 @@ class SolidNoise final : public yarf::Texture {
 
   void Evaluate(const yarf::SurfacePoints& at, std::span<float> value) const override {
     yarf::textures::CheckShapes(at, value, Channels());
-    const size_t n = at.Count();
-    const bool positioned = at.position.size() == 3 * n;
-    for (size_t k = 0; k < n; ++k) {
-      const Vec3 world = positioned ? Vec3::Load(&at.position[3 * k]) : Vec3(0, 0, 0);
-      const Vec3 p = to_texture_.Point(world);
+    for (size_t k = 0; k < at.Count(); ++k) {
+      const Vec3 p = space_.At(at, k);
       if constexpr (kPattern == Pattern::kMarble) {
         MarbleAt(p).Store(&value[3 * k]);
       } else {
@@ -152,7 +147,7 @@ class SolidNoise final : public yarf::Texture {
     return MarbleColour(0.5f + 0.5f * std::sin(marble));
   }
 
-  yarf::Transform to_texture_;
+  yarf::textures::TextureSpace space_;
   int octaves_;
   float omega_, scale_, variation_;
 };
